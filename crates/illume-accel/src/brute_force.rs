@@ -1,0 +1,42 @@
+//! Every triangle of every instance, tested in turn: slow, obviously right, the oracle
+//! for the BVH tests.
+
+use crate::{Hit, triangle::intersect_triangle};
+use illume_core::{Ray, Vec3};
+use illume_scene::{InstanceId, Scene};
+
+/// World-space triangles of a scene.
+pub struct BruteForce {
+    tris: Vec<([Vec3; 3], InstanceId, u32, u32)>,
+}
+
+impl BruteForce {
+    /// Transforms every instance's triangles to world space.
+    pub fn new(scene: &Scene) -> Self {
+        let mut tris = Vec::new();
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let mesh = &scene.meshes[inst.mesh.index()];
+            for t in 0..mesh.triangle_count() {
+                let w = mesh.triangle(t).map(|p| inst.world_from_object.transform_point3(p));
+                tris.push((w, InstanceId(i as u32), t as u32, inst.mask));
+            }
+        }
+        Self { tris }
+    }
+
+    /// Closest hit among instances visible to `mask`.
+    pub fn intersect(&self, ray: &Ray, mask: u32) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut t_max = ray.t_max;
+        for (w, inst, tri, m) in &self.tris {
+            if m & mask == 0 {
+                continue;
+            }
+            if let Some((t, b)) = intersect_triangle(ray, t_max, w[0], w[1], w[2]) {
+                t_max = t;
+                best = Some(Hit { t, instance: *inst, triangle: *tri, barycentrics: b });
+            }
+        }
+        best
+    }
+}

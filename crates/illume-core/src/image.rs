@@ -1,0 +1,309 @@
+//! HDR images, tone mapping and file I/O.
+//!
+//! Pixel values of linear images are radiance [W/(m²·sr)] per Rec.709 channel. OpenEXR
+//! (32-bit float, via the `exr` crate) is the HDR format; PNG (8-bit sRGB, via `image`)
+//! is for viewing, written through exposure and a tone curve.
+
+use crate::math::{Rgb, Vec3};
+use std::path::{Path, PathBuf};
+
+/// Errors reading or writing images; each names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// The file could not be read or decoded.
+    #[error("{path}: cannot read image: {message}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// The file could not be encoded or written.
+    #[error("{path}: cannot write image: {message}")]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// The extension is not one illume reads or writes.
+    #[error("{path}: unsupported image format (expected .exr or .png)")]
+    UnsupportedFormat {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// A width × height grid of pixels, row-major, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image<T> {
+    width: u32,
+    height: u32,
+    data: Vec<T>,
+}
+
+/// Linear RGB image.
+pub type RgbImage = Image<Rgb>;
+
+impl<T: Clone> Image<T> {
+    /// An image filled with `value`.
+    pub fn filled(width: u32, height: u32, value: T) -> Self {
+        Self { width, height, data: vec![value; width as usize * height as usize] }
+    }
+}
+
+impl<T> Image<T> {
+    /// An image from row-major pixels; `None` when the length does not match.
+    pub fn from_vec(width: u32, height: u32, data: Vec<T>) -> Option<Self> {
+        (data.len() == width as usize * height as usize).then_some(Self { width, height, data })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Row-major pixels.
+    pub fn pixels(&self) -> &[T] {
+        &self.data
+    }
+
+    /// Row-major pixels, mutable.
+    pub fn pixels_mut(&mut self) -> &mut [T] {
+        &mut self.data
+    }
+
+    /// Consumes the image, returning its pixels.
+    pub fn into_vec(self) -> Vec<T> {
+        self.data
+    }
+
+    /// Pixel at column `x`, row `y`.
+    #[inline]
+    pub fn get(&self, x: u32, y: u32) -> &T {
+        &self.data[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Mutable pixel at column `x`, row `y`.
+    #[inline]
+    pub fn get_mut(&mut self, x: u32, y: u32) -> &mut T {
+        &mut self.data[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Same pixels mapped through `f`.
+    pub fn map<U>(&self, f: impl Fn(&T) -> U) -> Image<U> {
+        Image { width: self.width, height: self.height, data: self.data.iter().map(f).collect() }
+    }
+}
+
+impl RgbImage {
+    /// A black image.
+    pub fn black(width: u32, height: u32) -> Self {
+        Self::filled(width, height, Rgb::ZERO)
+    }
+
+    /// Per-channel mean over all pixels (f64 accumulation).
+    pub fn mean(&self) -> Rgb {
+        let mut s = [0.0f64; 3];
+        for p in &self.data {
+            s[0] += p.x as f64;
+            s[1] += p.y as f64;
+            s[2] += p.z as f64;
+        }
+        let n = self.data.len().max(1) as f64;
+        Rgb::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
+    }
+
+    /// Pixel-wise sum; panics if sizes differ (a programming error, not input).
+    pub fn add(&self, other: &RgbImage) -> RgbImage {
+        assert_eq!((self.width, self.height), (other.width, other.height), "image sizes differ");
+        let data = self.data.iter().zip(&other.data).map(|(a, b)| *a + *b).collect();
+        Image { width: self.width, height: self.height, data }
+    }
+
+    /// Reads an `.exr` (linear) or `.png` (sRGB-decoded to linear) image.
+    pub fn read(path: &Path) -> Result<Self, ImageError> {
+        match extension(path).as_deref() {
+            Some("exr") => read_exr(path),
+            Some("png") | Some("jpg") | Some("jpeg") => read_ldr(path),
+            _ => Err(ImageError::UnsupportedFormat { path: path.to_owned() }),
+        }
+    }
+
+    /// Writes linear `.exr`, or tone-mapped sRGB `.png` with `tone`.
+    pub fn write(&self, path: &Path, tone: &ToneMap) -> Result<(), ImageError> {
+        match extension(path).as_deref() {
+            Some("exr") => write_exr(self, path),
+            Some("png") => write_png(self, path, tone),
+            _ => Err(ImageError::UnsupportedFormat { path: path.to_owned() }),
+        }
+    }
+}
+
+fn extension(path: &Path) -> Option<String> {
+    path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase())
+}
+
+/// How linear radiance becomes display values for 8-bit output.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ToneMap {
+    /// Exposure in stops (EV): pixel values are multiplied by `2^exposure_ev` first.
+    /// Default 0.
+    pub exposure_ev: f32,
+    /// The tone curve applied after exposure. Default [`ToneCurve::Aces`].
+    pub curve: ToneCurve,
+}
+
+impl Default for ToneMap {
+    fn default() -> Self {
+        Self { exposure_ev: 0.0, curve: ToneCurve::Aces }
+    }
+}
+
+/// Tone curves for display output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ToneCurve {
+    /// Clamp to [0, 1]: exact for values already in range (comparisons, tests).
+    Clamp,
+    /// Reinhard `x/(1+x)` per channel.
+    Reinhard,
+    /// Narkowicz's fit of the ACES filmic curve.
+    Aces,
+}
+
+impl ToneMap {
+    /// Display-linear value in [0, 1] of a linear radiance value.
+    #[inline]
+    pub fn apply(&self, c: Rgb) -> Rgb {
+        let x = (c * 2f32.powf(self.exposure_ev)).max(Vec3::ZERO);
+        let y = match self.curve {
+            ToneCurve::Clamp => x,
+            ToneCurve::Reinhard => x / (Vec3::ONE + x),
+            ToneCurve::Aces => {
+                let (a, b, c, d, e) = (2.51, 0.03, 2.43, 0.59, 0.14);
+                (x * (x * a + b)) / (x * (x * c + d) + e)
+            }
+        };
+        y.clamp(Vec3::ZERO, Vec3::ONE)
+    }
+}
+
+/// sRGB transfer (encode) of a display-linear value in [0, 1].
+#[inline]
+pub fn srgb_encode(x: f32) -> f32 {
+    if x <= 0.0031308 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
+}
+
+/// sRGB transfer (decode) to display-linear.
+#[inline]
+pub fn srgb_decode(x: f32) -> f32 {
+    if x <= 0.04045 { x / 12.92 } else { ((x + 0.055) / 1.055).powf(2.4) }
+}
+
+/// Writes a linear image as 32-bit float RGB OpenEXR.
+pub fn write_exr(img: &RgbImage, path: &Path) -> Result<(), ImageError> {
+    let w = img.width as usize;
+    exr::prelude::write_rgb_file(path, w, img.height as usize, |x, y| {
+        let p = img.data[y * w + x];
+        (p.x, p.y, p.z)
+    })
+    .map_err(|e| ImageError::Write { path: path.to_owned(), message: e.to_string() })
+}
+
+/// Reads the first RGB(A) layer of an OpenEXR file as linear RGB.
+pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
+    let img = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| Image::<Rgb>::black(res.width() as u32, res.height() as u32),
+        |img, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            *img.get_mut(pos.x() as u32, pos.y() as u32) = Rgb::new(r, g, b);
+        },
+    )
+    .map_err(|e| ImageError::Read { path: path.to_owned(), message: e.to_string() })?;
+    Ok(img.layer_data.channel_data.pixels)
+}
+
+/// Writes tone-mapped, sRGB-encoded 8-bit PNG.
+pub fn write_png(img: &RgbImage, path: &Path, tone: &ToneMap) -> Result<(), ImageError> {
+    let bytes = to_srgb8(img, tone);
+    image::save_buffer(path, &bytes, img.width, img.height, image::ColorType::Rgb8)
+        .map_err(|e| ImageError::Write { path: path.to_owned(), message: e.to_string() })
+}
+
+/// Tone-mapped sRGB 8-bit bytes (RGB, row-major).
+pub fn to_srgb8(img: &RgbImage, tone: &ToneMap) -> Vec<u8> {
+    img.data
+        .iter()
+        .flat_map(|&p| {
+            let d = tone.apply(p);
+            [d.x, d.y, d.z].map(|v| (srgb_encode(v) * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
+        })
+        .collect()
+}
+
+/// Reads an 8-bit image (PNG, JPEG) and decodes sRGB to linear.
+pub fn read_ldr(path: &Path) -> Result<RgbImage, ImageError> {
+    let dynimg = image::open(path).map_err(|e| ImageError::Read { path: path.to_owned(), message: e.to_string() })?;
+    let rgb = dynimg.to_rgb8();
+    let (w, h) = rgb.dimensions();
+    let data = rgb
+        .pixels()
+        .map(|p| Rgb::new(srgb_decode(p[0] as f32 / 255.0), srgb_decode(p[1] as f32 / 255.0), srgb_decode(p[2] as f32 / 255.0)))
+        .collect();
+    Ok(Image { width: w, height: h, data })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trip_is_exact() {
+        let dir = std::env::temp_dir().join(format!("illume-img-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut img = RgbImage::black(5, 3);
+        for y in 0..3 {
+            for x in 0..5 {
+                *img.get_mut(x, y) = Rgb::new(x as f32 * 1.5, y as f32 * 100.0, 1e-3);
+            }
+        }
+        let p = dir.join("a.exr");
+        img.write(&p, &ToneMap::default()).unwrap();
+        let back = RgbImage::read(&p).unwrap();
+        assert_eq!(back, img);
+    }
+
+    #[test]
+    fn png_round_trip_within_quantisation() {
+        let dir = std::env::temp_dir().join(format!("illume-img-png-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let img = RgbImage::filled(4, 4, Rgb::new(0.5, 0.2, 0.9));
+        let p = dir.join("a.png");
+        img.write(&p, &ToneMap { exposure_ev: 0.0, curve: ToneCurve::Clamp }).unwrap();
+        let back = RgbImage::read(&p).unwrap();
+        for px in back.pixels() {
+            assert!((*px - Rgb::new(0.5, 0.2, 0.9)).abs().max_element() < 0.01);
+        }
+    }
+
+    #[test]
+    fn srgb_transfer_round_trips() {
+        for i in 0..=100 {
+            let x = i as f32 / 100.0;
+            assert!((srgb_decode(srgb_encode(x)) - x).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn missing_file_error_names_it() {
+        let e = RgbImage::read(Path::new("/nonexistent/x.exr")).unwrap_err();
+        assert!(e.to_string().contains("/nonexistent/x.exr"));
+    }
+}

@@ -1,0 +1,1 @@
+//! Image and temporal metrics against the reference: RMSE, relMSE, PSNR, SSIM, FLIP, flicker, latency.

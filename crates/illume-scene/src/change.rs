@@ -1,0 +1,299 @@
+//! Scene changes as data: evaluating the scene at a new time or applying an interactive
+//! edit yields the list of what changed, with previous and new state, so each technique
+//! can invalidate exactly what it must (DESIGN.md, "Changes and history are explicit").
+
+use crate::animation::Trs;
+use crate::model::*;
+use illume_core::{Affine3A, affine_is_finite};
+
+/// One change to the scene, with its previous and new state.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneChange {
+    /// An instance's world transform changed (rigid or scaled motion).
+    InstanceMoved {
+        /// Which instance.
+        instance: InstanceId,
+        /// Transform before the change.
+        from: Affine3A,
+        /// Transform after the change.
+        to: Affine3A,
+    },
+    /// A light moved or changed its emission.
+    LightChanged {
+        /// Which light.
+        light: LightId,
+        /// State before.
+        from: Box<Light>,
+        /// State after.
+        to: Box<Light>,
+    },
+    /// The camera moved or changed its field of view.
+    CameraMoved {
+        /// Transform before.
+        from: Affine3A,
+        /// Transform after.
+        to: Affine3A,
+    },
+    /// A material's parameters changed.
+    MaterialChanged {
+        /// Which material.
+        material: MaterialId,
+        /// State before.
+        from: Box<Material>,
+        /// State after.
+        to: Box<Material>,
+    },
+}
+
+/// An interactive edit a user (or a script) applies to the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Edit {
+    /// Place an instance at a new world transform.
+    SetInstanceTransform {
+        /// Which instance.
+        instance: InstanceId,
+        /// New `world_from_object`.
+        world_from_object: Affine3A,
+    },
+    /// Place a light at a new world transform.
+    SetLightTransform {
+        /// Which light.
+        light: LightId,
+        /// New `world_from_light`.
+        world_from_light: Affine3A,
+    },
+    /// Change a light's kind or emission.
+    SetLightKind {
+        /// Which light.
+        light: LightId,
+        /// New kind and quantities.
+        kind: LightKind,
+    },
+    /// Place the camera at a new world transform.
+    SetCameraTransform {
+        /// New `world_from_camera`.
+        world_from_camera: Affine3A,
+    },
+    /// Replace a material's parameters.
+    SetMaterial {
+        /// Which material.
+        material: MaterialId,
+        /// New parameters.
+        value: Material,
+    },
+}
+
+/// Why an edit was refused.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum EditError {
+    /// The id does not name an existing item.
+    #[error("{what} {index} does not exist")]
+    NoSuchItem {
+        /// Item kind.
+        what: &'static str,
+        /// The id given.
+        index: u32,
+    },
+    /// A transform or value had NaN or infinity.
+    #[error("{what}: value is not finite")]
+    NotFinite {
+        /// What was being set.
+        what: &'static str,
+    },
+    /// An item placed by an animated node's ancestor cannot be placed arbitrarily.
+    #[error("{what}: parent transform is singular, cannot place a child")]
+    SingularParent {
+        /// What was being set.
+        what: &'static str,
+    },
+}
+
+impl Scene {
+    /// Recomputes every node's world transform from the local ones and refreshes the
+    /// cached transforms of instances, lights and camera. Returns the changes.
+    pub fn update_world_transforms(&mut self) -> Vec<SceneChange> {
+        for i in 0..self.nodes.len() {
+            let local = self.nodes[i].local.to_affine();
+            self.nodes[i].world_from_node = match self.nodes[i].parent {
+                Some(p) => self.nodes[p.index()].world_from_node * local,
+                None => local,
+            };
+        }
+        let mut changes = Vec::new();
+        for (i, inst) in self.instances.iter_mut().enumerate() {
+            let to = self.nodes[inst.node.index()].world_from_node;
+            if to != inst.world_from_object {
+                changes.push(SceneChange::InstanceMoved { instance: InstanceId(i as u32), from: inst.world_from_object, to });
+                inst.world_from_object = to;
+            }
+        }
+        for (i, light) in self.lights.iter_mut().enumerate() {
+            let to = self.nodes[light.node.index()].world_from_node;
+            if to != light.world_from_light {
+                let before = light.clone();
+                light.world_from_light = to;
+                changes.push(SceneChange::LightChanged { light: LightId(i as u32), from: Box::new(before), to: Box::new(light.clone()) });
+            }
+        }
+        if let Some(node) = self.nodes.get(self.camera.node.index()) {
+            let to = node.world_from_node;
+            if to != self.camera.world_from_camera {
+                changes.push(SceneChange::CameraMoved { from: self.camera.world_from_camera, to });
+                self.camera.world_from_camera = to;
+            }
+        }
+        changes
+    }
+
+    /// Evaluates the active animation at time `t` [s] and returns what changed since the
+    /// scene's previous state. Nodes not driven by the animation keep their transforms.
+    pub fn set_time(&mut self, t: f64) -> Vec<SceneChange> {
+        self.time = t;
+        if let Some(a) = self.active_animation {
+            let mut locals: Vec<Trs> = self.nodes.iter().map(|n| n.local).collect();
+            self.animations[a].apply(t, &mut locals);
+            for (n, l) in self.nodes.iter_mut().zip(locals) {
+                n.local = l;
+            }
+        }
+        self.update_world_transforms()
+    }
+
+    /// Selects the animation named `name` as the active one.
+    pub fn select_animation(&mut self, name: &str) -> Result<(), String> {
+        match self.animations.iter().position(|a| a.name == name) {
+            Some(i) => {
+                self.active_animation = Some(i);
+                Ok(())
+            }
+            None => Err(format!(
+                "{}: no animation named '{name}' (have: {})",
+                self.source,
+                self.animations.iter().map(|a| a.name.as_str()).collect::<Vec<_>>().join(", ")
+            )),
+        }
+    }
+
+    /// Applies an interactive edit and returns what changed. A placed item's node gets
+    /// the local transform that puts it at the requested world transform.
+    pub fn apply_edit(&mut self, edit: &Edit) -> Result<Vec<SceneChange>, EditError> {
+        match edit {
+            Edit::SetInstanceTransform { instance, world_from_object } => {
+                let node = self
+                    .instances
+                    .get(instance.index())
+                    .ok_or(EditError::NoSuchItem { what: "instance", index: instance.0 })?
+                    .node;
+                self.place_node(node, world_from_object, "instance transform")?;
+                Ok(self.update_world_transforms())
+            }
+            Edit::SetLightTransform { light, world_from_light } => {
+                let node = self.lights.get(light.index()).ok_or(EditError::NoSuchItem { what: "light", index: light.0 })?.node;
+                self.place_node(node, world_from_light, "light transform")?;
+                Ok(self.update_world_transforms())
+            }
+            Edit::SetCameraTransform { world_from_camera } => {
+                let node = self.camera.node;
+                self.place_node(node, world_from_camera, "camera transform")?;
+                Ok(self.update_world_transforms())
+            }
+            Edit::SetLightKind { light, kind } => {
+                let l = self.lights.get_mut(light.index()).ok_or(EditError::NoSuchItem { what: "light", index: light.0 })?;
+                let finite = match kind {
+                    LightKind::Point { intensity } => intensity.is_finite(),
+                    LightKind::Spot { intensity, inner_cone_rad, outer_cone_rad } => {
+                        intensity.is_finite() && inner_cone_rad.is_finite() && outer_cone_rad.is_finite()
+                    }
+                    LightKind::Directional { irradiance } => irradiance.is_finite(),
+                };
+                if !finite {
+                    return Err(EditError::NotFinite { what: "light kind" });
+                }
+                let before = l.clone();
+                l.kind = *kind;
+                Ok(vec![SceneChange::LightChanged { light: *light, from: Box::new(before), to: Box::new(l.clone()) }])
+            }
+            Edit::SetMaterial { material, value } => {
+                let m = self.materials.get_mut(material.index()).ok_or(EditError::NoSuchItem { what: "material", index: material.0 })?;
+                if !value.base_color.is_finite() || !value.emission.is_finite() {
+                    return Err(EditError::NotFinite { what: "material" });
+                }
+                let before = std::mem::replace(m, value.clone());
+                Ok(vec![SceneChange::MaterialChanged { material: *material, from: Box::new(before), to: Box::new(value.clone()) }])
+            }
+        }
+    }
+
+    fn place_node(&mut self, node: NodeId, world: &Affine3A, what: &'static str) -> Result<(), EditError> {
+        if !affine_is_finite(world) {
+            return Err(EditError::NotFinite { what });
+        }
+        let local = match self.nodes[node.index()].parent {
+            Some(p) => {
+                let parent = self.nodes[p.index()].world_from_node;
+                if parent.matrix3.determinant().abs() < 1e-12 {
+                    return Err(EditError::SingularParent { what });
+                }
+                parent.inverse() * *world
+            }
+            None => *world,
+        };
+        self.nodes[node.index()].local = Trs::from_affine(&local);
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use illume_core::Vec3;
+
+    #[test]
+    fn time_change_reports_moved_instance_with_previous_transform() {
+        let mut s = crate::builtin::load("cornell-spot").unwrap();
+        s.set_time(0.0);
+        let before: Vec<_> = s.instances.iter().map(|i| i.world_from_object).collect();
+        let changes = s.set_time(1.0);
+        let moved: Vec<_> = changes
+            .iter()
+            .filter_map(|c| match c {
+                SceneChange::InstanceMoved { instance, from, to } => Some((*instance, *from, *to)),
+                _ => None,
+            })
+            .collect();
+        assert!(!moved.is_empty(), "the sphere must move");
+        for (id, from, to) in moved {
+            assert_eq!(from, before[id.index()]);
+            assert_eq!(to, s.instances[id.index()].world_from_object);
+            assert_ne!(from, to);
+        }
+        assert!(changes.iter().any(|c| matches!(c, SceneChange::LightChanged { .. })), "the spot light must move");
+        // Same time again: nothing changes.
+        assert!(s.set_time(1.0).is_empty());
+    }
+
+    #[test]
+    fn edit_moves_instance_and_rejects_nan() {
+        let mut s = crate::builtin::load("cornell-spot").unwrap();
+        let target = Affine3A::from_translation(Vec3::new(0.1, 0.2, 0.3));
+        let ch = s.apply_edit(&Edit::SetInstanceTransform { instance: InstanceId(0), world_from_object: target }).unwrap();
+        assert_eq!(ch.len(), 1);
+        assert!((s.instances[0].world_from_object.translation - target.translation).length() < 1e-6);
+        let bad = Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));
+        assert_eq!(
+            s.apply_edit(&Edit::SetInstanceTransform { instance: InstanceId(0), world_from_object: bad }),
+            Err(EditError::NotFinite { what: "instance transform" })
+        );
+        assert!(s.apply_edit(&Edit::SetInstanceTransform { instance: InstanceId(999), world_from_object: target }).is_err());
+    }
+
+    #[test]
+    fn material_edit_reports_previous_value() {
+        let mut s = crate::builtin::load("furnace").unwrap();
+        let mut m = s.materials[0].clone();
+        let old = m.clone();
+        m.base_color = Vec3::new(0.1, 0.2, 0.3);
+        let ch = s.apply_edit(&Edit::SetMaterial { material: MaterialId(0), value: m.clone() }).unwrap();
+        assert_eq!(ch, vec![SceneChange::MaterialChanged { material: MaterialId(0), from: Box::new(old), to: Box::new(m) }]);
+    }
+}

@@ -1,0 +1,490 @@
+//! Scene data types: typed ids, meshes, materials, textures, lights, camera, nodes,
+//! instances, and the [`Scene`] that owns them.
+
+use crate::animation::{Animation, Trs};
+use illume_core::{Aabb, Affine3A, PI, Rgb, Vec2, Vec3, channel_mean};
+
+macro_rules! typed_id {
+    ($(#[$m:meta])* $name:ident) => {
+        $(#[$m])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+        pub struct $name(pub u32);
+        impl $name {
+            /// The id as a `usize` index into its scene array.
+            #[inline]
+            pub fn index(self) -> usize {
+                self.0 as usize
+            }
+        }
+    };
+}
+
+typed_id!(
+    /// Index of a [`Mesh`] in [`Scene::meshes`].
+    MeshId
+);
+typed_id!(
+    /// Index of a [`Material`] in [`Scene::materials`].
+    MaterialId
+);
+typed_id!(
+    /// Index of a [`Texture`] in [`Scene::textures`].
+    TextureId
+);
+typed_id!(
+    /// Index of an [`Instance`] in [`Scene::instances`].
+    InstanceId
+);
+typed_id!(
+    /// Index of a [`Light`] in [`Scene::lights`].
+    LightId
+);
+typed_id!(
+    /// Index of a [`Node`] in [`Scene::nodes`].
+    NodeId
+);
+
+/// A triangle mesh in object space. Positions in metres; normals and UVs per vertex,
+/// either empty or one per position; one material per triangle.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    /// Name from the file (glTF mesh name, OBJ object/group), for messages.
+    pub name: String,
+    /// Vertex positions, object space.
+    pub positions: Vec<Vec3>,
+    /// Unit shading normals per vertex, or empty (flat shading from the geometric normal).
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates per vertex, or empty.
+    pub uvs: Vec<Vec2>,
+    /// Vertex indices of each triangle (counter-clockwise = front face).
+    pub indices: Vec<[u32; 3]>,
+    /// Material of each triangle (same length as `indices`).
+    pub triangle_materials: Vec<MaterialId>,
+}
+
+impl Mesh {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// Object-space corner positions of triangle `t`.
+    #[inline]
+    pub fn triangle(&self, t: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[t];
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+    }
+
+    /// Object-space area of triangle `t`.
+    pub fn triangle_area(&self, t: usize) -> f32 {
+        let [a, b, c] = self.triangle(t);
+        0.5 * (b - a).cross(c - a).length()
+    }
+
+    /// Object-space bounds.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.positions.iter().copied())
+    }
+
+    /// Checks the invariants (index ranges, attribute lengths, finite values);
+    /// the message says what is wrong.
+    pub fn validate(&self, material_count: usize) -> Result<(), String> {
+        let n = self.positions.len();
+        if !self.normals.is_empty() && self.normals.len() != n {
+            return Err(format!("{} normals for {} positions", self.normals.len(), n));
+        }
+        if !self.uvs.is_empty() && self.uvs.len() != n {
+            return Err(format!("{} UVs for {} positions", self.uvs.len(), n));
+        }
+        if self.triangle_materials.len() != self.indices.len() {
+            return Err(format!("{} triangle materials for {} triangles", self.triangle_materials.len(), self.indices.len()));
+        }
+        if let Some((i, p)) = self.positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+            return Err(format!("position {i} is not finite: {p}"));
+        }
+        if let Some((t, tri)) = self.indices.iter().enumerate().find(|(_, tri)| tri.iter().any(|&v| v as usize >= n)) {
+            return Err(format!("triangle {t} has vertex index {tri:?} out of range 0..{n}"));
+        }
+        if let Some((t, m)) = self.triangle_materials.iter().enumerate().find(|(_, m)| m.index() >= material_count) {
+            return Err(format!("triangle {t} uses material {} of {material_count}", m.0));
+        }
+        Ok(())
+    }
+}
+
+/// How texture coordinates outside [0, 1] are mapped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum WrapMode {
+    /// Tile (glTF REPEAT, the default everywhere).
+    #[default]
+    Repeat,
+    /// Clamp to the edge texel.
+    Clamp,
+    /// Tile with every other copy mirrored.
+    Mirror,
+}
+
+/// An RGB texture, linear values (sRGB base-colour images are decoded on load).
+#[derive(Clone, Debug)]
+pub struct Texture {
+    /// File or glTF image name, for messages.
+    pub name: String,
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Row-major linear RGB texels, row 0 = top of the image (UV v = 0).
+    pub texels: Vec<Rgb>,
+    /// Wrapping in u.
+    pub wrap_u: WrapMode,
+    /// Wrapping in v.
+    pub wrap_v: WrapMode,
+}
+
+impl Texture {
+    /// Bilinear lookup at `uv` (glTF convention: v = 0 at the top row).
+    pub fn sample(&self, uv: Vec2) -> Rgb {
+        if self.texels.is_empty() {
+            return Rgb::ONE;
+        }
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = uv.y * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let t = |ix: i64, iy: i64| {
+            let cx = wrap(ix, self.width, self.wrap_u);
+            let cy = wrap(iy, self.height, self.wrap_v);
+            self.texels[cy * self.width as usize + cx]
+        };
+        let (ix, iy) = (x0 as i64, y0 as i64);
+        let top = t(ix, iy) * (1.0 - fx) + t(ix + 1, iy) * fx;
+        let bottom = t(ix, iy + 1) * (1.0 - fx) + t(ix + 1, iy + 1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// Mean texel value (used for photon albedo estimates and power).
+    pub fn average(&self) -> Rgb {
+        if self.texels.is_empty() {
+            return Rgb::ONE;
+        }
+        self.texels.iter().copied().sum::<Rgb>() / self.texels.len() as f32
+    }
+}
+
+fn wrap(i: i64, n: u32, mode: WrapMode) -> usize {
+    let n = n as i64;
+    let r = match mode {
+        WrapMode::Repeat => i.rem_euclid(n),
+        WrapMode::Clamp => i.clamp(0, n - 1),
+        WrapMode::Mirror => {
+            let m = i.rem_euclid(2 * n);
+            if m < n { m } else { 2 * n - 1 - m }
+        }
+    };
+    r as usize
+}
+
+/// A surface material. illume's light transport is Lambertian; `glossiness` is carried
+/// for techniques that will use it later.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name from the file.
+    pub name: String,
+    /// Diffuse albedo ρ (linear RGB, each channel in [0, 1]); multiplied by the texture.
+    pub base_color: Rgb,
+    /// Optional base-colour texture (linear after decoding), multiplied into `base_color`.
+    pub base_color_texture: Option<TextureId>,
+    /// Emitted radiance Le [W/(m²·sr)], from the front face only.
+    pub emission: Rgb,
+    /// 0 = perfectly diffuse (all of illume's transport today), 1 = mirror-like.
+    /// Read from glTF `1 − roughness` / OBJ `Ns`; not yet used by any technique.
+    pub glossiness: f32,
+    /// When false (glTF `doubleSided: false`), a back face neither reflects nor emits:
+    /// light arriving there is absorbed.
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color: Rgb::splat(0.8),
+            base_color_texture: None,
+            emission: Rgb::ZERO,
+            glossiness: 0.0,
+            double_sided: true,
+        }
+    }
+}
+
+impl Material {
+    /// True when the material emits light.
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+}
+
+/// Kinds of analytic (non-surface) light. Emissive triangles are area lights through
+/// their [`Material::emission`] and are not listed here.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    /// Isotropic point light; `intensity` is radiant intensity [W/sr] per channel.
+    Point {
+        /// Radiant intensity I [W/sr].
+        intensity: Rgb,
+    },
+    /// Spot light shining down the light's local −Z with glTF's smooth falloff
+    /// `clamp((cosθ − cos outer)/(cos inner − cos outer), 0, 1)²`.
+    Spot {
+        /// Radiant intensity on the axis [W/sr].
+        intensity: Rgb,
+        /// Inner cone half-angle [rad]: full intensity inside.
+        inner_cone_rad: f32,
+        /// Outer cone half-angle [rad]: zero outside.
+        outer_cone_rad: f32,
+    },
+    /// Distant light shining down the light's local −Z; `irradiance` [W/m²] on a surface
+    /// facing it.
+    Directional {
+        /// Irradiance E on a perpendicular surface [W/m²].
+        irradiance: Rgb,
+    },
+}
+
+/// An analytic light placed by a node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    /// Name from the file.
+    pub name: String,
+    /// What kind of light and its radiometric quantity.
+    pub kind: LightKind,
+    /// The node that places it (position = node origin, direction = node −Z).
+    pub node: NodeId,
+    /// Cached world transform of `node` at the scene's current time.
+    pub world_from_light: Affine3A,
+}
+
+impl Light {
+    /// World position (meaningless for directional lights).
+    pub fn position(&self) -> Vec3 {
+        self.world_from_light.translation.into()
+    }
+
+    /// Unit world direction the light shines in (spot and directional: local −Z).
+    pub fn direction(&self) -> Vec3 {
+        self.world_from_light.transform_vector3(-Vec3::Z).normalize_or(-Vec3::Y)
+    }
+
+    /// Radiant power Φ [W] per channel. Directional lights need the radius of the
+    /// scene's bounding sphere (their power is the irradiance through its disk).
+    pub fn power(&self, scene_radius: f32) -> Rgb {
+        match self.kind {
+            LightKind::Point { intensity } => intensity * 4.0 * PI,
+            LightKind::Spot { intensity, inner_cone_rad, outer_cone_rad } => {
+                intensity * spot_solid_angle(inner_cone_rad, outer_cone_rad)
+            }
+            LightKind::Directional { irradiance } => irradiance * PI * scene_radius * scene_radius,
+        }
+    }
+}
+
+/// glTF spot falloff at `cos_theta` from the axis.
+#[inline]
+pub fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+    let d = (cos_inner - cos_outer).max(1e-6);
+    let x = ((cos_theta - cos_outer) / d).clamp(0.0, 1.0);
+    x * x
+}
+
+/// ∫ falloff dω over the sphere for a glTF spot (steradians): 2π(1 − cos_inner) for the
+/// full-intensity core plus 2π(cos_inner − cos_outer)/3 for the squared linear ramp in cosθ.
+pub fn spot_solid_angle(inner_cone_rad: f32, outer_cone_rad: f32) -> f32 {
+    let ci = inner_cone_rad.cos();
+    let co = outer_cone_rad.cos();
+    2.0 * PI * (1.0 - ci) + 2.0 * PI * (ci - co).max(0.0) / 3.0
+}
+
+/// A perspective camera placed by a node, looking down its local −Z, +Y up.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    /// Name from the file.
+    pub name: String,
+    /// Vertical field of view [rad] (glTF `yfov`); the aspect comes from the output size.
+    pub yfov_rad: f32,
+    /// The node that places it.
+    pub node: NodeId,
+    /// Cached world transform of `node` at the scene's current time.
+    pub world_from_camera: Affine3A,
+}
+
+/// A node of the transform hierarchy. Animations drive `local`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Node {
+    /// Name from the file.
+    pub name: String,
+    /// Parent node, `None` for a root. Parents always have smaller indices.
+    pub parent: Option<NodeId>,
+    /// Transform relative to the parent, as translation/rotation/scale.
+    pub local: Trs,
+    /// Cached world transform at the scene's current time.
+    pub world_from_node: Affine3A,
+}
+
+/// Bit in [`Instance::mask`] that every ordinary instance carries.
+pub const MASK_DEFAULT: u32 = 1;
+
+/// One placement of a mesh in the world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// Name from the file (node name).
+    pub name: String,
+    /// The mesh it places.
+    pub mesh: MeshId,
+    /// The node that places it.
+    pub node: NodeId,
+    /// Cached world transform of `node` at the scene's current time.
+    pub world_from_object: Affine3A,
+    /// True when an animation or the user may move it (techniques may precompute less
+    /// for dynamic instances).
+    pub dynamic: bool,
+    /// Visibility bits: a ray sees this instance when `ray_mask & mask != 0`. Ordinary
+    /// instances carry [`MASK_DEFAULT`]; techniques may add copies (e.g. selective photon
+    /// tracing's phantoms) with other bits.
+    pub mask: u32,
+}
+
+/// A whole scene at one time.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Where it came from (file path or `builtin:NAME`), for messages.
+    pub source: String,
+    /// Meshes in object space.
+    pub meshes: Vec<Mesh>,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Textures.
+    pub textures: Vec<Texture>,
+    /// Transform hierarchy (parents before children).
+    pub nodes: Vec<Node>,
+    /// Mesh placements.
+    pub instances: Vec<Instance>,
+    /// Analytic lights.
+    pub lights: Vec<Light>,
+    /// The camera used for rendering.
+    pub camera: Camera,
+    /// Animations; [`Scene::active_animation`] selects the one that plays.
+    pub animations: Vec<Animation>,
+    /// Index of the animation [`Scene::set_time`] plays, if any.
+    pub active_animation: Option<usize>,
+    /// Current time [s].
+    pub time: f64,
+    /// Non-fatal problems found while loading (unsupported features ignored, defaults used).
+    pub warnings: Vec<String>,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self { name: "camera".into(), yfov_rad: 40f32.to_radians(), node: NodeId(0), world_from_camera: Affine3A::IDENTITY }
+    }
+}
+
+impl Scene {
+    /// World-space bounds of every instance at the current time.
+    pub fn bounds(&self) -> Aabb {
+        self.instances
+            .iter()
+            .map(|i| self.meshes[i.mesh.index()].bounds().transformed(&i.world_from_object))
+            .fold(Aabb::EMPTY, Aabb::union)
+    }
+
+    /// Total triangles over all instances.
+    pub fn instanced_triangle_count(&self) -> usize {
+        self.instances.iter().map(|i| self.meshes[i.mesh.index()].triangle_count()).sum()
+    }
+
+    /// Albedo ρ of `material` at `uv` (texture × factor).
+    pub fn albedo(&self, material: MaterialId, uv: Vec2) -> Rgb {
+        let m = &self.materials[material.index()];
+        match m.base_color_texture {
+            Some(t) => m.base_color * self.textures[t.index()].sample(uv),
+            None => m.base_color,
+        }
+    }
+
+    /// Duration of the active animation [s] (0 without one).
+    pub fn animation_duration(&self) -> f64 {
+        self.active_animation.map(|a| self.animations[a].duration()).unwrap_or(0.0)
+    }
+
+    /// Total emitted power of emissive triangles [W] per channel: Σ π·Le·A (one-sided).
+    pub fn emissive_power(&self) -> Rgb {
+        let mut total = Rgb::ZERO;
+        for inst in &self.instances {
+            let mesh = &self.meshes[inst.mesh.index()];
+            for (t, m) in mesh.triangle_materials.iter().enumerate() {
+                let mat = &self.materials[m.index()];
+                if mat.is_emissive() {
+                    let [a, b, c] = mesh.triangle(t).map(|p| inst.world_from_object.transform_point3(p));
+                    total += mat.emission * PI * 0.5 * (b - a).cross(c - a).length();
+                }
+            }
+        }
+        total
+    }
+
+    /// Total power of all lights [W] per channel, analytic and emissive.
+    pub fn total_power(&self) -> Rgb {
+        let r = self.bounds().bounding_radius();
+        self.lights.iter().map(|l| l.power(r)).sum::<Rgb>() + self.emissive_power()
+    }
+
+    /// Mean-channel power of everything that emits, for choosing among lights.
+    pub fn total_power_mean(&self) -> f32 {
+        channel_mean(self.total_power())
+    }
+
+    /// Checks every cross-reference and value; the message names the offending item.
+    pub fn validate(&self) -> Result<(), String> {
+        for (i, m) in self.meshes.iter().enumerate() {
+            m.validate(self.materials.len()).map_err(|e| format!("mesh {i} '{}': {e}", m.name))?;
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            if !m.base_color.is_finite() || !m.emission.is_finite() || m.emission.min_element() < 0.0 {
+                return Err(format!("material {i} '{}': colour or emission not finite or negative", m.name));
+            }
+            if let Some(t) = m.base_color_texture
+                && t.index() >= self.textures.len()
+            {
+                return Err(format!("material {i} '{}': texture {} of {}", m.name, t.0, self.textures.len()));
+            }
+        }
+        for (i, n) in self.nodes.iter().enumerate() {
+            if let Some(p) = n.parent
+                && p.index() >= i
+            {
+                return Err(format!("node {i} '{}': parent {} does not come first", n.name, p.0));
+            }
+            if !n.local.is_finite() {
+                return Err(format!("node {i} '{}': transform is not finite", n.name));
+            }
+        }
+        for (i, inst) in self.instances.iter().enumerate() {
+            if inst.mesh.index() >= self.meshes.len() || inst.node.index() >= self.nodes.len() {
+                return Err(format!("instance {i} '{}': mesh or node out of range", inst.name));
+            }
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            if l.node.index() >= self.nodes.len() {
+                return Err(format!("light {i} '{}': node out of range", l.name));
+            }
+        }
+        for (i, a) in self.animations.iter().enumerate() {
+            for c in &a.channels {
+                if c.node.index() >= self.nodes.len() {
+                    return Err(format!("animation {i} '{}': channel targets missing node {}", a.name, c.node.0));
+                }
+            }
+        }
+        Ok(())
+    }
+}

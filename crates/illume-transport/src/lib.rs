@@ -1,0 +1,1 @@
+//! Shared light transport: the Technique trait, surface interactions, BSDFs, light sampling and photon paths.

@@ -1,0 +1,1 @@
+//! Photon streaming with virtual surface lights (Meneveaux & Bridault 2008).

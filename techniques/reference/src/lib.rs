@@ -1,0 +1,1 @@
+//! Reference path tracer: unbiased ground truth with NEE + MIS, full/direct/indirect images.
