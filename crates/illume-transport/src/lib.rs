@@ -1,1 +1,31 @@
-//! Shared light transport: the Technique trait, surface interactions, BSDFs, light sampling and photon paths.
+//! Light transport shared by every technique.
+//!
+//! * [`World`] — a scene together with its [`Tracer`](illume_accel::Tracer) and
+//!   [`LightSet`], kept consistent under time changes and edits.
+//! * [`SurfaceHit`] — what a ray hit: position, normals, albedo, emission, sidedness.
+//! * [`lights`] — light selection proportional to power, direct-light sampling (next-event
+//!   estimation) and emission sampling for every light type.
+//! * [`bsdf`] — the Lambertian BSDF with cosine-weighted sampling, Russian roulette.
+//! * [`photon`] — the photon-path generator: a pure function of an addressable
+//!   [`SampleStream`](illume_core::sampling::SampleStream) (same index ⇒ same path).
+//! * [`gbuffer`] — the per-pixel primary-hit buffer a technique shades.
+//! * [`technique`] — the [`Technique`] trait every GI technique implements.
+//!
+//! Radiometric conventions follow `shared/DESIGN.md`: lights and pixels carry linear RGB
+//! radiometry (W, W/sr, W/m², W/(m²·sr)).
+
+pub mod bsdf;
+pub mod camera;
+pub mod gbuffer;
+pub mod lights;
+pub mod photon;
+pub mod surface;
+pub mod technique;
+pub mod world;
+
+pub use camera::CameraRays;
+pub use gbuffer::{GBuffer, GBufferPixel};
+pub use lights::{EmissionSample, LightSample, LightSet};
+pub use surface::SurfaceHit;
+pub use technique::{Budget, Technique, TechniqueStats};
+pub use world::{SharedWorld, World};

@@ -1,0 +1,50 @@
+//! Primary rays of the scene's perspective camera.
+
+use illume_core::{Affine3A, Ray, Vec2, Vec3};
+use illume_scene::Camera;
+
+/// Generates primary rays for a `width × height` image: pixel (x, y) with y = 0 at the
+/// top; the vertical field of view is the camera's, the aspect the image's.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraRays {
+    world_from_camera: Affine3A,
+    origin: Vec3,
+    tan_half_y: f32,
+    aspect: f32,
+    width: u32,
+    height: u32,
+}
+
+impl CameraRays {
+    /// Ray generator for `camera` at its current transform.
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
+        Self {
+            world_from_camera: camera.world_from_camera,
+            origin: camera.world_from_camera.translation.into(),
+            tan_half_y: (camera.yfov_rad * 0.5).tan(),
+            aspect: width as f32 / height.max(1) as f32,
+            width,
+            height,
+        }
+    }
+
+    /// The unit-direction ray through image position `(x + offset.x, y + offset.y)`,
+    /// `offset` in `[0, 1)²` within the pixel (0.5, 0.5 = centre).
+    #[inline]
+    pub fn ray(&self, x: u32, y: u32, offset: Vec2) -> Ray {
+        let ndc_x = ((x as f32 + offset.x) / self.width as f32) * 2.0 - 1.0;
+        let ndc_y = 1.0 - ((y as f32 + offset.y) / self.height as f32) * 2.0;
+        let d = Vec3::new(
+            ndc_x * self.tan_half_y * self.aspect,
+            ndc_y * self.tan_half_y,
+            -1.0,
+        );
+        let dir = self.world_from_camera.transform_vector3(d).normalize();
+        Ray::new(self.origin, dir)
+    }
+
+    /// Image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+}

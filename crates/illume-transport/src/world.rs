@@ -1,0 +1,81 @@
+//! A scene with its tracer and light set, updated together.
+
+use crate::lights::LightSet;
+use crate::surface::SurfaceHit;
+use illume_accel::{Hit, Tracer};
+use illume_core::Ray;
+use illume_scene::change::EditError;
+use illume_scene::{Edit, Scene, SceneChange};
+use std::sync::{Arc, RwLock};
+
+/// A world shared between the frame loop and long-lived simulation threads (photon
+/// streaming): readers trace under a read lock; scene updates take the write lock briefly
+/// (an instance-level refit, never a mesh BVH rebuild).
+pub type SharedWorld = Arc<RwLock<World>>;
+
+/// A scene, its acceleration structure and its lights, always mutually consistent.
+pub struct World {
+    /// The scene at [`Scene::time`].
+    pub scene: Scene,
+    /// Ray queries against `scene`.
+    pub tracer: Tracer,
+    /// Every emitter of `scene`, with power-proportional selection.
+    pub lights: LightSet,
+}
+
+impl World {
+    /// Builds the tracer and the light set for `scene`.
+    pub fn new(scene: Scene) -> Self {
+        let tracer = Tracer::new(&scene);
+        let lights = LightSet::new(&scene);
+        Self {
+            scene,
+            tracer,
+            lights,
+        }
+    }
+
+    /// Wraps the world for sharing between threads.
+    pub fn shared(self) -> SharedWorld {
+        Arc::new(RwLock::new(self))
+    }
+
+    /// Moves the scene to time `t` [s] and brings the tracer and lights up to date.
+    pub fn set_time(&mut self, t: f64) -> Vec<SceneChange> {
+        let changes = self.scene.set_time(t);
+        self.refresh(&changes);
+        changes
+    }
+
+    /// Applies an interactive edit and brings the tracer and lights up to date.
+    pub fn apply_edit(&mut self, edit: &Edit) -> Result<Vec<SceneChange>, EditError> {
+        let changes = self.scene.apply_edit(edit)?;
+        self.refresh(&changes);
+        Ok(changes)
+    }
+
+    /// Re-derives the tracer's instance level and the light set after `changes`.
+    pub fn refresh(&mut self, changes: &[SceneChange]) {
+        if changes
+            .iter()
+            .any(|c| matches!(c, SceneChange::InstanceMoved { .. }))
+        {
+            self.tracer.update(&self.scene);
+        }
+        if !changes.is_empty() {
+            self.lights = LightSet::new(&self.scene);
+        }
+    }
+
+    /// Closest hit of `ray` among instances visible to `mask`, as a surface description.
+    pub fn trace(&self, ray: &Ray, mask: u32) -> Option<SurfaceHit> {
+        self.tracer
+            .intersect(ray, mask)
+            .map(|h| self.surface(ray, &h))
+    }
+
+    /// Surface description of a hit.
+    pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
+        SurfaceHit::new(&self.scene, ray, hit)
+    }
+}

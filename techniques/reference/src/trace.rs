@@ -1,0 +1,136 @@
+//! The path kernel: radiance along one camera path, split by bounce count.
+
+use crate::settings::ReferenceSettings;
+use illume_core::sampling::SampleStream;
+use illume_core::{INV_PI, Ray, Rgb};
+use illume_transport::bsdf::{lambert_pdf, lambert_sample, russian_roulette};
+use illume_transport::{SurfaceHit, World};
+
+/// Radiance of one path split by how many reflections it took.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PathRadiance {
+    /// Emission seen directly (no reflection).
+    pub emitted: Rgb,
+    /// Light reflected once.
+    pub direct: Rgb,
+    /// Light reflected two or more times.
+    pub indirect: Rgb,
+}
+
+impl PathRadiance {
+    /// Everything.
+    pub fn total(&self) -> Rgb {
+        self.emitted + self.direct + self.indirect
+    }
+
+    fn add(&mut self, bounces: u32, value: Rgb) {
+        match bounces {
+            0 => self.emitted += value,
+            1 => self.direct += value,
+            _ => self.indirect += value,
+        }
+    }
+}
+
+#[inline]
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+}
+
+/// Radiance arriving along a camera `ray`.
+pub fn radiance(
+    world: &World,
+    ray: &Ray,
+    sampler: &mut impl SampleStream,
+    settings: &ReferenceSettings,
+) -> PathRadiance {
+    match world.trace(ray, illume_scene::MASK_DEFAULT) {
+        Some(hit) => {
+            let mut out = PathRadiance::default();
+            out.emitted = hit.emission;
+            continue_path(world, hit, sampler, settings, &mut out);
+            out
+        }
+        None => PathRadiance::default(),
+    }
+}
+
+/// Radiance leaving `first` towards where its ray came from, reflected one or more times
+/// (`direct` and `indirect`; `first`'s own emission is not added).
+pub fn continue_path(
+    world: &World,
+    first: SurfaceHit,
+    sampler: &mut impl SampleStream,
+    settings: &ReferenceSettings,
+    out: &mut PathRadiance,
+) {
+    let mut hit = first;
+    let mut throughput = Rgb::ONE;
+    // `bounces` = reflections so far on this path before the current vertex reflects.
+    let mut bounces = 0u32;
+    loop {
+        if !hit.reflects || hit.albedo == Rgb::ZERO {
+            return;
+        }
+        let n = hit.facing_normal();
+        let ng = hit.facing_geometric_normal();
+        let f = hit.albedo * INV_PI;
+        // Next-event estimation: light reaching this vertex directly.
+        if let Some(ls) = world.lights.sample_incident(hit.position, sampler) {
+            let cos = n.dot(ls.wi);
+            if cos > 0.0 && ng.dot(ls.wi) > 0.0 {
+                let origin = hit.spawn_origin(ls.wi);
+                let t_max = if ls.distance.is_finite() {
+                    (ls.distance - 2e-4 * (1.0 + ls.distance)).max(0.0)
+                } else {
+                    f32::INFINITY
+                };
+                if !world.tracer.occluded(
+                    &Ray::segment(origin, ls.wi, t_max),
+                    illume_scene::MASK_DEFAULT,
+                ) {
+                    let w = if ls.pdf > 0.0 {
+                        power_heuristic(ls.pdf, lambert_pdf(n, ls.wi))
+                    } else {
+                        1.0
+                    };
+                    out.add(bounces + 1, throughput * f * ls.weight * (cos * w));
+                }
+            }
+        }
+        // BSDF sampling.
+        let u_rr = sampler.next_1d();
+        let s = lambert_sample(hit.albedo, n, sampler.next_2d());
+        if s.wi.dot(ng) <= 0.0 {
+            return;
+        }
+        throughput *= s.weight;
+        bounces += 1;
+        if bounces >= settings.max_depth {
+            return;
+        }
+        if bounces >= settings.rr_start_depth {
+            match russian_roulette(throughput, u_rr) {
+                Some(w) => throughput *= w,
+                None => return,
+            }
+        }
+        let ray = Ray::new(hit.spawn_origin(s.wi), s.wi);
+        let Some(h) = world.tracer.intersect(&ray, illume_scene::MASK_DEFAULT) else {
+            return;
+        };
+        let next = world.surface(&ray, &h);
+        if next.emission != Rgb::ZERO {
+            let light_pdf = world.lights.pdf_triangle_hit(
+                next.instance,
+                next.triangle,
+                hit.position,
+                next.position,
+            );
+            let w = power_heuristic(s.pdf, light_pdf);
+            out.add(bounces, throughput * next.emission * w);
+        }
+        hit = next;
+    }
+}
