@@ -55,6 +55,7 @@ fn load_err(path: &Path) -> String {
         Ok(_) => panic!("{} loaded but should fail", path.display()),
         Err(e) => {
             let msg = e.to_string();
+            eprintln!("expected error: {msg}");
             let name = path.file_name().unwrap().to_string_lossy();
             assert!(
                 msg.contains(name.as_ref()),
@@ -1188,6 +1189,21 @@ fn ply_binary_both_endians_ascii_and_errors() {
             let msg = load_err(&t);
             assert_contains(&msg, &["byte offset", "truncated"]);
         }
+        // A face index out of range, located by its face's byte offset.
+        let mut bad = bytes.clone();
+        let n = bad.len();
+        bad[n - 4..].copy_from_slice(&if big {
+            9u32.to_be_bytes()
+        } else {
+            9u32.to_le_bytes()
+        });
+        let t = dir.join(format!("bad_face_{big}.ply"));
+        std::fs::write(&t, &bad).unwrap();
+        let face_offset = header_len + 4 * 21;
+        assert_contains(
+            &load_err(&t),
+            &[&format!("face 0 (byte offset {face_offset})"), "index 9"],
+        );
         let t = dir.join(format!("cut_vertex_{big}.ply"));
         std::fs::write(&t, &bytes[..header_len + 21 + 2]).unwrap();
         assert_contains(&load_err(&t), &["vertex 1 (byte offset"]);
@@ -1210,7 +1226,10 @@ fn ply_binary_both_endians_ascii_and_errors() {
 
     let p = dir.join("bad_index.ply");
     std::fs::write(&p, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n").unwrap();
-    assert_contains(&load_err(&p), &["face 0", "index 7", "out of range"]);
+    assert_contains(
+        &load_err(&p),
+        &["face 0 (line 13)", "index 7", "out of range"],
+    );
 
     let p = dir.join("bad_value.ply");
     std::fs::write(&p, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 oops 0\n").unwrap();
@@ -1218,7 +1237,7 @@ fn ply_binary_both_endians_ascii_and_errors() {
 
     let p = dir.join("nan.ply");
     std::fs::write(&p, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 nan 0\n").unwrap();
-    assert_contains(&load_err(&p), &["vertex 0", "not finite"]);
+    assert_contains(&load_err(&p), &["vertex 0 (line 8)", "not finite"]);
 
     for (name, text, expect) in [
         (
@@ -1270,4 +1289,166 @@ fn unknown_extension_and_missing_file() {
     let msg = load_err(&dir.join("absent.obj"));
     assert!(msg.contains("absent.obj"));
     assert!(load_scene(Path::new("builtin:cornell-spot")).is_ok());
+}
+
+// ---------------------------------------------------------------------------------------
+// Hostile inputs: many corruptions, never a panic
+// ---------------------------------------------------------------------------------------
+
+/// Loads `path` catching panics; returns the panic message if there was one.
+fn panics(path: &Path) -> Option<String> {
+    let p = path.to_path_buf();
+    match std::panic::catch_unwind(move || load_scene(&p).map(|_| ())) {
+        Ok(_) => None,
+        Err(e) => Some(
+            e.downcast_ref::<String>()
+                .cloned()
+                .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default(),
+        ),
+    }
+}
+
+/// JSON pointers of every leaf (number, string, bool) of `v`.
+fn leaves(v: &Value, at: String, out: &mut Vec<String>) {
+    match v {
+        Value::Object(m) => m
+            .iter()
+            .for_each(|(k, x)| leaves(x, format!("{at}/{k}"), out)),
+        Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| leaves(x, format!("{at}/{i}"), out)),
+        _ => out.push(at),
+    }
+}
+
+#[test]
+fn gltf_json_mutations_never_panic() {
+    let dir = temp_dir("mutate_gltf");
+    let (bin, views) = animated_buffer();
+    std::fs::write(dir.join("anim.bin"), &bin).unwrap();
+    std::fs::copy(
+        scenes_dir().join("gltf/cube_in_box.bin"),
+        dir.join("cube_in_box.bin"),
+    )
+    .unwrap();
+    let docs = [
+        animated_gltf(Some("anim.bin".into()), bin.len(), &views),
+        gltf_json("gltf/cube_in_box.gltf"),
+    ];
+    let hostile = [
+        json!(0),
+        json!(-1),
+        json!(2),
+        json!(7),
+        json!(4_294_967_295u64),
+        json!(1e39),
+        json!(0.5),
+        json!("VEC4"),
+        json!(null),
+        json!([]),
+    ];
+    let mut failures = Vec::new();
+    let mut runs = 0;
+    let prev_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    for doc in &docs {
+        let mut pointers = Vec::new();
+        leaves(doc, String::new(), &mut pointers);
+        for ptr in &pointers {
+            for h in &hostile {
+                let mut d = doc.clone();
+                *d.pointer_mut(ptr).unwrap() = h.clone();
+                let p = write_json(&dir, "m.gltf", &d);
+                runs += 1;
+                if let Some(msg) = panics(&p) {
+                    failures.push(format!("{ptr} = {h}: {msg}"));
+                }
+            }
+        }
+    }
+    std::panic::set_hook(prev_hook);
+    assert!(runs > 1000, "{runs} mutations");
+    assert!(
+        failures.is_empty(),
+        "{} of {runs} mutations panicked:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn binary_corruptions_never_panic() {
+    let dir = temp_dir("mutate_bin");
+    let (bin, views) = animated_buffer();
+    let glb_bytes = glb(&animated_gltf(None, bin.len(), &views), &bin);
+    let ply_bytes = binary_ply(false);
+    let ascii_ply = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n".to_vec();
+    let obj = b"mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nusemtl a\nf 1/1/1 2/1/1 -1/-1/-1\n".to_vec();
+    let mut failures = Vec::new();
+    let prev_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let mut check = |name: &str, bytes: &[u8], what: String| {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        if let Some(msg) = panics(&p) {
+            failures.push(format!("{name} {what}: {msg}"));
+        }
+    };
+    for (name, bytes) in [
+        ("c.glb", &glb_bytes),
+        ("c.ply", &ply_bytes),
+        ("a.ply", &ascii_ply),
+        ("c.obj", &obj),
+    ] {
+        for cut in 0..bytes.len() {
+            check(name, &bytes[..cut], format!("cut at {cut}"));
+        }
+        // Every byte of the small text formats; the GLB's headers and binary chunk (its
+        // JSON is covered by gltf_json_mutations_never_panic).
+        let json_end = if name == "c.glb" {
+            20 + u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize
+        } else {
+            0
+        };
+        for at in (0..bytes.len()).filter(|&at| name != "c.glb" || at < 20 || at >= json_end) {
+            for x in [0u8, 0xFF, b'-', b'9', b' ', b'\n', b'/'] {
+                let mut b = bytes.clone();
+                b[at] = x;
+                check(name, &b, format!("byte {at} = {x}"));
+            }
+        }
+    }
+    // 32-bit words of the GLB headers set to extreme values.
+    for at in (0..28).step_by(4) {
+        for w in [0u32, 1, 11, 12, 19, 20, u32::MAX, 0x8000_0000] {
+            let mut b = glb_bytes.clone();
+            b[at..at + 4].copy_from_slice(&w.to_le_bytes());
+            check("w.glb", &b, format!("word {at} = {w}"));
+        }
+    }
+    std::panic::set_hook(prev_hook);
+    assert!(
+        failures.is_empty(),
+        "{} corruptions panicked:\n{}",
+        failures.len(),
+        failures
+            .iter()
+            .take(30)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+}
+
+#[test]
+fn glb_header_with_tiny_length_is_an_error() {
+    let dir = temp_dir("glb_tiny");
+    let (bin, views) = animated_buffer();
+    let mut bytes = glb(&animated_gltf(None, bin.len(), &views), &bin);
+    bytes[8..12].copy_from_slice(&4u32.to_le_bytes());
+    let p = dir.join("tiny.glb");
+    std::fs::write(&p, &bytes).unwrap();
+    assert_contains(&load_err(&p), &["GLB header", "length 4"]);
 }

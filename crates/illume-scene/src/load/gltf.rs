@@ -52,9 +52,9 @@ use std::path::{Path, PathBuf};
 pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] =
     ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
 
-/// Largest element count of one accessor accepted (guards memory against absurd counts
-/// in accessors without a buffer view).
-const MAX_ACCESSOR_ELEMENTS: u64 = 1 << 28;
+/// Largest number of values (elements × components) of one accessor accepted: guards
+/// memory against absurd counts, e.g. in accessors without a buffer view.
+const MAX_ACCESSOR_VALUES: u64 = 1 << 26;
 
 /// Everything needed while converting one document.
 struct Ctx<'a> {
@@ -73,6 +73,9 @@ struct Ctx<'a> {
 pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
     let bytes = read_file(path)?;
     let is_glb = bytes.starts_with(b"glTF");
+    if is_glb {
+        check_glb_header(path, &bytes)?;
+    }
     let document = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
         LoadError::malformed(
             path,
@@ -88,6 +91,25 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
                 format!("extensionsRequired[{i}]"),
                 format!("required extension '{ext}'"),
             ));
+        }
+    }
+    // gltf-json's validation indexes `accessors` with a primitive's POSITION index
+    // unchecked: check every attribute reference first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, a) in &prim.attributes {
+                if a.value() >= root.accessors.len() {
+                    return Err(LoadError::malformed(
+                        path,
+                        format!("mesh {m} primitive {p}"),
+                        format!(
+                            "attribute {semantic:?} uses accessor {} of {}",
+                            a.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
         }
     }
     // The same schema validation `Gltf::from_slice` runs, reported with its JSON paths.
@@ -127,6 +149,52 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         camera_set: false,
     };
     ctx.convert()
+}
+
+/// Checks the 12-byte GLB header before the `gltf` crate reads it (it subtracts 12 from
+/// the declared length without checking, which overflows on a corrupt header).
+fn check_glb_header(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
+    let place = "GLB header";
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Err(LoadError::malformed(
+            path,
+            place,
+            format!(
+                "file has {} bytes, the header needs 12 (truncated)",
+                bytes.len()
+            ),
+        ));
+    };
+    if version != 2 {
+        return Err(LoadError::unsupported(
+            path,
+            place,
+            format!("GLB version {version} (only 2)"),
+        ));
+    }
+    if length < 20 {
+        return Err(LoadError::malformed(
+            path,
+            place,
+            format!("declared length {length} is too small for a JSON chunk"),
+        ));
+    }
+    if length as usize > bytes.len() {
+        return Err(LoadError::malformed(
+            path,
+            place,
+            format!(
+                "declared length {length} but the file has {} bytes (truncated)",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Reads every buffer: the GLB binary chunk, a data URI or a file next to the glTF.
@@ -278,7 +346,7 @@ impl Ctx<'_> {
         }
         let n_comp = components(*ty);
         let count = acc.count.0;
-        if count > MAX_ACCESSOR_ELEMENTS {
+        if count.saturating_mul(n_comp as u64) > MAX_ACCESSOR_VALUES {
             return Err(self.malformed(place, format!("count {count} is too large")));
         }
         let count = count as usize;
