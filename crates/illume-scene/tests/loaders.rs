@@ -28,12 +28,27 @@ fn load(rel: &str) -> Scene {
     load_scene(&p).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
-/// A fresh, empty temp folder for one test.
-fn temp_dir(test: &str) -> PathBuf {
+/// A fresh, empty temp folder for one test, removed when dropped.
+struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn temp_dir(test: &str) -> TempDir {
     let d = std::env::temp_dir().join(format!("illume-loaders-{}-{test}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TempDir(d)
 }
 
 fn assert_close(a: Vec3, b: Vec3, tol: f32, what: &str) {
@@ -827,7 +842,7 @@ fn glb_loads_and_truncated_glb_fails() {
 // ---------------------------------------------------------------------------------------
 
 /// Copies shared cube_in_box.gltf/.bin into a temp dir; returns (dir, parsed JSON).
-fn cube_copy(test: &str) -> (PathBuf, Value) {
+fn cube_copy(test: &str) -> (TempDir, Value) {
     let dir = temp_dir(test);
     let src = scenes_dir().join("gltf");
     std::fs::copy(src.join("cube_in_box.bin"), dir.join("cube_in_box.bin")).unwrap();
@@ -985,6 +1000,11 @@ fn gltf_missing_texture_and_data_uri_texture() {
             illume_scene::WrapMode::Mirror
         )
     );
+    // A truncated PNG: a located decode error.
+    let mut bad = d.clone();
+    bad["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64::encode(&png[..png.len() / 2]))}]);
+    let msg = load_err(&write_json(&dir, "bad_png.gltf", &bad));
+    assert_contains(&msg, &["image 0", "cannot decode"]);
     let orange = s.materials.iter().find(|m| m.name == "orange").unwrap();
     assert_eq!(orange.base_color_texture.map(|t| t.index()), Some(0));
 }
@@ -1072,8 +1092,16 @@ fn obj_materials_textures_and_missing_files() {
         "mtllib tex.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
     )
     .unwrap();
-    let err = load_scene(&p).unwrap_err().to_string();
-    assert_contains(&err, &["tex.mtl", "line 3", "missing.png"]);
+    assert_contains(&load_err(&p), &["tex.mtl line 3 (map_Kd)", "missing.png"]);
+    // A malformed MTL value: located in the MTL, reported against the OBJ.
+    std::fs::write(dir.join("bad.mtl"), "newmtl red\n\nKd 1 x 0\n").unwrap();
+    let p = dir.join("bad_mtl.obj");
+    std::fs::write(
+        &p,
+        "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
+    )
+    .unwrap();
+    assert_contains(&load_err(&p), &["bad.mtl line 3", "'x' is not a number"]);
 
     // A texture in a sub-folder relative to the MTL, with `-clamp on`, tab separators,
     // Ke, Ns, and vt flipped to v = 0 at the top.
