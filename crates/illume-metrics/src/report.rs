@@ -236,8 +236,11 @@ pub fn read_csv(path: &Path) -> Result<Table, MetricsError> {
     Ok(table)
 }
 
-/// Splits CSV text into records of fields, each with its 1-based starting line.
-fn parse_csv(text: &str) -> Result<Vec<(usize, Vec<String>)>, (usize, String)> {
+/// A CSV record: its 1-based starting line and its fields.
+type Record = (usize, Vec<String>);
+
+/// Splits CSV text into records; a syntax error gives its line and a message.
+fn parse_csv(text: &str) -> Result<Vec<Record>, (usize, String)> {
     let mut records = Vec::new();
     let mut chars = text.chars().peekable();
     let mut line = 1;

@@ -115,7 +115,7 @@ fn ldr_gradient_noisy() -> Srgb8 {
 
 fn ldr_checker(shift: u32, second: [f32; 3]) -> Srgb8 {
     Srgb8::from_fn(|x, y| {
-        if ((x + shift) / 8 + y / 8) % 2 == 0 {
+        if ((x + shift) / 8 + y / 8) & 1 == 0 {
             [0.8, 0.15, 0.15]
         } else {
             second
