@@ -469,15 +469,19 @@ impl Ctx<'_> {
             self.light(g, &name, id)?;
         }
         self.camera(&order, &node_ids)?;
-        let animated = self.animations(&node_ids)?;
-        // Animated by itself or through an ancestor (parents come first).
+        let targeted = self.animations(&node_ids)?;
+        // Moving = targeted itself or through an ancestor (parents come first).
         let nodes = &self.builder.scene().nodes;
         let mut moving = vec![false; nodes.len()];
+        for id in targeted {
+            if let Some(m) = moving.get_mut(id.index()) {
+                *m = true;
+            }
+        }
         for i in 0..nodes.len() {
-            moving[i] = animated.contains(&NodeId(i as u32))
-                || nodes[i]
-                    .parent
-                    .is_some_and(|p| moving.get(p.index()).copied().unwrap_or(false));
+            if let Some(p) = nodes[i].parent {
+                moving[i] |= moving.get(p.index()).copied().unwrap_or(false);
+            }
         }
         for (name, mesh, node) in placements {
             let dynamic = moving.get(node.index()).copied().unwrap_or(false);
