@@ -307,6 +307,21 @@ pub fn hdr_flip(
     })
 }
 
+/// The per-pixel FLIP map for writing as an error image: HDR-FLIP when `hdr`, LDR-FLIP
+/// otherwise.
+pub fn flip_error_map(
+    reference: &RgbImage,
+    test: &RgbImage,
+    hdr: bool,
+    settings: &FlipSettings,
+) -> Result<FlipMap, MetricsError> {
+    if hdr {
+        Ok(hdr_flip(reference, test, settings)?.map)
+    } else {
+        ldr_flip(reference, test, settings)
+    }
+}
+
 /// The exposure bracket HDR-FLIP uses for `reference` under `settings` (user values
 /// where given, the paper's automatic choice otherwise).
 pub fn exposure_range(
