@@ -958,7 +958,18 @@ fn gltf_bad_json_extension_accessor_and_mode() {
     let msg = load_err(&write_json(&dir, "bad_channel.gltf", &d));
     assert_contains(&msg, &["animation 0 'move' channel 0", "values for"]);
 
-    // A spot light with a range is loaded, with a warning.
+    // A directional light: intensity × colour is irradiance [W/m²].
+    let mut d = doc.clone();
+    d["extensions"]["KHR_lights_punctual"]["lights"][0] =
+        json!({"type": "directional", "color": [1.0, 0.5, 0.25], "intensity": 4.0});
+    let s = load_scene(&write_json(&dir, "sun.gltf", &d)).unwrap();
+    assert_eq!(
+        s.lights[0].kind,
+        LightKind::Directional {
+            irradiance: Vec3::new(4.0, 2.0, 1.0)
+        }
+    );
+    // A point light with a range is loaded, with a warning.
     let mut d = doc.clone();
     d["extensions"]["KHR_lights_punctual"]["lights"][0]["range"] = json!(5.0);
     let s = load_scene(&write_json(&dir, "range.gltf", &d)).unwrap();

@@ -1,8 +1,11 @@
 //! glTF 2.0 loader (`.gltf` with external or data-URI buffers, `.glb`).
 //!
-//! Parsing and schema validation are the `gltf` crate's (`Gltf::from_slice` without the
-//! importer); buffers and images are resolved here so that a missing or short file is
-//! reported as *this* scene's error naming the buffer or image index. The document is
+//! Parsing and schema validation are the `gltf` crate's:
+//! `Gltf::from_slice_without_validation`, then the same `Validate` pass `Gltf::from_slice`
+//! runs, preceded by our own checks of `extensionsRequired` (a clearer message) and of
+//! the GLB header and the POSITION accessor indices (on which the crate would panic). Not
+//! `gltf::import`: buffers and images are resolved here so that a missing or short file
+//! is reported as *this* scene's error naming the buffer or image index. The document is
 //! then read through its JSON (`gltf::json`) with every index and byte range checked, so
 //! no input can make the loader panic.
 //!
@@ -52,9 +55,10 @@ use std::path::{Path, PathBuf};
 pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] =
     ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
 
-/// Largest number of values (elements × components) of one accessor accepted: guards
-/// memory against absurd counts, e.g. in accessors without a buffer view.
-const MAX_ACCESSOR_VALUES: u64 = 1 << 26;
+/// Largest number of values (elements × components) of an accessor *without* a buffer
+/// view (all zeros) accepted: guards memory against absurd counts. Accessors with data
+/// are bounded by their buffer's size instead.
+const MAX_ZERO_ACCESSOR_VALUES: u64 = 1 << 26;
 
 /// Everything needed while converting one document.
 struct Ctx<'a> {
@@ -346,13 +350,15 @@ impl Ctx<'_> {
         }
         let n_comp = components(*ty);
         let count = acc.count.0;
-        if count.saturating_mul(n_comp as u64) > MAX_ACCESSOR_VALUES {
-            return Err(self.malformed(place, format!("count {count} is too large")));
-        }
-        let count = count as usize;
         let Some(view_index) = acc.buffer_view.map(|v| v.value()) else {
-            return Ok((vec![0.0; count * n_comp], n_comp)); // glTF: no buffer view = zeros
+            if count.saturating_mul(n_comp as u64) > MAX_ZERO_ACCESSOR_VALUES {
+                return Err(self.malformed(place, format!("count {count} is too large")));
+            }
+            // glTF: an accessor without a buffer view is all zeros.
+            return Ok((vec![0.0; count as usize * n_comp], n_comp));
         };
+        let count = usize::try_from(count)
+            .map_err(|_| self.malformed(&place, format!("count {count} is too large")))?;
         let bytes = self.view_bytes(view_index)?;
         let csize = component_size(*ct);
         let elem = (csize * n_comp) as u64;
