@@ -314,12 +314,17 @@ fn write_raw_f32(img: &RgbImage, path: &Path) {
     std::fs::write(path, bytes).unwrap();
 }
 
-/// Writes the fixtures for `flip_reference.py` into `$ILLUME_FLIP_FIXTURE_DIR`.
+/// Writes the fixtures for `flip_reference.py` into `$ILLUME_FLIP_FIXTURE_DIR` (default:
+/// `illume-flip-fixtures` in the temporary directory).
 #[test]
 #[ignore = "writes the fixtures for the offline reference run; see the module docs"]
 fn write_flip_fixtures() {
-    let dir = std::env::var("ILLUME_FLIP_FIXTURE_DIR").expect("set ILLUME_FLIP_FIXTURE_DIR");
-    write_cases(Path::new(&dir));
+    let dir = std::env::var_os("ILLUME_FLIP_FIXTURE_DIR").map_or_else(
+        || std::env::temp_dir().join("illume-flip-fixtures"),
+        Into::into,
+    );
+    write_cases(&dir);
+    println!("FLIP fixtures written to {}", dir.display());
 }
 
 #[test]
