@@ -123,7 +123,34 @@ fn cornell_objs_have_readme_triangle_counts() {
             s.materials.iter().all(|m| m.double_sided),
             "{file}: OBJ surfaces are two-sided"
         );
-        // The box is the 2-unit Cornell box, Y up (water.obj is only the water surface).
+        // The box is the 2-unit Cornell box, Y up, lit by an emissive quad (MTL `Ke`) at
+        // y = 1.98 or 1.58 (water.obj is only the water surface).
+        // Exception: both Glossy OBJs use CornellBox-Glossy.mtl, which has no `light`
+        // material: their light quad gets the default material, with a warning.
+        if file.contains("Glossy") {
+            assert_eq!(s.emissive_power(), Vec3::ZERO, "{file}");
+            assert!(
+                s.warnings
+                    .iter()
+                    .any(|w| w.contains("unknown materials") && w.contains("light")),
+                "{file}: {:?}",
+                s.warnings
+            );
+        } else if file != "water.obj" {
+            let mesh = &s.meshes[0];
+            let lit: Vec<usize> = (0..mesh.triangle_count())
+                .filter(|&t| s.materials[mesh.triangle_materials[t].index()].is_emissive())
+                .collect();
+            assert!(!lit.is_empty(), "{file}: no emissive triangle");
+            for t in lit {
+                for p in mesh.triangle(t) {
+                    assert!(
+                        (p.y - 1.98).abs() < 0.011 || (p.y - 1.58).abs() < 0.011,
+                        "{file}: light vertex {p}"
+                    );
+                }
+            }
+        }
         if file != "water.obj" {
             let b = s.bounds();
             assert!(
