@@ -200,7 +200,7 @@ impl Channel {
         if n == 0 {
             return Err("channel has no keys".into());
         }
-        if self.times.windows(2).any(|w| !(w[1] > w[0])) || self.times.iter().any(|t| !t.is_finite()) {
+        if self.times.windows(2).any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater)) || self.times.iter().any(|t| !t.is_finite()) {
             return Err("key times are not finite and strictly increasing".into());
         }
         let per_key = if self.interpolation == Interpolation::CubicSpline { 3 } else { 1 };

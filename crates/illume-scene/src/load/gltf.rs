@@ -1,0 +1,1034 @@
+//! glTF 2.0 loader (`.gltf` with external or data-URI buffers, `.glb`).
+//!
+//! Parsing and schema validation are the `gltf` crate's:
+//! `Gltf::from_slice_without_validation`, then the same `Validate` pass `Gltf::from_slice`
+//! runs, preceded by our own checks of `extensionsRequired` (a clearer message) and of
+//! the GLB header and the POSITION accessor indices (on which the crate would panic). Not
+//! `gltf::import`: buffers and images are resolved here so that a missing or short file
+//! is reported as *this* scene's error naming the buffer or image index. The document is
+//! then read through its JSON (`gltf::json`) with every index and byte range checked, so
+//! no input can make the loader panic.
+//!
+//! Mapping (see DESIGN.md "Conventions"):
+//!
+//! * the default scene (else scene 0, else every root node) is walked depth first;
+//!   each glTF node becomes a [`crate::Node`] (parents before children; a node reached
+//!   twice — a cycle or two parents — is an error); a node with a mesh places an
+//!   [`crate::Instance`], `dynamic` when the node or an ancestor is the target of any
+//!   animation channel;
+//! * one illume [`Mesh`] per glTF mesh (shared by every node that uses it): its primitives
+//!   are concatenated with per-triangle materials; only `TRIANGLES` primitives, indexed
+//!   or not; `POSITION`, `NORMAL` (dropped with a warning when only some primitives have
+//!   it) and `TEXCOORD_0` (zero-filled for primitives without it);
+//! * materials: albedo = `baseColorFactor` rgb (× `baseColorTexture`, decoded
+//!   sRGB → linear, wrap modes from its sampler), emitted radiance = `emissiveFactor` ×
+//!   `KHR_materials_emissive_strength`, glossiness = 1 − `roughnessFactor`,
+//!   `doubleSided`; primitives without a material get a grey (0.8) one-sided default;
+//! * camera: the lowest-index scene node with a perspective camera (`yfov`); without
+//!   one, [`super::default_camera_for_bounds`];
+//! * `KHR_lights_punctual`: point/spot intensity × colour = radiant intensity [W/sr],
+//!   directional intensity × colour = irradiance [W/m²]; `range` is ignored with a
+//!   warning;
+//! * animations: translation/rotation/scale channels with `LINEAR`, `STEP` and
+//!   `CUBICSPLINE`, each checked with [`Channel::validate`]; morph-target weights are
+//!   ignored with a warning. The first animation is the active one.
+//!
+//! Any `extensionsRequired` entry other than `KHR_lights_punctual` and
+//! `KHR_materials_emissive_strength` is [`LoadError::Unsupported`]. Non-finite numbers
+//! in transforms, vertex data or key values are [`LoadError::Malformed`] naming the node
+//! or accessor. Skins, morph targets, sparse accessors and orthographic cameras are not
+//! supported (sparse accessors are an error, the rest warnings).
+
+use super::{LoadError, decode_srgb_texture, default_camera_for_bounds, read_file};
+use crate::animation::{Animation, Channel, ChannelValues, Interpolation, Trs};
+use crate::builtin::SceneBuilder;
+use crate::model::{
+    LightKind, Material, MaterialId, Mesh, MeshId, NodeId, Scene, TextureId, WrapMode,
+};
+use ::gltf::json;
+use illume_core::{Affine3A, Mat4, Quat, Rgb, Vec2, Vec3, Vec4};
+use json::validation::{Checked, Validate};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Extensions a file may list in `extensionsRequired`.
+pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] =
+    ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
+/// Largest number of values (elements × components) of an accessor *without* a buffer
+/// view (all zeros) accepted: guards memory against absurd counts. Accessors with data
+/// are bounded by their buffer's size instead.
+const MAX_ZERO_ACCESSOR_VALUES: u64 = 1 << 26;
+
+/// Everything needed while converting one document.
+struct Ctx<'a> {
+    path: &'a Path,
+    folder: PathBuf,
+    root: &'a json::Root,
+    buffers: Vec<Vec<u8>>,
+    builder: SceneBuilder,
+    materials: Vec<MaterialId>,
+    default_material: Option<MaterialId>,
+    textures: HashMap<(usize, u8, u8), TextureId>,
+    meshes: HashMap<usize, MeshId>,
+    camera_set: bool,
+}
+
+pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
+    let bytes = read_file(path)?;
+    let is_glb = bytes.starts_with(b"glTF");
+    if is_glb {
+        check_glb_header(path, &bytes)?;
+    }
+    let document = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
+        LoadError::malformed(
+            path,
+            if is_glb { "GLB container" } else { "JSON" },
+            e.to_string(),
+        )
+    })?;
+    let root = document.document.as_json();
+    for (i, ext) in root.extensions_required.iter().enumerate() {
+        if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str()) {
+            return Err(LoadError::unsupported(
+                path,
+                format!("extensionsRequired[{i}]"),
+                format!("required extension '{ext}'"),
+            ));
+        }
+    }
+    // gltf-json's validation indexes `accessors` with a primitive's POSITION index
+    // unchecked: check every attribute reference first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, a) in &prim.attributes {
+                if a.value() >= root.accessors.len() {
+                    return Err(LoadError::malformed(
+                        path,
+                        format!("mesh {m} primitive {p}"),
+                        format!(
+                            "attribute {semantic:?} uses accessor {} of {}",
+                            a.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    // The same schema validation `Gltf::from_slice` runs, reported with its JSON paths.
+    let mut problems = Vec::new();
+    root.validate(root, json::Path::new, &mut |p, e| {
+        problems.push(format!("{}: {e}", p()))
+    });
+    if !problems.is_empty() {
+        let n = problems.len();
+        problems.truncate(5);
+        let more = if n > 5 {
+            format!(" (and {} more)", n - 5)
+        } else {
+            String::new()
+        };
+        return Err(LoadError::malformed(
+            path,
+            "validation",
+            format!("{}{more}", problems.join("; ")),
+        ));
+    }
+    let folder = path
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    let buffers = load_buffers(path, &folder, root, document.blob.as_deref())?;
+    let ctx = Ctx {
+        path,
+        folder,
+        root,
+        buffers,
+        builder: SceneBuilder::new(),
+        materials: Vec::new(),
+        default_material: None,
+        textures: HashMap::new(),
+        meshes: HashMap::new(),
+        camera_set: false,
+    };
+    ctx.convert()
+}
+
+/// Checks the 12-byte GLB header before the `gltf` crate reads it (it subtracts 12 from
+/// the declared length without checking, which overflows on a corrupt header).
+fn check_glb_header(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
+    let place = "GLB header";
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Err(LoadError::malformed(
+            path,
+            place,
+            format!(
+                "file has {} bytes, the header needs 12 (truncated)",
+                bytes.len()
+            ),
+        ));
+    };
+    if version != 2 {
+        return Err(LoadError::unsupported(
+            path,
+            place,
+            format!("GLB version {version} (only 2)"),
+        ));
+    }
+    if length < 20 {
+        return Err(LoadError::malformed(
+            path,
+            place,
+            format!("declared length {length} is too small for a JSON chunk"),
+        ));
+    }
+    if length as usize > bytes.len() {
+        return Err(LoadError::malformed(
+            path,
+            place,
+            format!(
+                "declared length {length} but the file has {} bytes (truncated)",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Reads every buffer: the GLB binary chunk, a data URI or a file next to the glTF.
+fn load_buffers(
+    path: &Path,
+    folder: &Path,
+    root: &json::Root,
+    blob: Option<&[u8]>,
+) -> Result<Vec<Vec<u8>>, LoadError> {
+    let mut out = Vec::with_capacity(root.buffers.len());
+    for (i, b) in root.buffers.iter().enumerate() {
+        let place = format!("buffer {i}");
+        let data = match b.uri.as_deref() {
+            None => blob
+                .ok_or_else(|| {
+                    LoadError::malformed(path, &place, "no uri and no GLB binary chunk")
+                })?
+                .to_vec(),
+            Some(uri) if uri.starts_with("data:") => {
+                decode_data_uri(uri).map_err(|m| LoadError::malformed(path, &place, m))?
+            }
+            Some(uri) => {
+                let file = folder.join(decode_uri_path(uri));
+                std::fs::read(&file).map_err(|source| LoadError::MissingFile {
+                    path: path.into(),
+                    place: place.clone(),
+                    file,
+                    source,
+                })?
+            }
+        };
+        let need = b.byte_length.0;
+        if (data.len() as u64) < need {
+            return Err(LoadError::malformed(
+                path,
+                place,
+                format!(
+                    "has {} bytes but byteLength is {need} (truncated?)",
+                    data.len()
+                ),
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+/// Decodes `data:[<media type>][;base64],<data>`.
+fn decode_data_uri(uri: &str) -> Result<Vec<u8>, String> {
+    let (header, data) = uri.split_once(',').ok_or("data URI without ','")?;
+    if header.ends_with(";base64") {
+        base64::decode(data.trim()).map_err(|e| format!("bad base64 in data URI: {e}"))
+    } else {
+        Ok(urlencoding::decode_binary(data.as_bytes()).into_owned())
+    }
+}
+
+/// A relative URI as a file path (percent-decoded).
+fn decode_uri_path(uri: &str) -> String {
+    urlencoding::decode(uri)
+        .map(|s| s.into_owned())
+        .unwrap_or_else(|_| uri.to_string())
+}
+
+fn wrap_mode(m: &Checked<json::texture::WrappingMode>) -> WrapMode {
+    use json::texture::WrappingMode as W;
+    match m {
+        Checked::Valid(W::ClampToEdge) => WrapMode::Clamp,
+        Checked::Valid(W::MirroredRepeat) => WrapMode::Mirror,
+        _ => WrapMode::Repeat,
+    }
+}
+
+fn component_size(c: json::accessor::ComponentType) -> usize {
+    use json::accessor::ComponentType as C;
+    match c {
+        C::I8 | C::U8 => 1,
+        C::I16 | C::U16 => 2,
+        C::U32 | C::F32 => 4,
+    }
+}
+
+fn components(t: json::accessor::Type) -> usize {
+    use json::accessor::Type as T;
+    match t {
+        T::Scalar => 1,
+        T::Vec2 => 2,
+        T::Vec3 => 3,
+        T::Vec4 | T::Mat2 => 4,
+        T::Mat3 => 9,
+        T::Mat4 => 16,
+    }
+}
+
+impl Ctx<'_> {
+    fn malformed(&self, place: impl Into<String>, message: impl Into<String>) -> LoadError {
+        LoadError::malformed(self.path, place, message)
+    }
+
+    fn warn(&mut self, w: String) {
+        let msg = format!("{}: {w}", self.path.display());
+        self.builder.warn(msg);
+    }
+
+    /// The bytes of buffer view `index`, bounds-checked against its buffer.
+    fn view_bytes(&self, index: usize) -> Result<&[u8], LoadError> {
+        let place = format!("bufferView {index}");
+        let view = self
+            .root
+            .buffer_views
+            .get(index)
+            .ok_or_else(|| self.malformed(&place, "does not exist"))?;
+        let b = view.buffer.value();
+        let buffer = self
+            .buffers
+            .get(b)
+            .ok_or_else(|| self.malformed(&place, format!("buffer {b} does not exist")))?;
+        let start = view.byte_offset.map(|o| o.0).unwrap_or(0);
+        let end = start.saturating_add(view.byte_length.0);
+        if end > buffer.len() as u64 {
+            return Err(self.malformed(
+                place,
+                format!(
+                    "bytes {start}..{end} exceed buffer {b} ({} bytes)",
+                    buffer.len()
+                ),
+            ));
+        }
+        Ok(&buffer[start as usize..end as usize])
+    }
+
+    /// Reads accessor `index` as `f64`s (`count × components`, row by row; normalized
+    /// integers mapped to [0, 1] or [−1, 1]) and returns them with the component count.
+    /// `what` names the use for messages. Non-finite values are an error.
+    fn read_accessor(&self, index: usize, what: &str) -> Result<(Vec<f64>, usize), LoadError> {
+        let place = format!("accessor {index} ({what})");
+        let acc = self
+            .root
+            .accessors
+            .get(index)
+            .ok_or_else(|| self.malformed(&place, "does not exist"))?;
+        let (Checked::Valid(ty), Checked::Valid(json::accessor::GenericComponentType(ct))) =
+            (&acc.type_, &acc.component_type)
+        else {
+            return Err(self.malformed(place, "invalid type or componentType"));
+        };
+        if acc.sparse.is_some() {
+            return Err(LoadError::unsupported(self.path, place, "sparse accessors"));
+        }
+        let n_comp = components(*ty);
+        let count = acc.count.0;
+        let Some(view_index) = acc.buffer_view.map(|v| v.value()) else {
+            if count.saturating_mul(n_comp as u64) > MAX_ZERO_ACCESSOR_VALUES {
+                return Err(self.malformed(place, format!("count {count} is too large")));
+            }
+            // glTF: an accessor without a buffer view is all zeros.
+            return Ok((vec![0.0; count as usize * n_comp], n_comp));
+        };
+        let count = usize::try_from(count)
+            .map_err(|_| self.malformed(&place, format!("count {count} is too large")))?;
+        let bytes = self.view_bytes(view_index)?;
+        let csize = component_size(*ct);
+        let elem = (csize * n_comp) as u64;
+        let stride = self
+            .root
+            .buffer_views
+            .get(view_index)
+            .and_then(|v| v.byte_stride)
+            .map(|s| s.0 as u64)
+            .unwrap_or(elem);
+        let offset = acc.byte_offset.map(|o| o.0).unwrap_or(0);
+        if count > 0 {
+            let end = (count as u64 - 1)
+                .checked_mul(stride)
+                .and_then(|x| x.checked_add(offset))
+                .and_then(|x| x.checked_add(elem));
+            if end.is_none_or(|e| e > bytes.len() as u64) {
+                return Err(self.malformed(
+                    place,
+                    format!("{count} elements of {elem} bytes (stride {stride}) from offset {offset} exceed bufferView {view_index} ({} bytes)", bytes.len()),
+                ));
+            }
+        }
+        use json::accessor::ComponentType as C;
+        let normalized = acc.normalized;
+        let mut out = Vec::with_capacity(count * n_comp);
+        for i in 0..count {
+            let base = offset as usize + i * stride as usize;
+            for c in 0..n_comp {
+                let at = base + c * csize;
+                let b = bytes
+                    .get(at..at + csize)
+                    .ok_or_else(|| self.malformed(&place, format!("element {i} out of bounds")))?;
+                let x = match ct {
+                    C::I8 => {
+                        let v = b[0] as i8 as f64;
+                        if normalized { (v / 127.0).max(-1.0) } else { v }
+                    }
+                    C::U8 => {
+                        let v = b[0] as f64;
+                        if normalized { v / 255.0 } else { v }
+                    }
+                    C::I16 => {
+                        let v = i16::from_le_bytes([b[0], b[1]]) as f64;
+                        if normalized {
+                            (v / 32767.0).max(-1.0)
+                        } else {
+                            v
+                        }
+                    }
+                    C::U16 => {
+                        let v = u16::from_le_bytes([b[0], b[1]]) as f64;
+                        if normalized { v / 65535.0 } else { v }
+                    }
+                    C::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                    C::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+                };
+                if !x.is_finite() {
+                    return Err(self.malformed(
+                        place,
+                        format!("element {i} component {c} is not finite ({x})"),
+                    ));
+                }
+                out.push(x);
+            }
+        }
+        Ok((out, n_comp))
+    }
+
+    /// Reads an accessor that must have `n` components per element, as `f32` arrays.
+    fn read_vecs<const N: usize>(
+        &self,
+        index: usize,
+        what: &str,
+    ) -> Result<Vec<[f32; N]>, LoadError> {
+        let (v, n) = self.read_accessor(index, what)?;
+        if n != N {
+            return Err(self.malformed(
+                format!("accessor {index} ({what})"),
+                format!("has {n} components per element, expected {N}"),
+            ));
+        }
+        Ok(v.chunks_exact(N)
+            .map(|c| std::array::from_fn(|k| c[k] as f32))
+            .collect())
+    }
+
+    fn convert(mut self) -> Result<Scene, LoadError> {
+        self.convert_materials()?;
+        let roots = self.scene_roots()?;
+        let order = self.walk(&roots)?;
+        // glTF node index → illume node, in walk order (parents first).
+        let mut node_ids: Vec<Option<NodeId>> = vec![None; self.root.nodes.len()];
+        let mut placements = Vec::new();
+        for &(g, parent) in &order {
+            let node = &self.root.nodes[g];
+            let name = node.name.clone().unwrap_or_else(|| format!("node {g}"));
+            let local = self.node_trs(g)?;
+            let parent_id = parent.and_then(|p| node_ids[p]);
+            let id = self.builder.node(&name, parent_id, local);
+            node_ids[g] = Some(id);
+            if let Some(mesh) = node.mesh {
+                let mesh_id = self.mesh(mesh.value())?;
+                placements.push((name.clone(), mesh_id, id));
+            }
+            if node.skin.is_some() {
+                self.warn(format!(
+                    "node {g} '{name}': skin ignored (rendered in bind pose)"
+                ));
+            }
+            if node.weights.is_some() {
+                self.warn(format!("node {g} '{name}': morph weights ignored"));
+            }
+            self.light(g, &name, id)?;
+        }
+        self.camera(&order, &node_ids)?;
+        let targeted = self.animations(&node_ids)?;
+        // Moving = targeted itself or through an ancestor (parents come first).
+        let nodes = &self.builder.scene().nodes;
+        let mut moving = vec![false; nodes.len()];
+        for id in targeted {
+            if let Some(m) = moving.get_mut(id.index()) {
+                *m = true;
+            }
+        }
+        for i in 0..nodes.len() {
+            if let Some(p) = nodes[i].parent {
+                moving[i] |= moving.get(p.index()).copied().unwrap_or(false);
+            }
+        }
+        for (name, mesh, node) in placements {
+            let dynamic = moving.get(node.index()).copied().unwrap_or(false);
+            self.builder.instance(&name, mesh, node, dynamic);
+        }
+        let mut scene = self.builder.finish(&self.path.to_string_lossy());
+        if !self.camera_set {
+            default_camera_for_bounds(&mut scene);
+        }
+        Ok(scene)
+    }
+
+    /// Root nodes of the scene to load: `scene`, else scene 0, else every node that is
+    /// nobody's child.
+    fn scene_roots(&self) -> Result<Vec<usize>, LoadError> {
+        let chosen = self
+            .root
+            .scene
+            .map(|s| s.value())
+            .or(if self.root.scenes.is_empty() {
+                None
+            } else {
+                Some(0)
+            });
+        match chosen {
+            Some(s) => {
+                let scene =
+                    self.root.scenes.get(s).ok_or_else(|| {
+                        self.malformed("scene", format!("scene {s} does not exist"))
+                    })?;
+                Ok(scene.nodes.iter().map(|n| n.value()).collect())
+            }
+            None => {
+                let mut is_child = vec![false; self.root.nodes.len()];
+                for n in &self.root.nodes {
+                    for c in n.children.iter().flatten() {
+                        if let Some(flag) = is_child.get_mut(c.value()) {
+                            *flag = true;
+                        }
+                    }
+                }
+                Ok((0..self.root.nodes.len())
+                    .filter(|&i| !is_child[i])
+                    .collect())
+            }
+        }
+    }
+
+    /// Depth-first order of the nodes under `roots` as `(node, parent)`; parents come
+    /// before their children. A node reached twice is an error.
+    fn walk(&self, roots: &[usize]) -> Result<Vec<(usize, Option<usize>)>, LoadError> {
+        let mut seen = vec![false; self.root.nodes.len()];
+        let mut order = Vec::new();
+        let mut stack: Vec<(usize, Option<usize>)> =
+            roots.iter().rev().map(|&r| (r, None)).collect();
+        while let Some((n, parent)) = stack.pop() {
+            let place = format!("node {n}");
+            let node = self
+                .root
+                .nodes
+                .get(n)
+                .ok_or_else(|| self.malformed(&place, "does not exist"))?;
+            if std::mem::replace(&mut seen[n], true) {
+                return Err(self.malformed(
+                    place,
+                    "reached twice in the hierarchy (a cycle, two parents or a repeated root)",
+                ));
+            }
+            order.push((n, parent));
+            for c in node.children.iter().flatten().rev() {
+                stack.push((c.value(), Some(n)));
+            }
+        }
+        Ok(order)
+    }
+
+    /// The local transform of node `g`; non-finite values are an error.
+    fn node_trs(&self, g: usize) -> Result<Trs, LoadError> {
+        let node = &self.root.nodes[g];
+        let place = format!("node {g} '{}'", node.name.as_deref().unwrap_or(""));
+        if let Some(m) = node.matrix {
+            if m.iter().any(|x| !x.is_finite()) {
+                return Err(self.malformed(place, format!("matrix is not finite: {m:?}")));
+            }
+            let trs = Trs::from_affine(&Affine3A::from_mat4(Mat4::from_cols_array(&m)));
+            if !trs.is_finite() {
+                return Err(self.malformed(
+                    place,
+                    "matrix cannot be decomposed into translation, rotation and scale",
+                ));
+            }
+            return Ok(trs);
+        }
+        let t = node.translation.unwrap_or([0.0; 3]);
+        let r = node.rotation.map(|q| q.0).unwrap_or([0.0, 0.0, 0.0, 1.0]);
+        let s = node.scale.unwrap_or([1.0; 3]);
+        if t.iter().chain(&r).chain(&s).any(|x| !x.is_finite()) {
+            return Err(self.malformed(
+                place,
+                format!("transform is not finite: translation {t:?}, rotation {r:?}, scale {s:?}"),
+            ));
+        }
+        let q = Quat::from_array(r);
+        if q.length_squared() == 0.0 {
+            return Err(self.malformed(place, "rotation quaternion is zero"));
+        }
+        Ok(Trs {
+            translation: Vec3::from(t),
+            rotation: q.normalize(),
+            scale: Vec3::from(s),
+        })
+    }
+
+    fn convert_materials(&mut self) -> Result<(), LoadError> {
+        for (i, m) in self.root.materials.iter().enumerate() {
+            let name = m.name.clone().unwrap_or_else(|| format!("material {i}"));
+            let pbr = &m.pbr_metallic_roughness;
+            let [r, g, b, _] = pbr.base_color_factor.0;
+            let strength = m
+                .extensions
+                .as_ref()
+                .and_then(|e| e.emissive_strength.as_ref())
+                .map(|s| s.emissive_strength.0)
+                .unwrap_or(1.0);
+            let base_color_texture = match &pbr.base_color_texture {
+                Some(info) => {
+                    if info.tex_coord != 0 {
+                        self.warn(format!("material {i} '{name}': baseColorTexture uses TEXCOORD_{}; TEXCOORD_0 is used", info.tex_coord));
+                    }
+                    Some(self.texture(info.index.value(), &format!("material {i} '{name}'"))?)
+                }
+                None => None,
+            };
+            if m.emissive_texture.is_some() {
+                self.warn(format!("material {i} '{name}': emissiveTexture ignored (emission is emissiveFactor × strength)"));
+            }
+            let material = Material {
+                name,
+                base_color: Rgb::new(r, g, b),
+                base_color_texture,
+                emission: Rgb::from(m.emissive_factor.0) * strength,
+                glossiness: (1.0 - pbr.roughness_factor.0).clamp(0.0, 1.0),
+                double_sided: m.double_sided,
+            };
+            let id = self.builder.material(material);
+            self.materials.push(id);
+        }
+        Ok(())
+    }
+
+    /// The illume texture for glTF texture `index` (image decoded once per wrap mode).
+    fn texture(&mut self, index: usize, user: &str) -> Result<TextureId, LoadError> {
+        let root = self.root;
+        let texture = root
+            .textures
+            .get(index)
+            .ok_or_else(|| self.malformed(user, format!("texture {index} does not exist")))?;
+        let (wrap_u, wrap_v) = match texture.sampler.and_then(|s| root.samplers.get(s.value())) {
+            Some(s) => (wrap_mode(&s.wrap_s), wrap_mode(&s.wrap_t)),
+            None => (WrapMode::Repeat, WrapMode::Repeat),
+        };
+        let image_index = texture.source.value();
+        if let Some(&id) = self
+            .textures
+            .get(&(image_index, wrap_u as u8, wrap_v as u8))
+        {
+            return Ok(id);
+        }
+        let place = format!("image {image_index}");
+        let image = root
+            .images
+            .get(image_index)
+            .ok_or_else(|| self.malformed(&place, "does not exist"))?;
+        let (bytes, name) = match (&image.buffer_view, image.uri.as_deref()) {
+            (Some(view), _) => (
+                self.view_bytes(view.value())?.to_vec(),
+                image.name.clone().unwrap_or_else(|| place.clone()),
+            ),
+            (None, Some(uri)) if uri.starts_with("data:") => (
+                decode_data_uri(uri).map_err(|m| self.malformed(&place, m))?,
+                image.name.clone().unwrap_or_else(|| place.clone()),
+            ),
+            (None, Some(uri)) => {
+                let file = self.folder.join(decode_uri_path(uri));
+                let bytes = std::fs::read(&file).map_err(|source| LoadError::MissingFile {
+                    path: self.path.into(),
+                    place: place.clone(),
+                    file: file.clone(),
+                    source,
+                })?;
+                (bytes, file.to_string_lossy().into_owned())
+            }
+            (None, None) => return Err(self.malformed(place, "neither uri nor bufferView")),
+        };
+        let tex = decode_srgb_texture(&bytes, name, wrap_u, wrap_v)
+            .map_err(|e| self.malformed(&place, format!("cannot decode: {e}")))?;
+        let id = self.builder.texture(tex);
+        self.textures
+            .insert((image_index, wrap_u as u8, wrap_v as u8), id);
+        Ok(id)
+    }
+
+    fn default_material(&mut self) -> MaterialId {
+        if let Some(m) = self.default_material {
+            return m;
+        }
+        let m = self.builder.material(Material {
+            name: "gltf_default".into(),
+            double_sided: false,
+            ..Material::default()
+        });
+        self.default_material = Some(m);
+        m
+    }
+
+    /// The illume mesh of glTF mesh `index`, converted on first use.
+    fn mesh(&mut self, index: usize) -> Result<MeshId, LoadError> {
+        if let Some(&id) = self.meshes.get(&index) {
+            return Ok(id);
+        }
+        let root = self.root;
+        let gm = root
+            .meshes
+            .get(index)
+            .ok_or_else(|| self.malformed(format!("mesh {index}"), "does not exist"))?;
+        let name = gm.name.clone().unwrap_or_else(|| format!("mesh {index}"));
+        let mut mesh = Mesh {
+            name: name.clone(),
+            ..Default::default()
+        };
+        let mut with_normals = 0;
+        let mut prim_normals: Vec<Vec<Vec3>> = Vec::new();
+        for (p, prim) in gm.primitives.iter().enumerate() {
+            let place = format!("mesh {index} '{name}' primitive {p}");
+            use json::mesh::{Mode, Semantic};
+            match prim.mode {
+                Checked::Valid(Mode::Triangles) => {}
+                Checked::Valid(other) => {
+                    return Err(LoadError::unsupported(
+                        self.path,
+                        place,
+                        format!("primitive mode {other:?} (only TRIANGLES)"),
+                    ));
+                }
+                Checked::Invalid => return Err(self.malformed(place, "invalid primitive mode")),
+            }
+            if prim.targets.as_ref().is_some_and(|t| !t.is_empty()) {
+                self.warn(format!("{place}: morph targets ignored"));
+            }
+            let attr = |s: Semantic| prim.attributes.get(&Checked::Valid(s)).map(|a| a.value());
+            let pos_acc = attr(Semantic::Positions)
+                .ok_or_else(|| self.malformed(&place, "no POSITION attribute"))?;
+            let positions: Vec<Vec3> = self
+                .read_vecs::<3>(pos_acc, &format!("{place} POSITION"))?
+                .into_iter()
+                .map(Vec3::from)
+                .collect();
+            let n = positions.len();
+            let normals = match attr(Semantic::Normals) {
+                Some(a) => {
+                    let v: Vec<Vec3> = self
+                        .read_vecs::<3>(a, &format!("{place} NORMAL"))?
+                        .into_iter()
+                        .map(|x| Vec3::from(x).normalize_or(Vec3::Y))
+                        .collect();
+                    if v.len() != n {
+                        return Err(self.malformed(
+                            format!("accessor {a} ({place} NORMAL)"),
+                            format!("{} normals for {n} positions", v.len()),
+                        ));
+                    }
+                    with_normals += 1;
+                    v
+                }
+                None => Vec::new(),
+            };
+            let uvs: Vec<Vec2> = match attr(Semantic::TexCoords(0)) {
+                Some(a) => {
+                    let v: Vec<Vec2> = self
+                        .read_vecs::<2>(a, &format!("{place} TEXCOORD_0"))?
+                        .into_iter()
+                        .map(Vec2::from)
+                        .collect();
+                    if v.len() != n {
+                        return Err(self.malformed(
+                            format!("accessor {a} ({place} TEXCOORD_0)"),
+                            format!("{} UVs for {n} positions", v.len()),
+                        ));
+                    }
+                    v
+                }
+                None => vec![Vec2::ZERO; n],
+            };
+            let indices: Vec<u32> = match prim.indices {
+                Some(a) => {
+                    let a = a.value();
+                    let what = format!("{place} indices");
+                    let (v, comps) = self.read_accessor(a, &what)?;
+                    if comps != 1 {
+                        return Err(self.malformed(
+                            format!("accessor {a} ({what})"),
+                            "indices must be SCALAR",
+                        ));
+                    }
+                    let mut out = Vec::with_capacity(v.len());
+                    for (k, &i) in v.iter().enumerate() {
+                        if i < 0.0 || i >= n as f64 || i.fract() != 0.0 {
+                            return Err(self.malformed(
+                                format!("accessor {a} ({what})"),
+                                format!("index {k} = {i} out of range ({n} vertices)"),
+                            ));
+                        }
+                        out.push(i as u32);
+                    }
+                    out
+                }
+                None => (0..n as u32).collect(),
+            };
+            if !indices.len().is_multiple_of(3) {
+                return Err(self.malformed(
+                    place,
+                    format!("{} indices is not a multiple of 3", indices.len()),
+                ));
+            }
+            let material = match prim.material {
+                Some(m) => *self.materials.get(m.value()).ok_or_else(|| {
+                    self.malformed(&place, format!("material {} does not exist", m.value()))
+                })?,
+                None => self.default_material(),
+            };
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend(positions);
+            mesh.uvs.extend(uvs);
+            prim_normals.push(normals);
+            for t in indices.chunks_exact(3) {
+                mesh.indices.push([base + t[0], base + t[1], base + t[2]]);
+                mesh.triangle_materials.push(material);
+            }
+        }
+        if with_normals == prim_normals.len() {
+            mesh.normals = prim_normals.into_iter().flatten().collect();
+        } else if with_normals > 0 {
+            self.warn(format!("mesh {index} '{name}': only some primitives have normals; normals dropped (flat shading)"));
+        }
+        let id = self.builder.mesh(mesh);
+        self.meshes.insert(index, id);
+        Ok(id)
+    }
+
+    /// Adds the `KHR_lights_punctual` light of glTF node `g`, if any, at `node`.
+    fn light(&mut self, g: usize, node_name: &str, node: NodeId) -> Result<(), LoadError> {
+        use json::extensions::scene::khr_lights_punctual::Type;
+        let root = self.root;
+        let Some(index) = root.nodes[g]
+            .extensions
+            .as_ref()
+            .and_then(|e| e.khr_lights_punctual.as_ref())
+            .map(|l| l.light.value())
+        else {
+            return Ok(());
+        };
+        let place = format!("node {g} '{node_name}' light {index}");
+        let light = root
+            .extensions
+            .as_ref()
+            .and_then(|e| e.khr_lights_punctual.as_ref())
+            .and_then(|l| l.lights.get(index))
+            .ok_or_else(|| self.malformed(&place, "light does not exist"))?;
+        let colour = Rgb::from(light.color);
+        let value = colour * light.intensity;
+        if !value.is_finite() || value.min_element() < 0.0 {
+            return Err(self.malformed(
+                place,
+                format!("intensity × colour {value} is not finite and non-negative"),
+            ));
+        }
+        if let Some(range) = light.range {
+            self.warn(format!(
+                "{place}: range {range} ignored (pure inverse-square falloff)"
+            ));
+        }
+        let kind = match light.type_ {
+            Checked::Valid(Type::Point) => LightKind::Point { intensity: value },
+            Checked::Valid(Type::Directional) => LightKind::Directional { irradiance: value },
+            Checked::Valid(Type::Spot) => {
+                let spot = light.spot.as_ref().ok_or_else(|| {
+                    self.malformed(&place, "spot light without 'spot' cone angles")
+                })?;
+                let (inner, outer) = (spot.inner_cone_angle, spot.outer_cone_angle);
+                if !(inner.is_finite()
+                    && outer.is_finite()
+                    && 0.0 <= inner
+                    && inner < outer
+                    && outer <= std::f32::consts::FRAC_PI_2)
+                {
+                    return Err(self.malformed(place, format!("spot cone angles inner {inner}, outer {outer} must satisfy 0 ≤ inner < outer ≤ π/2")));
+                }
+                LightKind::Spot {
+                    intensity: value,
+                    inner_cone_rad: inner,
+                    outer_cone_rad: outer,
+                }
+            }
+            Checked::Invalid => return Err(self.malformed(place, "invalid light type")),
+        };
+        let name = light.name.clone().unwrap_or_else(|| node_name.to_string());
+        self.builder.light(&name, kind, node);
+        Ok(())
+    }
+
+    /// Sets the camera from the lowest-index scene node with a perspective camera.
+    fn camera(
+        &mut self,
+        order: &[(usize, Option<usize>)],
+        node_ids: &[Option<NodeId>],
+    ) -> Result<(), LoadError> {
+        use json::camera::Type;
+        let root = self.root;
+        let mut with_camera: Vec<usize> = order
+            .iter()
+            .map(|&(g, _)| g)
+            .filter(|&g| root.nodes[g].camera.is_some())
+            .collect();
+        with_camera.sort_unstable();
+        for g in with_camera {
+            let Some(c) = root.nodes[g].camera.map(|c| c.value()) else {
+                continue;
+            };
+            let place = format!("node {g} camera {c}");
+            let cam = root
+                .cameras
+                .get(c)
+                .ok_or_else(|| self.malformed(&place, "camera does not exist"))?;
+            match (&cam.type_, &cam.perspective) {
+                (Checked::Valid(Type::Perspective), Some(p)) => {
+                    if !(p.yfov.is_finite() && p.yfov > 0.0 && p.yfov < std::f32::consts::PI) {
+                        return Err(
+                            self.malformed(place, format!("yfov {} is not in (0, π)", p.yfov))
+                        );
+                    }
+                    let Some(node) = node_ids.get(g).copied().flatten() else {
+                        continue;
+                    };
+                    let name = cam.name.clone().unwrap_or_else(|| format!("camera {c}"));
+                    self.builder.camera(&name, p.yfov, node);
+                    self.camera_set = true;
+                    return Ok(());
+                }
+                _ => self.warn(format!("{place}: not a perspective camera, ignored")),
+            }
+        }
+        Ok(())
+    }
+
+    /// Converts every animation; returns the illume nodes any channel targets.
+    fn animations(&mut self, node_ids: &[Option<NodeId>]) -> Result<Vec<NodeId>, LoadError> {
+        use json::animation::{Interpolation as I, Property as P};
+        let root = self.root;
+        let mut targeted = Vec::new();
+        for (ai, a) in root.animations.iter().enumerate() {
+            let name = a.name.clone().unwrap_or_else(|| format!("animation {ai}"));
+            let mut channels = Vec::new();
+            for (ci, ch) in a.channels.iter().enumerate() {
+                let place = format!("animation {ai} '{name}' channel {ci}");
+                let s = ch.sampler.value();
+                let sampler = a
+                    .samplers
+                    .get(s)
+                    .ok_or_else(|| self.malformed(&place, format!("sampler {s} does not exist")))?;
+                let target = ch.target.node.value();
+                let property = match ch.target.path {
+                    Checked::Valid(P::MorphTargetWeights) => {
+                        self.warn(format!("{place}: morph-target weights ignored"));
+                        continue;
+                    }
+                    Checked::Valid(p) => p,
+                    Checked::Invalid => return Err(self.malformed(place, "invalid target path")),
+                };
+                let Some(node) = node_ids.get(target).copied().flatten() else {
+                    self.warn(format!(
+                        "{place}: targets node {target}, which is not in the loaded scene; ignored"
+                    ));
+                    continue;
+                };
+                let interpolation = match sampler.interpolation {
+                    Checked::Valid(I::Linear) => Interpolation::Linear,
+                    Checked::Valid(I::Step) => Interpolation::Step,
+                    Checked::Valid(I::CubicSpline) => Interpolation::CubicSpline,
+                    Checked::Invalid => return Err(self.malformed(place, "invalid interpolation")),
+                };
+                let (input, output) = (sampler.input.value(), sampler.output.value());
+                let (times, comps) = self.read_accessor(input, &format!("{place} input"))?;
+                if comps != 1 {
+                    return Err(self.malformed(
+                        format!("accessor {input} ({place} input)"),
+                        "key times must be SCALAR",
+                    ));
+                }
+                let times: Vec<f32> = times.into_iter().map(|t| t as f32).collect();
+                let what = format!("{place} output");
+                let values = match property {
+                    P::Translation => ChannelValues::Translation(
+                        self.read_vecs::<3>(output, &what)?
+                            .into_iter()
+                            .map(Vec3::from)
+                            .collect(),
+                    ),
+                    P::Scale => ChannelValues::Scale(
+                        self.read_vecs::<3>(output, &what)?
+                            .into_iter()
+                            .map(Vec3::from)
+                            .collect(),
+                    ),
+                    P::Rotation => ChannelValues::Rotation(
+                        self.read_vecs::<4>(output, &what)?
+                            .into_iter()
+                            .map(Vec4::from)
+                            .collect(),
+                    ),
+                    P::MorphTargetWeights => continue,
+                };
+                let channel = Channel {
+                    node,
+                    times,
+                    values,
+                    interpolation,
+                };
+                channel.validate().map_err(|m| {
+                    self.malformed(format!("{place} (accessors {input}/{output})"), m)
+                })?;
+                targeted.push(node);
+                channels.push(channel);
+            }
+            if channels.is_empty() {
+                self.warn(format!(
+                    "animation {ai} '{name}': no usable channel; skipped"
+                ));
+                continue;
+            }
+            self.builder.animation(Animation { name, channels });
+        }
+        Ok(targeted)
+    }
+}

@@ -1,0 +1,513 @@
+//! Wavefront OBJ + MTL loader.
+//!
+//! Hand-written line parser rather than `tobj`: `tobj` 4 does resolve negative indices
+//! against the vertices read so far and splits on any whitespace, but its errors carry
+//! no line number (`FaceVertexOutOfBounds`, `PositionParseError` say neither where nor
+//! which index), it silently drops MTL keywords it does not know (`Ke` ends up in
+//! `unknown_param` as a string), and a missing texture is not its concern. The OBJ subset
+//! a renderer needs is a few dozen lines, and owning it gives every error a line number.
+//!
+//! What is read:
+//!
+//! * `v x y z` (extra `w`/colour values ignored), `vt u [v]`, `vn x y z`, `f` with
+//!   `v`, `v/vt`, `v//vn`, `v/vt/vn` corners; positive indices are 1-based absolute,
+//!   negative ones are relative to the vertices read *so far* (both must refer to an
+//!   element already read); polygons are fan-triangulated;
+//! * `mtllib` (relative to the OBJ's folder; a missing library is a warning and its
+//!   materials become the default material), `usemtl` (an unknown name is a warning and
+//!   the default material);
+//! * MTL: `newmtl`, `Kd` (albedo, clamped to [0, 1]), `Ke` (emitted radiance
+//!   [W/(m²·sr)]), `Ns` (glossiness = clamp(Ns / 1000, 0, 1)), `map_Kd` (an sRGB image
+//!   relative to the MTL's folder, multiplied by `Kd` as the MTL spec says; `-clamp on`
+//!   selects clamped wrapping, other options are skipped). **A `map_Kd` file that cannot
+//!   be read or decoded is an error** (not a warning: a scene silently rendered without
+//!   its textures is worse than a clear failure) naming the OBJ, the MTL and its line,
+//!   and the texture file.
+//!   `map_bump`/`bump` are ignored with one warning per library (illume has no bump
+//!   mapping); other keywords are ignored.
+//!
+//! Result: **one illume [`Mesh`] per OBJ file** (groups `o`/`g` are not split; each
+//! triangle keeps its own material), placed once by a root node at the identity, every
+//! material two-sided. Vertices are shared between faces with the same `v/vt/vn` triple.
+//! When some corners have normals and others not, the ones without get their face's
+//! geometric normal (flat shading there); when no corner has a normal the mesh has none.
+//! OBJ's `vt` has v = 0 at the bottom of the image; it is flipped to illume's
+//! top-row convention (v' = 1 − v). Points/lines (`p`, `l`) and free-form geometry are
+//! ignored with a warning. Line continuations (`\`) are not supported.
+
+use super::{LoadError, decode_srgb_texture, default_camera_for_bounds, read_file};
+use crate::animation::Trs;
+use crate::builtin::SceneBuilder;
+use crate::model::{Material, MaterialId, Mesh, Scene, TextureId, WrapMode};
+use illume_core::{Rgb, Vec2, Vec3};
+use std::collections::{BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+
+/// "No texture coordinate / normal" marker in a [`Corner`].
+const NONE: u32 = u32::MAX;
+
+/// One face corner: 0-based indices into the position/uv/normal arrays.
+#[derive(Clone, Copy)]
+struct Corner {
+    v: u32,
+    vt: u32,
+    vn: u32,
+}
+
+/// Parser state for one OBJ file.
+struct ObjReader<'a> {
+    path: &'a Path,
+    builder: SceneBuilder,
+    positions: Vec<Vec3>,
+    uvs: Vec<Vec2>,
+    normals: Vec<Vec3>,
+    triangles: Vec<[Corner; 3]>,
+    triangle_materials: Vec<MaterialId>,
+    materials: HashMap<String, MaterialId>,
+    textures: HashMap<PathBuf, TextureId>,
+    default_material: Option<MaterialId>,
+    current: Option<MaterialId>,
+    ignored: BTreeSet<String>,
+    unknown_materials: BTreeSet<String>,
+}
+
+pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
+    let bytes = read_file(path)?;
+    let text = String::from_utf8_lossy(&bytes);
+    let mut r = ObjReader {
+        path,
+        builder: SceneBuilder::new(),
+        positions: Vec::new(),
+        uvs: Vec::new(),
+        normals: Vec::new(),
+        triangles: Vec::new(),
+        triangle_materials: Vec::new(),
+        materials: HashMap::new(),
+        textures: HashMap::new(),
+        default_material: None,
+        current: None,
+        ignored: BTreeSet::new(),
+        unknown_materials: BTreeSet::new(),
+    };
+    for (i, raw) in text.split('\n').enumerate() {
+        r.line(i + 1, raw)?;
+    }
+    if !r.ignored.is_empty() {
+        let list = r.ignored.iter().cloned().collect::<Vec<_>>().join(", ");
+        r.builder.warn(format!(
+            "{}: ignored OBJ statements: {list}",
+            path.display()
+        ));
+    }
+    if !r.unknown_materials.is_empty() {
+        let list = r
+            .unknown_materials
+            .iter()
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", ");
+        r.builder.warn(format!(
+            "{}: unknown materials (default material used): {list}",
+            path.display()
+        ));
+    }
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "obj".into());
+    let mesh = r.build_mesh(&name);
+    if mesh.indices.is_empty() {
+        r.builder.warn(format!("{}: no faces", path.display()));
+    }
+    let mut b = r.builder;
+    let mesh = b.mesh(mesh);
+    b.placed(&name, mesh, Trs::IDENTITY, false);
+    let mut scene = b.finish(&path.to_string_lossy());
+    default_camera_for_bounds(&mut scene);
+    Ok(scene)
+}
+
+/// The text of a line without its comment and surrounding whitespace.
+fn strip_comment(raw: &str) -> &str {
+    raw.split('#').next().unwrap_or("").trim()
+}
+
+/// The rest of a (comment-stripped, trimmed) line after its keyword.
+fn after_keyword(text: &str) -> &str {
+    text.split_once(char::is_whitespace)
+        .map(|(_, rest)| rest.trim())
+        .unwrap_or("")
+}
+
+/// Parses `n` floats from `tokens`; fewer than `min` present, a non-number or a
+/// non-finite value is an error message.
+fn floats<const N: usize>(
+    tokens: &mut std::str::SplitWhitespace<'_>,
+    min: usize,
+    what: &str,
+) -> Result<[f32; N], String> {
+    let mut out = [0.0f32; N];
+    for (k, slot) in out.iter_mut().enumerate() {
+        match tokens.next() {
+            Some(t) => {
+                let x: f32 = t
+                    .parse()
+                    .map_err(|_| format!("{what}: '{t}' is not a number"))?;
+                if !x.is_finite() {
+                    return Err(format!("{what}: value '{t}' is not finite"));
+                }
+                *slot = x;
+            }
+            None if k < min => return Err(format!("{what}: expected {min} numbers, found {k}")),
+            None => break,
+        }
+    }
+    Ok(out)
+}
+
+/// Resolves a 1-based (positive) or relative (negative) OBJ index against `count`
+/// elements read so far; the error says which and why.
+fn resolve(token: &str, count: usize, what: &str) -> Result<u32, String> {
+    let i: i64 = token
+        .parse()
+        .map_err(|_| format!("face {what} index '{token}' is not an integer"))?;
+    let resolved = if i > 0 { i - 1 } else { count as i64 + i };
+    if i == 0 || resolved < 0 || resolved >= count as i64 {
+        return Err(format!(
+            "face {what} index {i} out of range ({count} {what}s read so far)"
+        ));
+    }
+    u32::try_from(resolved).map_err(|_| format!("face {what} index {i} too large"))
+}
+
+impl ObjReader<'_> {
+    fn err(&self, line: usize, message: String) -> LoadError {
+        LoadError::malformed(self.path, format!("line {line}"), message)
+    }
+
+    fn line(&mut self, n: usize, raw: &str) -> Result<(), LoadError> {
+        let text = strip_comment(raw);
+        let mut tokens = text.split_whitespace();
+        let Some(keyword) = tokens.next() else {
+            return Ok(());
+        };
+        match keyword {
+            "v" => {
+                let [x, y, z] =
+                    floats::<3>(&mut tokens, 3, "vertex position").map_err(|m| self.err(n, m))?;
+                self.positions.push(Vec3::new(x, y, z));
+            }
+            "vt" => {
+                let [u, v] = floats::<2>(&mut tokens, 1, "texture coordinate")
+                    .map_err(|m| self.err(n, m))?;
+                self.uvs.push(Vec2::new(u, 1.0 - v));
+            }
+            "vn" => {
+                let [x, y, z] =
+                    floats::<3>(&mut tokens, 3, "normal").map_err(|m| self.err(n, m))?;
+                self.normals.push(Vec3::new(x, y, z));
+            }
+            "f" => self.face(n, tokens)?,
+            "usemtl" => {
+                let name = after_keyword(text);
+                self.current = Some(match self.materials.get(name) {
+                    Some(&m) => m,
+                    None => {
+                        self.unknown_materials.insert(name.to_string());
+                        self.default_material()
+                    }
+                });
+            }
+            "mtllib" => self.mtllib(n, after_keyword(text))?,
+            "o" | "g" | "s" => {}
+            other => {
+                self.ignored.insert(other.to_string());
+            }
+        }
+        Ok(())
+    }
+
+    fn face(&mut self, n: usize, tokens: std::str::SplitWhitespace<'_>) -> Result<(), LoadError> {
+        let mut corners = Vec::with_capacity(4);
+        for t in tokens {
+            let mut parts = t.split('/');
+            let v = parts.next().unwrap_or("");
+            let vt = parts.next().unwrap_or("");
+            let vn = parts.next().unwrap_or("");
+            let v = resolve(v, self.positions.len(), "position").map_err(|m| self.err(n, m))?;
+            let vt = if vt.is_empty() {
+                NONE
+            } else {
+                resolve(vt, self.uvs.len(), "texture coordinate").map_err(|m| self.err(n, m))?
+            };
+            let vn = if vn.is_empty() {
+                NONE
+            } else {
+                resolve(vn, self.normals.len(), "normal").map_err(|m| self.err(n, m))?
+            };
+            corners.push(Corner { v, vt, vn });
+        }
+        if corners.len() < 3 {
+            return Err(self.err(
+                n,
+                format!("face has {} corners, needs at least 3", corners.len()),
+            ));
+        }
+        let material = match self.current {
+            Some(m) => m,
+            None => self.default_material(),
+        };
+        for k in 1..corners.len() - 1 {
+            self.triangles
+                .push([corners[0], corners[k], corners[k + 1]]);
+            self.triangle_materials.push(material);
+        }
+        Ok(())
+    }
+
+    fn default_material(&mut self) -> MaterialId {
+        match self.default_material {
+            Some(m) => m,
+            None => {
+                let m = self.builder.material(Material::default());
+                self.default_material = Some(m);
+                m
+            }
+        }
+    }
+
+    /// Loads the libraries named on an `mtllib` line: the whole rest of the line when
+    /// such a file exists (names with spaces), else each whitespace-separated name.
+    fn mtllib(&mut self, line: usize, rest: &str) -> Result<(), LoadError> {
+        let folder = self.path.parent().unwrap_or(Path::new("."));
+        let whole = folder.join(rest.replace('\\', "/"));
+        let names: Vec<String> = if whole.is_file() {
+            vec![rest.to_string()]
+        } else {
+            rest.split_whitespace().map(str::to_string).collect()
+        };
+        for name in names {
+            let mtl_path = folder.join(name.replace('\\', "/"));
+            match std::fs::read(&mtl_path) {
+                Ok(bytes) => self.parse_mtl(&mtl_path, &String::from_utf8_lossy(&bytes))?,
+                Err(e) => self.builder.warn(format!(
+                    "{}: line {line}: material library '{}' not readable ({e}); its materials use the default material",
+                    self.path.display(),
+                    mtl_path.display()
+                )),
+            }
+        }
+        Ok(())
+    }
+
+    fn parse_mtl(&mut self, mtl_path: &Path, text: &str) -> Result<(), LoadError> {
+        let obj_path = self.path;
+        let err = |line: usize, message: String| {
+            LoadError::malformed(obj_path, mtl_place(mtl_path, line), message)
+        };
+        let mut current: Option<Material> = None;
+        let mut bump_ignored = false;
+        let mut finished: Vec<Material> = Vec::new();
+        for (i, raw) in text.split('\n').enumerate() {
+            let n = i + 1;
+            let text = strip_comment(raw);
+            let mut tokens = text.split_whitespace();
+            let Some(keyword) = tokens.next() else {
+                continue;
+            };
+            let keyword = keyword.to_ascii_lowercase();
+            if keyword == "newmtl" {
+                if let Some(m) = current.take() {
+                    finished.push(m);
+                }
+                let name = after_keyword(text).to_string();
+                current = Some(Material {
+                    name,
+                    ..Material::default()
+                });
+                continue;
+            }
+            let Some(m) = current.as_mut() else {
+                continue; // statements before the first newmtl have nothing to apply to
+            };
+            match keyword.as_str() {
+                "kd" => {
+                    let [r, g, b] = floats::<3>(&mut tokens, 1, "Kd").map_err(|e| err(n, e))?;
+                    // A single value means grey (MTL spec).
+                    let c = if text.split_whitespace().count() == 2 {
+                        Rgb::splat(r)
+                    } else {
+                        Rgb::new(r, g, b)
+                    };
+                    m.base_color = c.clamp(Rgb::ZERO, Rgb::ONE);
+                }
+                "ke" => {
+                    let [r, g, b] = floats::<3>(&mut tokens, 1, "Ke").map_err(|e| err(n, e))?;
+                    let c = if text.split_whitespace().count() == 2 {
+                        Rgb::splat(r)
+                    } else {
+                        Rgb::new(r, g, b)
+                    };
+                    m.emission = c.max(Rgb::ZERO);
+                }
+                "ns" => {
+                    let [ns] = floats::<1>(&mut tokens, 1, "Ns").map_err(|e| err(n, e))?;
+                    m.glossiness = (ns / 1000.0).clamp(0.0, 1.0);
+                }
+                "map_kd" => {
+                    let (file, wrap) = texture_file(tokens);
+                    if file.is_empty() {
+                        return Err(err(n, "map_Kd without a file name".into()));
+                    }
+                    let folder = mtl_path.parent().unwrap_or(Path::new("."));
+                    let tex_path = folder.join(file.replace('\\', "/"));
+                    let id = self.texture(mtl_path, n, &tex_path, wrap)?;
+                    m.base_color_texture = Some(id);
+                }
+                "map_bump" | "bump" => bump_ignored = true,
+                _ => {}
+            }
+        }
+        if let Some(m) = current.take() {
+            finished.push(m);
+        }
+        if bump_ignored {
+            self.builder.warn(format!(
+                "{}: bump maps ignored (illume has no bump mapping)",
+                mtl_path.display()
+            ));
+        }
+        for m in finished {
+            let name = m.name.clone();
+            let id = self.builder.material(m);
+            // The first definition of a name wins, as in most loaders.
+            self.materials.entry(name).or_insert(id);
+        }
+        Ok(())
+    }
+
+    /// The texture at `tex_path` (decoded once per file), referenced from `mtl_path`
+    /// line `line`.
+    fn texture(
+        &mut self,
+        mtl_path: &Path,
+        line: usize,
+        tex_path: &Path,
+        wrap: WrapMode,
+    ) -> Result<TextureId, LoadError> {
+        if let Some(&id) = self.textures.get(tex_path) {
+            return Ok(id);
+        }
+        let place = format!("{} (map_Kd)", mtl_place(mtl_path, line));
+        let bytes = std::fs::read(tex_path).map_err(|source| LoadError::MissingFile {
+            path: self.path.into(),
+            place: place.clone(),
+            file: tex_path.into(),
+            source,
+        })?;
+        let name = tex_path.to_string_lossy().into_owned();
+        let texture = decode_srgb_texture(&bytes, name, wrap, wrap).map_err(|e| {
+            LoadError::malformed(
+                self.path,
+                place,
+                format!("texture '{}' cannot be decoded: {e}", tex_path.display()),
+            )
+        })?;
+        let id = self.builder.texture(texture);
+        self.textures.insert(tex_path.into(), id);
+        Ok(id)
+    }
+
+    /// Turns the triangles into one mesh, sharing vertices with equal `v/vt/vn`.
+    fn build_mesh(&self, name: &str) -> Mesh {
+        let has_uv = self.triangles.iter().flatten().any(|c| c.vt != NONE);
+        let has_normal = self.triangles.iter().flatten().any(|c| c.vn != NONE);
+        let mut mesh = Mesh {
+            name: name.into(),
+            ..Default::default()
+        };
+        let mut map: HashMap<(u32, u32, u64), u32> = HashMap::with_capacity(self.positions.len());
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let p = tri.map(|c| self.positions[c.v as usize]);
+            let flat = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Y);
+            let mut idx = [0u32; 3];
+            for (k, c) in tri.iter().enumerate() {
+                // Corners without a normal are not shared across faces: they carry their
+                // face's normal.
+                let normal_key = if c.vn != NONE {
+                    c.vn as u64
+                } else {
+                    (1u64 << 32) + t as u64
+                };
+                let key = (c.v, c.vt, if has_normal { normal_key } else { 0 });
+                idx[k] = *map.entry(key).or_insert_with(|| {
+                    mesh.positions.push(self.positions[c.v as usize]);
+                    if has_uv {
+                        mesh.uvs.push(if c.vt != NONE {
+                            self.uvs[c.vt as usize]
+                        } else {
+                            Vec2::ZERO
+                        });
+                    }
+                    if has_normal {
+                        mesh.normals.push(if c.vn != NONE {
+                            self.normals[c.vn as usize].normalize_or(flat)
+                        } else {
+                            flat
+                        });
+                    }
+                    mesh.positions.len() as u32 - 1
+                });
+            }
+            mesh.indices.push(idx);
+        }
+        mesh.triangle_materials = self.triangle_materials.clone();
+        mesh
+    }
+}
+
+/// The place of line `line` of material library `mtl_path`, for errors reported against
+/// the OBJ file.
+fn mtl_place(mtl_path: &Path, line: usize) -> String {
+    format!("material library {} line {line}", mtl_path.display())
+}
+
+/// Splits the arguments of a `map_*` statement into the file name (the tokens left
+/// after the options, joined by single spaces) and the wrap mode (`-clamp on` →
+/// [`WrapMode::Clamp`]).
+fn texture_file(tokens: std::str::SplitWhitespace<'_>) -> (String, WrapMode) {
+    let tokens: Vec<&str> = tokens.collect();
+    let mut wrap = WrapMode::Repeat;
+    let mut rest = Vec::new();
+    let mut i = 0;
+    while i < tokens.len() {
+        let t = tokens[i];
+        if t.starts_with('-') && t.len() > 1 && t.parse::<f32>().is_err() {
+            // An option: skip its arguments (numbers or on/off).
+            if t.eq_ignore_ascii_case("-clamp")
+                && tokens
+                    .get(i + 1)
+                    .is_some_and(|a| a.eq_ignore_ascii_case("on"))
+            {
+                wrap = WrapMode::Clamp;
+            }
+            i += 1;
+            while i < tokens.len() && i + 1 < tokens.len() && is_option_argument(tokens[i]) {
+                i += 1;
+            }
+            continue;
+        }
+        rest.push(t);
+        i += 1;
+    }
+    (rest.join(" "), wrap)
+}
+
+/// True for option arguments (`0.5`, `on`, `off`, a channel letter of `-imfchan`).
+fn is_option_argument(t: &str) -> bool {
+    t.parse::<f32>().is_ok()
+        || matches!(
+            t.to_ascii_lowercase().as_str(),
+            "on" | "off" | "r" | "g" | "b" | "m" | "l" | "z"
+        )
+}
