@@ -45,7 +45,7 @@ mod wide;
 
 use crate::blas::Blas;
 use crate::build::{BuildParams, build_binary};
-use crate::wide::{Bvh4, Item, PreparedRay, new_stack, traverse};
+use crate::wide::{Bvh4, Item, PreparedRay, StackEntry, traverse, with_stack};
 use illume_core::{Aabb, Affine3A, Ray, Vec2, Vec3A};
 use illume_scene::{InstanceId, Scene};
 use rayon::prelude::*;
@@ -112,6 +112,9 @@ const INSTANCE_PARAMS: BuildParams = BuildParams {
     max_leaf: 1,
 };
 
+/// Rays per rayon task in the batch queries.
+const BATCH_CHUNK: usize = 256;
+
 /// Answers ray queries against a scene.
 pub struct Tracer {
     /// One BVH per scene mesh, indexed like `Scene::meshes`.
@@ -162,7 +165,7 @@ impl Tracer {
             .filter_map(|(i, inst)| {
                 let blas = self.blases.get(inst.mesh.index())?;
                 let object_from_world = inst.world_from_object.inverse();
-                let usable = !blas.triangles.is_empty()
+                let usable = blas.triangle_count > 0
                     && inst.world_from_object.matrix3.determinant() != 0.0
                     && object_from_world.matrix3.is_finite()
                     && object_from_world.translation.is_finite();
@@ -189,7 +192,7 @@ impl Tracer {
         self.stats.mesh_bvhs = self.blases.len();
         self.stats.mesh_nodes = self.blases.iter().map(|b| b.bvh.nodes.len()).sum();
         self.stats.instance_nodes = self.tlas.nodes.len();
-        self.stats.triangles = self.blases.iter().map(|b| b.triangles.len()).sum();
+        self.stats.triangles = self.blases.iter().map(|b| b.triangle_count).sum();
         self.stats.instances = self.instances.len();
         self.stats.memory_bytes = self.blases.iter().map(Blas::memory_bytes).sum::<usize>()
             + self.tlas.memory_bytes()
@@ -206,20 +209,59 @@ impl Tracer {
     pub fn mesh_bvh_address(&self, mesh: illume_scene::MeshId) -> Option<usize> {
         self.blases
             .get(mesh.index())
-            .map(|b| b.triangles.as_ptr() as usize)
+            .map(|b| b.packets.as_ptr() as usize)
     }
 
     /// Closest hit along `ray` among instances whose mask intersects `mask`.
     pub fn intersect(&self, ray: &Ray, mask: u32) -> Option<Hit> {
+        with_stack(|stack| self.intersect_with(ray, mask, stack))
+    }
+
+    /// True when anything visible to `mask` lies on `ray` within `(t_min, t_max)`.
+    pub fn occluded(&self, ray: &Ray, mask: u32) -> bool {
+        with_stack(|stack| self.occluded_with(ray, mask, stack))
+    }
+
+    /// Closest hits for a batch of rays, in parallel (rayon, in chunks of rays).
+    pub fn intersect_batch(&self, rays: &[Ray], mask: u32) -> Vec<Option<Hit>> {
+        let mut hits = vec![None; rays.len()];
+        hits.par_chunks_mut(BATCH_CHUNK)
+            .zip(rays.par_chunks(BATCH_CHUNK))
+            .for_each(|(hits, rays)| {
+                with_stack(|stack| {
+                    for (h, r) in hits.iter_mut().zip(rays) {
+                        *h = self.intersect_with(r, mask, stack);
+                    }
+                })
+            });
+        hits
+    }
+
+    /// Occlusion for a batch of rays, in parallel (rayon, in chunks of rays).
+    pub fn occluded_batch(&self, rays: &[Ray], mask: u32) -> Vec<bool> {
+        let mut hits = vec![false; rays.len()];
+        hits.par_chunks_mut(BATCH_CHUNK)
+            .zip(rays.par_chunks(BATCH_CHUNK))
+            .for_each(|(hits, rays)| {
+                with_stack(|stack| {
+                    for (h, r) in hits.iter_mut().zip(rays) {
+                        *h = self.occluded_with(r, mask, stack);
+                    }
+                })
+            });
+        hits
+    }
+
+    #[inline]
+    fn intersect_with(&self, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> Option<Hit> {
         let world_ray = PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min);
-        let mut stack = new_stack();
         let mut best = None;
-        traverse(
+        traverse::<true>(
             &self.tlas,
             &world_ray,
             ray.t_max,
             mask,
-            &mut stack,
+            stack,
             |range, t_max, free| {
                 for inst in &self.instances[range] {
                     if inst.mask & mask == 0 {
@@ -244,17 +286,16 @@ impl Tracer {
         best
     }
 
-    /// True when anything visible to `mask` lies on `ray` within `(t_min, t_max)`.
-    pub fn occluded(&self, ray: &Ray, mask: u32) -> bool {
+    #[inline]
+    fn occluded_with(&self, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> bool {
         let world_ray = PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min);
-        let mut stack = new_stack();
         let mut hit = false;
-        traverse(
+        traverse::<true>(
             &self.tlas,
             &world_ray,
             ray.t_max,
             mask,
-            &mut stack,
+            stack,
             |range, t_max, free| {
                 hit = self.instances[range].iter().any(|inst| {
                     inst.mask & mask != 0
@@ -268,34 +309,6 @@ impl Tracer {
             },
         );
         hit
-    }
-
-    /// Closest hits for a batch of rays, in parallel (rayon, in chunks of rays).
-    pub fn intersect_batch(&self, rays: &[Ray], mask: u32) -> Vec<Option<Hit>> {
-        const CHUNK: usize = 256;
-        let mut hits = vec![None; rays.len()];
-        hits.par_chunks_mut(CHUNK)
-            .zip(rays.par_chunks(CHUNK))
-            .for_each(|(hits, rays)| {
-                for (h, r) in hits.iter_mut().zip(rays) {
-                    *h = self.intersect(r, mask);
-                }
-            });
-        hits
-    }
-
-    /// Occlusion for a batch of rays, in parallel (rayon, in chunks of rays).
-    pub fn occluded_batch(&self, rays: &[Ray], mask: u32) -> Vec<bool> {
-        const CHUNK: usize = 256;
-        let mut hits = vec![false; rays.len()];
-        hits.par_chunks_mut(CHUNK)
-            .zip(rays.par_chunks(CHUNK))
-            .for_each(|(hits, rays)| {
-                for (h, r) in hits.iter_mut().zip(rays) {
-                    *h = self.occluded(r, mask);
-                }
-            });
-        hits
     }
 
     /// Checks the structure's invariants (bounds contain children and triangles, every
@@ -360,33 +373,34 @@ fn tolerance(b: &Aabb) -> f32 {
 }
 
 fn validate_blas(blas: &Blas) -> Result<(), String> {
-    let n = blas.triangles.len();
-    let mut slot_refs = vec![0u32; n];
+    let n = blas.triangle_count;
+    let mut packet_refs = vec![0u32; blas.packets.len()];
     let mut index_refs = vec![0u32; n];
     validate_tree(&blas.bvh, &mut |range, bounds, _, place| {
-        for (k, tri) in blas.triangles[range.clone()].iter().enumerate() {
-            slot_refs[range.start + k] += 1;
-            if let Some(c) = index_refs.get_mut(tri.index as usize) {
+        for (k, packet) in blas.packets[range.clone()].iter().enumerate() {
+            packet_refs[range.start + k] += 1;
+            for (index, corners) in packet.triangles() {
+                let Some(c) = index_refs.get_mut(index as usize) else {
+                    return Err(format!(
+                        "{place}: triangle index {index} out of range 0..{n}"
+                    ));
+                };
                 *c += 1;
-            } else {
-                return Err(format!(
-                    "{place}: triangle index {} out of range 0..{n}",
-                    tri.index
-                ));
-            }
-            let tb = Aabb::from_points(tri.corners());
-            if !bounds.contains_box(&tb, tolerance(&tb)) {
-                return Err(format!(
-                    "{place}: box {bounds:?} does not contain triangle {} {:?}",
-                    tri.index,
-                    tri.corners()
-                ));
+                let tb = Aabb::from_points(corners);
+                if !bounds.contains_box(&tb, tolerance(&tb)) {
+                    return Err(format!(
+                        "{place}: box {bounds:?} does not contain triangle {index} {corners:?}"
+                    ));
+                }
             }
         }
         Ok(())
     })?;
-    if let Some(i) = slot_refs.iter().position(|&c| c != 1) {
-        return Err(format!("stored triangle {i} is in {} leaves", slot_refs[i]));
+    if let Some(i) = packet_refs.iter().position(|&c| c != 1) {
+        return Err(format!(
+            "triangle packet {i} is in {} leaves",
+            packet_refs[i]
+        ));
     }
     if let Some(i) = index_refs.iter().position(|&c| c != 1) {
         return Err(format!(
@@ -499,8 +513,8 @@ mod tests {
         );
         // Losing a triangle reference is caught too.
         let mut tracer = Tracer::new(&scene);
-        let first = tracer.blases[mesh].triangles[0];
-        tracer.blases[mesh].triangles[1].index = first.index;
+        let first = tracer.blases[mesh].packets[0].index[0];
+        tracer.blases[mesh].packets[1].index[0] = first;
         let err = tracer.validate().unwrap_err();
         assert!(err.contains(" times"), "{err}");
         // An instance box that no longer covers its mesh.

@@ -6,7 +6,8 @@
 //! primitives in the owner's primitive array), encoded in one `u32`.
 
 use crate::build::{BinaryBvh, BinaryNode, MAX_DEPTH};
-use illume_core::{Aabb, Vec3, Vec3A};
+use illume_core::{Aabb, Vec3, Vec3A, Vec4};
+use std::cell::RefCell;
 
 /// Children per node.
 pub(crate) const WIDTH: usize = 4;
@@ -230,10 +231,11 @@ impl PreparedRay {
     /// Prepares `origin + t·dir`, `t ≥ t_min`.
     #[inline]
     pub fn new(origin: Vec3A, dir: Vec3A, t_min: f32) -> Self {
-        // A zero component would make 0·∞ = NaN at a slab; 1e-30 keeps every product finite.
+        // A zero component would make 0·∞ = NaN at a slab; replacing components below
+        // 1e-20 in magnitude keeps every product finite for coordinates up to 1e18.
         let safe = |d: f32| {
-            if d.abs() < 1e-30 {
-                1e-30f32.copysign(d)
+            if d.abs() < 1e-20 {
+                1e-20f32.copysign(d)
             } else {
                 d
             }
@@ -257,49 +259,53 @@ impl PreparedRay {
         }
     }
 
-    /// Entry distances of the four child boxes of `node`, +∞ for a box missed within
-    /// `(t_min, t_max)` or whose mask does not meet `mask`.
+    /// Entry distances of the four child boxes of `node` and a bit mask of the children
+    /// hit within `(t_min, t_max)` (and, when `MASKED`, whose mask meets `mask`).
     #[inline(always)]
-    fn hit_boxes(&self, node: &Node4, t_max: f32, mask: u32) -> [f32; WIDTH] {
+    fn hit_boxes<const MASKED: bool>(&self, node: &Node4, t_max: f32, mask: u32) -> (Vec4, u32) {
         let b = &node.bounds;
         let [nx, ny, nz] = self.near;
         let [fx, fy, fz] = self.far;
-        let [ix, iy, iz] = self.inv_dir;
-        let [ox, oy, oz] = self.origin_inv;
-        let mut out = [f32::INFINITY; WIDTH];
-        for i in 0..WIDTH {
-            let tnx = b[nx][i] * ix - ox;
-            let tny = b[ny][i] * iy - oy;
-            let tnz = b[nz][i] * iz - oz;
-            let tfx = b[fx][i] * ix - ox;
-            let tfy = b[fy][i] * iy - oy;
-            let tfz = b[fz][i] * iz - oz;
-            let t_near = fmax(fmax(tnx, tny), fmax(tnz, self.t_min));
-            let t_far = fmin(fmin(tfx, tfy), fmin(tfz, t_max)) * EXIT_SCALE;
-            let hit = t_near <= t_far && node.masks[i] & mask != 0;
-            out[i] = if hit { t_near } else { f32::INFINITY };
+        let [ix, iy, iz] = self.inv_dir.map(Vec4::splat);
+        let [ox, oy, oz] = self.origin_inv.map(Vec4::splat);
+        let plane = |row: usize, inv: Vec4, o: Vec4| Vec4::from_array(b[row]) * inv - o;
+        let t_near = plane(nx, ix, ox)
+            .max(plane(ny, iy, oy))
+            .max(plane(nz, iz, oz).max(Vec4::splat(self.t_min)));
+        let t_far = plane(fx, ix, ox)
+            .min(plane(fy, iy, oy))
+            .min(plane(fz, iz, oz).min(Vec4::splat(t_max)))
+            * EXIT_SCALE;
+        let mut bits = t_near.cmple(t_far).bitmask();
+        if MASKED {
+            for (i, m) in node.masks.iter().enumerate() {
+                if m & mask == 0 {
+                    bits &= !(1 << i);
+                }
+            }
         }
-        out
+        (t_near, bits)
     }
-}
-
-#[inline(always)]
-fn fmax(a: f32, b: f32) -> f32 {
-    if a > b { a } else { b }
-}
-
-#[inline(always)]
-fn fmin(a: f32, b: f32) -> f32 {
-    if a < b { a } else { b }
 }
 
 /// Entries of a traversal stack: (child reference, entry distance).
 pub(crate) type StackEntry = (u32, f32);
 
-/// A stack big enough for one tree walk plus, below it, one more (the instance level
-/// walks a mesh BVH from its leaves).
-pub(crate) fn new_stack() -> [StackEntry; 2 * STACK_SIZE] {
-    [(0, 0.0); 2 * STACK_SIZE]
+thread_local! {
+    /// Each thread's traversal stack, kept between queries (clearing a fresh one per ray
+    /// would cost more than a small scene's whole query).
+    static STACK: RefCell<Vec<StackEntry>> = RefCell::new(vec![(0, 0.0); 2 * STACK_SIZE]);
+}
+
+/// Runs `f` with a stack big enough for one tree walk plus, below it, one more (the
+/// instance level walks a mesh BVH from its leaves).
+#[inline]
+pub(crate) fn with_stack<R>(f: impl FnOnce(&mut [StackEntry]) -> R) -> R {
+    STACK.with(|stack| match stack.try_borrow_mut() {
+        Ok(mut stack) => f(&mut stack),
+        // Only reached if a query runs inside another on the same thread.
+        Err(_) => f(&mut vec![(0, 0.0); 2 * STACK_SIZE]),
+    })
 }
 
 /// Walks `bvh` nearest child first, using `stack` (at least `STACK_SIZE` entries).
@@ -307,7 +313,7 @@ pub(crate) fn new_stack() -> [StackEntry; 2 * STACK_SIZE] {
 /// closer hit, and returns true to stop the walk (any-hit queries); `free_stack` is the
 /// unused rest of `stack`, for a nested walk. Returns the final `t_max`.
 #[inline(always)]
-pub(crate) fn traverse(
+pub(crate) fn traverse<const MASKED: bool>(
     bvh: &Bvh4,
     ray: &PreparedRay,
     mut t_max: f32,
@@ -327,15 +333,16 @@ pub(crate) fn traverse(
             }
         } else {
             let node = &bvh.nodes[current.node()];
-            let dist = ray.hit_boxes(node, t_max, mask);
+            let (dist, mut bits) = ray.hit_boxes::<MASKED>(node, t_max, mask);
             // Gather the hit children, then sort them nearest first (at most four).
+            let dist = dist.to_array();
             let mut hits = [(0u32, 0f32); WIDTH];
             let mut n = 0;
-            for (&d, &child) in dist.iter().zip(&node.children) {
-                if d < f32::INFINITY {
-                    hits[n] = (child, d);
-                    n += 1;
-                }
+            while bits != 0 {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                hits[n] = (node.children[i], dist[i]);
+                n += 1;
             }
             if n > 0 {
                 for i in 1..n {
