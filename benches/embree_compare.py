@@ -21,6 +21,7 @@ import argparse
 import json
 import multiprocessing as mp
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -85,6 +86,14 @@ def time_embree(out_dir, threads):
         hits = scene.run(origins, dirs, query="INTERSECT", output=1)
         single.append(time.perf_counter() - start)
     t_embree = np.where(hits["geomID"] >= 0, hits["tfar"], np.inf).astype(np.float32)
+    # CPU time of this (single-threaded) process: insensitive to other processes
+    # time-slicing the machine; the illume side measures its thread's CPU time alike.
+    cpu = []
+    for _ in range(REPEATS):
+        r0 = resource.getrusage(resource.RUSAGE_SELF)
+        scene.run(origins, dirs, query="INTERSECT", output=1)
+        r1 = resource.getrusage(resource.RUSAGE_SELF)
+        cpu.append((r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime))
     multi = None
     if threads > 1:
         ctx = mp.get_context("fork")
@@ -101,6 +110,7 @@ def time_embree(out_dir, threads):
         "build_ms": build_ms,
         "rays_per_s_1": n / float(np.median(single)),
         "rays_per_s_n": n / multi if multi else None,
+        "cpu_rays_per_s_1": n / float(np.median(cpu)),
         "t": t_embree,
     }
 
@@ -166,16 +176,23 @@ def main():
                 "embree_rays_per_s_1thread": round(emb_1),
                 f"embree_rays_per_s_{args.threads}proc": round(emb_n),
                 "ratio_illume_over_embree": round(med([r[0]["rays_per_s"] / (r[1]["rays_per_s_n"] or r[1]["rays_per_s_1"]) for r in rounds]), 3),
+                "illume_cpu_rays_per_s_1thread": round(med([r[0]["cpu_rays_per_s_1thread"] for r in rounds])),
+                "embree_cpu_rays_per_s_1thread": round(med([r[1]["cpu_rays_per_s_1"] for r in rounds])),
+                "cpu_ratio_illume_over_embree": round(med([r[0]["cpu_rays_per_s_1thread"] / r[1]["cpu_rays_per_s_1"] for r in rounds]), 3),
                 "same_t_fraction": round(min(r[2] for r in rounds), 5),
             }
             rows.append(row)
             print(json.dumps(row), flush=True)
     print()
-    print(f"{'scene':28} {'kind':11} {'tris':>7} {'illume Mrays/s':>15} {'Embree Mrays/s':>15} {'ratio':>6} {'same t':>7}")
+    print(f"{'':48} {'wall clock, ' + str(args.threads) + ' threads':^38}   {'CPU time, 1 thread':^38}")
+    print(f"{'scene':28} {'kind':11} {'tris':>7} {'illume Mrays/s':>15} {'Embree Mrays/s':>15} {'ratio':>6}"
+          f" {'illume Mrays/s':>15} {'Embree Mrays/s':>15} {'ratio':>6} {'same t':>7}")
     for r in rows:
         emb_n = r[f"embree_rays_per_s_{args.threads}proc"]
         print(f"{r['scene']:28} {r['kind']:11} {r['triangles']:>7} {r['illume_rays_per_s'] / 1e6:>15.2f} "
-              f"{emb_n / 1e6:>15.2f} {r['ratio_illume_over_embree']:>6.2f} {r['same_t_fraction']:>7.4f}")
+              f"{emb_n / 1e6:>15.2f} {r['ratio_illume_over_embree']:>6.2f} "
+              f"{r['illume_cpu_rays_per_s_1thread'] / 1e6:>15.2f} {r['embree_cpu_rays_per_s_1thread'] / 1e6:>15.2f} "
+              f"{r['cpu_ratio_illume_over_embree']:>6.2f} {r['same_t_fraction']:>7.4f}")
     print(f"(illume: {args.threads} rayon threads; Embree: {args.threads} processes, rtcIntersect1 per ray; "
           f"medians of {args.rounds} alternating rounds, each the median of {REPEATS} runs; ratio = median of per-round ratios)")
 

@@ -82,6 +82,55 @@ fn tracer_benches(c: &mut Criterion) {
     }
 }
 
+/// `Tracer::update` (the instance level only) after moving every instance of a scene of
+/// 1000 spheres; mesh BVHs are not rebuilt.
+fn update_bench(c: &mut Criterion) {
+    use illume_scene::builtin::{SceneBuilder, uv_sphere};
+    use illume_scene::{Edit, InstanceId, Material, Trs};
+    let mut b = SceneBuilder::new();
+    let mat = b.material(Material::default());
+    let sphere = b.mesh(uv_sphere(0.1, 24, 12, mat, false));
+    for i in 0..1000 {
+        let p = illume_core::Vec3::new((i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32);
+        b.placed(
+            &format!("sphere{i}"),
+            sphere,
+            Trs::from_translation(p),
+            true,
+        );
+    }
+    let mut scene = b.finish("bench:spheres");
+    let mut tracer = Tracer::new(&scene);
+    let mut step = 0u32;
+    let mut group = c.benchmark_group("update");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(2));
+    group.bench_function("move_1000_instances", |bench| {
+        bench.iter_batched_ref(
+            || {
+                step += 1;
+                for i in 0..scene.instances.len() {
+                    let mut m = scene.instances[i].world_from_object;
+                    m.translation.y += 0.001 * (step as f32 + i as f32).sin();
+                    scene
+                        .apply_edit(&Edit::SetInstanceTransform {
+                            instance: InstanceId(i as u32),
+                            world_from_object: m,
+                        })
+                        .expect("finite transform");
+                }
+                scene.clone()
+            },
+            |moved| tracer.update(moved),
+            criterion::BatchSize::LargeInput,
+        )
+    });
+    group.finish();
+    eprintln!("update/move_1000_instances: {:?}", tracer.stats());
+}
+
 /// obvhs's triangles (glam 0.34) for every instanced triangle of `scene`, world space.
 fn obvhs_triangles(scene: &Scene) -> Vec<obvhs::triangle::Triangle> {
     let mut tris = Vec::new();
@@ -195,6 +244,6 @@ fn obvhs_vs_own(c: &mut Criterion) {
 /// Criterion's generated entry points (private, so they need no docs).
 mod entry {
     use super::*;
-    criterion_group!(benches, tracer_benches, obvhs_vs_own);
+    criterion_group!(benches, tracer_benches, update_bench, obvhs_vs_own);
 }
 criterion_main!(entry::benches);

@@ -69,11 +69,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &out.join("illume_t.f32"),
         hits.iter().map(|h| h.map_or(f32::INFINITY, |h| h.t)),
     )?;
+    // CPU time of one thread tracing alone: insensitive to other processes time-slicing
+    // the machine (Linux only; -1 elsewhere). Repeats until half a second of CPU time.
+    let cpu_rays_per_s = match thread_cpu_seconds() {
+        Some(start) => {
+            let mut traced = 0usize;
+            let mut spent = 0.0;
+            while spent < 0.5 {
+                for r in &rays {
+                    std::hint::black_box(tracer.intersect(r, MASK_DEFAULT));
+                }
+                traced += rays.len();
+                spent = thread_cpu_seconds().unwrap_or(f64::INFINITY) - start;
+            }
+            traced as f64 / spent
+        }
+        None => -1.0,
+    };
     let stats = tracer.stats();
     let hit_count = hits.iter().flatten().count();
     println!(
         "ILLUME {{\"scene\": \"{scene_arg}\", \"kind\": \"{kind}\", \"rays\": {}, \"threads\": {threads}, \"triangles\": {}, \"build_ms\": {build_ms:.2}, \
-         \"median_s\": {median:.6}, \"rays_per_s\": {:.0}, \"hits\": {hit_count}, \"nodes\": {}, \"memory_bytes\": {}}}",
+         \"median_s\": {median:.6}, \"rays_per_s\": {:.0}, \"hits\": {hit_count}, \"nodes\": {}, \"memory_bytes\": {}, \"cpu_rays_per_s_1thread\": {cpu_rays_per_s:.0}}}",
         rays.len(),
         scene.instanced_triangle_count(),
         rays.len() as f64 / median,
@@ -96,6 +113,16 @@ fn world_triangles(scene: &Scene) -> Vec<[f32; 9]> {
         }
     }
     out
+}
+
+/// User + system CPU time of the calling thread [s], from `/proc/thread-self/stat`
+/// (10 ms resolution).
+fn thread_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are the 12th and 13th.
+    let fields: Vec<&str> = stat.rsplit(')').next()?.split_whitespace().collect();
+    let ticks = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
 }
 
 fn write_f32(path: &Path, values: impl Iterator<Item = f32>) -> std::io::Result<()> {
