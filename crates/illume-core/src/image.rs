@@ -207,14 +207,23 @@ pub fn srgb_decode(x: f32) -> f32 {
     if x <= 0.04045 { x / 12.92 } else { ((x + 0.055) / 1.055).powf(2.4) }
 }
 
-/// Writes a linear image as 32-bit float RGB OpenEXR.
+/// Writes a linear image as 32-bit float RGB OpenEXR: ZIP compression (16 scan lines a
+/// block), increasing line order. The `exr` crate's default encoding (RLE, unspecified
+/// line order) crashes tinyexr-based readers (e.g. NVIDIA's FLIP tool); this encoding is
+/// read by every common OpenEXR reader.
 pub fn write_exr(img: &RgbImage, path: &Path) -> Result<(), ImageError> {
+    use exr::prelude::*;
     let w = img.width as usize;
-    exr::prelude::write_rgb_file(path, w, img.height as usize, |x, y| {
-        let p = img.data[y * w + x];
+    let encoding = Encoding { compression: Compression::ZIP16, blocks: Blocks::ScanLines, line_order: LineOrder::Increasing };
+    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+        let p = img.data[pos.y() * w + pos.x()];
         (p.x, p.y, p.z)
-    })
-    .map_err(|e| ImageError::Write { path: path.to_owned(), message: e.to_string() })
+    });
+    let layer = Layer::new((w, img.height as usize), LayerAttributes::default(), encoding, channels);
+    Image::from_layer(layer)
+        .write()
+        .to_file(path)
+        .map_err(|e| ImageError::Write { path: path.to_owned(), message: e.to_string() })
 }
 
 /// Reads the first RGB(A) layer of an OpenEXR file as linear RGB.
