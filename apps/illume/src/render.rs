@@ -63,6 +63,9 @@ pub fn load_scene(path: &Path, animation: Option<&str>, time: f64) -> Result<ill
         scene.select_animation(name).map_err(anyhow::Error::msg)?;
     }
     scene.set_time(time);
+    if scene.lights.is_empty() && scene.materials.iter().all(|m| !m.is_emissive()) {
+        eprintln!("warning: {}: the scene has no lights and no emissive materials; it will render black", path.display());
+    }
     let dt = t0.elapsed().as_secs_f64();
     if dt > 0.5 {
         eprintln!("loaded {} in {dt:.2} s", path.display());
