@@ -2,18 +2,11 @@
 //! triangles copied in leaf order (corner plus two edges, four triangles to a packet) so a
 //! leaf is one contiguous run of packets.
 
+use crate::BvhSettings;
 use crate::build::{BuildParams, build_binary};
 use crate::wide::{Bvh4, MAX_LEAF, PreparedRay, StackEntry, traverse};
 use illume_core::{Aabb, Vec2, Vec3, Vec4};
 use illume_scene::Mesh;
-
-/// Mesh-level build parameters: a box test costs about as much as a triangle test, and
-/// leaves hold up to 8 triangles (chosen by measurement, see lib.rs).
-const PARAMS: BuildParams = BuildParams {
-    traversal_cost: 1.0,
-    max_leaf: 8,
-};
-const _: () = assert!(PARAMS.max_leaf <= MAX_LEAF);
 
 /// Up to four triangles ready for Möller–Trumbore, tested together in 4-lane arithmetic:
 /// corners `v0`, edges `e1 = v1 − v0` and `e2 = v2 − v0` (structure of arrays), and each
@@ -118,11 +111,16 @@ pub(crate) struct Blas {
 
 impl Blas {
     /// Builds the BVH of `mesh` (binned SAH, then collapsed to four-wide nodes).
-    pub fn build(mesh: &Mesh) -> Blas {
+    pub fn build(mesh: &Mesh, settings: &BvhSettings) -> Blas {
         let boxes: Vec<Aabb> = (0..mesh.triangle_count())
             .map(|t| Aabb::from_points(mesh.triangle(t)))
             .collect();
-        let mut bin = build_binary(&boxes, PARAMS);
+        let params = BuildParams {
+            traversal_cost: settings.node_cost,
+            max_leaf: settings.max_leaf_triangles.clamp(1, 4 * MAX_LEAF),
+            block: if settings.packet_aware_sah { 4 } else { 1 },
+        };
+        let mut bin = build_binary(&boxes, params);
         // Repack every leaf's triangles into whole packets; leaves then index packets.
         let mut packets = Vec::with_capacity(mesh.triangle_count() / 3 + 1);
         for node in bin.nodes.iter_mut().filter(|n| n.count > 0) {

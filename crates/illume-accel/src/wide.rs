@@ -259,6 +259,22 @@ impl PreparedRay {
         }
     }
 
+    /// The same ray from `origin + offset`.
+    #[inline]
+    pub fn translated(&self, offset: Vec3A) -> Self {
+        let origin = self.origin + offset;
+        let origin_inv = [
+            origin.x * self.inv_dir[0],
+            origin.y * self.inv_dir[1],
+            origin.z * self.inv_dir[2],
+        ];
+        Self {
+            origin,
+            origin_inv,
+            ..*self
+        }
+    }
+
     /// Entry distances of the four child boxes of `node` and a bit mask of the children
     /// hit within `(t_min, t_max)` (and, when `MASKED`, whose mask meets `mask`).
     #[inline(always)]
@@ -334,31 +350,39 @@ pub(crate) fn traverse<const MASKED: bool>(
         } else {
             let node = &bvh.nodes[current.node()];
             let (dist, mut bits) = ray.hit_boxes::<MASKED>(node, t_max, mask);
-            // Gather the hit children, then sort them nearest first (at most four).
-            let dist = dist.to_array();
-            let mut hits = [(0u32, 0f32); WIDTH];
-            let mut n = 0;
-            while bits != 0 {
-                let i = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                hits[n] = (node.children[i], dist[i]);
-                n += 1;
-            }
-            if n > 0 {
-                for i in 1..n {
-                    let mut j = i;
-                    while j > 0 && hits[j - 1].1 < hits[j].1 {
-                        hits.swap(j - 1, j);
-                        j -= 1;
-                    }
-                }
-                // Farthest first onto the stack; the nearest is visited now.
-                for &h in &hits[..n - 1] {
-                    stack[sp] = h;
-                    sp += 1;
-                }
-                current = Item(hits[n - 1].0);
+            if bits == 0 {
+                // Nothing hit: fall through to pop.
+            } else if bits & (bits - 1) == 0 {
+                // One child hit (the common case deep in the tree): visit it directly.
+                current = Item(node.children[bits.trailing_zeros() as usize]);
                 continue;
+            } else {
+                // Gather the hit children, then sort them nearest first (at most four).
+                let dist = dist.to_array();
+                let mut hits = [(0u32, 0f32); WIDTH];
+                let mut n = 0;
+                while bits != 0 {
+                    let i = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    hits[n] = (node.children[i], dist[i]);
+                    n += 1;
+                }
+                if n > 0 {
+                    for i in 1..n {
+                        let mut j = i;
+                        while j > 0 && hits[j - 1].1 < hits[j].1 {
+                            hits.swap(j - 1, j);
+                            j -= 1;
+                        }
+                    }
+                    // Farthest first onto the stack; the nearest is visited now.
+                    for &h in &hits[..n - 1] {
+                        stack[sp] = h;
+                        sp += 1;
+                    }
+                    current = Item(hits[n - 1].0);
+                    continue;
+                }
             }
         }
         // Pop the next child still nearer than the closest hit.
