@@ -15,8 +15,12 @@ use std::time::Instant;
 
 fn main() {
     // `cargo bench` passes `--bench`; ignore arguments.
-    let scene_name = std::env::var("ILLUME_BENCH_SCENE").unwrap_or_else(|_| "builtin:cornell-spot".into());
-    let long_spp: u32 = std::env::var("ILLUME_BENCH_LONG_SPP").ok().and_then(|s| s.parse().ok()).unwrap_or(2048);
+    let scene_name =
+        std::env::var("ILLUME_BENCH_SCENE").unwrap_or_else(|_| "builtin:cornell-spot".into());
+    let long_spp: u32 = std::env::var("ILLUME_BENCH_LONG_SPP")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2048);
     let (w, h) = (320, 240);
     let scene = illume_scene::load_scene(std::path::Path::new(&scene_name)).expect("scene loads");
     let world = World::new(scene);
@@ -24,7 +28,12 @@ fn main() {
     println!("scene {scene_name}, {w}×{h}, {threads} threads");
 
     let t0 = Instant::now();
-    let mut long = ReferenceRenderer::new(ReferenceSettings { width: w, height: h, seed: 1000, ..Default::default() });
+    let mut long = ReferenceRenderer::new(ReferenceSettings {
+        width: w,
+        height: h,
+        seed: 1000,
+        ..Default::default()
+    });
     let chunk = 64;
     while long.samples() < long_spp {
         long.add_samples(&world, chunk.min(long_spp - long.samples()));
@@ -36,11 +45,19 @@ fn main() {
         (w * h) as f64 * long_spp as f64 / long_s / 1e6
     );
 
-    let mut r = ReferenceRenderer::new(ReferenceSettings { width: w, height: h, seed: 0, ..Default::default() });
+    let mut r = ReferenceRenderer::new(ReferenceSettings {
+        width: w,
+        height: h,
+        seed: 0,
+        ..Default::default()
+    });
     let mut elapsed = 0.0f64;
     let mut converged_at: Option<(u32, f64)> = None;
     let mut first_relmse = None;
-    println!("{:>6} {:>10} {:>12} {:>16} {:>14}", "spp", "time [s]", "relMSE", "minus long own", "M samples/s");
+    println!(
+        "{:>6} {:>10} {:>12} {:>16} {:>14}",
+        "spp", "time [s]", "relMSE", "minus long own", "M samples/s"
+    );
     let mut target = 1u32;
     while target <= long_spp / 2 {
         let t = Instant::now();
@@ -62,7 +79,10 @@ fn main() {
         target *= 2;
     }
     if let Some(e1) = first_relmse {
-        println!("long run's own relMSE ≈ {:.2e} (relMSE at 1 spp / {long_spp})", e1 / long_spp as f64);
+        println!(
+            "long run's own relMSE ≈ {:.2e} (relMSE at 1 spp / {long_spp})",
+            e1 / long_spp as f64
+        );
     }
     match converged_at {
         Some((spp, s)) => println!("relMSE < 1e-3 at {spp} spp after {s:.2} s"),
