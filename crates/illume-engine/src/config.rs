@@ -52,18 +52,27 @@ pub enum ConfigError {
 impl Config {
     /// Reads a configuration file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io { path: path.into(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+            path: path.into(),
+            source,
+        })?;
         Self::parse(&text, path)
     }
 
     /// Parses configuration text; `path` names it in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
-        toml::from_str(text).map_err(|e| ConfigError::Parse { path: path.into(), message: e.to_string() })
+        toml::from_str(text).map_err(|e| ConfigError::Parse {
+            path: path.into(),
+            message: e.to_string(),
+        })
     }
 
     /// The per-frame budget the configured technique gets by default.
     pub fn budget(&self) -> Budget {
-        Budget { samples: Some(self.reference.spp_per_frame), ..Default::default() }
+        Budget {
+            samples: Some(self.reference.spp_per_frame),
+            ..Default::default()
+        }
     }
 }
 
@@ -73,11 +82,19 @@ mod tests {
 
     #[test]
     fn parses_tables_and_rejects_unknown_keys() {
-        let c = Config::parse("technique = \"reference\"\n[render]\nwidth = 10\n[reference]\nspp = 3\n", Path::new("a.toml")).unwrap();
+        let c = Config::parse(
+            "technique = \"reference\"\n[render]\nwidth = 10\n[reference]\nspp = 3\n",
+            Path::new("a.toml"),
+        )
+        .unwrap();
         assert_eq!((c.render.width, c.reference.spp), (10, 3));
-        let e = Config::parse("[render]\nwidht = 10\n", Path::new("cfg/a.toml")).unwrap_err().to_string();
+        let e = Config::parse("[render]\nwidht = 10\n", Path::new("cfg/a.toml"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("cfg/a.toml") && e.contains("widht"), "{e}");
-        let e = Config::parse("technique = \"nope\"\n", Path::new("b.toml")).unwrap_err().to_string();
+        let e = Config::parse("technique = \"nope\"\n", Path::new("b.toml"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("b.toml") && e.contains("nope"), "{e}");
     }
 }

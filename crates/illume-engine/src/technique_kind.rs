@@ -26,7 +26,11 @@ impl TechniqueKind {
     }
 
     /// Builds the technique for `world` with its settings from `config`.
-    pub fn build(self, _world: &SharedWorld, config: &Config) -> Result<Box<dyn Technique>, EngineError> {
+    pub fn build(
+        self,
+        _world: &SharedWorld,
+        config: &Config,
+    ) -> Result<Box<dyn Technique>, EngineError> {
         Ok(match self {
             TechniqueKind::Reference => Box::new(ReferenceTechnique::new(config.reference.clone())),
         })
@@ -37,9 +41,20 @@ impl std::str::FromStr for TechniqueKind {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL.iter().copied().find(|k| k.name() == s).ok_or_else(|| {
-            format!("unknown technique '{s}' (have: {})", Self::ALL.iter().map(|k| k.name()).collect::<Vec<_>>().join(", "))
-        })
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown technique '{s}' (have: {})",
+                    Self::ALL
+                        .iter()
+                        .map(|k| k.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })
     }
 }
 
