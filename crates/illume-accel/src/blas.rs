@@ -81,15 +81,20 @@ impl TrianglePacket {
         let [ox, oy, oz] = ray.origin.to_array().map(Vec4::splat);
         let (tx, ty, tz) = (ox - c(0), oy - c(1), oz - c(2));
         let b1 = (tx * px + ty * py + tz * pz) * inv_det;
+        let first = det.abs().cmpge(Vec4::splat(f32::MIN_POSITIVE))
+            & b1.cmpge(Vec4::ZERO)
+            & b1.cmple(Vec4::ONE);
+        if !first.any() {
+            // Most packets a ray meets miss on the first barycentric: skip the rest.
+            return (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO, 0);
+        }
         // qvec = tvec × e1
         let qx = ty * e1z - tz * e1y;
         let qy = tz * e1x - tx * e1z;
         let qz = tx * e1y - ty * e1x;
         let b2 = (dx * qx + dy * qy + dz * qz) * inv_det;
         let t = (e2x * qx + e2y * qy + e2z * qz) * inv_det;
-        let valid = det.abs().cmpge(Vec4::splat(f32::MIN_POSITIVE))
-            & b1.cmpge(Vec4::ZERO)
-            & b1.cmple(Vec4::ONE)
+        let valid = first
             & b2.cmpge(Vec4::ZERO)
             & (b1 + b2).cmple(Vec4::ONE)
             & t.cmpgt(Vec4::splat(ray.t_min))

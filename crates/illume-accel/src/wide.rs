@@ -136,7 +136,9 @@ impl Bvh4 {
             Item::leaf(root.first, root.count)
         } else {
             let mut mask = 0;
-            Item(collapse(bin, 0, &mut nodes, leaf_mask, &mut mask))
+            nodes.push(Node4::EMPTY);
+            collapse(bin, 0, &mut nodes, 0, leaf_mask, &mut mask);
+            Item(0)
         };
         Bvh4 {
             root: root_item,
@@ -151,15 +153,16 @@ impl Bvh4 {
     }
 }
 
-/// Writes the wide node for binary interior node `b` (and, recursively, its subtree);
-/// returns its index and ORs the subtree's mask into `mask`.
+/// Writes the wide node for binary interior node `b` into the `reserved` slot of `out`
+/// (and, recursively, its subtree) and ORs the subtree's mask into `mask`.
 fn collapse(
     bin: &BinaryBvh,
     b: usize,
     out: &mut Vec<Node4>,
+    reserved: usize,
     leaf_mask: &dyn Fn(u32, u32) -> u32,
     mask: &mut u32,
-) -> u32 {
+) {
     let node: &BinaryNode = &bin.nodes[b];
     debug_assert_eq!(node.count, 0);
     let mut kids: Vec<usize> = vec![node.first as usize, node.first as usize + 1];
@@ -181,8 +184,14 @@ fn collapse(
         kids.push(bin.nodes[k].first as usize);
         kids.push(bin.nodes[k].first as usize + 1);
     }
-    let index = out.len();
-    out.push(Node4::EMPTY);
+    // Siblings' nodes sit side by side (allocated before any of their subtrees).
+    let index = reserved;
+    let mut first_interior = out.len();
+    out.extend(
+        kids.iter()
+            .filter(|&&k| bin.nodes[k].count == 0)
+            .map(|_| Node4::EMPTY),
+    );
     let mut wide = Node4::EMPTY;
     for (i, &k) in kids.iter().enumerate() {
         let kid = &bin.nodes[k];
@@ -192,8 +201,11 @@ fn collapse(
                 leaf_mask(kid.first, kid.count),
             )
         } else {
+            let slot = first_interior;
+            first_interior += 1;
             let mut m = 0;
-            (collapse(bin, k, out, leaf_mask, &mut m), m)
+            collapse(bin, k, out, slot, leaf_mask, &mut m);
+            (slot as u32, m)
         };
         wide.children[i] = item;
         wide.masks[i] = m;
@@ -204,7 +216,6 @@ fn collapse(
         }
     }
     out[index] = wide;
-    index as u32
 }
 
 /// A ray prepared for box tests: origin, direction, robust reciprocal direction, and for
