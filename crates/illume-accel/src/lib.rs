@@ -1,5 +1,5 @@
 // MEASUREMENTS — own BVH or `obvhs`, and illume against Embree 4
-// (AMD EPYC, 2 cores shared with other builds: load average 5–8 during every run, so
+// (AMD EPYC, 2 cores shared with other builds: load average 4–8 during every run, so
 // wall-clock figures are noisy; CPU-time figures are not time-sliced. Medians.)
 //
 // Own BVH vs obvhs 0.4 (DGriffin91; its compressed 8-wide CWBVH, `medium_build` preset:
@@ -7,9 +7,9 @@
 // triangles and rays, every hit distance equal:
 //   `cargo bench -p illume-accel --bench trace -- obvhs_vs_own`
 //                         obvhs CWBVH      own 4-wide BVH
-//   build                 103 ms                81 ms       (over 3 runs: 62–103 vs 81–94)
-//   incoherent rays       0.93 Mrays/s          1.33 Mrays/s  (3 runs: own 1.2–1.4× faster)
-//   primary rays          5.28 Mrays/s          9.91 Mrays/s  (3 runs: own 1.4–2.0× faster)
+//   build                 51.7 ms               40.0 ms       (5 runs: 52–103 vs 40–94)
+//   incoherent rays       2.09 Mrays/s          2.84 Mrays/s  (5 runs: own 1.2–1.4× faster)
+//   primary rays          10.8 Mrays/s          19.4 Mrays/s  (5 runs: own 1.4–2.0× faster)
 // obvhs builds with glam 0.34 (it needs glam >=0.33, <0.35; the workspace has 0.30), so
 // it can only be used beside our glam with conversions at the boundary. Decision: keep
 // our own BVH — it traces faster on both ray kinds, its build is as fast, and it gives
@@ -20,18 +20,20 @@
 // --rays 1000000 --rounds 3`), closest hit, same triangles and rays, same hit distances:
 //                              wall clock, 2 threads        CPU time of 1 thread
 //   Mrays/s                     illume  Embree  ratio        illume  Embree  ratio
-//   cornell-spot   incoherent    9.74    8.17   1.08         10.53    9.62   1.08
-//   cornell-spot   primary       6.36    6.37   1.12         13.73   12.86   1.08
-//   CornellBox-Sphere incoh.     4.89    4.89   0.97         10.53    9.81   1.07
-//   CornellBox-Sphere primary    9.20    8.16   1.10         19.23   15.90   1.22
-//   Sponza         incoherent    1.39    1.57   0.83          2.82    3.43   0.80
-//   Sponza         primary       9.00    8.29   1.17         16.98   16.58   1.01
+//   cornell-spot   incoherent    9.18    9.75   0.94         10.17    9.65   1.05
+//   cornell-spot   primary      12.79   12.66   1.01         14.00   12.85   1.11
+//   CornellBox-Sphere incoh.     8.33    9.54   0.91          9.80   10.16   0.97
+//   CornellBox-Sphere primary   13.72   15.24   0.89         14.55   15.53   0.94
+//   Sponza         incoherent    2.98    3.60   0.83          2.99    3.94   0.76
+//   Sponza         primary      18.74   17.50   1.06         19.23   17.33   1.10
+// Repeating the whole run moves each ratio by up to ±0.15 (an earlier run, load 7–8:
+// 1.08 1.12 0.97 1.10 0.83 1.17 wall, 1.08 1.08 1.07 1.22 0.80 1.01 CPU).
 // (Embree's two-thread figure is two processes each tracing half the rays; illume's
 // cornell-spot goes through its three instances, Embree gets the flattened soup.)
 // Sponza's incoherent rays are the weak spot: traversal there is bound by memory
-// latency (3.5 MB of nodes and packets), and Embree picks AVX2/AVX-512 kernels (wider
-// nodes) on this CPU where we stay on 4-wide SSE2 (no target features without `unsafe`
-// or build flags).
+// latency (3.5 MB of nodes and packets), and Embree selects its kernels by CPU (this one
+// has AVX2 and AVX-512) where we stay on portable 4-wide SSE2 (target features need
+// `unsafe` or build flags).
 //
 // Settings (BvhSettings::default) chosen by thread CPU time on Sponza: leaves of up to 8
 // triangles with a packet-aware SAH (node cost 2) were within noise of 12 and 16 and
