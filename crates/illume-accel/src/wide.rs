@@ -26,8 +26,9 @@ pub(crate) struct Item(pub u32);
 
 impl Item {
     const LEAF: u32 = 1 << 31;
-    /// Largest primitive index a leaf can start at.
-    pub const MAX_FIRST: u32 = (1 << 27) - 1;
+    /// Largest primitive index a leaf can start at (one less than the 27-bit maximum,
+    /// so that no leaf encodes as [`Item::NONE`], which also marks unused slots).
+    pub const MAX_FIRST: u32 = (1 << 27) - 2;
     /// The reference to nothing (an empty tree's root).
     pub const NONE: Item = Item(u32::MAX);
 
@@ -37,7 +38,10 @@ impl Item {
             "BVH leaf starts at primitive {first}, beyond the limit {}",
             Self::MAX_FIRST
         );
-        debug_assert!((1..=MAX_LEAF as u32).contains(&count));
+        assert!(
+            (1..=MAX_LEAF as u32).contains(&count),
+            "BVH leaf of {count} primitives (1..={MAX_LEAF})"
+        );
         Item(Self::LEAF | first << 4 | (count - 1))
     }
 
@@ -102,10 +106,9 @@ impl Node4 {
 
     /// Number of used slots (they come first).
     pub fn child_count(&self) -> usize {
-        self.masks
+        self.children
             .iter()
-            .zip(&self.children)
-            .take_while(|(_, c)| **c != u32::MAX)
+            .take_while(|&&c| c != Item::NONE.0)
             .count()
     }
 }
