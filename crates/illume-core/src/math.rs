@@ -252,11 +252,17 @@ pub fn affine_is_finite(m: &Affine3A) -> bool {
 }
 
 /// Transforms a normal by the inverse transpose of `world_from_object`'s linear part and
-/// normalises it.
+/// normalises it. Uses the cofactor matrix (det · inverse transpose: three cross products,
+/// no division), with the determinant's sign restored so mirroring transforms give the
+/// same direction as the inverse transpose.
 #[inline]
 pub fn transform_normal(world_from_object: &Affine3A, n: Vec3) -> Vec3 {
-    let inv_t = world_from_object.matrix3.inverse().transpose();
-    (inv_t * Vec3A::from(n)).normalize_or_zero().into()
+    let m = &world_from_object.matrix3;
+    let (c0, c1, c2) = (m.x_axis, m.y_axis, m.z_axis);
+    let (k0, k1, k2) = (c1.cross(c2), c2.cross(c0), c0.cross(c1));
+    let det = c0.dot(k0);
+    let v = (k0 * n.x + k1 * n.y + k2 * n.z) * det.signum();
+    Vec3::from(v).normalize_or_zero()
 }
 
 #[cfg(test)]
@@ -277,6 +283,32 @@ mod tests {
             );
             let v = Vec3::new(0.3, -0.5, 0.8);
             assert!((f.to_local(f.to_world(v)) - v).length() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn normal_transform_matches_inverse_transpose() {
+        for (k, scale) in [
+            Vec3::new(2.0, 0.5, 1.0),
+            Vec3::new(-1.0, 3.0, 0.2),
+            Vec3::splat(0.01),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let m = Affine3A::from_scale_rotation_translation(
+                scale,
+                Quat::from_euler(glam::EulerRot::XYZ, 0.3 * k as f32, 1.1, -0.4),
+                Vec3::new(5.0, -1.0, 0.0),
+            );
+            for n in [Vec3::X, Vec3::new(0.3, -0.5, 0.8).normalize(), Vec3::Z] {
+                let expected = (m.matrix3.inverse().transpose() * Vec3A::from(n)).normalize();
+                let got = transform_normal(&m, n);
+                assert!(
+                    (Vec3::from(expected) - got).length() < 1e-5,
+                    "{expected} vs {got}"
+                );
+            }
         }
     }
 

@@ -9,7 +9,9 @@ fn gbuffer(c: &mut Criterion) {
     let mut g = c.benchmark_group("gbuffer");
     g.sample_size(20);
     for (w, h) in [(640u32, 480u32), (800, 600)] {
-        g.bench_function(format!("cornell-spot {w}x{h}"), |b| b.iter(|| GBuffer::render(&world, w, h, Vec2::splat(0.5))));
+        g.bench_function(format!("cornell-spot {w}x{h}"), |b| {
+            b.iter(|| GBuffer::render(&world, w, h, Vec2::splat(0.5)))
+        });
     }
     g.finish();
 }
