@@ -1,1 +1,46 @@
-fn main() {}
+//! `illume` — the command line of the illume global-illumination engine.
+//!
+//! * `illume render SCENE` — one image (reference path tracer or a technique);
+//! * `illume info SCENE` — what a scene holds (triangles, instances, lights and power);
+//! * `illume compare A B` — image metrics between two images or two frame folders.
+//!
+//! SCENE is a file (`.gltf`, `.glb`, `.obj`, `.ply`) or `builtin:NAME`
+//! (`builtin:cornell-spot`, `builtin:cube-in-box`, `builtin:furnace`).
+
+mod compare;
+mod info;
+mod progress;
+mod render;
+
+use clap::{Parser, Subcommand};
+
+/// illume: global illumination for dynamic scenes.
+#[derive(Parser)]
+#[command(name = "illume", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render one image of a scene.
+    Render(render::RenderArgs),
+    /// Describe a scene: geometry, lights and their power, animations, bounds.
+    Info(info::InfoArgs),
+    /// Compare two images (EXR/PNG) or two folders of frames with image metrics.
+    Compare(compare::CompareArgs),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(a) => render::run(a),
+        Command::Info(a) => info::run(a),
+        Command::Compare(a) => compare::run(a),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}

@@ -17,7 +17,9 @@ impl BruteForce {
         for (i, inst) in scene.instances.iter().enumerate() {
             let mesh = &scene.meshes[inst.mesh.index()];
             for t in 0..mesh.triangle_count() {
-                let w = mesh.triangle(t).map(|p| inst.world_from_object.transform_point3(p));
+                let w = mesh
+                    .triangle(t)
+                    .map(|p| inst.world_from_object.transform_point3(p));
                 tris.push((w, InstanceId(i as u32), t as u32, inst.mask));
             }
         }
@@ -34,9 +36,21 @@ impl BruteForce {
             }
             if let Some((t, b)) = intersect_triangle(ray, t_max, w[0], w[1], w[2]) {
                 t_max = t;
-                best = Some(Hit { t, instance: *inst, triangle: *tri, barycentrics: b });
+                best = Some(Hit {
+                    t,
+                    instance: *inst,
+                    triangle: *tri,
+                    barycentrics: b,
+                });
             }
         }
         best
+    }
+
+    /// True when any triangle visible to `mask` is hit within `(ray.t_min, ray.t_max)`.
+    pub fn occluded(&self, ray: &Ray, mask: u32) -> bool {
+        self.tris.iter().any(|(w, _, _, m)| {
+            m & mask != 0 && intersect_triangle(ray, ray.t_max, w[0], w[1], w[2]).is_some()
+        })
     }
 }

@@ -1,18 +1,55 @@
 //! Ray queries against a [`Scene`]: a two-level acceleration structure with one BVH per
-//! mesh (built once) and an instance level over them (refit or rebuilt when transforms
-//! change, so a moving object never rebuilds its own BVH).
+//! mesh (built once) and an instance level over them (rebuilt from the instances' world
+//! boxes when transforms change, so a moving object never rebuilds its own BVH).
 //!
 //! Queries take an instance mask: a ray sees instance `i` when `ray_mask & i.mask != 0`
 //! (see [`illume_scene::MASK_DEFAULT`]), so a technique can include or ignore chosen
 //! instances (selective photon tracing's phantoms).
 //!
-//! [`brute_force`] intersects every triangle; it is the oracle the BVH is tested against.
+//! ```
+//! use illume_accel::Tracer;
+//! use illume_core::{Ray, Vec3};
+//! let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+//! let tracer = Tracer::new(&scene);
+//! let hit = tracer.intersect(&Ray::new(Vec3::new(0.0, 1.0, 0.0), Vec3::NEG_Y), illume_scene::MASK_DEFAULT);
+//! assert!((hit.unwrap().t - 1.0).abs() < 1e-5); // the floor
+//! tracer.validate().unwrap();
+//! ```
+//!
+//! # Design
+//!
+//! * Mesh level ([`blas`]): binned SAH (32 bins, all three axes, leaves of up to 8
+//!   triangles) builds a binary tree, which is collapsed into four-wide nodes of 128
+//!   bytes (child boxes as structure of arrays, so one ray meets four boxes in 4-lane
+//!   arithmetic). Triangles are copied in leaf order as corner + two edges.
+//! * Instance level: the same builder over the instances' world boxes (the mesh BVH's
+//!   box under `world_from_object`), rebuilt by [`Tracer::update`] in
+//!   O(n log n) for n instances; each node keeps the union of the masks below each
+//!   child, so masked-out instances are culled at the instance level. Rays enter a mesh
+//!   BVH through the precomputed `object_from_world`; the object-space direction is not
+//!   renormalised, so `t` stays in the units of the caller's ray.
+//! * Traversal is ordered (nearest child first, far children culled on pop against the
+//!   closest hit), with a conservative slab test (exit distance widened by 2γ₃) and a
+//!   reciprocal direction that stays finite for zero direction components.
+//!
+//! # Own BVH or `obvhs`?
+//!
+//! See `MEASUREMENTS` below; [`brute_force`] intersects every triangle and is the oracle
+//! the BVH is tested against.
 
+mod blas;
 pub mod brute_force;
+mod build;
 pub mod triangle;
+mod wide;
 
-use illume_core::{Ray, Vec2};
+use crate::blas::Blas;
+use crate::build::{BuildParams, build_binary};
+use crate::wide::{Bvh4, Item, PreparedRay, StackEntry, traverse, with_stack};
+use illume_core::{Aabb, Affine3A, Ray, Vec2, Vec3A};
 use illume_scene::{InstanceId, Scene};
+use rayon::prelude::*;
+use std::time::Instant;
 
 /// A ray–triangle hit.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,41 +64,463 @@ pub struct Hit {
     pub barycentrics: Vec2,
 }
 
+/// Size and cost of a [`Tracer`]'s structures.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TracerStats {
+    /// Mesh BVHs held (one per mesh).
+    pub mesh_bvhs: usize,
+    /// Four-wide nodes over all mesh BVHs.
+    pub mesh_nodes: usize,
+    /// Four-wide nodes of the instance level.
+    pub instance_nodes: usize,
+    /// Triangles stored over all mesh BVHs (each mesh once, however often instanced).
+    pub triangles: usize,
+    /// Instances in the instance level (empty meshes and singular transforms are left out).
+    pub instances: usize,
+    /// Bytes of nodes, triangles and instance records.
+    pub memory_bytes: usize,
+    /// Milliseconds spent building mesh BVHs, in total.
+    pub mesh_build_ms: f64,
+    /// Milliseconds of the last instance-level build.
+    pub instance_build_ms: f64,
+    /// How many mesh BVHs were ever built by this tracer (each mesh once unless meshes
+    /// were added; [`Tracer::update`] never rebuilds one).
+    pub mesh_builds: u64,
+}
+
+/// One instance as the instance level sees it.
+#[derive(Clone, Copy, Debug)]
+struct InstanceRecord {
+    /// Maps world points to the mesh's object space.
+    object_from_world: Affine3A,
+    /// Maps object points to world space (kept for [`Tracer::validate`]).
+    world_from_object: Affine3A,
+    /// World box of the mesh BVH's box, padded for rounding.
+    world_bounds: Aabb,
+    /// Visibility bits.
+    mask: u32,
+    /// Mesh (and mesh BVH) index.
+    mesh: u32,
+    /// Which scene instance.
+    id: InstanceId,
+}
+
+/// Instance-level build parameters: a mesh BVH costs far more to enter than a box test,
+/// so leaves hold one instance.
+const INSTANCE_PARAMS: BuildParams = BuildParams {
+    traversal_cost: 0.2,
+    max_leaf: 1,
+};
+
+/// Rays per rayon task in the batch queries.
+const BATCH_CHUNK: usize = 256;
+
 /// Answers ray queries against a scene.
 pub struct Tracer {
-    inner: brute_force::BruteForce,
+    /// One BVH per scene mesh, indexed like `Scene::meshes`.
+    blases: Vec<Blas>,
+    /// Instance level; leaves index `instances`.
+    tlas: Bvh4,
+    /// Instances in instance-level leaf order.
+    instances: Vec<InstanceRecord>,
+    stats: TracerStats,
 }
 
 impl Tracer {
     /// Builds the acceleration structure for `scene` at its current time.
     pub fn new(scene: &Scene) -> Self {
-        Self { inner: brute_force::BruteForce::new(scene) }
+        let mut tracer = Self {
+            blases: Vec::new(),
+            tlas: Bvh4 {
+                root: Item::NONE,
+                bounds: Aabb::EMPTY,
+                nodes: Vec::new(),
+            },
+            instances: Vec::new(),
+            stats: TracerStats::default(),
+        };
+        tracer.update(scene);
+        tracer
     }
 
     /// Brings the instance level up to date with the scene's current instance transforms
-    /// and masks. Mesh-level structures are never rebuilt.
+    /// and masks. Mesh-level structures are never rebuilt; meshes added to the scene
+    /// since the last call get theirs (meshes are assumed never to change in place).
     pub fn update(&mut self, scene: &Scene) {
-        self.inner = brute_force::BruteForce::new(scene);
+        if scene.meshes.len() > self.blases.len() {
+            let start = Instant::now();
+            let new: Vec<Blas> = scene.meshes[self.blases.len()..]
+                .par_iter()
+                .map(Blas::build)
+                .collect();
+            self.stats.mesh_builds += new.len() as u64;
+            self.blases.extend(new);
+            self.stats.mesh_build_ms += start.elapsed().as_secs_f64() * 1e3;
+        }
+        let start = Instant::now();
+        let records: Vec<InstanceRecord> = scene
+            .instances
+            .iter()
+            .enumerate()
+            .filter_map(|(i, inst)| {
+                let blas = self.blases.get(inst.mesh.index())?;
+                let object_from_world = inst.world_from_object.inverse();
+                let usable = blas.triangle_count > 0
+                    && inst.world_from_object.matrix3.determinant() != 0.0
+                    && object_from_world.matrix3.is_finite()
+                    && object_from_world.translation.is_finite();
+                usable.then(|| InstanceRecord {
+                    object_from_world,
+                    world_from_object: inst.world_from_object,
+                    world_bounds: pad(blas.bounds().transformed(&inst.world_from_object)),
+                    mask: inst.mask,
+                    mesh: inst.mesh.0,
+                    id: InstanceId(i as u32),
+                })
+            })
+            .collect();
+        let boxes: Vec<Aabb> = records.iter().map(|r| r.world_bounds).collect();
+        let bin = build_binary(&boxes, INSTANCE_PARAMS);
+        self.instances = bin.order.iter().map(|&i| records[i as usize]).collect();
+        let instances = &self.instances;
+        self.tlas = Bvh4::from_binary(&bin, &|first, count| {
+            instances[first as usize..(first + count) as usize]
+                .iter()
+                .fold(0, |m, r| m | r.mask)
+        });
+        self.stats.instance_build_ms = start.elapsed().as_secs_f64() * 1e3;
+        self.stats.mesh_bvhs = self.blases.len();
+        self.stats.mesh_nodes = self.blases.iter().map(|b| b.bvh.nodes.len()).sum();
+        self.stats.instance_nodes = self.tlas.nodes.len();
+        self.stats.triangles = self.blases.iter().map(|b| b.triangle_count).sum();
+        self.stats.instances = self.instances.len();
+        self.stats.memory_bytes = self.blases.iter().map(Blas::memory_bytes).sum::<usize>()
+            + self.tlas.memory_bytes()
+            + self.instances.len() * std::mem::size_of::<InstanceRecord>();
+    }
+
+    /// Sizes and build times.
+    pub fn stats(&self) -> TracerStats {
+        self.stats
+    }
+
+    /// Address of the storage of mesh `mesh`'s BVH (stable as long as that BVH is not
+    /// rebuilt), for tests that check that [`Tracer::update`] keeps mesh BVHs.
+    pub fn mesh_bvh_address(&self, mesh: illume_scene::MeshId) -> Option<usize> {
+        self.blases
+            .get(mesh.index())
+            .map(|b| b.packets.as_ptr() as usize)
     }
 
     /// Closest hit along `ray` among instances whose mask intersects `mask`.
     pub fn intersect(&self, ray: &Ray, mask: u32) -> Option<Hit> {
-        self.inner.intersect(ray, mask)
+        with_stack(|stack| self.intersect_with(ray, mask, stack))
     }
 
-    /// True when anything visible to `mask` lies on `ray` within `[t_min, t_max]`.
+    /// True when anything visible to `mask` lies on `ray` within `(t_min, t_max)`.
     pub fn occluded(&self, ray: &Ray, mask: u32) -> bool {
-        self.inner.intersect(ray, mask).is_some()
+        with_stack(|stack| self.occluded_with(ray, mask, stack))
     }
 
-    /// Closest hits for a batch of rays, in parallel.
+    /// Closest hits for a batch of rays, in parallel (rayon, in chunks of rays).
     pub fn intersect_batch(&self, rays: &[Ray], mask: u32) -> Vec<Option<Hit>> {
-        rays.iter().map(|r| self.intersect(r, mask)).collect()
+        let mut hits = vec![None; rays.len()];
+        hits.par_chunks_mut(BATCH_CHUNK)
+            .zip(rays.par_chunks(BATCH_CHUNK))
+            .for_each(|(hits, rays)| {
+                with_stack(|stack| {
+                    for (h, r) in hits.iter_mut().zip(rays) {
+                        *h = self.intersect_with(r, mask, stack);
+                    }
+                })
+            });
+        hits
+    }
+
+    /// Occlusion for a batch of rays, in parallel (rayon, in chunks of rays).
+    pub fn occluded_batch(&self, rays: &[Ray], mask: u32) -> Vec<bool> {
+        let mut hits = vec![false; rays.len()];
+        hits.par_chunks_mut(BATCH_CHUNK)
+            .zip(rays.par_chunks(BATCH_CHUNK))
+            .for_each(|(hits, rays)| {
+                with_stack(|stack| {
+                    for (h, r) in hits.iter_mut().zip(rays) {
+                        *h = self.occluded_with(r, mask, stack);
+                    }
+                })
+            });
+        hits
+    }
+
+    #[inline]
+    fn intersect_with(&self, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> Option<Hit> {
+        let world_ray = PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min);
+        let mut best = None;
+        traverse::<true>(
+            &self.tlas,
+            &world_ray,
+            ray.t_max,
+            mask,
+            stack,
+            |range, t_max, free| {
+                for inst in &self.instances[range] {
+                    if inst.mask & mask == 0 {
+                        continue;
+                    }
+                    let local = object_ray(inst, &world_ray);
+                    if let Some((t, triangle, barycentrics)) =
+                        self.blases[inst.mesh as usize].intersect(&local, *t_max, free)
+                    {
+                        *t_max = t;
+                        best = Some(Hit {
+                            t,
+                            instance: inst.id,
+                            triangle,
+                            barycentrics,
+                        });
+                    }
+                }
+                false
+            },
+        );
+        best
+    }
+
+    #[inline]
+    fn occluded_with(&self, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> bool {
+        let world_ray = PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min);
+        let mut hit = false;
+        traverse::<true>(
+            &self.tlas,
+            &world_ray,
+            ray.t_max,
+            mask,
+            stack,
+            |range, t_max, free| {
+                hit = self.instances[range].iter().any(|inst| {
+                    inst.mask & mask != 0
+                        && self.blases[inst.mesh as usize].occluded(
+                            &object_ray(inst, &world_ray),
+                            *t_max,
+                            free,
+                        )
+                });
+                hit
+            },
+        );
+        hit
     }
 
     /// Checks the structure's invariants (bounds contain children and triangles, every
     /// triangle referenced once); the message says what is broken.
     pub fn validate(&self) -> Result<(), String> {
+        for (m, blas) in self.blases.iter().enumerate() {
+            validate_blas(blas).map_err(|e| format!("mesh {m} BVH: {e}"))?;
+        }
+        let mut seen = vec![0u32; self.instances.len()];
+        validate_tree(&self.tlas, &mut |range, bounds, mask, place| {
+            for (k, inst) in self.instances[range.clone()].iter().enumerate() {
+                seen[range.start + k] += 1;
+                if !bounds.contains_box(&inst.world_bounds, tolerance(bounds)) {
+                    return Err(format!("{place}: box {bounds:?} does not contain instance {} box {:?}", inst.id.0, inst.world_bounds));
+                }
+                let blas_world = self.blases[inst.mesh as usize].bounds().transformed(&inst.world_from_object);
+                if !inst.world_bounds.contains_box(&blas_world, tolerance(&blas_world)) {
+                    return Err(format!("{place}: instance {} box {:?} does not contain its mesh BVH's world box {blas_world:?}", inst.id.0, inst.world_bounds));
+                }
+                if inst.mask & !mask != 0 {
+                    return Err(format!("{place}: mask {mask:#x} lacks bits of instance {} mask {:#x}", inst.id.0, inst.mask));
+                }
+            }
+            Ok(())
+        })
+        .map_err(|e| format!("instance level: {e}"))?;
+        if let Some(i) = seen.iter().position(|&c| c != 1) {
+            return Err(format!(
+                "instance level: instance record {i} (instance {}) referenced {} times",
+                self.instances[i].id.0, seen[i]
+            ));
+        }
         Ok(())
+    }
+}
+
+/// The world ray in `inst`'s object space (direction not renormalised: `t` is preserved).
+#[inline(always)]
+fn object_ray(inst: &InstanceRecord, world_ray: &PreparedRay) -> PreparedRay {
+    let m = &inst.object_from_world;
+    PreparedRay::new(
+        m.transform_point3a(world_ray.origin),
+        m.transform_vector3a(world_ray.dir),
+        world_ray.t_min,
+    )
+}
+
+/// Widens a transformed box by the rounding the transform may have made.
+fn pad(b: Aabb) -> Aabb {
+    let e = tolerance(&b);
+    Aabb::new(b.min - e, b.max + e)
+}
+
+/// Absolute slack for containment checks of boxes near `b`: a few ulps of its largest
+/// coordinate.
+fn tolerance(b: &Aabb) -> f32 {
+    let scale = Vec3A::from(b.min)
+        .abs()
+        .max(Vec3A::from(b.max).abs())
+        .max_element();
+    1e-6 * scale.max(1e-3)
+}
+
+fn validate_blas(blas: &Blas) -> Result<(), String> {
+    let n = blas.triangle_count;
+    let mut packet_refs = vec![0u32; blas.packets.len()];
+    let mut index_refs = vec![0u32; n];
+    validate_tree(&blas.bvh, &mut |range, bounds, _, place| {
+        for (k, packet) in blas.packets[range.clone()].iter().enumerate() {
+            packet_refs[range.start + k] += 1;
+            for (index, corners) in packet.triangles() {
+                let Some(c) = index_refs.get_mut(index as usize) else {
+                    return Err(format!(
+                        "{place}: triangle index {index} out of range 0..{n}"
+                    ));
+                };
+                *c += 1;
+                let tb = Aabb::from_points(corners);
+                if !bounds.contains_box(&tb, tolerance(&tb)) {
+                    return Err(format!(
+                        "{place}: box {bounds:?} does not contain triangle {index} {corners:?}"
+                    ));
+                }
+            }
+        }
+        Ok(())
+    })?;
+    if let Some(i) = packet_refs.iter().position(|&c| c != 1) {
+        return Err(format!(
+            "triangle packet {i} is in {} leaves",
+            packet_refs[i]
+        ));
+    }
+    if let Some(i) = index_refs.iter().position(|&c| c != 1) {
+        return Err(format!(
+            "mesh triangle {i} is stored {} times",
+            index_refs[i]
+        ));
+    }
+    Ok(())
+}
+
+/// Checks one leaf: `(primitive range, box and mask its parent holds, where)`.
+type LeafCheck<'a> = dyn FnMut(std::ops::Range<usize>, &Aabb, u32, &str) -> Result<(), String> + 'a;
+
+/// Walks every node of `bvh` checking that each node's child boxes lie inside the box
+/// its parent holds for it and that unused slots are empty; calls
+/// `leaf(range, box, mask, place)` for every leaf with the box and mask its parent holds.
+fn validate_tree(bvh: &Bvh4, leaf: &mut LeafCheck<'_>) -> Result<(), String> {
+    if bvh.root == Item::NONE {
+        return if bvh.nodes.is_empty() {
+            Ok(())
+        } else {
+            Err(format!("empty tree has {} nodes", bvh.nodes.len()))
+        };
+    }
+    let mut visits = vec![0u32; bvh.nodes.len()];
+    // (reference, box the parent holds for it, mask the parent holds for it, parent description)
+    let mut work = vec![(bvh.root, bvh.bounds, u32::MAX, "root".to_string())];
+    while let Some((item, bounds, mask, place)) = work.pop() {
+        if item.is_leaf() {
+            leaf(
+                item.leaf_range(),
+                &bounds,
+                mask,
+                &format!("leaf {:?} under {place}", item.leaf_range()),
+            )?;
+            continue;
+        }
+        let index = item.node();
+        let node = bvh.nodes.get(index).ok_or_else(|| {
+            format!(
+                "{place}: child node {index} out of range 0..{}",
+                bvh.nodes.len()
+            )
+        })?;
+        visits[index] += 1;
+        if visits[index] > 1 {
+            return Err(format!("node {index} is referenced more than once"));
+        }
+        let count = node.child_count();
+        if count < 2 {
+            return Err(format!("node {index} has {count} children"));
+        }
+        for slot in 0..wide::WIDTH {
+            let b = node.child_bounds(slot);
+            if slot >= count {
+                if !b.is_empty() || node.masks[slot] != 0 {
+                    return Err(format!(
+                        "node {index} slot {slot}: unused slot is not empty"
+                    ));
+                }
+                continue;
+            }
+            if !bounds.contains_box(&b, tolerance(&b)) {
+                return Err(format!(
+                    "node {index} slot {slot}: child box {b:?} is outside the node's box {bounds:?}"
+                ));
+            }
+            if node.masks[slot] & !mask != 0 {
+                return Err(format!(
+                    "node {index} slot {slot}: mask {:#x} has bits the parent's {mask:#x} lacks",
+                    node.masks[slot]
+                ));
+            }
+            work.push((
+                Item(node.children[slot]),
+                b,
+                node.masks[slot],
+                format!("node {index} slot {slot}"),
+            ));
+        }
+    }
+    if let Some(i) = visits.iter().position(|&v| v == 0) {
+        return Err(format!("node {i} is unreachable"));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn validate_names_the_broken_node() {
+        let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+        let mut tracer = Tracer::new(&scene);
+        assert_eq!(tracer.validate(), Ok(()));
+        // Shrink one child box of the sphere's root node: its triangles stick out.
+        let sphere = scene
+            .instances
+            .iter()
+            .position(|i| i.name == "sphere")
+            .unwrap();
+        let mesh = scene.instances[sphere].mesh.index();
+        tracer.blases[mesh].bvh.nodes[0].bounds[3][1] -= 0.05;
+        let err = tracer.validate().unwrap_err();
+        assert!(err.starts_with(&format!("mesh {mesh} BVH:")), "{err}");
+        assert!(
+            err.contains("outside the node's box") || err.contains("does not contain triangle"),
+            "{err}"
+        );
+        // Losing a triangle reference is caught too.
+        let mut tracer = Tracer::new(&scene);
+        let first = tracer.blases[mesh].packets[0].index[0];
+        tracer.blases[mesh].packets[1].index[0] = first;
+        let err = tracer.validate().unwrap_err();
+        assert!(err.contains(" times"), "{err}");
+        // An instance box that no longer covers its mesh.
+        let mut tracer = Tracer::new(&scene);
+        tracer.instances[0].world_bounds.max.y -= 0.5;
+        let err = tracer.validate().unwrap_err();
+        assert!(err.starts_with("instance level:"), "{err}");
     }
 }

@@ -5,7 +5,13 @@ use illume_core::{Ray, Vec2, Vec3};
 /// Möller–Trumbore intersection. Returns `(t, b1, b2)` for a hit with `t` in
 /// `(ray.t_min, t_max)`; both faces are hit (culling is the caller's business).
 #[inline]
-pub fn intersect_triangle(ray: &Ray, t_max: f32, p0: Vec3, p1: Vec3, p2: Vec3) -> Option<(f32, Vec2)> {
+pub fn intersect_triangle(
+    ray: &Ray,
+    t_max: f32,
+    p0: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+) -> Option<(f32, Vec2)> {
     let e1 = p1 - p0;
     let e2 = p2 - p0;
     let pvec = ray.dir.cross(e2);

@@ -292,7 +292,7 @@ impl AliasTable {
     /// Table over non-negative `weights`; `None` when they sum to zero or any is not finite.
     pub fn new(weights: &[f32]) -> Option<Self> {
         let total: f64 = weights.iter().map(|&w| w as f64).sum();
-        if weights.is_empty() || !(total > 0.0) || !total.is_finite() || weights.iter().any(|w| *w < 0.0) {
+        if weights.is_empty() || total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !total.is_finite() || weights.iter().any(|w| *w < 0.0) {
             return None;
         }
         let n = weights.len();

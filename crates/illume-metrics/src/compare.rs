@@ -267,10 +267,12 @@ fn image_names(dir: &Path) -> Result<Vec<String>, MetricsError> {
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
-        if path.is_file() && matches!(ext.as_deref(), Some("exr") | Some("png")) {
-            if let Some(name) = path.file_name().and_then(|n| n.to_str()) {
-                names.push(name.to_owned());
-            }
+        let name = path.file_name().and_then(|n| n.to_str());
+        if let (true, Some(name)) = (
+            path.is_file() && matches!(ext.as_deref(), Some("exr" | "png")),
+            name,
+        ) {
+            names.push(name.to_owned());
         }
     }
     names.sort();

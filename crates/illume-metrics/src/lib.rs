@@ -10,6 +10,19 @@
 //! - **Reports** ([`report`]): `results.csv`, `report.md`, SVG plots.
 //! - **Counters** ([`Counters`]): ordered `technique.name → value`, as CSV rows.
 //!
+//! # Definitions
+//!
+//! | metric | definition | notes |
+//! | --- | --- | --- |
+//! | `rmse` | `sqrt(mean over pixels and RGB channels of (t − r)²)` | linear values |
+//! | `relmse` | `mean over pixels and channels of (t − r)² / (r² + ε)` | ε = 1e-2 ([`pixel::DEFAULT_RELMSE_EPSILON`]) |
+//! | `psnr` | `20·log10(peak / rmse)` dB | peak 1 for LDR references (all values ≤ 1), the reference maximum for HDR ([`Peak::Auto`]); identical images give `+∞` (`inf` in CSV) |
+//! | `ssim` | Wang et al. 2004, 11×11 Gaussian σ = 1.5, C1 = (0.01·L)², C2 = (0.03·L)² | per RGB channel on linear values, averaged; `L` = the PSNR peak; valid window positions only |
+//! | `flip` | mean LDR-FLIP, 67.02 pixels per degree by default | inputs clamped to [0, 1] |
+//! | `hdr-flip` | mean HDR-FLIP, ACES, automatic exposures | matches NVIDIA's reference implementation to < 2e-6 on the test set |
+//! | flicker | `mean_p max(0, abs(ΔY_test) − abs(ΔY_ref))` per frame pair, `Y` = Rec.709 luminance | see [`temporal::Flicker`] |
+//! | latency | frames (and seconds) from the event until the error is below a threshold for good | see [`temporal::latency_after_event`] |
+//!
 //! ```
 //! use illume_core::image::RgbImage;
 //! use illume_core::Rgb;
@@ -35,6 +48,8 @@ pub use compare::{
 };
 pub use counters::Counters;
 pub use error::MetricsError;
-pub use flip::{FlipMap, FlipSettings, FlipToneMapper, HdrFlip, hdr_flip, ldr_flip};
+pub use flip::{
+    FlipMap, FlipSettings, FlipToneMapper, HdrFlip, flip_error_map, hdr_flip, ldr_flip,
+};
 pub use pixel::{Peak, mse, psnr, rel_mse, rmse, ssim};
 pub use temporal::{ErrorCurve, Flicker, Latency, error_curve, flicker, latency_after_event};

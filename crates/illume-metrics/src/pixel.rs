@@ -4,6 +4,7 @@
 
 use crate::error::{MetricsError, check_not_empty, check_same_size};
 use illume_core::image::{Image, RgbImage};
+use rayon::prelude::*;
 
 /// Default ε of [`rel_mse`]: 1e-2 keeps near-black reference pixels from dominating
 /// (the value used by, e.g., Rousselle et al. 2011 and the denoising literature).
@@ -170,17 +171,22 @@ fn filter_valid(image: &Image<f64>, kernel: &[f64]) -> Vec<f64> {
     let (ow, oh) = (w + 1 - n, h + 1 - n);
     let px = image.pixels();
     let mut rows = vec![0.0; ow * h];
-    for y in 0..h {
-        for x in 0..ow {
-            rows[y * ow + x] = (0..n).map(|k| kernel[k] * px[y * w + x + k]).sum();
+    rows.par_chunks_mut(ow).enumerate().for_each(|(y, row)| {
+        let src = &px[y * w..(y + 1) * w];
+        for (x, out) in row.iter_mut().enumerate() {
+            *out = kernel.iter().zip(&src[x..x + n]).map(|(k, v)| k * v).sum();
         }
-    }
+    });
     let mut out = vec![0.0; ow * oh];
-    for y in 0..oh {
-        for x in 0..ow {
-            out[y * ow + x] = (0..n).map(|k| kernel[k] * rows[(y + k) * ow + x]).sum();
+    out.par_chunks_mut(ow).enumerate().for_each(|(y, row)| {
+        for (x, o) in row.iter_mut().enumerate() {
+            *o = kernel
+                .iter()
+                .enumerate()
+                .map(|(k, c)| c * rows[(y + k) * ow + x])
+                .sum();
         }
-    }
+    });
     out
 }
 

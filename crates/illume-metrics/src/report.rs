@@ -236,8 +236,11 @@ pub fn read_csv(path: &Path) -> Result<Table, MetricsError> {
     Ok(table)
 }
 
-/// Splits CSV text into records of fields, each with its 1-based starting line.
-fn parse_csv(text: &str) -> Result<Vec<(usize, Vec<String>)>, (usize, String)> {
+/// A CSV record: its 1-based starting line and its fields.
+type Record = (usize, Vec<String>);
+
+/// Splits CSV text into records; a syntax error gives its line and a message.
+fn parse_csv(text: &str) -> Result<Vec<Record>, (usize, String)> {
     let mut records = Vec::new();
     let mut chars = text.chars().peekable();
     let mut line = 1;
@@ -555,7 +558,8 @@ pub fn plot_bars(
         .margin(12)
         .x_label_area_size(44)
         .y_label_area_size(70)
-        .build_cartesian_2d((0..n).into_segmented(), 0.0..y1)
+        // Integer ranges are inclusive in plotters: 0..n−1 gives n segments.
+        .build_cartesian_2d((0..n - 1).into_segmented(), 0.0..y1)
         .map_err(|e| plot_error(&e))?;
     let labels: Vec<String> = bars.iter().map(|b| b.label.clone()).collect();
     chart
@@ -616,6 +620,28 @@ mod tests {
         std::fs::write(&p, "a,b\n1\n").unwrap();
         let e = read_csv(&p).unwrap_err();
         assert!(e.to_string().contains("t.csv:2"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn plots_accept_single_and_degenerate_data() {
+        let dir = std::env::temp_dir().join(format!("illume-plots-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let one = [Bar {
+            label: "only".into(),
+            value: 0.0,
+        }];
+        plot_bars(&dir.join("one.svg"), "t", "s", &one).unwrap();
+        assert!(
+            std::fs::read_to_string(dir.join("one.svg"))
+                .unwrap()
+                .contains("only")
+        );
+        let flat = [Series {
+            name: "flat".into(),
+            points: vec![(1.0, 2.0), (1.0, f64::NAN)],
+        }];
+        plot_lines(&dir.join("flat.svg"), "t", "x", "y", &flat).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

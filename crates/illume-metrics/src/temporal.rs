@@ -254,11 +254,11 @@ mod tests {
     fn flicker_rejects_mismatched_sequences() {
         let a = gradient(8, 8);
         assert!(matches!(
-            flicker(&[a.clone()], &[a.clone()]),
+            flicker(std::slice::from_ref(&a), std::slice::from_ref(&a)),
             Err(MetricsError::TooFewFrames { .. })
         ));
         assert!(matches!(
-            flicker(&[a.clone(), a.clone()], &[a.clone()]),
+            flicker(&[a.clone(), a.clone()], std::slice::from_ref(&a)),
             Err(MetricsError::LengthMismatch { .. })
         ));
     }

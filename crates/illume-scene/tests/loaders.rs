@@ -28,12 +28,27 @@ fn load(rel: &str) -> Scene {
     load_scene(&p).unwrap_or_else(|e| panic!("{rel}: {e}"))
 }
 
-/// A fresh, empty temp folder for one test.
-fn temp_dir(test: &str) -> PathBuf {
+/// A fresh, empty temp folder for one test, removed when dropped.
+struct TempDir(PathBuf);
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn temp_dir(test: &str) -> TempDir {
     let d = std::env::temp_dir().join(format!("illume-loaders-{}-{test}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TempDir(d)
 }
 
 fn assert_close(a: Vec3, b: Vec3, tol: f32, what: &str) {
@@ -55,6 +70,7 @@ fn load_err(path: &Path) -> String {
         Ok(_) => panic!("{} loaded but should fail", path.display()),
         Err(e) => {
             let msg = e.to_string();
+            eprintln!("expected error: {msg}");
             let name = path.file_name().unwrap().to_string_lossy();
             assert!(
                 msg.contains(name.as_ref()),
@@ -107,7 +123,34 @@ fn cornell_objs_have_readme_triangle_counts() {
             s.materials.iter().all(|m| m.double_sided),
             "{file}: OBJ surfaces are two-sided"
         );
-        // The box is the 2-unit Cornell box, Y up (water.obj is only the water surface).
+        // The box is the 2-unit Cornell box, Y up, lit by an emissive quad (MTL `Ke`) at
+        // y = 1.98 or 1.58 (water.obj is only the water surface).
+        // Exception: both Glossy OBJs use CornellBox-Glossy.mtl, which has no `light`
+        // material: their light quad gets the default material, with a warning.
+        if file.contains("Glossy") {
+            assert_eq!(s.emissive_power(), Vec3::ZERO, "{file}");
+            assert!(
+                s.warnings
+                    .iter()
+                    .any(|w| w.contains("unknown materials") && w.contains("light")),
+                "{file}: {:?}",
+                s.warnings
+            );
+        } else if file != "water.obj" {
+            let mesh = &s.meshes[0];
+            let lit: Vec<usize> = (0..mesh.triangle_count())
+                .filter(|&t| s.materials[mesh.triangle_materials[t].index()].is_emissive())
+                .collect();
+            assert!(!lit.is_empty(), "{file}: no emissive triangle");
+            for t in lit {
+                for p in mesh.triangle(t) {
+                    assert!(
+                        (p.y - 1.98).abs() < 0.011 || (p.y - 1.58).abs() < 0.011,
+                        "{file}: light vertex {p}"
+                    );
+                }
+            }
+        }
         if file != "water.obj" {
             let b = s.bounds();
             assert!(
@@ -826,7 +869,7 @@ fn glb_loads_and_truncated_glb_fails() {
 // ---------------------------------------------------------------------------------------
 
 /// Copies shared cube_in_box.gltf/.bin into a temp dir; returns (dir, parsed JSON).
-fn cube_copy(test: &str) -> (PathBuf, Value) {
+fn cube_copy(test: &str) -> (TempDir, Value) {
     let dir = temp_dir(test);
     let src = scenes_dir().join("gltf");
     std::fs::copy(src.join("cube_in_box.bin"), dir.join("cube_in_box.bin")).unwrap();
@@ -942,7 +985,18 @@ fn gltf_bad_json_extension_accessor_and_mode() {
     let msg = load_err(&write_json(&dir, "bad_channel.gltf", &d));
     assert_contains(&msg, &["animation 0 'move' channel 0", "values for"]);
 
-    // A spot light with a range is loaded, with a warning.
+    // A directional light: intensity × colour is irradiance [W/m²].
+    let mut d = doc.clone();
+    d["extensions"]["KHR_lights_punctual"]["lights"][0] =
+        json!({"type": "directional", "color": [1.0, 0.5, 0.25], "intensity": 4.0});
+    let s = load_scene(&write_json(&dir, "sun.gltf", &d)).unwrap();
+    assert_eq!(
+        s.lights[0].kind,
+        LightKind::Directional {
+            irradiance: Vec3::new(4.0, 2.0, 1.0)
+        }
+    );
+    // A point light with a range is loaded, with a warning.
     let mut d = doc.clone();
     d["extensions"]["KHR_lights_punctual"]["lights"][0]["range"] = json!(5.0);
     let s = load_scene(&write_json(&dir, "range.gltf", &d)).unwrap();
@@ -984,6 +1038,11 @@ fn gltf_missing_texture_and_data_uri_texture() {
             illume_scene::WrapMode::Mirror
         )
     );
+    // A truncated PNG: a located decode error.
+    let mut bad = d.clone();
+    bad["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64::encode(&png[..png.len() / 2]))}]);
+    let msg = load_err(&write_json(&dir, "bad_png.gltf", &bad));
+    assert_contains(&msg, &["image 0", "cannot decode"]);
     let orange = s.materials.iter().find(|m| m.name == "orange").unwrap();
     assert_eq!(orange.base_color_texture.map(|t| t.index()), Some(0));
 }
@@ -1071,8 +1130,16 @@ fn obj_materials_textures_and_missing_files() {
         "mtllib tex.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
     )
     .unwrap();
-    let err = load_scene(&p).unwrap_err().to_string();
-    assert_contains(&err, &["tex.mtl", "line 3", "missing.png"]);
+    assert_contains(&load_err(&p), &["tex.mtl line 3 (map_Kd)", "missing.png"]);
+    // A malformed MTL value: located in the MTL, reported against the OBJ.
+    std::fs::write(dir.join("bad.mtl"), "newmtl red\n\nKd 1 x 0\n").unwrap();
+    let p = dir.join("bad_mtl.obj");
+    std::fs::write(
+        &p,
+        "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
+    )
+    .unwrap();
+    assert_contains(&load_err(&p), &["bad.mtl line 3", "'x' is not a number"]);
 
     // A texture in a sub-folder relative to the MTL, with `-clamp on`, tab separators,
     // Ke, Ns, and vt flipped to v = 0 at the top.
@@ -1188,6 +1255,21 @@ fn ply_binary_both_endians_ascii_and_errors() {
             let msg = load_err(&t);
             assert_contains(&msg, &["byte offset", "truncated"]);
         }
+        // A face index out of range, located by its face's byte offset.
+        let mut bad = bytes.clone();
+        let n = bad.len();
+        bad[n - 4..].copy_from_slice(&if big {
+            9u32.to_be_bytes()
+        } else {
+            9u32.to_le_bytes()
+        });
+        let t = dir.join(format!("bad_face_{big}.ply"));
+        std::fs::write(&t, &bad).unwrap();
+        let face_offset = header_len + 4 * 21;
+        assert_contains(
+            &load_err(&t),
+            &[&format!("face 0 (byte offset {face_offset})"), "index 9"],
+        );
         let t = dir.join(format!("cut_vertex_{big}.ply"));
         std::fs::write(&t, &bytes[..header_len + 21 + 2]).unwrap();
         assert_contains(&load_err(&t), &["vertex 1 (byte offset"]);
@@ -1210,7 +1292,10 @@ fn ply_binary_both_endians_ascii_and_errors() {
 
     let p = dir.join("bad_index.ply");
     std::fs::write(&p, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n").unwrap();
-    assert_contains(&load_err(&p), &["face 0", "index 7", "out of range"]);
+    assert_contains(
+        &load_err(&p),
+        &["face 0 (line 13)", "index 7", "out of range"],
+    );
 
     let p = dir.join("bad_value.ply");
     std::fs::write(&p, "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n1 oops 0\n").unwrap();
@@ -1218,7 +1303,7 @@ fn ply_binary_both_endians_ascii_and_errors() {
 
     let p = dir.join("nan.ply");
     std::fs::write(&p, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 nan 0\n").unwrap();
-    assert_contains(&load_err(&p), &["vertex 0", "not finite"]);
+    assert_contains(&load_err(&p), &["vertex 0 (line 8)", "not finite"]);
 
     for (name, text, expect) in [
         (
@@ -1270,4 +1355,166 @@ fn unknown_extension_and_missing_file() {
     let msg = load_err(&dir.join("absent.obj"));
     assert!(msg.contains("absent.obj"));
     assert!(load_scene(Path::new("builtin:cornell-spot")).is_ok());
+}
+
+// ---------------------------------------------------------------------------------------
+// Hostile inputs: many corruptions, never a panic
+// ---------------------------------------------------------------------------------------
+
+/// Loads `path` catching panics; returns the panic message if there was one.
+fn panics(path: &Path) -> Option<String> {
+    let p = path.to_path_buf();
+    match std::panic::catch_unwind(move || load_scene(&p).map(|_| ())) {
+        Ok(_) => None,
+        Err(e) => Some(
+            e.downcast_ref::<String>()
+                .cloned()
+                .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default(),
+        ),
+    }
+}
+
+/// JSON pointers of every leaf (number, string, bool) of `v`.
+fn leaves(v: &Value, at: String, out: &mut Vec<String>) {
+    match v {
+        Value::Object(m) => m
+            .iter()
+            .for_each(|(k, x)| leaves(x, format!("{at}/{k}"), out)),
+        Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| leaves(x, format!("{at}/{i}"), out)),
+        _ => out.push(at),
+    }
+}
+
+#[test]
+fn gltf_json_mutations_never_panic() {
+    let dir = temp_dir("mutate_gltf");
+    let (bin, views) = animated_buffer();
+    std::fs::write(dir.join("anim.bin"), &bin).unwrap();
+    std::fs::copy(
+        scenes_dir().join("gltf/cube_in_box.bin"),
+        dir.join("cube_in_box.bin"),
+    )
+    .unwrap();
+    let docs = [
+        animated_gltf(Some("anim.bin".into()), bin.len(), &views),
+        gltf_json("gltf/cube_in_box.gltf"),
+    ];
+    let hostile = [
+        json!(0),
+        json!(-1),
+        json!(2),
+        json!(7),
+        json!(4_294_967_295u64),
+        json!(1e39),
+        json!(0.5),
+        json!("VEC4"),
+        json!(null),
+        json!([]),
+    ];
+    let mut failures = Vec::new();
+    let mut runs = 0;
+    let prev_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    for doc in &docs {
+        let mut pointers = Vec::new();
+        leaves(doc, String::new(), &mut pointers);
+        for ptr in &pointers {
+            for h in &hostile {
+                let mut d = doc.clone();
+                *d.pointer_mut(ptr).unwrap() = h.clone();
+                let p = write_json(&dir, "m.gltf", &d);
+                runs += 1;
+                if let Some(msg) = panics(&p) {
+                    failures.push(format!("{ptr} = {h}: {msg}"));
+                }
+            }
+        }
+    }
+    std::panic::set_hook(prev_hook);
+    assert!(runs > 1000, "{runs} mutations");
+    assert!(
+        failures.is_empty(),
+        "{} of {runs} mutations panicked:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn binary_corruptions_never_panic() {
+    let dir = temp_dir("mutate_bin");
+    let (bin, views) = animated_buffer();
+    let glb_bytes = glb(&animated_gltf(None, bin.len(), &views), &bin);
+    let ply_bytes = binary_ply(false);
+    let ascii_ply = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n".to_vec();
+    let obj = b"mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nusemtl a\nf 1/1/1 2/1/1 -1/-1/-1\n".to_vec();
+    let mut failures = Vec::new();
+    let prev_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let mut check = |name: &str, bytes: &[u8], what: String| {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        if let Some(msg) = panics(&p) {
+            failures.push(format!("{name} {what}: {msg}"));
+        }
+    };
+    for (name, bytes) in [
+        ("c.glb", &glb_bytes),
+        ("c.ply", &ply_bytes),
+        ("a.ply", &ascii_ply),
+        ("c.obj", &obj),
+    ] {
+        for cut in 0..bytes.len() {
+            check(name, &bytes[..cut], format!("cut at {cut}"));
+        }
+        // Every byte of the small text formats; the GLB's headers and binary chunk (its
+        // JSON is covered by gltf_json_mutations_never_panic).
+        let json_end = if name == "c.glb" {
+            20 + u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize
+        } else {
+            0
+        };
+        for at in (0..bytes.len()).filter(|&at| name != "c.glb" || at < 20 || at >= json_end) {
+            for x in [0u8, 0xFF, b'-', b'9', b' ', b'\n', b'/'] {
+                let mut b = bytes.clone();
+                b[at] = x;
+                check(name, &b, format!("byte {at} = {x}"));
+            }
+        }
+    }
+    // 32-bit words of the GLB headers set to extreme values.
+    for at in (0..28).step_by(4) {
+        for w in [0u32, 1, 11, 12, 19, 20, u32::MAX, 0x8000_0000] {
+            let mut b = glb_bytes.clone();
+            b[at..at + 4].copy_from_slice(&w.to_le_bytes());
+            check("w.glb", &b, format!("word {at} = {w}"));
+        }
+    }
+    std::panic::set_hook(prev_hook);
+    assert!(
+        failures.is_empty(),
+        "{} corruptions panicked:\n{}",
+        failures.len(),
+        failures
+            .iter()
+            .take(30)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+}
+
+#[test]
+fn glb_header_with_tiny_length_is_an_error() {
+    let dir = temp_dir("glb_tiny");
+    let (bin, views) = animated_buffer();
+    let mut bytes = glb(&animated_gltf(None, bin.len(), &views), &bin);
+    bytes[8..12].copy_from_slice(&4u32.to_le_bytes());
+    let p = dir.join("tiny.glb");
+    std::fs::write(&p, &bytes).unwrap();
+    assert_contains(&load_err(&p), &["GLB header", "length 4"]);
 }

@@ -47,8 +47,7 @@ pub fn radiance(
 ) -> PathRadiance {
     match world.trace(ray, illume_scene::MASK_DEFAULT) {
         Some(hit) => {
-            let mut out = PathRadiance::default();
-            out.emitted = hit.emission;
+            let mut out = PathRadiance { emitted: hit.emission, ..Default::default() };
             continue_path(world, hit, sampler, settings, &mut out);
             out
         }

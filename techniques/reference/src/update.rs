@@ -97,8 +97,8 @@ impl Technique for ReferenceTechnique {
                     );
                     let mut out = PathRadiance::default();
                     continue_path(world, px.hit, &mut rng, settings, &mut out);
-                    for c in 0..3 {
-                        acc[c] += out.indirect[c] as f64;
+                    for (a, v) in acc.iter_mut().zip(out.indirect.to_array()) {
+                        *a += f64::from(v);
                     }
                 }
             });

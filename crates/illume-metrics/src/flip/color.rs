@@ -1,4 +1,4 @@
-//! Colour spaces used by FLIP (Andersson et al. 2020, Sec. 3–4): linear Rec.709 RGB,
+//! Colour spaces used by FLIP (Andersson et al. 2020): linear Rec.709 RGB,
 //! CIE XYZ (D65), the opponent space YCxCz (a linearised CIELAB) in which the
 //! contrast-sensitivity filters are applied, and CIELAB with the Hunt adjustment in which
 //! colour differences are measured with HyAB.
@@ -44,7 +44,7 @@ pub(crate) fn linear_rgb_from_xyz(c: Vec3) -> Vec3 {
 }
 
 /// CIE XYZ → YCxCz: CIELAB without the cube root, so that filtering in it is linear
-/// (FLIP paper, Sec. 4.1).
+/// (FLIP paper, spatial filtering).
 #[inline]
 pub(crate) fn ycxcz_from_xyz(c: Vec3) -> Vec3 {
     let n = c * INV_D65_WHITE;
@@ -77,14 +77,14 @@ pub(crate) fn lab_from_xyz(c: Vec3) -> Vec3 {
 }
 
 /// The Hunt effect: chroma scaled by 0.01·L*, so that dark colours differ less
-/// (FLIP paper, Eq. 4).
+/// (FLIP paper, colour pipeline).
 #[inline]
 pub(crate) fn hunt_adjusted(lab: Vec3) -> Vec3 {
     Vec3::new(lab.x, 0.01 * lab.x * lab.y, 0.01 * lab.x * lab.z)
 }
 
 /// HyAB distance: city-block in lightness plus Euclidean in (a, b) (Abasi et al. 2020;
-/// FLIP paper, Eq. 5).
+/// FLIP paper, colour pipeline).
 #[inline]
 pub(crate) fn hyab(a: Vec3, b: Vec3) -> f32 {
     let da = a.y - b.y;

@@ -45,25 +45,25 @@ use std::str::FromStr;
 pub const DEFAULT_PIXELS_PER_DEGREE: f32 = 0.7 * (3840.0 / 0.7) * (std::f32::consts::PI / 180.0);
 
 /// Pixels per degree for a monitor `width_m` metres and `width_px` pixels wide, seen from
-/// `distance_m` metres (FLIP paper, Sec. 5).
+/// `distance_m` metres (FLIP paper, viewing conditions).
 pub fn pixels_per_degree(distance_m: f32, width_px: f32, width_m: f32) -> f32 {
     distance_m * (width_px / width_m) * (std::f32::consts::PI / 180.0)
 }
 
-/// Colour-pipeline exponent q_c (FLIP paper, Eq. 6).
+/// Colour-pipeline exponent q_c (FLIP paper, colour pipeline).
 const QC: f32 = 0.7;
-/// Fraction p_c of the maximal colour difference where the remapping bends (Eq. 7).
+/// Fraction p_c of the maximal colour difference where the remapping bends (colour pipeline).
 const PC: f32 = 0.4;
-/// Error value p_t that p_c·c_max maps to (Eq. 7).
+/// Error value p_t that p_c·c_max maps to (colour pipeline).
 const PT: f32 = 0.95;
-/// Feature-detector width w in degrees (Sec. 4.2).
+/// Feature-detector width w in degrees (feature pipeline).
 const FEATURE_WIDTH_DEG: f32 = 0.082;
-/// Feature-pipeline exponent q_f (Eq. 10).
+/// Feature-pipeline exponent q_f (feature pipeline).
 const QF: f32 = 0.5;
 
 /// The contrast-sensitivity functions of the achromatic (Y), red-green (Cx) and
 /// blue-yellow (Cz) channels as sums of Gaussians `a·sqrt(π/b)·exp(−π²x²/b)`
-/// (FLIP paper, Eq. 2 and Table 1): (a1, b1) for all, plus (a2, b2) for Cz.
+/// (FLIP paper, spatial filtering; the paper's constants): (a1, b1) for all, plus (a2, b2) for Cz.
 const CSF_A1: [f32; 3] = [1.0, 1.0, 34.1];
 const CSF_B1: [f32; 3] = [0.0047, 0.0053, 0.04];
 const CSF_A2_CZ: f32 = 13.5;
@@ -72,7 +72,7 @@ const CSF_B2_CZ: f32 = 0.025;
 const CSF_B_MAX: f32 = 0.04;
 
 /// The tone mapper HDR-FLIP assumes the images will be shown with (HDR-FLIP paper,
-/// Sec. 4.1). Each is applied after the exposure `2^ev`, then clamped to [0, 1].
+/// tone mapping). Each is applied after the exposure `2^ev`, then clamped to [0, 1].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FlipToneMapper {
@@ -150,10 +150,10 @@ pub struct FlipSettings {
     /// HDR-FLIP only: the assumed tone mapper. Default ACES.
     pub tone_mapper: FlipToneMapper,
     /// HDR-FLIP only: first exposure in stops; `None` computes it from the reference so
-    /// that its brightest pixel maps to 0.85 (HDR-FLIP paper, Eq. 3).
+    /// that its brightest pixel maps to 0.85 (HDR-FLIP paper, start exposure).
     pub start_exposure_ev: Option<f32>,
     /// HDR-FLIP only: last exposure in stops; `None` computes it from the reference so
-    /// that its median luminance maps to 0.85 (HDR-FLIP paper, Eq. 4).
+    /// that its median luminance maps to 0.85 (HDR-FLIP paper, stop exposure).
     pub stop_exposure_ev: Option<f32>,
     /// HDR-FLIP only: number of exposures; `None` uses `max(2, ⌈stop − start⌉)`
     /// (about one per stop). Higher: finer bracketing at proportional cost.
@@ -259,7 +259,7 @@ pub fn ldr_flip(
     })
 }
 
-/// HDR-FLIP between two linear radiance images (HDR-FLIP paper, Sec. 4): for each
+/// HDR-FLIP between two linear radiance images (HDR-FLIP paper, exposure bracketing): for each
 /// exposure `ev` of the bracket, both images are scaled by `2^ev`, tone mapped, clamped
 /// and compared with LDR-FLIP; the per-pixel maximum is kept.
 ///
@@ -307,6 +307,21 @@ pub fn hdr_flip(
     })
 }
 
+/// The per-pixel FLIP map for writing as an error image: HDR-FLIP when `hdr`, LDR-FLIP
+/// otherwise.
+pub fn flip_error_map(
+    reference: &RgbImage,
+    test: &RgbImage,
+    hdr: bool,
+    settings: &FlipSettings,
+) -> Result<FlipMap, MetricsError> {
+    if hdr {
+        Ok(hdr_flip(reference, test, settings)?.map)
+    } else {
+        ldr_flip(reference, test, settings)
+    }
+}
+
 /// The exposure bracket HDR-FLIP uses for `reference` under `settings` (user values
 /// where given, the paper's automatic choice otherwise).
 pub fn exposure_range(
@@ -347,7 +362,7 @@ fn check_ppd(ppd: f32) -> Result<(), MetricsError> {
     }
 }
 
-/// HDR-FLIP paper, Eqs. 3–4: the exposures that send the reference's maximum and median
+/// HDR-FLIP paper, start and stop exposures: the exposures that send the reference's maximum and median
 /// luminance to 0.85 after tone mapping.
 fn automatic_exposures(reference: &RgbImage, tone: FlipToneMapper) -> (f32, f32) {
     // Solve tone(x) = t for the rational tone curve: (a−t·d)x² + (b−t·e)x + (c−t·f) = 0.
@@ -376,7 +391,7 @@ fn automatic_exposures(reference: &RgbImage, tone: FlipToneMapper) -> (f32, f32)
     ((x_max / y_max).log2(), (x_max / y_median).log2())
 }
 
-/// Separable 1-D weights of the contrast-sensitivity filters (FLIP paper, Sec. 4.1),
+/// Separable 1-D weights of the contrast-sensitivity filters (FLIP paper, spatial filtering),
 /// sampled at pixel spacing `1/ppd` degrees. Y and Cx are single Gaussians, each
 /// normalised to unit sum; Cz is a sum of two 2-D Gaussians, written as
 /// `g1(x)g1(y) + g2(x)g2(y)` and normalised so that the 2-D kernel sums to one.
@@ -430,7 +445,7 @@ impl SpatialFilters {
     }
 }
 
-/// Separable edge and point detectors (FLIP paper, Sec. 4.2): a Gaussian of standard
+/// Separable edge and point detectors (FLIP paper, feature detection): a Gaussian of standard
 /// deviation `σ = ½·w·ppd` pixels and its first and second derivatives, radius ⌈3σ⌉. The
 /// Gaussian sums to one; the positive and negative lobes of each derivative sum to +1
 /// and −1.
@@ -480,7 +495,7 @@ fn tap(i: usize, k: usize, radius: usize, n: usize) -> usize {
 }
 
 /// LDR-FLIP on linear RGB pixels already in [0, 1] (FLIP paper, Fig. 2): colour pipeline
-/// ΔE_c, feature pipeline ΔE_f, combined as `ΔE_c^(1 − ΔE_f)` (Eq. 11).
+/// ΔE_c, feature pipeline ΔE_f, combined as `ΔE_c^(1 − ΔE_f)`.
 fn ldr_flip_pixels(reference: &[Vec3], test: &[Vec3], w: usize, h: usize, ppd: f32) -> Vec<f32> {
     let to_ycxcz = |c: &Vec3| ycxcz_from_xyz(xyz_from_linear_rgb(*c));
     let r: Vec<Vec3> = reference.par_iter().map(to_ycxcz).collect();
@@ -494,7 +509,7 @@ fn ldr_flip_pixels(reference: &[Vec3], test: &[Vec3], w: usize, h: usize, ppd: f
     let r_features = detect_features(&r, w, h, &features);
     let t_features = detect_features(&t, w, h, &features);
 
-    // Maximal colour difference: between pure green and pure blue (Eq. 6).
+    // Maximal colour difference: between pure green and pure blue.
     let c_max = hyab(
         hunt_lab_from_linear_rgb(Vec3::new(0.0, 1.0, 0.0)),
         hunt_lab_from_linear_rgb(Vec3::new(0.0, 0.0, 1.0)),
@@ -509,14 +524,14 @@ fn ldr_flip_pixels(reference: &[Vec3], test: &[Vec3], w: usize, h: usize, ppd: f
                 let rgb = linear_rgb_from_xyz(xyz_from_ycxcz(ycxcz)).clamp(Vec3::ZERO, Vec3::ONE);
                 hunt_lab_from_linear_rgb(rgb)
             };
-            // Colour difference, compressed and remapped to [0, 1] (Eqs. 6–7).
+            // Colour difference, compressed and remapped to [0, 1].
             let d = hyab(to_lab(r_filtered[i]), to_lab(t_filtered[i])).powf(QC);
             let colour = if d < pc_cmax {
                 d * (PT / pc_cmax)
             } else {
                 PT + (d - pc_cmax) / (c_max - pc_cmax) * (1.0 - PT)
             };
-            // Feature difference (Eq. 10).
+            // Feature difference.
             let (re, rp) = r_features[i];
             let (te, tp) = t_features[i];
             let feature =
@@ -562,7 +577,7 @@ fn filter_spatially(image: &[Vec3], w: usize, h: usize, f: &SpatialFilters) -> V
 }
 
 /// Per pixel, the magnitude of the edge (gradient) and point (second-derivative)
-/// responses of the achromatic channel normalised to [0, 1] (FLIP paper, Eqs. 8–9).
+/// responses of the achromatic channel normalised to [0, 1] (FLIP paper, feature detection).
 fn detect_features(image: &[Vec3], w: usize, h: usize, f: &FeatureFilters) -> Vec<(f32, f32)> {
     let n = 2 * f.radius + 1;
     let normalised = |c: Vec3| c.x * (1.0 / 116.0) + 16.0 / 116.0;

@@ -1,8 +1,11 @@
 //! glTF 2.0 loader (`.gltf` with external or data-URI buffers, `.glb`).
 //!
-//! Parsing and schema validation are the `gltf` crate's (`Gltf::from_slice` without the
-//! importer); buffers and images are resolved here so that a missing or short file is
-//! reported as *this* scene's error naming the buffer or image index. The document is
+//! Parsing and schema validation are the `gltf` crate's:
+//! `Gltf::from_slice_without_validation`, then the same `Validate` pass `Gltf::from_slice`
+//! runs, preceded by our own checks of `extensionsRequired` (a clearer message) and of
+//! the GLB header and the POSITION accessor indices (on which the crate would panic). Not
+//! `gltf::import`: buffers and images are resolved here so that a missing or short file
+//! is reported as *this* scene's error naming the buffer or image index. The document is
 //! then read through its JSON (`gltf::json`) with every index and byte range checked, so
 //! no input can make the loader panic.
 //!
@@ -52,9 +55,10 @@ use std::path::{Path, PathBuf};
 pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] =
     ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
 
-/// Largest element count of one accessor accepted (guards memory against absurd counts
-/// in accessors without a buffer view).
-const MAX_ACCESSOR_ELEMENTS: u64 = 1 << 28;
+/// Largest number of values (elements × components) of an accessor *without* a buffer
+/// view (all zeros) accepted: guards memory against absurd counts. Accessors with data
+/// are bounded by their buffer's size instead.
+const MAX_ZERO_ACCESSOR_VALUES: u64 = 1 << 26;
 
 /// Everything needed while converting one document.
 struct Ctx<'a> {
@@ -73,6 +77,9 @@ struct Ctx<'a> {
 pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
     let bytes = read_file(path)?;
     let is_glb = bytes.starts_with(b"glTF");
+    if is_glb {
+        check_glb_header(path, &bytes)?;
+    }
     let document = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
         LoadError::malformed(
             path,
@@ -88,6 +95,25 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
                 format!("extensionsRequired[{i}]"),
                 format!("required extension '{ext}'"),
             ));
+        }
+    }
+    // gltf-json's validation indexes `accessors` with a primitive's POSITION index
+    // unchecked: check every attribute reference first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, a) in &prim.attributes {
+                if a.value() >= root.accessors.len() {
+                    return Err(LoadError::malformed(
+                        path,
+                        format!("mesh {m} primitive {p}"),
+                        format!(
+                            "attribute {semantic:?} uses accessor {} of {}",
+                            a.value(),
+                            root.accessors.len()
+                        ),
+                    ));
+                }
+            }
         }
     }
     // The same schema validation `Gltf::from_slice` runs, reported with its JSON paths.
@@ -127,6 +153,52 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         camera_set: false,
     };
     ctx.convert()
+}
+
+/// Checks the 12-byte GLB header before the `gltf` crate reads it (it subtracts 12 from
+/// the declared length without checking, which overflows on a corrupt header).
+fn check_glb_header(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
+    let place = "GLB header";
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Err(LoadError::malformed(
+            path,
+            place,
+            format!(
+                "file has {} bytes, the header needs 12 (truncated)",
+                bytes.len()
+            ),
+        ));
+    };
+    if version != 2 {
+        return Err(LoadError::unsupported(
+            path,
+            place,
+            format!("GLB version {version} (only 2)"),
+        ));
+    }
+    if length < 20 {
+        return Err(LoadError::malformed(
+            path,
+            place,
+            format!("declared length {length} is too small for a JSON chunk"),
+        ));
+    }
+    if length as usize > bytes.len() {
+        return Err(LoadError::malformed(
+            path,
+            place,
+            format!(
+                "declared length {length} but the file has {} bytes (truncated)",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Reads every buffer: the GLB binary chunk, a data URI or a file next to the glTF.
@@ -278,13 +350,15 @@ impl Ctx<'_> {
         }
         let n_comp = components(*ty);
         let count = acc.count.0;
-        if count > MAX_ACCESSOR_ELEMENTS {
-            return Err(self.malformed(place, format!("count {count} is too large")));
-        }
-        let count = count as usize;
         let Some(view_index) = acc.buffer_view.map(|v| v.value()) else {
-            return Ok((vec![0.0; count * n_comp], n_comp)); // glTF: no buffer view = zeros
+            if count.saturating_mul(n_comp as u64) > MAX_ZERO_ACCESSOR_VALUES {
+                return Err(self.malformed(place, format!("count {count} is too large")));
+            }
+            // glTF: an accessor without a buffer view is all zeros.
+            return Ok((vec![0.0; count as usize * n_comp], n_comp));
         };
+        let count = usize::try_from(count)
+            .map_err(|_| self.malformed(&place, format!("count {count} is too large")))?;
         let bytes = self.view_bytes(view_index)?;
         let csize = component_size(*ct);
         let elem = (csize * n_comp) as u64;
@@ -401,15 +475,19 @@ impl Ctx<'_> {
             self.light(g, &name, id)?;
         }
         self.camera(&order, &node_ids)?;
-        let animated = self.animations(&node_ids)?;
-        // Animated by itself or through an ancestor (parents come first).
+        let targeted = self.animations(&node_ids)?;
+        // Moving = targeted itself or through an ancestor (parents come first).
         let nodes = &self.builder.scene().nodes;
         let mut moving = vec![false; nodes.len()];
+        for id in targeted {
+            if let Some(m) = moving.get_mut(id.index()) {
+                *m = true;
+            }
+        }
         for i in 0..nodes.len() {
-            moving[i] = animated.contains(&NodeId(i as u32))
-                || nodes[i]
-                    .parent
-                    .is_some_and(|p| moving.get(p.index()).copied().unwrap_or(false));
+            if let Some(p) = nodes[i].parent {
+                moving[i] |= moving.get(p.index()).copied().unwrap_or(false);
+            }
         }
         for (name, mesh, node) in placements {
             let dynamic = moving.get(node.index()).copied().unwrap_or(false);

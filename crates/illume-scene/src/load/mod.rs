@@ -143,7 +143,7 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, LoadError> {
     })
 }
 
-/// Vertical field of view of [`default_camera_for_bounds`]'s camera [degrees].
+/// Vertical field of view of [`default_camera_for_bounds`]'s camera, in degrees.
 pub const DEFAULT_CAMERA_YFOV_DEG: f32 = 40.0;
 
 /// Adds a root node `default_camera` and makes it the scene's camera: it looks down −Z

@@ -20,7 +20,9 @@
 //!   [W/(m²·sr)]), `Ns` (glossiness = clamp(Ns / 1000, 0, 1)), `map_Kd` (an sRGB image
 //!   relative to the MTL's folder, multiplied by `Kd` as the MTL spec says; `-clamp on`
 //!   selects clamped wrapping, other options are skipped). **A `map_Kd` file that cannot
-//!   be read or decoded is an error** naming the texture file and the MTL line.
+//!   be read or decoded is an error** (not a warning: a scene silently rendered without
+//!   its textures is worse than a clear failure) naming the OBJ, the MTL and its line,
+//!   and the texture file.
 //!   `map_bump`/`bump` are ignored with one warning per library (illume has no bump
 //!   mapping); other keywords are ignored.
 //!
@@ -299,8 +301,9 @@ impl ObjReader<'_> {
     }
 
     fn parse_mtl(&mut self, mtl_path: &Path, text: &str) -> Result<(), LoadError> {
+        let obj_path = self.path;
         let err = |line: usize, message: String| {
-            LoadError::malformed(mtl_path, format!("line {line}"), message)
+            LoadError::malformed(obj_path, mtl_place(mtl_path, line), message)
         };
         let mut current: Option<Material> = None;
         let mut bump_ignored = false;
@@ -395,9 +398,9 @@ impl ObjReader<'_> {
         if let Some(&id) = self.textures.get(tex_path) {
             return Ok(id);
         }
-        let place = format!("line {line} (map_Kd)");
+        let place = format!("{} (map_Kd)", mtl_place(mtl_path, line));
         let bytes = std::fs::read(tex_path).map_err(|source| LoadError::MissingFile {
-            path: mtl_path.into(),
+            path: self.path.into(),
             place: place.clone(),
             file: tex_path.into(),
             source,
@@ -405,7 +408,7 @@ impl ObjReader<'_> {
         let name = tex_path.to_string_lossy().into_owned();
         let texture = decode_srgb_texture(&bytes, name, wrap, wrap).map_err(|e| {
             LoadError::malformed(
-                mtl_path,
+                self.path,
                 place,
                 format!("texture '{}' cannot be decoded: {e}", tex_path.display()),
             )
@@ -461,6 +464,12 @@ impl ObjReader<'_> {
         mesh.triangle_materials = self.triangle_materials.clone();
         mesh
     }
+}
+
+/// The place of line `line` of material library `mtl_path`, for errors reported against
+/// the OBJ file.
+fn mtl_place(mtl_path: &Path, line: usize) -> String {
+    format!("material library {} line {line}", mtl_path.display())
 }
 
 /// Splits the arguments of a `map_*` statement into the file name (the tokens left

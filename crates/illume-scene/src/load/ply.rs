@@ -102,12 +102,33 @@ enum Body<'a> {
     },
 }
 
+/// A place in the body: a line (ASCII) or a byte offset (binary).
+#[derive(Clone, Copy)]
+enum Mark {
+    Line(usize),
+    Offset(usize),
+}
+
+impl std::fmt::Display for Mark {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Mark::Line(l) => write!(f, "line {l}"),
+            Mark::Offset(o) => write!(f, "byte offset {o}"),
+        }
+    }
+}
+
 impl Body<'_> {
     /// Where the next value starts: `line N` or `byte offset N`.
     fn place(&self) -> String {
+        self.mark().to_string()
+    }
+
+    /// The current line (ASCII: of the last value read) or byte offset (binary).
+    fn mark(&self) -> Mark {
         match self {
-            Body::Ascii { line, .. } => format!("line {line}"),
-            Body::Binary { pos, .. } => format!("byte offset {pos}"),
+            Body::Ascii { line, .. } => Mark::Line(*line),
+            Body::Binary { pos, .. } => Mark::Offset(*pos),
         }
     }
 
@@ -312,7 +333,7 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
     let mut normals: Vec<Vec3> = Vec::new();
     let mut uvs: Vec<Vec2> = Vec::new();
     // (face index, corner indices) kept until every vertex is known.
-    let mut polygons: Vec<(usize, Vec<f64>)> = Vec::new();
+    let mut polygons: Vec<(usize, Mark, Vec<f64>)> = Vec::new();
     let mut seen_vertex = false;
     let mut seen_face = false;
     for element in &header.elements {
@@ -377,6 +398,7 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         let mut values = vec![0.0f64; element.properties.len()];
         for item in 0..element.count {
             let at = |body: &Body<'_>| format!("{} {item} ({})", element.name, body.place());
+            let start = body.mark();
             let mut list: Vec<f64> = Vec::new();
             for (k, p) in element.properties.iter().enumerate() {
                 match p.kind {
@@ -415,12 +437,18 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
                     }
                 }
             }
+            // Where this element is: its start (binary) or its line (ASCII).
+            let mark = if matches!(start, Mark::Line(_)) {
+                body.mark()
+            } else {
+                start
+            };
             if let Some([x, y, z]) = xyz {
                 let p = Vec3::new(values[x] as f32, values[y] as f32, values[z] as f32);
                 if !p.is_finite() {
                     return Err(LoadError::malformed(
                         path,
-                        format!("vertex {item}"),
+                        format!("vertex {item} ({mark})"),
                         format!("position {p} is not finite"),
                     ));
                 }
@@ -437,7 +465,7 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
                 }
             }
             if index_list.is_some() {
-                polygons.push((item, list));
+                polygons.push((item, mark, list));
             }
         }
     }
@@ -464,13 +492,13 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
     };
     let n = positions.len();
     let mut skipped = 0usize;
-    for (face, corners) in &polygons {
+    for (face, mark, corners) in &polygons {
         let mut idx = Vec::with_capacity(corners.len());
         for &c in corners {
             if c < 0.0 || c.fract() != 0.0 || c >= n as f64 {
                 return Err(LoadError::malformed(
                     path,
-                    format!("face {face}"),
+                    format!("face {face} ({mark})"),
                     format!("vertex index {c} out of range ({n} vertices)"),
                 ));
             }

@@ -1,0 +1,71 @@
+//! `illume compare`.
+
+use anyhow::{Result, bail};
+use clap::Args;
+use illume_core::image::RgbImage;
+use illume_metrics::{CompareSettings, Metric, compare_files, compare_folders, hdr_flip, ldr_flip};
+use std::path::PathBuf;
+
+/// Arguments of `illume compare`.
+#[derive(Args)]
+pub struct CompareArgs {
+    /// The reference image (or folder of frames).
+    pub reference: PathBuf,
+    /// The image (or folder of frames) to measure against it.
+    pub test: PathBuf,
+    /// Metrics, comma-separated: rmse, relmse, psnr, ssim, flip, hdr-flip.
+    #[arg(long, default_value = "rmse,relmse,psnr,ssim,flip,hdr-flip")]
+    pub metric: String,
+    /// Write the FLIP error map (magma colour map) to this PNG (HDR-FLIP for EXR inputs).
+    #[arg(long)]
+    pub error_map: Option<PathBuf>,
+}
+
+/// Runs `illume compare`.
+pub fn run(a: CompareArgs) -> Result<()> {
+    let metrics = illume_metrics::compare::parse_metric_list(&a.metric)?;
+    let settings = CompareSettings::default();
+    match (a.reference.is_dir(), a.test.is_dir()) {
+        (true, true) => {
+            if a.error_map.is_some() {
+                bail!("--error-map needs two images, not two folders");
+            }
+            let cmp = compare_folders(&a.reference, &a.test, &metrics, &settings)?;
+            if cmp.files.is_empty() {
+                bail!("{} and {}: no image file names in common", a.reference.display(), a.test.display());
+            }
+            print!("{}", cmp.to_table().to_markdown());
+            if let Some(means) = cmp.means() {
+                println!();
+                for (m, v) in means {
+                    println!("mean {:<9} {}", m.name(), fmt_value(m, v));
+                }
+            }
+            for n in &cmp.only_in_reference {
+                eprintln!("warning: {n} only in {}", a.reference.display());
+            }
+            for n in &cmp.only_in_test {
+                eprintln!("warning: {n} only in {}", a.test.display());
+            }
+        }
+        (false, false) => {
+            for (m, v) in compare_files(&a.reference, &a.test, &metrics, &settings)? {
+                println!("{:<9} {}", m.name(), fmt_value(m, v));
+            }
+            if let Some(path) = &a.error_map {
+                let r = RgbImage::read(&a.reference)?;
+                let t = RgbImage::read(&a.test)?;
+                let is_hdr = a.reference.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+                let map = if is_hdr { hdr_flip(&r, &t, &settings.flip)?.map } else { ldr_flip(&r, &t, &settings.flip)? };
+                map.write_png(path)?;
+                eprintln!("wrote {}", path.display());
+            }
+        }
+        _ => bail!("compare two images or two folders, not one of each"),
+    }
+    Ok(())
+}
+
+fn fmt_value(m: Metric, v: f64) -> String {
+    if v.is_infinite() { format!("{v}") } else if m == Metric::Psnr { format!("{v:.3} dB") } else { format!("{v:.6}") }
+}

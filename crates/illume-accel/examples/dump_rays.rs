@@ -1,0 +1,145 @@
+//! Writes a scene's world-space triangle soup and a ray set to files, then times illume's
+//! closest-hit queries on exactly those rays; `benches/embree_compare.py` runs this and
+//! times Embree on the same files.
+//!
+//! ```text
+//! cargo run --release -p illume-accel --example dump_rays -- SCENE KIND RAYS THREADS OUT_DIR
+//!   SCENE    builtin:NAME or a scene file (OBJ, glTF, PLY)
+//!   KIND     incoherent (origins uniform in the scene box, uniform directions) | primary
+//!   RAYS     number of rays (primary: a square image of about that many pixels)
+//!   THREADS  rayon threads for the timed run
+//! ```
+//!
+//! Files (little-endian f32): `triangles.f32` (9 per triangle), `rays.f32` (origin and
+//! direction, 6 per ray), `illume_t.f32` (illume's hit distance per ray, +∞ for a miss).
+//! The last line printed is `ILLUME {json}` with the timings.
+
+use illume_accel::Tracer;
+use illume_core::sampling::Pcg32;
+use illume_core::{Ray, Vec3};
+use illume_scene::{MASK_DEFAULT, Scene};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [scene_arg, kind, rays_arg, threads_arg, out] = args.as_slice() else {
+        return Err("usage: dump_rays SCENE incoherent|primary RAYS THREADS OUT_DIR".into());
+    };
+    let scene = illume_scene::load_scene(Path::new(scene_arg))?;
+    let n: usize = rays_arg.parse()?;
+    let threads: usize = threads_arg.parse()?;
+    let out = PathBuf::from(out);
+    std::fs::create_dir_all(&out)?;
+
+    let rays = match kind.as_str() {
+        "incoherent" => incoherent_rays(&scene, n, 1),
+        "primary" => primary_rays(&scene, n),
+        other => return Err(format!("unknown ray kind '{other}'").into()),
+    };
+    write_f32(
+        &out.join("triangles.f32"),
+        world_triangles(&scene).into_iter().flatten(),
+    )?;
+    write_f32(
+        &out.join("rays.f32"),
+        rays.iter().flat_map(|r| {
+            [
+                r.origin.x, r.origin.y, r.origin.z, r.dir.x, r.dir.y, r.dir.z,
+            ]
+        }),
+    )?;
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    let start = Instant::now();
+    let tracer = pool.install(|| Tracer::new(&scene));
+    let build_ms = start.elapsed().as_secs_f64() * 1e3;
+    let mut times = Vec::new();
+    let mut hits = Vec::new();
+    for _ in 0..7 {
+        let start = Instant::now();
+        hits = pool.install(|| tracer.intersect_batch(&rays, MASK_DEFAULT));
+        times.push(start.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    let median = times[times.len() / 2];
+    write_f32(
+        &out.join("illume_t.f32"),
+        hits.iter().map(|h| h.map_or(f32::INFINITY, |h| h.t)),
+    )?;
+    let stats = tracer.stats();
+    let hit_count = hits.iter().flatten().count();
+    println!(
+        "ILLUME {{\"scene\": \"{scene_arg}\", \"kind\": \"{kind}\", \"rays\": {}, \"threads\": {threads}, \"triangles\": {}, \"build_ms\": {build_ms:.2}, \
+         \"median_s\": {median:.6}, \"rays_per_s\": {:.0}, \"hits\": {hit_count}, \"nodes\": {}, \"memory_bytes\": {}}}",
+        rays.len(),
+        scene.instanced_triangle_count(),
+        rays.len() as f64 / median,
+        stats.mesh_nodes + stats.instance_nodes,
+        stats.memory_bytes
+    );
+    Ok(())
+}
+
+/// Every instance's triangles in world space, 9 floats each.
+fn world_triangles(scene: &Scene) -> Vec<[f32; 9]> {
+    let mut out = Vec::with_capacity(scene.instanced_triangle_count());
+    for inst in &scene.instances {
+        let mesh = &scene.meshes[inst.mesh.index()];
+        for t in 0..mesh.triangle_count() {
+            let [a, b, c] = mesh
+                .triangle(t)
+                .map(|p| inst.world_from_object.transform_point3(p));
+            out.push([a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z]);
+        }
+    }
+    out
+}
+
+/// Origins uniform in the scene box, directions uniform on the sphere.
+pub fn incoherent_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
+    let mut rng = Pcg32::new(seed, 1);
+    let b = scene.bounds();
+    let mut u = || rng.next_f64() as f32;
+    (0..n)
+        .map(|_| {
+            let o = b.min + b.extent() * Vec3::new(u(), u(), u());
+            let z = 1.0 - 2.0 * u();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = 2.0 * std::f32::consts::PI * u();
+            Ray::new(o, Vec3::new(r * phi.cos(), r * phi.sin(), z))
+        })
+        .collect()
+}
+
+/// One ray through each pixel centre of a square image from the scene camera.
+pub fn primary_rays(scene: &Scene, n: usize) -> Vec<Ray> {
+    let side = (n as f64).sqrt().round().max(1.0) as usize;
+    let cam = &scene.camera;
+    let tan = (cam.yfov_rad * 0.5).tan();
+    let origin = Vec3::from(cam.world_from_camera.translation);
+    let mut rays = Vec::with_capacity(side * side);
+    for y in 0..side {
+        for x in 0..side {
+            let px = (2.0 * (x as f32 + 0.5) / side as f32 - 1.0) * tan;
+            let py = (1.0 - 2.0 * (y as f32 + 0.5) / side as f32) * tan;
+            let dir = cam
+                .world_from_camera
+                .transform_vector3(Vec3::new(px, py, -1.0))
+                .normalize();
+            rays.push(Ray::new(origin, dir));
+        }
+    }
+    rays
+}
+
+fn write_f32(path: &Path, values: impl Iterator<Item = f32>) -> std::io::Result<()> {
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path)?);
+    for v in values {
+        w.write_all(&v.to_le_bytes())?;
+    }
+    w.flush()
+}

@@ -1,0 +1,205 @@
+//! The mesh level: one BVH per mesh, built once in object space, with the mesh's
+//! triangles copied in leaf order (corner plus two edges, four triangles to a packet) so a
+//! leaf is one contiguous run of packets.
+
+use crate::build::{BuildParams, build_binary};
+use crate::wide::{Bvh4, MAX_LEAF, PreparedRay, StackEntry, traverse};
+use illume_core::{Aabb, Vec2, Vec3, Vec4};
+use illume_scene::Mesh;
+
+/// Mesh-level build parameters: a box test costs about as much as a triangle test, and
+/// leaves hold up to 8 triangles (chosen by measurement, see lib.rs).
+const PARAMS: BuildParams = BuildParams {
+    traversal_cost: 1.0,
+    max_leaf: 8,
+};
+const _: () = assert!(PARAMS.max_leaf <= MAX_LEAF);
+
+/// Up to four triangles ready for Möller–Trumbore, tested together in 4-lane arithmetic:
+/// corners `v0`, edges `e1 = v1 − v0` and `e2 = v2 − v0` (structure of arrays), and each
+/// lane's triangle index in the mesh. An unused lane has zero edges (it never hits) and
+/// index [`TrianglePacket::UNUSED`].
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+pub(crate) struct TrianglePacket {
+    /// `[v0.x, v0.y, v0.z, e1.x, e1.y, e1.z, e2.x, e2.y, e2.z]`, one array lane per triangle.
+    pub coords: [[f32; 4]; 9],
+    /// Mesh triangle index per lane.
+    pub index: [u32; 4],
+}
+
+const _: () = assert!(std::mem::size_of::<TrianglePacket>() == 160);
+
+impl TrianglePacket {
+    /// Index of an unused lane.
+    pub const UNUSED: u32 = u32::MAX;
+
+    /// Packs up to four triangles given as `(index, corners)`.
+    fn new(tris: &[(u32, [Vec3; 3])]) -> Self {
+        debug_assert!(!tris.is_empty() && tris.len() <= 4);
+        let mut p = TrianglePacket {
+            coords: [[0.0; 4]; 9],
+            index: [Self::UNUSED; 4],
+        };
+        for (lane, &(index, [v0, v1, v2])) in tris.iter().enumerate() {
+            let (e1, e2) = (v1 - v0, v2 - v0);
+            for (k, value) in [v0.x, v0.y, v0.z, e1.x, e1.y, e1.z, e2.x, e2.y, e2.z]
+                .into_iter()
+                .enumerate()
+            {
+                p.coords[k][lane] = value;
+            }
+            p.index[lane] = index;
+        }
+        p
+    }
+
+    /// Used lanes as `(mesh triangle index, corners)`; corners are rebuilt from the edges,
+    /// so within rounding of the mesh's.
+    pub fn triangles(&self) -> impl Iterator<Item = (u32, [Vec3; 3])> + '_ {
+        (0..4).filter(|&l| self.index[l] != Self::UNUSED).map(|l| {
+            let c = |k: usize| {
+                Vec3::new(
+                    self.coords[k][l],
+                    self.coords[k + 1][l],
+                    self.coords[k + 2][l],
+                )
+            };
+            let (v0, e1, e2) = (c(0), c(3), c(6));
+            (self.index[l], [v0, v0 + e1, v0 + e2])
+        })
+    }
+
+    /// Per lane: hit distance (valid where the returned bit is set), barycentrics `b1`,
+    /// `b2`; the bits mark lanes hit with `t` in `(ray.t_min, t_max)`. The arithmetic and
+    /// the acceptance on edges are those of [`crate::triangle::intersect_triangle`].
+    #[inline(always)]
+    fn intersect(&self, ray: &PreparedRay, t_max: f32) -> (Vec4, Vec4, Vec4, u32) {
+        let c = |k: usize| Vec4::from_array(self.coords[k]);
+        let (e1x, e1y, e1z) = (c(3), c(4), c(5));
+        let (e2x, e2y, e2z) = (c(6), c(7), c(8));
+        let [dx, dy, dz] = ray.dir.to_array().map(Vec4::splat);
+        // pvec = dir × e2
+        let px = dy * e2z - dz * e2y;
+        let py = dz * e2x - dx * e2z;
+        let pz = dx * e2y - dy * e2x;
+        let det = e1x * px + e1y * py + e1z * pz;
+        let inv_det = Vec4::ONE / det;
+        let [ox, oy, oz] = ray.origin.to_array().map(Vec4::splat);
+        let (tx, ty, tz) = (ox - c(0), oy - c(1), oz - c(2));
+        let b1 = (tx * px + ty * py + tz * pz) * inv_det;
+        // qvec = tvec × e1
+        let qx = ty * e1z - tz * e1y;
+        let qy = tz * e1x - tx * e1z;
+        let qz = tx * e1y - ty * e1x;
+        let b2 = (dx * qx + dy * qy + dz * qz) * inv_det;
+        let t = (e2x * qx + e2y * qy + e2z * qz) * inv_det;
+        let valid = det.abs().cmpge(Vec4::splat(f32::MIN_POSITIVE))
+            & b1.cmpge(Vec4::ZERO)
+            & b1.cmple(Vec4::ONE)
+            & b2.cmpge(Vec4::ZERO)
+            & (b1 + b2).cmple(Vec4::ONE)
+            & t.cmpgt(Vec4::splat(ray.t_min))
+            & t.cmplt(Vec4::splat(t_max));
+        (t, b1, b2, valid.bitmask())
+    }
+}
+
+/// One mesh's BVH, in the mesh's object space.
+#[derive(Clone, Debug)]
+pub(crate) struct Blas {
+    /// The tree; leaves index `packets`.
+    pub bvh: Bvh4,
+    /// Triangles in leaf order, four to a packet (a leaf is a run of whole packets).
+    pub packets: Vec<TrianglePacket>,
+    /// Number of mesh triangles.
+    pub triangle_count: usize,
+}
+
+impl Blas {
+    /// Builds the BVH of `mesh` (binned SAH, then collapsed to four-wide nodes).
+    pub fn build(mesh: &Mesh) -> Blas {
+        let boxes: Vec<Aabb> = (0..mesh.triangle_count())
+            .map(|t| Aabb::from_points(mesh.triangle(t)))
+            .collect();
+        let mut bin = build_binary(&boxes, PARAMS);
+        // Repack every leaf's triangles into whole packets; leaves then index packets.
+        let mut packets = Vec::with_capacity(mesh.triangle_count() / 3 + 1);
+        for node in bin.nodes.iter_mut().filter(|n| n.count > 0) {
+            let tris: Vec<(u32, [Vec3; 3])> = bin.order
+                [node.first as usize..(node.first + node.count) as usize]
+                .iter()
+                .map(|&t| (t, mesh.triangle(t as usize)))
+                .collect();
+            let first = packets.len() as u32;
+            packets.extend(tris.chunks(4).map(TrianglePacket::new));
+            node.first = first;
+            node.count = packets.len() as u32 - first;
+        }
+        let bvh = Bvh4::from_binary(&bin, &|_, _| u32::MAX);
+        Blas {
+            bvh,
+            packets,
+            triangle_count: mesh.triangle_count(),
+        }
+    }
+
+    /// Object-space bounds.
+    pub fn bounds(&self) -> Aabb {
+        self.bvh.bounds
+    }
+
+    /// Bytes used by nodes and triangles.
+    pub fn memory_bytes(&self) -> usize {
+        self.bvh.memory_bytes() + self.packets.len() * std::mem::size_of::<TrianglePacket>()
+    }
+
+    /// Closest hit `(t, triangle index, barycentrics)` with `t < t_max`.
+    #[inline]
+    pub fn intersect(
+        &self,
+        ray: &PreparedRay,
+        t_max: f32,
+        stack: &mut [StackEntry],
+    ) -> Option<(f32, u32, Vec2)> {
+        let mut best = None;
+        traverse::<false>(&self.bvh, ray, t_max, u32::MAX, stack, |range, t_max, _| {
+            for packet in &self.packets[range] {
+                let (t, b1, b2, mut bits) = packet.intersect(ray, *t_max);
+                if bits != 0 {
+                    let t = t.to_array();
+                    let mut lane = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    while bits != 0 {
+                        let l = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        if t[l] < t[lane] {
+                            lane = l;
+                        }
+                    }
+                    *t_max = t[lane];
+                    best = Some((
+                        t[lane],
+                        packet.index[lane],
+                        Vec2::new(b1.to_array()[lane], b2.to_array()[lane]),
+                    ));
+                }
+            }
+            false
+        });
+        best
+    }
+
+    /// True when any triangle is hit with `t < t_max`.
+    #[inline]
+    pub fn occluded(&self, ray: &PreparedRay, t_max: f32, stack: &mut [StackEntry]) -> bool {
+        let mut hit = false;
+        traverse::<false>(&self.bvh, ray, t_max, u32::MAX, stack, |range, t_max, _| {
+            hit = self.packets[range]
+                .iter()
+                .any(|p| p.intersect(ray, *t_max).3 != 0);
+            hit
+        });
+        hit
+    }
+}

@@ -1,0 +1,377 @@
+//! The four-wide BVH that traversal walks: each 128-byte node (two cache lines) holds the
+//! boxes of its up to four children in structure-of-arrays form, so one ray is tested
+//! against four boxes with 4-lane arithmetic, and children are visited nearest first.
+//!
+//! A child reference ([`Item`]) is either an interior node or a leaf (a run of
+//! primitives in the owner's primitive array), encoded in one `u32`.
+
+use crate::build::{BinaryBvh, BinaryNode, MAX_DEPTH};
+use illume_core::{Aabb, Vec3, Vec3A, Vec4};
+use std::cell::RefCell;
+
+/// Children per node.
+pub(crate) const WIDTH: usize = 4;
+/// Largest primitive count of a leaf (fits the 4-bit count of [`Item`]).
+pub(crate) const MAX_LEAF: usize = 16;
+/// Traversal stack entries: each level of the tree pushes at most `WIDTH - 1`.
+pub(crate) const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH + 1;
+/// Relative widening of a box's exit distance that makes the slab test conservative
+/// under rounding (2γ₃ with γₙ = nε/(1 − nε), ε = 2⁻²⁴; Ize 2013, pbrt-v4 §6.8.2).
+const EXIT_SCALE: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
+/// A child reference: bit 31 set = leaf with primitives `first .. first + count`
+/// (`first` in bits 4..31, `count − 1` in bits 0..4); clear = interior node index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Item(pub u32);
+
+impl Item {
+    const LEAF: u32 = 1 << 31;
+    /// Largest primitive index a leaf can start at.
+    pub const MAX_FIRST: u32 = (1 << 27) - 1;
+    /// The reference to nothing (an empty tree's root).
+    pub const NONE: Item = Item(u32::MAX);
+
+    fn leaf(first: u32, count: u32) -> Self {
+        assert!(
+            first <= Self::MAX_FIRST,
+            "BVH leaf starts at primitive {first}, beyond the limit {}",
+            Self::MAX_FIRST
+        );
+        debug_assert!((1..=MAX_LEAF as u32).contains(&count));
+        Item(Self::LEAF | first << 4 | (count - 1))
+    }
+
+    /// True for a leaf.
+    #[inline(always)]
+    pub fn is_leaf(self) -> bool {
+        self.0 & Self::LEAF != 0
+    }
+
+    /// Primitive range of a leaf.
+    #[inline(always)]
+    pub fn leaf_range(self) -> std::ops::Range<usize> {
+        let first = ((self.0 & !Self::LEAF) >> 4) as usize;
+        first..first + (self.0 & 15) as usize + 1
+    }
+
+    /// Node index of an interior node.
+    #[inline(always)]
+    pub fn node(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// Four children's boxes (structure of arrays: `bounds[k][i]` is coordinate `k` of child
+/// `i`, with `k` = min x, min y, min z, max x, max y, max z), references and masks. An
+/// unused slot has an empty box (min = +∞, max = −∞) and mask 0, so it never hits.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct Node4 {
+    /// Child boxes, structure of arrays.
+    pub bounds: [[f32; WIDTH]; 6],
+    /// Child references ([`Item`] bits).
+    pub children: [u32; WIDTH],
+    /// Union of the instance masks below each child (all ones in a mesh BVH).
+    pub masks: [u32; WIDTH],
+}
+
+const _: () = assert!(std::mem::size_of::<Node4>() == 128);
+
+impl Node4 {
+    const EMPTY: Node4 = Node4 {
+        bounds: [
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+        ],
+        children: [u32::MAX; WIDTH],
+        masks: [0; WIDTH],
+    };
+
+    /// Box of child slot `i`.
+    pub fn child_bounds(&self, i: usize) -> Aabb {
+        let b = &self.bounds;
+        Aabb::new(
+            Vec3::new(b[0][i], b[1][i], b[2][i]),
+            Vec3::new(b[3][i], b[4][i], b[5][i]),
+        )
+    }
+
+    /// Number of used slots (they come first).
+    pub fn child_count(&self) -> usize {
+        self.masks
+            .iter()
+            .zip(&self.children)
+            .take_while(|(_, c)| **c != u32::MAX)
+            .count()
+    }
+}
+
+/// A four-wide BVH: the root reference, its box, and the nodes.
+#[derive(Clone, Debug)]
+pub(crate) struct Bvh4 {
+    /// Root reference ([`Item::NONE`] for an empty tree).
+    pub root: Item,
+    /// Box of everything.
+    pub bounds: Aabb,
+    /// Interior nodes.
+    pub nodes: Vec<Node4>,
+}
+
+impl Bvh4 {
+    /// Collapses a binary BVH; `leaf_mask(first, count)` gives a leaf's mask.
+    pub fn from_binary(bin: &BinaryBvh, leaf_mask: &dyn Fn(u32, u32) -> u32) -> Bvh4 {
+        let Some(root) = bin.nodes.first() else {
+            return Bvh4 {
+                root: Item::NONE,
+                bounds: Aabb::EMPTY,
+                nodes: Vec::new(),
+            };
+        };
+        let mut nodes = Vec::with_capacity(bin.nodes.len() / 2 + 1);
+        let root_item = if root.count > 0 {
+            Item::leaf(root.first, root.count)
+        } else {
+            let mut mask = 0;
+            Item(collapse(bin, 0, &mut nodes, leaf_mask, &mut mask))
+        };
+        Bvh4 {
+            root: root_item,
+            bounds: root.bounds,
+            nodes,
+        }
+    }
+
+    /// Bytes used by the nodes.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<Node4>()
+    }
+}
+
+/// Writes the wide node for binary interior node `b` (and, recursively, its subtree);
+/// returns its index and ORs the subtree's mask into `mask`.
+fn collapse(
+    bin: &BinaryBvh,
+    b: usize,
+    out: &mut Vec<Node4>,
+    leaf_mask: &dyn Fn(u32, u32) -> u32,
+    mask: &mut u32,
+) -> u32 {
+    let node: &BinaryNode = &bin.nodes[b];
+    debug_assert_eq!(node.count, 0);
+    let mut kids: Vec<usize> = vec![node.first as usize, node.first as usize + 1];
+    // Open the interior child of largest area until four children or only leaves remain.
+    while kids.len() < WIDTH {
+        let interior = kids
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| bin.nodes[**k].count == 0);
+        let Some((i, _)) = interior.max_by(|a, b| {
+            bin.nodes[*a.1]
+                .bounds
+                .surface_area()
+                .total_cmp(&bin.nodes[*b.1].bounds.surface_area())
+        }) else {
+            break;
+        };
+        let k = kids.swap_remove(i);
+        kids.push(bin.nodes[k].first as usize);
+        kids.push(bin.nodes[k].first as usize + 1);
+    }
+    let index = out.len();
+    out.push(Node4::EMPTY);
+    let mut wide = Node4::EMPTY;
+    for (i, &k) in kids.iter().enumerate() {
+        let kid = &bin.nodes[k];
+        let (item, m) = if kid.count > 0 {
+            (
+                Item::leaf(kid.first, kid.count).0,
+                leaf_mask(kid.first, kid.count),
+            )
+        } else {
+            let mut m = 0;
+            (collapse(bin, k, out, leaf_mask, &mut m), m)
+        };
+        wide.children[i] = item;
+        wide.masks[i] = m;
+        *mask |= m;
+        for axis in 0..3 {
+            wide.bounds[axis][i] = kid.bounds.min[axis];
+            wide.bounds[axis + 3][i] = kid.bounds.max[axis];
+        }
+    }
+    out[index] = wide;
+    index as u32
+}
+
+/// A ray prepared for box tests: origin, direction, robust reciprocal direction, and for
+/// each axis which of a box's min/max planes is entered first.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PreparedRay {
+    /// Origin.
+    pub origin: Vec3A,
+    /// Direction.
+    pub dir: Vec3A,
+    /// `1 / dir`, with zero components replaced by tiny ones of the same sign.
+    pub inv_dir: [f32; 3],
+    /// `origin · inv_dir`, so a plane distance is one multiply-subtract.
+    pub origin_inv: [f32; 3],
+    /// Row of [`Node4::bounds`] holding the entry plane per axis.
+    pub near: [usize; 3],
+    /// Row of [`Node4::bounds`] holding the exit plane per axis.
+    pub far: [usize; 3],
+    /// Smallest accepted distance.
+    pub t_min: f32,
+}
+
+impl PreparedRay {
+    /// Prepares `origin + t·dir`, `t ≥ t_min`.
+    #[inline]
+    pub fn new(origin: Vec3A, dir: Vec3A, t_min: f32) -> Self {
+        // A zero component would make 0·∞ = NaN at a slab; replacing components below
+        // 1e-20 in magnitude keeps every product finite for coordinates up to 1e18.
+        let safe = |d: f32| {
+            if d.abs() < 1e-20 {
+                1e-20f32.copysign(d)
+            } else {
+                d
+            }
+        };
+        let inv_dir = [1.0 / safe(dir.x), 1.0 / safe(dir.y), 1.0 / safe(dir.z)];
+        let origin_inv = [
+            origin.x * inv_dir[0],
+            origin.y * inv_dir[1],
+            origin.z * inv_dir[2],
+        ];
+        let near = [0, 1, 2].map(|a| if inv_dir[a] >= 0.0 { a } else { a + 3 });
+        let far = near.map(|k| if k < 3 { k + 3 } else { k - 3 });
+        Self {
+            origin,
+            dir,
+            inv_dir,
+            origin_inv,
+            near,
+            far,
+            t_min,
+        }
+    }
+
+    /// Entry distances of the four child boxes of `node` and a bit mask of the children
+    /// hit within `(t_min, t_max)` (and, when `MASKED`, whose mask meets `mask`).
+    #[inline(always)]
+    fn hit_boxes<const MASKED: bool>(&self, node: &Node4, t_max: f32, mask: u32) -> (Vec4, u32) {
+        let b = &node.bounds;
+        let [nx, ny, nz] = self.near;
+        let [fx, fy, fz] = self.far;
+        let [ix, iy, iz] = self.inv_dir.map(Vec4::splat);
+        let [ox, oy, oz] = self.origin_inv.map(Vec4::splat);
+        let plane = |row: usize, inv: Vec4, o: Vec4| Vec4::from_array(b[row]) * inv - o;
+        let t_near = plane(nx, ix, ox)
+            .max(plane(ny, iy, oy))
+            .max(plane(nz, iz, oz).max(Vec4::splat(self.t_min)));
+        let t_far = plane(fx, ix, ox)
+            .min(plane(fy, iy, oy))
+            .min(plane(fz, iz, oz).min(Vec4::splat(t_max)))
+            * EXIT_SCALE;
+        let mut bits = t_near.cmple(t_far).bitmask();
+        if MASKED {
+            for (i, m) in node.masks.iter().enumerate() {
+                if m & mask == 0 {
+                    bits &= !(1 << i);
+                }
+            }
+        }
+        (t_near, bits)
+    }
+}
+
+/// Entries of a traversal stack: (child reference, entry distance).
+pub(crate) type StackEntry = (u32, f32);
+
+thread_local! {
+    /// Each thread's traversal stack, kept between queries (clearing a fresh one per ray
+    /// would cost more than a small scene's whole query).
+    static STACK: RefCell<Vec<StackEntry>> = RefCell::new(vec![(0, 0.0); 2 * STACK_SIZE]);
+}
+
+/// Runs `f` with a stack big enough for one tree walk plus, below it, one more (the
+/// instance level walks a mesh BVH from its leaves).
+#[inline]
+pub(crate) fn with_stack<R>(f: impl FnOnce(&mut [StackEntry]) -> R) -> R {
+    STACK.with(|stack| match stack.try_borrow_mut() {
+        Ok(mut stack) => f(&mut stack),
+        // Only reached if a query runs inside another on the same thread.
+        Err(_) => f(&mut vec![(0, 0.0); 2 * STACK_SIZE]),
+    })
+}
+
+/// Walks `bvh` nearest child first, using `stack` (at least `STACK_SIZE` entries).
+/// `leaf(range, t_max, free_stack)` tests a leaf's primitives, lowers `t_max` on a
+/// closer hit, and returns true to stop the walk (any-hit queries); `free_stack` is the
+/// unused rest of `stack`, for a nested walk. Returns the final `t_max`.
+#[inline(always)]
+pub(crate) fn traverse<const MASKED: bool>(
+    bvh: &Bvh4,
+    ray: &PreparedRay,
+    mut t_max: f32,
+    mask: u32,
+    stack: &mut [StackEntry],
+    mut leaf: impl FnMut(std::ops::Range<usize>, &mut f32, &mut [StackEntry]) -> bool,
+) -> f32 {
+    if bvh.root == Item::NONE {
+        return t_max;
+    }
+    let mut sp = 0usize;
+    let mut current = bvh.root;
+    loop {
+        if current.is_leaf() {
+            if leaf(current.leaf_range(), &mut t_max, &mut stack[sp..]) {
+                return t_max;
+            }
+        } else {
+            let node = &bvh.nodes[current.node()];
+            let (dist, mut bits) = ray.hit_boxes::<MASKED>(node, t_max, mask);
+            // Gather the hit children, then sort them nearest first (at most four).
+            let dist = dist.to_array();
+            let mut hits = [(0u32, 0f32); WIDTH];
+            let mut n = 0;
+            while bits != 0 {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                hits[n] = (node.children[i], dist[i]);
+                n += 1;
+            }
+            if n > 0 {
+                for i in 1..n {
+                    let mut j = i;
+                    while j > 0 && hits[j - 1].1 < hits[j].1 {
+                        hits.swap(j - 1, j);
+                        j -= 1;
+                    }
+                }
+                // Farthest first onto the stack; the nearest is visited now.
+                for &h in &hits[..n - 1] {
+                    stack[sp] = h;
+                    sp += 1;
+                }
+                current = Item(hits[n - 1].0);
+                continue;
+            }
+        }
+        // Pop the next child still nearer than the closest hit.
+        loop {
+            if sp == 0 {
+                return t_max;
+            }
+            sp -= 1;
+            let (item, d) = stack[sp];
+            if d <= t_max {
+                current = Item(item);
+                break;
+            }
+        }
+    }
+}
