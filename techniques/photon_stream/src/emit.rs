@@ -71,31 +71,56 @@ pub struct Emitter<'a> {
 
 impl<'a> Emitter<'a> {
     /// An emitter for `world`'s current instance transforms.
-    pub fn new(world: &World, vsls: &'a VslSet, inv_quantum: f64, max_bounces: u32, seed: u64) -> Self {
-        let object_from_world = world.scene.instances.iter().map(|i| i.world_from_object.inverse()).collect();
+    pub fn new(
+        world: &World,
+        vsls: &'a VslSet,
+        inv_quantum: f64,
+        max_bounces: u32,
+        seed: u64,
+    ) -> Self {
+        let object_from_world = world
+            .scene
+            .instances
+            .iter()
+            .map(|i| i.world_from_object.inverse())
+            .collect();
         Self {
             vsls,
             object_from_world,
             inv_quantum,
-            path: PhotonPathSettings { max_bounces, ..Default::default() },
+            path: PhotonPathSettings {
+                max_bounces,
+                ..Default::default()
+            },
             seed: mix64(seed ^ 0x9407_0a57),
         }
     }
 
     /// Traces photons `first..first + count` sequentially.
     pub fn trace(&self, world: &World, first: u64, count: u64) -> PhotonBatch {
-        let mut batch = PhotonBatch { impacts: Vec::with_capacity(count as usize * 3), ends: Vec::with_capacity(count as usize), rays: 0 };
+        let mut batch = PhotonBatch {
+            impacts: Vec::with_capacity(count as usize * 3),
+            ends: Vec::with_capacity(count as usize),
+            rays: 0,
+        };
         for seq in first..first + count {
             let mut rng = Pcg32::new(self.seed, seq);
             let stats = trace_photon(world, &mut rng, &self.path, |imp| {
                 let inst = imp.hit.instance;
-                let p_object = self.object_from_world[inst.index()].transform_point3(imp.hit.position);
-                let Some(vsl) = self.vsls.nearest(inst, p_object) else { return };
+                let p_object =
+                    self.object_from_world[inst.index()].transform_point3(imp.hit.position);
+                let Some(vsl) = self.vsls.nearest(inst, p_object) else {
+                    return;
+                };
                 let side = u32::from(!imp.hit.front_face);
                 let out = imp.hit.albedo * imp.flux; // flux leaving the surface, ρ·Φ
                 batch.impacts.push(PoolImpact {
                     slot: 2 * vsl + side,
-                    quanta: [to_quanta(out.x, self.inv_quantum), to_quanta(out.y, self.inv_quantum), to_quanta(out.z, self.inv_quantum)],
+                    quanta: [
+                        to_quanta(out.x, self.inv_quantum),
+                        to_quanta(out.y, self.inv_quantum),
+                        to_quanta(out.z, self.inv_quantum),
+                    ],
                 });
             });
             batch.rays += stats.rays as u64;

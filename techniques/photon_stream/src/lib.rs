@@ -36,7 +36,7 @@
 //! use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
 //! use illume_transport::{Budget, GBuffer, Technique, World};
 //! let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
-//! let settings = PhotonStreamSettings { vsl_count: 20, ..PhotonStreamSettings::deterministic() };
+//! let settings = PhotonStreamSettings { vsl_count: 20, warm_up: false, ..PhotonStreamSettings::deterministic() };
 //! let mut ps = PhotonStream::new(&world, settings).unwrap();
 //! let w = world.read().unwrap();
 //! ps.advance(&w, &Budget { photons: Some(2000), ..Default::default() });

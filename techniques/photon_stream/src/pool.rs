@@ -111,7 +111,11 @@ impl PhotonPool {
     /// Records that photons pushed from now on were emitted at `time_s` (for the pool
     /// age).
     pub fn stamp(&mut self, time_s: f64) {
-        if self.stamps.back().is_none_or(|&(i, _)| i != self.applied_photons) {
+        if self
+            .stamps
+            .back()
+            .is_none_or(|&(i, _)| i != self.applied_photons)
+        {
             self.stamps.push_back((self.applied_photons, time_s));
         } else if let Some(last) = self.stamps.back_mut() {
             last.1 = time_s;
@@ -123,7 +127,12 @@ impl PhotonPool {
         if self.photons() == 0 {
             return None;
         }
-        self.stamps.iter().rev().find(|&&(i, _)| i <= self.evicted_photons).or(self.stamps.front()).map(|s| s.1)
+        self.stamps
+            .iter()
+            .rev()
+            .find(|&&(i, _)| i <= self.evicted_photons)
+            .or(self.stamps.front())
+            .map(|s| s.1)
     }
 
     /// Algorithm 2 for every impact of one emitted photon: evicts whole oldest photons
@@ -136,17 +145,30 @@ impl PhotonPool {
             self.carry += 1;
             return;
         }
-        assert!(impacts.len() <= self.capacity, "a photon path of {} impacts exceeds the pool of {}", impacts.len(), self.capacity);
+        assert!(
+            impacts.len() <= self.capacity,
+            "a photon path of {} impacts exceeds the pool of {}",
+            impacts.len(),
+            self.capacity
+        );
         while self.ring.len() + impacts.len() > self.capacity {
             self.evict_oldest_photon();
         }
         for (j, imp) in impacts.iter().enumerate() {
-            let weight = if j == 0 { 1 + std::mem::take(&mut self.carry) } else { 0 };
+            let weight = if j == 0 {
+                1 + std::mem::take(&mut self.carry)
+            } else {
+                0
+            };
             let acc = &mut self.power[imp.slot as usize];
-            for c in 0..3 {
-                acc[c] += imp.quanta[c];
+            for (a, q) in acc.iter_mut().zip(imp.quanta) {
+                *a += q;
             }
-            self.ring.push_back(Pooled { slot: imp.slot, weight, quanta: imp.quanta });
+            self.ring.push_back(Pooled {
+                slot: imp.slot,
+                weight,
+                quanta: imp.quanta,
+            });
         }
         self.impacts_added += impacts.len() as u64;
     }
@@ -160,8 +182,8 @@ impl PhotonPool {
             first = false;
             let p = self.ring.pop_front().expect("front exists");
             let acc = &mut self.power[p.slot as usize];
-            for c in 0..3 {
-                acc[c] -= p.quanta[c];
+            for (a, q) in acc.iter_mut().zip(p.quanta) {
+                *a -= q;
             }
             self.evicted_photons += p.weight as u64;
         }
@@ -185,19 +207,34 @@ impl PhotonPool {
         let mut sums = vec![[0u64; 3]; self.power.len()];
         let mut weights = self.carry as u64;
         for p in &self.ring {
-            for c in 0..3 {
-                sums[p.slot as usize][c] += p.quanta[c];
+            for (a, q) in sums[p.slot as usize].iter_mut().zip(p.quanta) {
+                *a += q;
             }
             weights += p.weight as u64;
         }
-        if let Some((i, _)) = sums.iter().zip(&self.power).enumerate().find(|(_, (a, b))| a != b) {
-            return Err(format!("slot {i}: power {:?} but pooled impacts sum to {:?}", self.power[i], sums[i]));
+        if let Some((i, _)) = sums
+            .iter()
+            .zip(&self.power)
+            .enumerate()
+            .find(|(_, (a, b))| a != b)
+        {
+            return Err(format!(
+                "slot {i}: power {:?} but pooled impacts sum to {:?}",
+                self.power[i], sums[i]
+            ));
         }
         if weights != self.photons() {
-            return Err(format!("K = {} but pooled photon weights sum to {weights}", self.photons()));
+            return Err(format!(
+                "K = {} but pooled photon weights sum to {weights}",
+                self.photons()
+            ));
         }
         if self.ring.len() > self.capacity {
-            return Err(format!("{} impacts in a pool of {}", self.ring.len(), self.capacity));
+            return Err(format!(
+                "{} impacts in a pool of {}",
+                self.ring.len(),
+                self.capacity
+            ));
         }
         Ok(())
     }
@@ -217,7 +254,10 @@ mod tests {
     #[test]
     fn whole_photons_are_evicted_and_k_counts_empty_photons() {
         let mut pool = PhotonPool::new(4, 2, 1.0);
-        let imp = |slot, q| PoolImpact { slot, quanta: [q, 2 * q, 3 * q] };
+        let imp = |slot, q| PoolImpact {
+            slot,
+            quanta: [q, 2 * q, 3 * q],
+        };
         pool.push_photon(&[]); // hits nothing
         pool.push_photon(&[imp(0, 1), imp(1, 2)]);
         pool.push_photon(&[imp(2, 4)]);

@@ -96,6 +96,11 @@ pub struct PhotonStreamSettings {
     /// Longest photon path in bounces, a safety net behind Russian roulette (§0.7.1).
     /// Default 32.
     pub max_bounces: u32,
+    /// Fill the pool synchronously (on the calling thread and rayon) before the first
+    /// frame, so the first frame is already converged (the paper renders at once and
+    /// lets the stream fill in). False: frames start dark and brighten as the pool
+    /// fills. Default true.
+    pub warm_up: bool,
     /// Start with the simulation thread paused ([`StreamMode::Streaming`]). Default false.
     pub start_paused: bool,
     /// Seed of VSL placement and photon paths: the same seed gives the same VSLs and,
@@ -119,6 +124,7 @@ impl Default for PhotonStreamSettings {
             visibility: VisibilityMode::Off,
             visibility_rays: 8,
             max_bounces: 32,
+            warm_up: true,
             start_paused: false,
             seed: 0,
         }
@@ -129,17 +135,29 @@ impl PhotonStreamSettings {
     /// Preset for tests and reproducible animations: deterministic shooting, the
     /// paper's other defaults.
     pub fn deterministic() -> Self {
-        Self { mode: StreamMode::Deterministic, ..Self::default() }
+        Self {
+            mode: StreamMode::Deterministic,
+            ..Self::default()
+        }
     }
 
     /// Preset for interactive previews: 50 VSLs, a smaller pool (lower latency).
     pub fn interactive() -> Self {
-        Self { vsl_count: 50, pool_size: 50_000, ..Self::default() }
+        Self {
+            vsl_count: 50,
+            pool_size: 50_000,
+            ..Self::default()
+        }
     }
 
     /// Preset for stills: 200 VSLs, a large pool, stochastic VSL visibility.
     pub fn quality() -> Self {
-        Self { vsl_count: 200, pool_size: 1_000_000, visibility: VisibilityMode::Stochastic, ..Self::default() }
+        Self {
+            vsl_count: 200,
+            pool_size: 1_000_000,
+            visibility: VisibilityMode::Stochastic,
+            ..Self::default()
+        }
     }
 
     /// The preset named `name` (`default`, `deterministic`, `interactive`, `quality`).
@@ -155,30 +173,50 @@ impl PhotonStreamSettings {
 
     /// Checks every value; the error names the field.
     pub fn validate(&self) -> Result<(), crate::PhotonStreamError> {
-        let bad = |field: &'static str, reason: String| Err(crate::PhotonStreamError::InvalidSetting { field, reason });
+        let bad = |field: &'static str, reason: String| {
+            Err(crate::PhotonStreamError::InvalidSetting { field, reason })
+        };
         if self.vsl_count == 0 {
             return bad("vsl_count", "must be at least 1".into());
         }
         if !(self.oversampling >= 0.0 && self.oversampling <= 10.0) {
-            return bad("oversampling", format!("{} is not in [0, 10]", self.oversampling));
+            return bad(
+                "oversampling",
+                format!("{} is not in [0, 10]", self.oversampling),
+            );
         }
         if !(self.triangle_scale > 0.0 && self.triangle_scale <= 1.0) {
-            return bad("triangle_scale", format!("{} is not in (0, 1]", self.triangle_scale));
+            return bad(
+                "triangle_scale",
+                format!("{} is not in (0, 1]", self.triangle_scale),
+            );
         }
         if (self.pool_size as u64) < self.max_bounces as u64 + 1 {
-            return bad("pool_size", format!("{} cannot hold one photon path of max_bounces + 1 impacts", self.pool_size));
+            return bad(
+                "pool_size",
+                format!(
+                    "{} cannot hold one photon path of max_bounces + 1 impacts",
+                    self.pool_size
+                ),
+            );
         }
         if self.batch_photons == 0 {
             return bad("batch_photons", "must be at least 1".into());
         }
         if !(self.epsilon >= 0.0 && self.epsilon.is_finite()) {
-            return bad("epsilon", format!("{} is not a finite non-negative radiance", self.epsilon));
+            return bad(
+                "epsilon",
+                format!("{} is not a finite non-negative radiance", self.epsilon),
+            );
         }
         if self.tile_size == 0 {
             return bad("tile_size", "must be at least 1".into());
         }
         if self.visibility == VisibilityMode::Stochastic && self.visibility_rays == 0 {
-            return bad("visibility_rays", "stochastic visibility needs at least 1 ray".into());
+            return bad(
+                "visibility_rays",
+                "stochastic visibility needs at least 1 ray".into(),
+            );
         }
         Ok(())
     }

@@ -84,7 +84,11 @@ pub struct ShadeStats {
 impl ShadeStats {
     /// Mean VSLs per non-empty tile after culling.
     pub fn vsls_per_tile(&self) -> f64 {
-        if self.tiles == 0 { 0.0 } else { self.vsls_kept as f64 / self.tiles as f64 }
+        if self.tiles == 0 {
+            0.0
+        } else {
+            self.vsls_kept as f64 / self.tiles as f64
+        }
     }
 
     fn merge(self, o: Self) -> Self {
@@ -113,17 +117,38 @@ struct TilePixels {
 }
 
 /// VSLs of `field` that may light any point of `bounds` (see the module doc).
-pub fn cull(field: &VslField, bounds: &Aabb, max_reflectance: f32, epsilon: f32, out: &mut Vec<u32>) {
+pub fn cull(
+    field: &VslField,
+    bounds: &Aabb,
+    max_reflectance: f32,
+    epsilon: f32,
+    out: &mut Vec<u32>,
+) {
     out.clear();
     let corners: [Vec3; 8] = std::array::from_fn(|i| {
         Vec3::new(
-            if i & 1 == 0 { bounds.min.x } else { bounds.max.x },
-            if i & 2 == 0 { bounds.min.y } else { bounds.max.y },
-            if i & 4 == 0 { bounds.min.z } else { bounds.max.z },
+            if i & 1 == 0 {
+                bounds.min.x
+            } else {
+                bounds.max.x
+            },
+            if i & 2 == 0 {
+                bounds.min.y
+            } else {
+                bounds.max.y
+            },
+            if i & 4 == 0 {
+                bounds.min.z
+            } else {
+                bounds.max.z
+            },
         )
     });
     for s in 0..field.len() {
-        let (pf, pb) = (field.front_w[s].max_element(), field.back_w[s].max_element());
+        let (pf, pb) = (
+            field.front_w[s].max_element(),
+            field.back_w[s].max_element(),
+        );
         if pf <= 0.0 && pb <= 0.0 {
             continue;
         }
@@ -152,7 +177,13 @@ pub fn cull(field: &VslField, bounds: &Aabb, max_reflectance: f32, epsilon: f32,
 
 /// Indirect radiance of every G-buffer pixel from `field` (see the module doc).
 /// `frame_seed` decorrelates stochastic visibility between frames.
-pub fn shade(world: &World, gbuffer: &GBuffer, field: &VslField, settings: &PhotonStreamSettings, frame_seed: u64) -> (RgbImage, ShadeStats) {
+pub fn shade(
+    world: &World,
+    gbuffer: &GBuffer,
+    field: &VslField,
+    settings: &PhotonStreamSettings,
+    frame_seed: u64,
+) -> (RgbImage, ShadeStats) {
     let (w, h) = (gbuffer.width, gbuffer.height);
     let t = settings.tile_size;
     let (tx, ty) = (w.div_ceil(t), h.div_ceil(t));
@@ -162,7 +193,16 @@ pub fn shade(world: &World, gbuffer: &GBuffer, field: &VslField, settings: &Phot
             || (TilePixels::default(), Vec::new()),
             |(tile, kept), k| {
                 let (x0, y0) = ((k % tx) * t, (k / tx) * t);
-                shade_tile(world, gbuffer, field, settings, frame_seed, (x0, y0, (x0 + t).min(w), (y0 + t).min(h)), tile, kept)
+                shade_tile(
+                    world,
+                    gbuffer,
+                    field,
+                    settings,
+                    frame_seed,
+                    (x0, y0, (x0 + t).min(w), (y0 + t).min(h)),
+                    tile,
+                    kept,
+                )
             },
         )
         .collect();
@@ -177,7 +217,10 @@ pub fn shade(world: &World, gbuffer: &GBuffer, field: &VslField, settings: &Phot
     (img, stats)
 }
 
-#[allow(clippy::too_many_arguments, reason = "one tile's private scratch buffers")]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one tile's private scratch buffers"
+)]
 fn shade_tile(
     world: &World,
     gbuffer: &GBuffer,
@@ -190,7 +233,9 @@ fn shade_tile(
 ) -> (Vec<(u32, Rgb)>, ShadeStats) {
     let mut stats = ShadeStats::default();
     let tp = tile;
-    for v in [&mut tp.px, &mut tp.py, &mut tp.pz, &mut tp.nx, &mut tp.ny, &mut tp.nz] {
+    for v in [
+        &mut tp.px, &mut tp.py, &mut tp.pz, &mut tp.nx, &mut tp.ny, &mut tp.nz,
+    ] {
         v.clear();
     }
     tp.index.clear();
@@ -199,7 +244,9 @@ fn shade_tile(
     for y in y0..y1 {
         for x in x0..x1 {
             let i = y * gbuffer.width + x;
-            let Some(px) = &gbuffer.pixels[i as usize] else { continue };
+            let Some(px) = &gbuffer.pixels[i as usize] else {
+                continue;
+            };
             if !px.hit.reflects || px.hit.albedo == Rgb::ZERO {
                 continue;
             }
@@ -224,7 +271,11 @@ fn shade_tile(
     stats.tiles = 1;
     stats.vsls_kept = kept.len() as u64;
     stats.evaluations = (kept.len() * m) as u64;
-    let albedo = |i: u32| gbuffer.pixels[i as usize].as_ref().map_or(Rgb::ZERO, |p| p.hit.albedo);
+    let albedo = |i: u32| {
+        gbuffer.pixels[i as usize]
+            .as_ref()
+            .map_or(Rgb::ZERO, |p| p.hit.albedo)
+    };
     let out: Vec<(u32, Rgb)> = match settings.visibility {
         VisibilityMode::Off => {
             for v in [&mut tp.r, &mut tp.g, &mut tp.b] {
@@ -255,7 +306,14 @@ fn shade_tile(
                     b[i] += wgt * if front { f.z } else { bk.z };
                 }
             }
-            (0..m).map(|i| (tp.index[i], albedo(tp.index[i]) * INV_PI * Rgb::new(tp.r[i], tp.g[i], tp.b[i]))).collect()
+            (0..m)
+                .map(|i| {
+                    (
+                        tp.index[i],
+                        albedo(tp.index[i]) * INV_PI * Rgb::new(tp.r[i], tp.g[i], tp.b[i]),
+                    )
+                })
+                .collect()
         }
         VisibilityMode::All | VisibilityMode::Stochastic => {
             let mut contrib: Vec<(u32, Rgb)> = Vec::with_capacity(kept.len());
@@ -263,13 +321,19 @@ fn shade_tile(
             (0..m)
                 .map(|i| {
                     let idx = tp.index[i];
-                    let px = gbuffer.pixels[idx as usize].as_ref().expect("gathered pixels exist");
+                    let px = gbuffer.pixels[idx as usize]
+                        .as_ref()
+                        .expect("gathered pixels exist");
                     let x = px.hit.position;
                     let n = px.hit.facing_normal();
                     contrib.clear();
                     for &s in kept.iter() {
                         let (wgt, front) = field.geometry(s as usize, x, n);
-                        let phi = if front { field.front_w[s as usize] } else { field.back_w[s as usize] };
+                        let phi = if front {
+                            field.front_w[s as usize]
+                        } else {
+                            field.back_w[s as usize]
+                        };
                         let c = phi * wgt;
                         if c.max_element() > 0.0 {
                             contrib.push((s, c));
@@ -284,10 +348,15 @@ fn shade_tile(
                         let dir = to / dist;
                         *rays += 1;
                         let t_max = dist * 0.999 - 1e-4;
-                        !world.tracer.occluded(&Ray::segment(px.hit.spawn_origin(dir), dir, t_max), illume_scene::MASK_DEFAULT)
+                        !world.tracer.occluded(
+                            &Ray::segment(px.hit.spawn_origin(dir), dir, t_max),
+                            illume_scene::MASK_DEFAULT,
+                        )
                     };
                     let mut sum = Rgb::ZERO;
-                    if settings.visibility == VisibilityMode::All || contrib.len() <= settings.visibility_rays as usize {
+                    if settings.visibility == VisibilityMode::All
+                        || contrib.len() <= settings.visibility_rays as usize
+                    {
                         for &(s, c) in &contrib {
                             if visible(s, &mut stats.shadow_rays) {
                                 sum += c;

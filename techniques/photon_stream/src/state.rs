@@ -26,19 +26,37 @@ pub struct PhotonStream {
     frames: u64,
     last_shade: ShadeStats,
     shading_ms: f64,
+    warmed_up: bool,
 }
 
 /// VSL fluxes [W] from a pool snapshot: front and back side of each VSL.
 pub fn fluxes(snapshot: &PoolSnapshot) -> (Vec<Rgb>, Vec<Rgb>) {
-    let scale = if snapshot.photons == 0 { 0.0 } else { snapshot.quantum_w / snapshot.photons as f64 };
-    let to_w = |q: &[u64; 3]| Rgb::new((q[0] as f64 * scale) as f32, (q[1] as f64 * scale) as f32, (q[2] as f64 * scale) as f32);
-    snapshot.quanta.chunks_exact(2).map(|c| (to_w(&c[0]), to_w(&c[1]))).unzip()
+    let scale = if snapshot.photons == 0 {
+        0.0
+    } else {
+        snapshot.quantum_w / snapshot.photons as f64
+    };
+    let to_w = |q: &[u64; 3]| {
+        Rgb::new(
+            (q[0] as f64 * scale) as f32,
+            (q[1] as f64 * scale) as f32,
+            (q[2] as f64 * scale) as f32,
+        )
+    };
+    snapshot
+        .quanta
+        .chunks_exact(2)
+        .map(|c| (to_w(&c[0]), to_w(&c[1])))
+        .unzip()
 }
 
 impl PhotonStream {
     /// Places the VSLs on `world`'s scene and, in [`StreamMode::Streaming`], starts the
     /// simulation thread (which keeps a clone of `world` and read-locks it per batch).
-    pub fn new(world: &SharedWorld, settings: PhotonStreamSettings) -> Result<Self, PhotonStreamError> {
+    pub fn new(
+        world: &SharedWorld,
+        settings: PhotonStreamSettings,
+    ) -> Result<Self, PhotonStreamError> {
         settings.validate()?;
         let (vsls, quantum_w) = {
             let w = world.read().map_err(|_| PhotonStreamError::PoisonedWorld)?;
@@ -52,11 +70,20 @@ impl PhotonStream {
                 },
             );
             if vsls.is_empty() {
-                return Err(PhotonStreamError::NoSurfaces { scene: w.scene.source.clone() });
+                return Err(PhotonStreamError::NoSurfaces {
+                    scene: w.scene.source.clone(),
+                });
             }
             // 2^24 quanta per photon of the scene's total power: 6e-8 relative precision.
             let power = w.lights.total_power().max_element() as f64;
-            (vsls, if power > 0.0 { power / (1u64 << 24) as f64 } else { 1e-12 })
+            (
+                vsls,
+                if power > 0.0 {
+                    power / (1u64 << 24) as f64
+                } else {
+                    1e-12
+                },
+            )
         };
         let vsls = Arc::new(vsls);
         let pool = PhotonPool::new(settings.pool_size as usize, vsls.len(), quantum_w);
@@ -79,7 +106,17 @@ impl PhotonStream {
             ),
             StreamMode::Deterministic => None,
         };
-        Ok(Self { settings, vsls, shared, thread, inv_quantum, frames: 0, last_shade: ShadeStats::default(), shading_ms: 0.0 })
+        Ok(Self {
+            settings,
+            vsls,
+            shared,
+            thread,
+            inv_quantum,
+            frames: 0,
+            last_shade: ShadeStats::default(),
+            shading_ms: 0.0,
+            warmed_up: false,
+        })
     }
 
     /// The settings.
@@ -95,11 +132,31 @@ impl PhotonStream {
     /// Shoots `count` photons now, on the calling thread and rayon (the deterministic
     /// mode's step; usable in streaming mode too, e.g. to warm the pool up).
     pub fn shoot(&mut self, world: &World, count: u64) {
-        let emitter = Emitter::new(world, &self.vsls, self.inv_quantum, self.settings.max_bounces, self.settings.seed);
+        let emitter = Emitter::new(
+            world,
+            &self.vsls,
+            self.inv_quantum,
+            self.settings.max_bounces,
+            self.settings.seed,
+        );
         let epoch = self.shared.epoch();
         let first = self.shared.reserve(count);
         let batch = emitter.trace_parallel(world, first, count);
         self.shared.apply(&batch, epoch);
+    }
+
+    /// Shoots photons until the pool is full (or 4 × pool size photons were shot, for
+    /// scenes where most photons escape). Returns the photons shot.
+    pub fn warm_up(&mut self, world: &World) -> u64 {
+        let capacity = self.settings.pool_size as u64;
+        let mut shot = 0;
+        while (self.shared.lock().pool.len() as u64) < capacity && shot < 4 * capacity {
+            let n = (capacity / 4).clamp(1000, 50_000);
+            self.shoot(world, n);
+            shot += n;
+        }
+        self.warmed_up = true;
+        shot
     }
 
     /// A consistent copy of the VSL powers.
@@ -112,7 +169,13 @@ impl PhotonStream {
         let (front_w, back_w) = fluxes(&self.snapshot());
         let (positions, normals) = self.vsls.world_frames(&world.scene);
         let area_m2 = self.vsls.vsls().iter().map(|v| v.area_m2).collect();
-        VslField { positions, normals, front_w, back_w, area_m2 }
+        VslField {
+            positions,
+            normals,
+            front_w,
+            back_w,
+            area_m2,
+        }
     }
 
     /// Pauses the simulation thread (no effect in deterministic mode).
@@ -166,10 +229,14 @@ impl Technique for PhotonStream {
         update::on_changes(&self.shared, self.settings.on_change, changes);
     }
 
-    /// Deterministic mode: shoots `budget.photons` (default
+    /// First call with [`PhotonStreamSettings::warm_up`]: fills the pool. Then, in
+    /// deterministic mode: shoots `budget.photons` (default
     /// [`PhotonStreamSettings::photons_per_frame`]). Streaming mode: nothing (the thread
     /// runs by itself); `budget` is ignored.
     fn advance(&mut self, world: &World, budget: &Budget) {
+        if self.settings.warm_up && !self.warmed_up {
+            self.warm_up(world);
+        }
         if self.settings.mode == StreamMode::Deterministic {
             let n = budget.photons.unwrap_or(self.settings.photons_per_frame);
             self.shoot(world, n);
@@ -197,7 +264,11 @@ impl Technique for PhotonStream {
             let evicted = pool.photons_pushed() - pool.photons();
             s.photons_at_change.saturating_sub(evicted) as f64 / pool.photons() as f64
         };
-        let latency = if s.impacts_per_s > 0.0 { pool.capacity() as f64 / s.impacts_per_s } else { f64::INFINITY };
+        let latency = if s.impacts_per_s > 0.0 {
+            pool.capacity() as f64 / s.impacts_per_s
+        } else {
+            f64::INFINITY
+        };
         let v = |name: &str, x: f64| (format!("photon_stream.{name}"), x);
         vec![
             v("photons_shot", pool.photons_pushed() as f64),
@@ -221,6 +292,7 @@ impl Technique for PhotonStream {
 
     fn reset(&mut self) {
         self.shared.flush();
+        self.warmed_up = false;
         self.frames = 0;
         self.last_shade = ShadeStats::default();
     }

@@ -130,7 +130,11 @@ impl SharedPool {
     /// Copies every VSL power and K under the mutex.
     pub fn snapshot(&self) -> PoolSnapshot {
         let s = self.lock();
-        PoolSnapshot { quanta: s.pool.power_quanta().to_vec(), photons: s.pool.photons(), quantum_w: s.pool.quantum_w() }
+        PoolSnapshot {
+            quanta: s.pool.power_quanta().to_vec(),
+            photons: s.pool.photons(),
+            quantum_w: s.pool.quantum_w(),
+        }
     }
 
     /// Empties the pool and invalidates batches in flight.
@@ -195,16 +199,24 @@ pub fn spawn(
     shared: Arc<SharedPool>,
     config: StreamConfig,
 ) -> std::io::Result<std::thread::JoinHandle<()>> {
-    std::thread::Builder::new().name("photon_stream".into()).spawn(move || {
-        while shared.wait_running() {
-            let (batch, epoch) = {
-                let w = world.read().unwrap_or_else(|e| e.into_inner());
-                let epoch = shared.epoch();
-                let emitter = Emitter::new(&w, &vsls, config.inv_quantum, config.max_bounces, config.seed);
-                let first = shared.reserve(config.batch_photons);
-                (emitter.trace(&w, first, config.batch_photons), epoch)
-            };
-            shared.apply(&batch, epoch);
-        }
-    })
+    std::thread::Builder::new()
+        .name("photon_stream".into())
+        .spawn(move || {
+            while shared.wait_running() {
+                let (batch, epoch) = {
+                    let w = world.read().unwrap_or_else(|e| e.into_inner());
+                    let epoch = shared.epoch();
+                    let emitter = Emitter::new(
+                        &w,
+                        &vsls,
+                        config.inv_quantum,
+                        config.max_bounces,
+                        config.seed,
+                    );
+                    let first = shared.reserve(config.batch_photons);
+                    (emitter.trace(&w, first, config.batch_photons), epoch)
+                };
+                shared.apply(&batch, epoch);
+            }
+        })
 }

@@ -11,13 +11,22 @@ use illume_transport::{Budget, Technique, World};
 fn field_distance(a: &PhotonStream, b: &PhotonStream) -> f64 {
     let (fa, ba) = fluxes(&a.snapshot());
     let (fb, bb) = fluxes(&b.snapshot());
-    let num: f64 = fa.iter().chain(&ba).zip(fb.iter().chain(&bb)).map(|(x, y)| (*x - *y).abs().element_sum() as f64).sum();
+    let num: f64 = fa
+        .iter()
+        .chain(&ba)
+        .zip(fb.iter().chain(&bb))
+        .map(|(x, y)| (*x - *y).abs().element_sum() as f64)
+        .sum();
     let den: f64 = fb.iter().chain(&bb).map(|y| y.element_sum() as f64).sum();
     num / den
 }
 
 fn stat(ps: &PhotonStream, name: &str) -> f64 {
-    ps.stats().into_iter().find(|(n, _)| n == name).unwrap_or_else(|| panic!("no stat {name}")).1
+    ps.stats()
+        .into_iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("no stat {name}"))
+        .1
 }
 
 const POOL: u32 = 30_000;
@@ -26,11 +35,24 @@ const PER_FRAME: u64 = 1_000;
 #[test]
 fn after_the_sphere_moves_the_field_converges_with_latency_pool_size_over_rate() {
     let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
-    let settings = PhotonStreamSettings { vsl_count: 50, pool_size: POOL, photons_per_frame: PER_FRAME, ..PhotonStreamSettings::deterministic() };
+    let settings = PhotonStreamSettings {
+        vsl_count: 50,
+        pool_size: POOL,
+        photons_per_frame: PER_FRAME,
+        warm_up: false,
+        ..PhotonStreamSettings::deterministic()
+    };
     let mut ps = PhotonStream::new(&world, settings.clone()).unwrap();
     // The new steady state, on the same VSL layout: a second technique with a huge pool,
     // flushed at the change and then filled with new-scene photons only.
-    let mut steady = PhotonStream::new(&world, PhotonStreamSettings { pool_size: 4_000_000, ..settings.clone() }).unwrap();
+    let mut steady = PhotonStream::new(
+        &world,
+        PhotonStreamSettings {
+            pool_size: 4_000_000,
+            ..settings.clone()
+        },
+    )
+    .unwrap();
     assert_eq!(steady.vsls().vsls(), ps.vsls().vsls());
     let budget = Budget::default();
     for _ in 0..40 {
@@ -42,7 +64,10 @@ fn after_the_sphere_moves_the_field_converges_with_latency_pool_size_over_rate()
     let changes = world
         .write()
         .unwrap()
-        .apply_edit(&Edit::SetInstanceTransform { instance: sphere, world_from_object: Affine3A::from_translation(Vec3::new(0.45, 0.3, 0.1)) })
+        .apply_edit(&Edit::SetInstanceTransform {
+            instance: sphere,
+            world_from_object: Affine3A::from_translation(Vec3::new(0.45, 0.3, 0.1)),
+        })
         .unwrap();
     ps.scene_changed(&world.read().unwrap(), &changes);
     steady.reset();
@@ -63,34 +88,77 @@ fn after_the_sphere_moves_the_field_converges_with_latency_pool_size_over_rate()
     // FIFO: the field is a linear blend old → new over one turnover, so the excess
     // distance halves at half the latency. Measure the half-way crossing.
     let half = floor + 0.5 * (before - floor);
-    let k = distances.iter().position(|&d| d <= half).expect("field converges") as f64 + 1.0;
+    let k = distances
+        .iter()
+        .position(|&d| d <= half)
+        .expect("field converges") as f64
+        + 1.0;
     let measured_frames = 2.0 * k;
-    eprintln!("before {before:.3}, floor {floor:.3}, impacts/frame {rate:.0}, latency predicted {predicted_frames:.1} frames, measured {measured_frames:.1}; {distances:.3?}");
-    assert!(before > 3.0 * floor, "the move must change the field clearly: {before} vs floor {floor}");
-    assert!((measured_frames / predicted_frames - 1.0).abs() < 0.2, "latency {measured_frames} frames vs pool/rate {predicted_frames}");
+    eprintln!(
+        "before {before:.3}, floor {floor:.3}, impacts/frame {rate:.0}, latency predicted {predicted_frames:.1} frames, measured {measured_frames:.1}; {distances:.3?}"
+    );
+    assert!(
+        before > 3.0 * floor,
+        "the move must change the field clearly: {before} vs floor {floor}"
+    );
+    assert!(
+        (measured_frames / predicted_frames - 1.0).abs() < 0.2,
+        "latency {measured_frames} frames vs pool/rate {predicted_frames}"
+    );
     // After one full turnover (plus a frame) every pooled photon is new.
     let turnover = predicted_frames.ceil() as usize + 1;
-    assert!(distances[turnover] < 1.5 * floor, "not converged after one turnover: {}", distances[turnover]);
+    assert!(
+        distances[turnover] < 1.5 * floor,
+        "not converged after one turnover: {}",
+        distances[turnover]
+    );
     assert_eq!(stat(&ps, "photon_stream.stale_fraction"), 0.0);
 }
 
 #[test]
 fn flush_policy_empties_the_pool_on_a_change_but_not_on_a_camera_move() {
     let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
-    let settings = PhotonStreamSettings { vsl_count: 20, pool_size: 10_000, on_change: ChangePolicy::Flush, ..PhotonStreamSettings::deterministic() };
+    let settings = PhotonStreamSettings {
+        vsl_count: 20,
+        pool_size: 10_000,
+        on_change: ChangePolicy::Flush,
+        warm_up: false,
+        ..PhotonStreamSettings::deterministic()
+    };
     let mut ps = PhotonStream::new(&world, settings).unwrap();
-    ps.advance(&world.read().unwrap(), &Budget { photons: Some(3000), ..Default::default() });
+    ps.advance(
+        &world.read().unwrap(),
+        &Budget {
+            photons: Some(3000),
+            ..Default::default()
+        },
+    );
     assert!(stat(&ps, "photon_stream.pool_impacts") > 0.0);
     let cam = world.read().unwrap().scene.camera.world_from_camera;
-    let changes = world.write().unwrap().apply_edit(&Edit::SetCameraTransform { world_from_camera: Affine3A::from_translation(Vec3::Z) * cam }).unwrap();
+    let changes = world
+        .write()
+        .unwrap()
+        .apply_edit(&Edit::SetCameraTransform {
+            world_from_camera: Affine3A::from_translation(Vec3::Z) * cam,
+        })
+        .unwrap();
     ps.scene_changed(&world.read().unwrap(), &changes);
-    assert!(stat(&ps, "photon_stream.pool_impacts") > 0.0, "a camera move keeps the pool");
+    assert!(
+        stat(&ps, "photon_stream.pool_impacts") > 0.0,
+        "a camera move keeps the pool"
+    );
     let changes = world.write().unwrap().set_time(0.5);
     ps.scene_changed(&world.read().unwrap(), &changes);
     assert_eq!(stat(&ps, "photon_stream.pool_impacts"), 0.0);
     assert_eq!(stat(&ps, "photon_stream.pool_photons"), 0.0);
     ps.validate().unwrap();
-    ps.advance(&world.read().unwrap(), &Budget { photons: Some(1000), ..Default::default() });
+    ps.advance(
+        &world.read().unwrap(),
+        &Budget {
+            photons: Some(1000),
+            ..Default::default()
+        },
+    );
     assert_eq!(stat(&ps, "photon_stream.pool_photons"), 1000.0);
     ps.validate().unwrap();
 }
@@ -99,12 +167,30 @@ fn flush_policy_empties_the_pool_on_a_change_but_not_on_a_camera_move() {
 fn deterministic_mode_is_reproducible() {
     let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
     let run = || {
-        let mut ps = PhotonStream::new(&world, PhotonStreamSettings { vsl_count: 30, ..PhotonStreamSettings::deterministic() }).unwrap();
-        ps.advance(&world.read().unwrap(), &Budget { photons: Some(5000), ..Default::default() });
+        let mut ps = PhotonStream::new(
+            &world,
+            PhotonStreamSettings {
+                vsl_count: 30,
+                warm_up: false,
+                ..PhotonStreamSettings::deterministic()
+            },
+        )
+        .unwrap();
+        ps.advance(
+            &world.read().unwrap(),
+            &Budget {
+                photons: Some(5000),
+                ..Default::default()
+            },
+        );
         ps.snapshot()
     };
     let a = run();
-    let b = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(run);
+    let b = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(run);
     assert_eq!(a, b);
     assert!(a.quanta.iter().any(|q| q[0] > 0));
 }
@@ -112,7 +198,12 @@ fn deterministic_mode_is_reproducible() {
 #[test]
 fn streaming_thread_shoots_pauses_resumes_and_keeps_the_books() {
     let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
-    let settings = PhotonStreamSettings { vsl_count: 30, pool_size: 20_000, batch_photons: 64, ..PhotonStreamSettings::default() };
+    let settings = PhotonStreamSettings {
+        vsl_count: 30,
+        pool_size: 20_000,
+        batch_photons: 64,
+        ..PhotonStreamSettings::default()
+    };
     let ps = PhotonStream::new(&world, settings).unwrap();
     let wait_for = |f: &dyn Fn() -> bool| {
         let t = std::time::Instant::now();
@@ -133,7 +224,11 @@ fn streaming_thread_shoots_pauses_resumes_and_keeps_the_books() {
     std::thread::sleep(std::time::Duration::from_millis(50)); // let a batch in flight land
     let shot = stat(&ps, "photon_stream.photons_shot");
     std::thread::sleep(std::time::Duration::from_millis(200));
-    assert_eq!(stat(&ps, "photon_stream.photons_shot"), shot, "paused thread kept shooting");
+    assert_eq!(
+        stat(&ps, "photon_stream.photons_shot"),
+        shot,
+        "paused thread kept shooting"
+    );
     assert_eq!(stat(&ps, "photon_stream.paused"), 1.0);
     assert!(stat(&ps, "photon_stream.pool_age_s") > 0.0);
     assert!(stat(&ps, "photon_stream.latency_s").is_finite());

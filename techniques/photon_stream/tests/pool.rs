@@ -10,7 +10,10 @@ fn random_photon(rng: &mut Pcg32, slots: u32, out: &mut Vec<PoolImpact>) {
     for _ in 0..n {
         let slot = rng.next_below(slots);
         let q = rng.next_u32() as u64;
-        out.push(PoolImpact { slot, quanta: [q, q >> 3, (q * 7) >> 2] });
+        out.push(PoolImpact {
+            slot,
+            quanta: [q, q >> 3, (q * 7) >> 2],
+        });
     }
 }
 
@@ -27,7 +30,8 @@ fn power_is_conserved_after_every_update_and_across_flushes() {
         pushed_since_flush += 1;
         impacts_since_flush += photon.len() as u64;
         if step % 97 == 0 {
-            pool.validate().unwrap_or_else(|e| panic!("step {step}: {e}"));
+            pool.validate()
+                .unwrap_or_else(|e| panic!("step {step}: {e}"));
         }
         // Before the first eviction K counts every photon, empty ones included.
         if impacts_since_flush <= 1000 - 4 {
@@ -42,7 +46,10 @@ fn power_is_conserved_after_every_update_and_across_flushes() {
             impacts_since_flush = 0;
         }
     }
-    assert!(pool.len() > 990 && pool.len() <= 1000, "the pool fills to capacity");
+    assert!(
+        pool.len() > 990 && pool.len() <= 1000,
+        "the pool fills to capacity"
+    );
 }
 
 #[test]
@@ -54,10 +61,20 @@ fn no_drift_after_a_billion_add_subtract_pairs() {
     const N: u64 = 1_000_000_000;
     let mut pool = PhotonPool::new(1024, 4, 1.0);
     let mut rng = Pcg32::new(99, 1);
-    let mut imp = [PoolImpact { slot: 0, quanta: [0; 3] }];
+    let mut imp = [PoolImpact {
+        slot: 0,
+        quanta: [0; 3],
+    }];
     for i in 0..N {
         let r = rng.next_u32();
-        imp[0] = PoolImpact { slot: r & 7, quanta: [(r >> 3) as u64, (r >> 9) as u64 + 1, 1 + (r as u64 & 0xffff) * 40_000] };
+        imp[0] = PoolImpact {
+            slot: r & 7,
+            quanta: [
+                (r >> 3) as u64,
+                (r >> 9) as u64 + 1,
+                1 + (r as u64 & 0xffff) * 40_000,
+            ],
+        };
         pool.push_photon(&imp);
         if i % 100_000_000 == 0 {
             pool.validate().unwrap();
@@ -97,5 +114,10 @@ fn floating_point_sums_would_drift_which_is_why_the_pool_uses_integers() {
         }
     }
     let exact: f64 = window.iter().map(|&v| v as f64).sum();
-    assert!((sum as f64 - exact).abs() > 1e-3 * exact.abs() * 1e-3, "f32 drift {} vs {}", sum, exact);
+    assert!(
+        (sum as f64 - exact).abs() > 1e-3 * exact.abs() * 1e-3,
+        "f32 drift {} vs {}",
+        sum,
+        exact
+    );
 }

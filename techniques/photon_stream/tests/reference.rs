@@ -26,7 +26,11 @@ fn blocks(img: &RgbImage) -> Vec<Rgb> {
 /// Relative L1 error of block means: Σ|a − b| / Σ b over blocks and channels.
 fn block_error(img: &RgbImage, reference: &RgbImage) -> f64 {
     let (a, b) = (blocks(img), blocks(reference));
-    let num: f64 = a.iter().zip(&b).map(|(a, b)| (*a - *b).abs().element_sum() as f64).sum();
+    let num: f64 = a
+        .iter()
+        .zip(&b)
+        .map(|(a, b)| (*a - *b).abs().element_sum() as f64)
+        .sum();
     let den: f64 = b.iter().map(|b| b.element_sum() as f64).sum();
     num / den
 }
@@ -36,7 +40,16 @@ fn mean_ratio(img: &RgbImage, reference: &RgbImage) -> f64 {
 }
 
 fn average(a: &RgbImage, b: &RgbImage) -> RgbImage {
-    RgbImage::from_vec(W, H, a.pixels().iter().zip(b.pixels()).map(|(a, b)| (*a + *b) * 0.5).collect()).unwrap()
+    RgbImage::from_vec(
+        W,
+        H,
+        a.pixels()
+            .iter()
+            .zip(b.pixels())
+            .map(|(a, b)| (*a + *b) * 0.5)
+            .collect(),
+    )
+    .unwrap()
 }
 
 /// Tolerances (deterministic seeds, so the measured values are fixed; margins cover
@@ -59,29 +72,71 @@ fn converged_vsl_indirect_agrees_with_reference_indirect_and_visibility_reduces_
 
     let t = Instant::now();
     let half = |seed| {
-        let mut r = ReferenceTechnique::new(ReferenceSettings { spp_per_frame: 128, seed, ..Default::default() });
-        r.advance(&w, &Budget { samples: Some(128), ..Default::default() });
+        let mut r = ReferenceTechnique::new(ReferenceSettings {
+            spp_per_frame: 128,
+            seed,
+            ..Default::default()
+        });
+        r.advance(
+            &w,
+            &Budget {
+                samples: Some(128),
+                ..Default::default()
+            },
+        );
         r.indirect(&w, &g)
     };
     let (ref_a, ref_b) = (half(0), half(1_000_000)); // disjoint sample indices
     let ref_img = average(&ref_a, &ref_b);
     let ref_noise = block_error(&ref_a, &ref_b) / 2.0;
-    eprintln!("reference: {:.1} s, mean {:?}, block noise {ref_noise:.3}", t.elapsed().as_secs_f64(), ref_img.mean());
-    assert!(ref_noise < 0.05, "reference too noisy for the comparison: {ref_noise}");
+    eprintln!(
+        "reference: {:.1} s, mean {:?}, block noise {ref_noise:.3}",
+        t.elapsed().as_secs_f64(),
+        ref_img.mean()
+    );
+    assert!(
+        ref_noise < 0.05,
+        "reference too noisy for the comparison: {ref_noise}"
+    );
 
     let mut errors = Vec::new();
     for vis in [VisibilityMode::Off, VisibilityMode::All] {
         let t = Instant::now();
-        let settings = PhotonStreamSettings { vsl_count: 100, pool_size: 400_000, visibility: vis, ..PhotonStreamSettings::deterministic() };
+        let settings = PhotonStreamSettings {
+            vsl_count: 100,
+            pool_size: 400_000,
+            visibility: vis,
+            warm_up: false,
+            ..PhotonStreamSettings::deterministic()
+        };
         let mut ps = PhotonStream::new(&world, settings).unwrap();
-        ps.advance(&w, &Budget { photons: Some(150_000), ..Default::default() });
+        ps.advance(
+            &w,
+            &Budget {
+                photons: Some(150_000),
+                ..Default::default()
+            },
+        );
         let img = ps.indirect(&w, &g);
         let (e, r) = (block_error(&img, &ref_img), mean_ratio(&img, &ref_img));
-        eprintln!("{vis:?}: {:.1} s, mean {:?}, block L1 {e:.3}, mean ratio {r:.3}", t.elapsed().as_secs_f64(), img.mean());
+        eprintln!(
+            "{vis:?}: {:.1} s, mean {:?}, block L1 {e:.3}, mean ratio {r:.3}",
+            t.elapsed().as_secs_f64(),
+            img.mean()
+        );
         errors.push((e, r));
     }
     let (off, all) = (errors[0], errors[1]);
-    assert!((off.1 - 1.0).abs() < 0.15, "indirect energy ratio {} not within ±15 %", off.1);
+    assert!(
+        (off.1 - 1.0).abs() < 0.15,
+        "indirect energy ratio {} not within ±15 %",
+        off.1
+    );
     assert!(off.0 < 0.32, "block L1 error {} ≥ 0.32", off.0);
-    assert!(all.0 < off.0, "visibility did not reduce the error: {} vs {}", all.0, off.0);
+    assert!(
+        all.0 < off.0,
+        "visibility did not reduce the error: {} vs {}",
+        all.0,
+        off.0
+    );
 }
