@@ -1,7 +1,7 @@
 //! Photon streaming benchmarks (the paper's Tables 2–3 in kind, photon rate, latency).
 //!
 //! `cargo bench -p illume-photon-stream --bench photon_stream [-- SECTION...]` with
-//! SECTION among `fps`, `rate`, `latency` (default: all). Prints Markdown tables.
+//! SECTION among `fps`, `rate`, `latency`, `visibility` (default: all). Prints Markdown tables.
 //!
 //! * `fps` — frames per second of whole frames (G-buffer + direct light with one shadow
 //!   ray + VSL indirect) at 800×600 and 1280×1024 for 10/50/100/200 VSLs on the Cornell
@@ -10,12 +10,13 @@
 //!   light (file emitters are switched off).
 //! * `rate` — photon impacts per second of the streaming thread (alone) against the
 //!   tracer's incoherent closest-hit rays per second on one thread.
+//! * `visibility` — cost of the VSL visibility modes (beyond the paper).
 //! * `latency` — time until no photon from before a change is left in the pool,
 //!   against pool size / impact rate, on `builtin:cornell-spot`.
 
 use illume_core::sampling::{Pcg32, SampleStream, uniform_sphere};
 use illume_core::{Affine3A, Quat, Ray, Rgb, Vec3};
-use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
+use illume_photon_stream::{PhotonStream, PhotonStreamSettings, VisibilityMode};
 use illume_render::{RenderSettings, Renderer};
 use illume_scene::{Edit, InstanceId, Light, LightKind, Node, Scene, Trs};
 use illume_transport::{SharedWorld, Technique, World};
@@ -279,6 +280,42 @@ fn latency_table() {
     }
 }
 
+fn visibility_table() {
+    println!("\n### Cost of VSL visibility (Cornell box, 800×600, 100 VSLs, indirect pass only)\n");
+    println!("| visibility | indirect ms/frame | shadow rays/frame |");
+    println!("|---|---|---|");
+    let world: SharedWorld = World::new(load(SCENES[0].1)).shared();
+    let guard = world.read().unwrap();
+    let g = illume_transport::GBuffer::render(&guard, 800, 600, illume_core::Vec2::splat(0.5));
+    for vis in [
+        VisibilityMode::Off,
+        VisibilityMode::Stochastic,
+        VisibilityMode::All,
+    ] {
+        let mut ps = PhotonStream::new(
+            &world,
+            PhotonStreamSettings {
+                visibility: vis,
+                start_paused: true,
+                ..Default::default()
+            },
+        )
+        .expect("photon_stream");
+        ps.warm_up(&guard);
+        let _ = ps.indirect(&guard, &g);
+        let t0 = Instant::now();
+        let n = 3;
+        for _ in 0..n {
+            let _ = ps.indirect(&guard, &g);
+        }
+        let ms = t0.elapsed().as_secs_f64() * 1e3 / n as f64;
+        println!(
+            "| {vis:?} | {ms:.1} | {:.3e} |",
+            ps.last_shade().shadow_rays as f64
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args()
         .skip(1)
@@ -294,6 +331,9 @@ fn main() {
     }
     if want("latency") {
         latency_table();
+    }
+    if want("visibility") {
+        visibility_table();
     }
     if want("fps") {
         fps_table();
