@@ -21,6 +21,7 @@ import argparse
 import json
 import multiprocessing as mp
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -85,6 +86,14 @@ def time_embree(out_dir, threads):
         hits = scene.run(origins, dirs, query="INTERSECT", output=1)
         single.append(time.perf_counter() - start)
     t_embree = np.where(hits["geomID"] >= 0, hits["tfar"], np.inf).astype(np.float32)
+    # CPU time of this (single-threaded) process: insensitive to other processes
+    # time-slicing the machine; the illume side measures its thread's CPU time alike.
+    cpu = []
+    for _ in range(REPEATS):
+        r0 = resource.getrusage(resource.RUSAGE_SELF)
+        scene.run(origins, dirs, query="INTERSECT", output=1)
+        r1 = resource.getrusage(resource.RUSAGE_SELF)
+        cpu.append((r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime))
     multi = None
     if threads > 1:
         ctx = mp.get_context("fork")
@@ -101,6 +110,7 @@ def time_embree(out_dir, threads):
         "build_ms": build_ms,
         "rays_per_s_1": n / float(np.median(single)),
         "rays_per_s_n": n / multi if multi else None,
+        "cpu_rays_per_s_1": n / float(np.median(cpu)),
         "t": t_embree,
     }
 
@@ -118,7 +128,8 @@ def run_illume(scene, kind, rays, threads, out_dir):
 
 def agreement(t_illume, t_embree):
     both_miss = np.isinf(t_illume) & np.isinf(t_embree)
-    close = np.abs(t_illume - t_embree) <= 1e-4 * np.maximum(np.abs(t_embree), 1e-2)
+    with np.errstate(invalid="ignore"):
+        close = np.abs(t_illume - t_embree) <= 1e-4 * np.maximum(np.abs(t_embree), 1e-2)
     return float(np.mean(both_miss | close))
 
 
@@ -128,6 +139,7 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--scenes", nargs="*", default=DEFAULT_SCENES)
     ap.add_argument("--kinds", nargs="*", default=["incoherent", "primary"])
+    ap.add_argument("--rounds", type=int, default=3, help="alternating illume/Embree rounds (medians are reported)")
     args = ap.parse_args()
     try:
         import embreex  # noqa: F401
@@ -139,32 +151,50 @@ def main():
             print(f"skipping {scene}: not found")
             continue
         for kind in args.kinds:
-            with tempfile.TemporaryDirectory(prefix="illume-embree-") as tmp:
-                out = Path(tmp)
-                ill = run_illume(scene, kind, args.rays, args.threads, out)
-                emb = time_embree(out, args.threads)
-                t_illume = np.fromfile(out / "illume_t.f32", dtype="<f4")
-                agree = agreement(t_illume, emb["t"])
+            # Alternate the two sides over several rounds so that load from other
+            # processes on the machine hits both alike; report medians.
+            rounds = []
+            for _ in range(args.rounds):
+                with tempfile.TemporaryDirectory(prefix="illume-embree-") as tmp:
+                    out = Path(tmp)
+                    ill = run_illume(scene, kind, args.rays, args.threads, out)
+                    emb = time_embree(out, args.threads)
+                    t_illume = np.fromfile(out / "illume_t.f32", dtype="<f4")
+                    agree = agreement(t_illume, emb["t"])
+                rounds.append((ill, emb, agree))
+            med = lambda xs: float(np.median(xs))
+            ill = rounds[0][0]
+            ill_rps = med([r[0]["rays_per_s"] for r in rounds])
+            emb_1 = med([r[1]["rays_per_s_1"] for r in rounds])
+            emb_n = med([r[1]["rays_per_s_n"] or r[1]["rays_per_s_1"] for r in rounds])
             name = Path(scene).name if not scene.startswith("builtin:") else scene
-            emb_n = emb["rays_per_s_n"] or emb["rays_per_s_1"]
             row = {
                 "scene": name, "kind": kind, "rays": ill["rays"], "triangles": ill["triangles"],
-                "illume_build_ms": ill["build_ms"], "embree_build_ms": round(emb["build_ms"], 2),
-                "illume_rays_per_s": ill["rays_per_s"],
-                "embree_rays_per_s_1thread": round(emb["rays_per_s_1"]),
+                "illume_build_ms": med([r[0]["build_ms"] for r in rounds]),
+                "embree_build_ms": round(med([r[1]["build_ms"] for r in rounds]), 2),
+                "illume_rays_per_s": round(ill_rps),
+                "embree_rays_per_s_1thread": round(emb_1),
                 f"embree_rays_per_s_{args.threads}proc": round(emb_n),
-                "ratio_illume_over_embree": round(ill["rays_per_s"] / emb_n, 3),
-                "same_t_fraction": round(agree, 5),
+                "ratio_illume_over_embree": round(med([r[0]["rays_per_s"] / (r[1]["rays_per_s_n"] or r[1]["rays_per_s_1"]) for r in rounds]), 3),
+                "illume_cpu_rays_per_s_1thread": round(med([r[0]["cpu_rays_per_s_1thread"] for r in rounds])),
+                "embree_cpu_rays_per_s_1thread": round(med([r[1]["cpu_rays_per_s_1"] for r in rounds])),
+                "cpu_ratio_illume_over_embree": round(med([r[0]["cpu_rays_per_s_1thread"] / r[1]["cpu_rays_per_s_1"] for r in rounds]), 3),
+                "same_t_fraction": round(min(r[2] for r in rounds), 5),
             }
             rows.append(row)
             print(json.dumps(row), flush=True)
     print()
-    print(f"{'scene':28} {'kind':11} {'tris':>7} {'illume Mrays/s':>15} {'Embree Mrays/s':>15} {'ratio':>6} {'same t':>7}")
+    print(f"{'':48} {'wall clock, ' + str(args.threads) + ' threads':^38}   {'CPU time, 1 thread':^38}")
+    print(f"{'scene':28} {'kind':11} {'tris':>7} {'illume Mrays/s':>15} {'Embree Mrays/s':>15} {'ratio':>6}"
+          f" {'illume Mrays/s':>15} {'Embree Mrays/s':>15} {'ratio':>6} {'same t':>7}")
     for r in rows:
         emb_n = r[f"embree_rays_per_s_{args.threads}proc"]
         print(f"{r['scene']:28} {r['kind']:11} {r['triangles']:>7} {r['illume_rays_per_s'] / 1e6:>15.2f} "
-              f"{emb_n / 1e6:>15.2f} {r['ratio_illume_over_embree']:>6.2f} {r['same_t_fraction']:>7.4f}")
-    print(f"(illume: {args.threads} rayon threads; Embree: {args.threads} processes, rtcIntersect1 per ray)")
+              f"{emb_n / 1e6:>15.2f} {r['ratio_illume_over_embree']:>6.2f} "
+              f"{r['illume_cpu_rays_per_s_1thread'] / 1e6:>15.2f} {r['embree_cpu_rays_per_s_1thread'] / 1e6:>15.2f} "
+              f"{r['cpu_ratio_illume_over_embree']:>6.2f} {r['same_t_fraction']:>7.4f}")
+    print(f"(illume: {args.threads} rayon threads; Embree: {args.threads} processes, rtcIntersect1 per ray; "
+          f"medians of {args.rounds} alternating rounds, each the median of {REPEATS} runs; ratio = median of per-round ratios)")
 
 
 if __name__ == "__main__":

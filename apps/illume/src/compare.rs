@@ -32,7 +32,11 @@ pub fn run(a: CompareArgs) -> Result<()> {
             }
             let cmp = compare_folders(&a.reference, &a.test, &metrics, &settings)?;
             if cmp.files.is_empty() {
-                bail!("{} and {}: no image file names in common", a.reference.display(), a.test.display());
+                bail!(
+                    "{} and {}: no image file names in common",
+                    a.reference.display(),
+                    a.test.display()
+                );
             }
             print!("{}", cmp.to_table().to_markdown());
             if let Some(means) = cmp.means() {
@@ -55,8 +59,15 @@ pub fn run(a: CompareArgs) -> Result<()> {
             if let Some(path) = &a.error_map {
                 let r = RgbImage::read(&a.reference)?;
                 let t = RgbImage::read(&a.test)?;
-                let is_hdr = a.reference.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-                let map = if is_hdr { hdr_flip(&r, &t, &settings.flip)?.map } else { ldr_flip(&r, &t, &settings.flip)? };
+                let is_hdr = a
+                    .reference
+                    .extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+                let map = if is_hdr {
+                    hdr_flip(&r, &t, &settings.flip)?.map
+                } else {
+                    ldr_flip(&r, &t, &settings.flip)?
+                };
                 map.write_png(path)?;
                 eprintln!("wrote {}", path.display());
             }
@@ -67,5 +78,11 @@ pub fn run(a: CompareArgs) -> Result<()> {
 }
 
 fn fmt_value(m: Metric, v: f64) -> String {
-    if v.is_infinite() { format!("{v}") } else if m == Metric::Psnr { format!("{v:.3} dB") } else { format!("{v:.6}") }
+    if v.is_infinite() {
+        format!("{v}")
+    } else if m == Metric::Psnr {
+        format!("{v:.3} dB")
+    } else {
+        format!("{v:.6}")
+    }
 }

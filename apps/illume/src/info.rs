@@ -18,17 +18,45 @@ pub fn run(a: InfoArgs) -> Result<()> {
     let scene = crate::render::load_scene(&a.scene, None, 0.0)?;
     let b = scene.bounds();
     println!("scene        {}", scene.source);
-    println!("triangles    {} in {} meshes ({} instanced)", scene.meshes.iter().map(|m| m.triangle_count()).sum::<usize>(), scene.meshes.len(), scene.instanced_triangle_count());
-    println!("instances    {} ({} dynamic)", scene.instances.len(), scene.instances.iter().filter(|i| i.dynamic).count());
-    println!("materials    {} ({} emissive), textures {}", scene.materials.len(), scene.materials.iter().filter(|m| m.is_emissive()).count(), scene.textures.len());
-    println!("bounds       ({:.3}, {:.3}, {:.3}) .. ({:.3}, {:.3}, {:.3}) m", b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z);
+    println!(
+        "triangles    {} in {} meshes ({} instanced)",
+        scene
+            .meshes
+            .iter()
+            .map(|m| m.triangle_count())
+            .sum::<usize>(),
+        scene.meshes.len(),
+        scene.instanced_triangle_count()
+    );
+    println!(
+        "instances    {} ({} dynamic)",
+        scene.instances.len(),
+        scene.instances.iter().filter(|i| i.dynamic).count()
+    );
+    println!(
+        "materials    {} ({} emissive), textures {}",
+        scene.materials.len(),
+        scene.materials.iter().filter(|m| m.is_emissive()).count(),
+        scene.textures.len()
+    );
+    println!(
+        "bounds       ({:.3}, {:.3}, {:.3}) .. ({:.3}, {:.3}, {:.3}) m",
+        b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+    );
     let r = b.bounding_radius();
     println!("lights       {}", scene.lights.len());
     for l in &scene.lights {
         let p = l.power(r);
         let kind = match l.kind {
-            LightKind::Point { intensity } => format!("point, I = ({:.3}, {:.3}, {:.3}) W/sr", intensity.x, intensity.y, intensity.z),
-            LightKind::Spot { intensity, inner_cone_rad, outer_cone_rad } => format!(
+            LightKind::Point { intensity } => format!(
+                "point, I = ({:.3}, {:.3}, {:.3}) W/sr",
+                intensity.x, intensity.y, intensity.z
+            ),
+            LightKind::Spot {
+                intensity,
+                inner_cone_rad,
+                outer_cone_rad,
+            } => format!(
                 "spot, I = ({:.3}, {:.3}, {:.3}) W/sr, cones {:.1}°/{:.1}°",
                 intensity.x,
                 intensity.y,
@@ -36,23 +64,51 @@ pub fn run(a: InfoArgs) -> Result<()> {
                 inner_cone_rad.to_degrees(),
                 outer_cone_rad.to_degrees()
             ),
-            LightKind::Directional { irradiance } => format!("directional, E = ({:.3}, {:.3}, {:.3}) W/m²", irradiance.x, irradiance.y, irradiance.z),
+            LightKind::Directional { irradiance } => format!(
+                "directional, E = ({:.3}, {:.3}, {:.3}) W/m²",
+                irradiance.x, irradiance.y, irradiance.z
+            ),
         };
         let pos = l.position();
-        println!("  {:<12} {kind}; at ({:.2}, {:.2}, {:.2}); power ({:.3}, {:.3}, {:.3}) W", l.name, pos.x, pos.y, pos.z, p.x, p.y, p.z);
+        println!(
+            "  {:<12} {kind}; at ({:.2}, {:.2}, {:.2}); power ({:.3}, {:.3}, {:.3}) W",
+            l.name, pos.x, pos.y, pos.z, p.x, p.y, p.z
+        );
     }
     let e = scene.emissive_power();
     println!("emissive     power ({:.3}, {:.3}, {:.3}) W", e.x, e.y, e.z);
     let t = scene.total_power();
-    println!("total power  ({:.3}, {:.3}, {:.3}) W (mean {:.3} W)", t.x, t.y, t.z, channel_mean(t));
+    println!(
+        "total power  ({:.3}, {:.3}, {:.3}) W (mean {:.3} W)",
+        t.x,
+        t.y,
+        t.z,
+        channel_mean(t)
+    );
     println!("animations   {}", scene.animations.len());
     for (i, an) in scene.animations.iter().enumerate() {
-        let active = if scene.active_animation == Some(i) { " (active)" } else { "" };
-        println!("  {:<12} {:.3} s, {} channels{active}", an.name, an.duration(), an.channels.len());
+        let active = if scene.active_animation == Some(i) {
+            " (active)"
+        } else {
+            ""
+        };
+        println!(
+            "  {:<12} {:.3} s, {} channels{active}",
+            an.name,
+            an.duration(),
+            an.channels.len()
+        );
     }
     let c = &scene.camera;
     let cp = c.world_from_camera.translation;
-    println!("camera       '{}' at ({:.2}, {:.2}, {:.2}), vertical fov {:.1}°", c.name, cp.x, cp.y, cp.z, c.yfov_rad.to_degrees());
+    println!(
+        "camera       '{}' at ({:.2}, {:.2}, {:.2}), vertical fov {:.1}°",
+        c.name,
+        cp.x,
+        cp.y,
+        cp.z,
+        c.yfov_rad.to_degrees()
+    );
     if !scene.warnings.is_empty() {
         println!("warnings     {}", scene.warnings.len());
     }

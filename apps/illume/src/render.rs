@@ -63,6 +63,12 @@ pub fn load_scene(path: &Path, animation: Option<&str>, time: f64) -> Result<ill
         scene.select_animation(name).map_err(anyhow::Error::msg)?;
     }
     scene.set_time(time);
+    if scene.lights.is_empty() && scene.materials.iter().all(|m| !m.is_emissive()) {
+        eprintln!(
+            "warning: {}: the scene has no lights and no emissive materials; it will render black",
+            path.display()
+        );
+    }
     let dt = t0.elapsed().as_secs_f64();
     if dt > 0.5 {
         eprintln!("loaded {} in {dt:.2} s", path.display());
@@ -72,14 +78,18 @@ pub fn load_scene(path: &Path, animation: Option<&str>, time: f64) -> Result<ill
 
 /// `path` with `_suffix` added to the file stem.
 pub fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
-    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("render");
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("render");
     let ext = path.extension().and_then(|s| s.to_str()).unwrap_or("png");
     path.with_file_name(format!("{stem}_{suffix}.{ext}"))
 }
 
 fn write(img: &RgbImage, path: &Path, tone: &ToneMap) -> Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create folder", dir.display()))?;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create folder", dir.display()))?;
     }
     img.write(path, tone)?;
     eprintln!("wrote {}", path.display());
@@ -111,7 +121,10 @@ pub fn run(a: RenderArgs) -> Result<()> {
     }
     config.reference.width = config.render.width;
     config.reference.height = config.render.height;
-    let tone = ToneMap { exposure_ev: a.exposure, ..Default::default() };
+    let tone = ToneMap {
+        exposure_ev: a.exposure,
+        ..Default::default()
+    };
     let scene = load_scene(&a.scene, a.animation.as_deref(), a.time)?;
     let t0 = Instant::now();
     let (full, direct, indirect) = if config.technique == TechniqueKind::Reference {

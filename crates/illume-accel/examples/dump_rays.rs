@@ -15,8 +15,7 @@
 //! The last line printed is `ILLUME {json}` with the timings.
 
 use illume_accel::Tracer;
-use illume_core::sampling::Pcg32;
-use illume_core::{Ray, Vec3};
+use illume_accel::ray_sets::{incoherent_rays, primary_rays};
 use illume_scene::{MASK_DEFAULT, Scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -70,11 +69,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &out.join("illume_t.f32"),
         hits.iter().map(|h| h.map_or(f32::INFINITY, |h| h.t)),
     )?;
+    // CPU time of one thread tracing alone: insensitive to other processes time-slicing
+    // the machine (Linux only; -1 elsewhere). Repeats until half a second of CPU time.
+    let cpu_rays_per_s = match thread_cpu_seconds() {
+        Some(start) => {
+            let mut traced = 0usize;
+            let mut spent = 0.0;
+            while spent < 0.5 {
+                for r in &rays {
+                    std::hint::black_box(tracer.intersect(r, MASK_DEFAULT));
+                }
+                traced += rays.len();
+                spent = thread_cpu_seconds().unwrap_or(f64::INFINITY) - start;
+            }
+            traced as f64 / spent
+        }
+        None => -1.0,
+    };
     let stats = tracer.stats();
     let hit_count = hits.iter().flatten().count();
     println!(
         "ILLUME {{\"scene\": \"{scene_arg}\", \"kind\": \"{kind}\", \"rays\": {}, \"threads\": {threads}, \"triangles\": {}, \"build_ms\": {build_ms:.2}, \
-         \"median_s\": {median:.6}, \"rays_per_s\": {:.0}, \"hits\": {hit_count}, \"nodes\": {}, \"memory_bytes\": {}}}",
+         \"median_s\": {median:.6}, \"rays_per_s\": {:.0}, \"hits\": {hit_count}, \"nodes\": {}, \"memory_bytes\": {}, \"cpu_rays_per_s_1thread\": {cpu_rays_per_s:.0}}}",
         rays.len(),
         scene.instanced_triangle_count(),
         rays.len() as f64 / median,
@@ -99,41 +115,14 @@ fn world_triangles(scene: &Scene) -> Vec<[f32; 9]> {
     out
 }
 
-/// Origins uniform in the scene box, directions uniform on the sphere.
-pub fn incoherent_rays(scene: &Scene, n: usize, seed: u64) -> Vec<Ray> {
-    let mut rng = Pcg32::new(seed, 1);
-    let b = scene.bounds();
-    let mut u = || rng.next_f64() as f32;
-    (0..n)
-        .map(|_| {
-            let o = b.min + b.extent() * Vec3::new(u(), u(), u());
-            let z = 1.0 - 2.0 * u();
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let phi = 2.0 * std::f32::consts::PI * u();
-            Ray::new(o, Vec3::new(r * phi.cos(), r * phi.sin(), z))
-        })
-        .collect()
-}
-
-/// One ray through each pixel centre of a square image from the scene camera.
-pub fn primary_rays(scene: &Scene, n: usize) -> Vec<Ray> {
-    let side = (n as f64).sqrt().round().max(1.0) as usize;
-    let cam = &scene.camera;
-    let tan = (cam.yfov_rad * 0.5).tan();
-    let origin = Vec3::from(cam.world_from_camera.translation);
-    let mut rays = Vec::with_capacity(side * side);
-    for y in 0..side {
-        for x in 0..side {
-            let px = (2.0 * (x as f32 + 0.5) / side as f32 - 1.0) * tan;
-            let py = (1.0 - 2.0 * (y as f32 + 0.5) / side as f32) * tan;
-            let dir = cam
-                .world_from_camera
-                .transform_vector3(Vec3::new(px, py, -1.0))
-                .normalize();
-            rays.push(Ray::new(origin, dir));
-        }
-    }
-    rays
+/// User + system CPU time of the calling thread [s], from `/proc/thread-self/stat`
+/// (10 ms resolution).
+fn thread_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are the 12th and 13th.
+    let fields: Vec<&str> = stat.rsplit(')').next()?.split_whitespace().collect();
+    let ticks = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
 }
 
 fn write_f32(path: &Path, values: impl Iterator<Item = f32>) -> std::io::Result<()> {

@@ -2,18 +2,11 @@
 //! triangles copied in leaf order (corner plus two edges, four triangles to a packet) so a
 //! leaf is one contiguous run of packets.
 
+use crate::BvhSettings;
 use crate::build::{BuildParams, build_binary};
 use crate::wide::{Bvh4, MAX_LEAF, PreparedRay, StackEntry, traverse};
 use illume_core::{Aabb, Vec2, Vec3, Vec4};
 use illume_scene::Mesh;
-
-/// Mesh-level build parameters: a box test costs about as much as a triangle test, and
-/// leaves hold up to 8 triangles (chosen by measurement, see lib.rs).
-const PARAMS: BuildParams = BuildParams {
-    traversal_cost: 1.0,
-    max_leaf: 8,
-};
-const _: () = assert!(PARAMS.max_leaf <= MAX_LEAF);
 
 /// Up to four triangles ready for Möller–Trumbore, tested together in 4-lane arithmetic:
 /// corners `v0`, edges `e1 = v1 − v0` and `e2 = v2 − v0` (structure of arrays), and each
@@ -88,15 +81,20 @@ impl TrianglePacket {
         let [ox, oy, oz] = ray.origin.to_array().map(Vec4::splat);
         let (tx, ty, tz) = (ox - c(0), oy - c(1), oz - c(2));
         let b1 = (tx * px + ty * py + tz * pz) * inv_det;
+        let first = det.abs().cmpge(Vec4::splat(f32::MIN_POSITIVE))
+            & b1.cmpge(Vec4::ZERO)
+            & b1.cmple(Vec4::ONE);
+        if !first.any() {
+            // Most packets a ray meets miss on the first barycentric: skip the rest.
+            return (Vec4::ZERO, Vec4::ZERO, Vec4::ZERO, 0);
+        }
         // qvec = tvec × e1
         let qx = ty * e1z - tz * e1y;
         let qy = tz * e1x - tx * e1z;
         let qz = tx * e1y - ty * e1x;
         let b2 = (dx * qx + dy * qy + dz * qz) * inv_det;
         let t = (e2x * qx + e2y * qy + e2z * qz) * inv_det;
-        let valid = det.abs().cmpge(Vec4::splat(f32::MIN_POSITIVE))
-            & b1.cmpge(Vec4::ZERO)
-            & b1.cmple(Vec4::ONE)
+        let valid = first
             & b2.cmpge(Vec4::ZERO)
             & (b1 + b2).cmple(Vec4::ONE)
             & t.cmpgt(Vec4::splat(ray.t_min))
@@ -118,11 +116,16 @@ pub(crate) struct Blas {
 
 impl Blas {
     /// Builds the BVH of `mesh` (binned SAH, then collapsed to four-wide nodes).
-    pub fn build(mesh: &Mesh) -> Blas {
+    pub fn build(mesh: &Mesh, settings: &BvhSettings) -> Blas {
         let boxes: Vec<Aabb> = (0..mesh.triangle_count())
             .map(|t| Aabb::from_points(mesh.triangle(t)))
             .collect();
-        let mut bin = build_binary(&boxes, PARAMS);
+        let params = BuildParams {
+            traversal_cost: settings.node_cost,
+            max_leaf: settings.max_leaf_triangles.clamp(1, 4 * MAX_LEAF),
+            block: if settings.packet_aware_sah { 4 } else { 1 },
+        };
+        let mut bin = build_binary(&boxes, params);
         // Repack every leaf's triangles into whole packets; leaves then index packets.
         let mut packets = Vec::with_capacity(mesh.triangle_count() / 3 + 1);
         for node in bin.nodes.iter_mut().filter(|n| n.count > 0) {

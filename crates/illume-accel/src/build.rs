@@ -22,6 +22,17 @@ pub(crate) struct BuildParams {
     pub traversal_cost: f32,
     /// Largest number of primitives in a leaf (larger sets are always split).
     pub max_leaf: usize,
+    /// Primitives tested together (4 for triangle packets): a leaf of `n` costs
+    /// `⌈n / block⌉` tests.
+    pub block: u32,
+}
+
+impl BuildParams {
+    /// Test cost of `n` primitives.
+    #[inline]
+    fn leaf_cost(&self, n: u32) -> f32 {
+        n.div_ceil(self.block) as f32
+    }
 }
 
 /// A node of the binary build tree: a leaf holds `count > 0` primitives starting at
@@ -119,7 +130,7 @@ pub(crate) fn build_binary(boxes: &[Aabb], params: BuildParams) -> BinaryBvh {
         };
         let mid = match split {
             Some((axis, bin, cost)) => {
-                if cost >= count as f32 && count <= params.max_leaf {
+                if cost >= params.leaf_cost(count as u32) && count <= params.max_leaf {
                     make_leaf(&mut nodes);
                     continue;
                 }
@@ -199,7 +210,7 @@ fn best_binned_split(
         for i in (1..BINS).rev() {
             acc.bounds = acc.bounds.union(bins[i].bounds);
             acc.count += bins[i].count;
-            right_cost[i - 1] = acc.bounds.surface_area() * acc.count as f32;
+            right_cost[i - 1] = acc.bounds.surface_area() * params.leaf_cost(acc.count);
         }
         let mut acc = Bin::default();
         for i in 0..BINS - 1 {
@@ -209,7 +220,7 @@ fn best_binned_split(
                 continue;
             }
             let cost = params.traversal_cost
-                + (acc.bounds.surface_area() * acc.count as f32 + right_cost[i])
+                + (acc.bounds.surface_area() * params.leaf_cost(acc.count) + right_cost[i])
                     / parent_area.max(f32::MIN_POSITIVE);
             if best.is_none_or(|(_, _, c)| cost < c) {
                 best = Some((axis, i, cost));

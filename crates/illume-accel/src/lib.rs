@@ -1,3 +1,42 @@
+// MEASUREMENTS — own BVH or `obvhs`, and illume against Embree 4
+// (AMD EPYC, 2 cores shared with other builds: load average 5–8 during every run, so
+// wall-clock figures are noisy; CPU-time figures are not time-sliced. Medians.)
+//
+// Own BVH vs obvhs 0.4 (DGriffin91; its compressed 8-wide CWBVH, `medium_build` preset:
+// PLOC + reinsertion), Dabrovic Sponza (66,450 triangles), 2 threads, same world-space
+// triangles and rays, every hit distance equal:
+//   `cargo bench -p illume-accel --bench trace -- obvhs_vs_own`
+//                         obvhs CWBVH      own 4-wide BVH
+//   build                 103 ms                81 ms       (over 3 runs: 62–103 vs 81–94)
+//   incoherent rays       0.93 Mrays/s          1.33 Mrays/s  (3 runs: own 1.2–1.4× faster)
+//   primary rays          5.28 Mrays/s          9.91 Mrays/s  (3 runs: own 1.4–2.0× faster)
+// obvhs builds with glam 0.34 (it needs glam >=0.33, <0.35; the workspace has 0.30), so
+// it can only be used beside our glam with conversions at the boundary. Decision: keep
+// our own BVH — it traces faster on both ray kinds, its build is as fast, and it gives
+// us control of the layout (instance masks in the nodes, triangle packets, robust slab
+// test) without a second glam. obvhs stays a dev-dependency for this comparison only.
+//
+// Against Embree 4.4 (embreex, rtcIntersect1 per ray; `python3 benches/embree_compare.py
+// --rays 1000000 --rounds 3`), closest hit, same triangles and rays, same hit distances:
+//                              wall clock, 2 threads        CPU time of 1 thread
+//   Mrays/s                     illume  Embree  ratio        illume  Embree  ratio
+//   cornell-spot   incoherent    9.74    8.17   1.08         10.53    9.62   1.08
+//   cornell-spot   primary       6.36    6.37   1.12         13.73   12.86   1.08
+//   CornellBox-Sphere incoh.     4.89    4.89   0.97         10.53    9.81   1.07
+//   CornellBox-Sphere primary    9.20    8.16   1.10         19.23   15.90   1.22
+//   Sponza         incoherent    1.39    1.57   0.83          2.82    3.43   0.80
+//   Sponza         primary       9.00    8.29   1.17         16.98   16.58   1.01
+// (Embree's two-thread figure is two processes each tracing half the rays; illume's
+// cornell-spot goes through its three instances, Embree gets the flattened soup.)
+// Sponza's incoherent rays are the weak spot: traversal there is bound by memory
+// latency (3.5 MB of nodes and packets), and Embree picks AVX2/AVX-512 kernels (wider
+// nodes) on this CPU where we stay on 4-wide SSE2 (no target features without `unsafe`
+// or build flags).
+//
+// Settings (BvhSettings::default) chosen by thread CPU time on Sponza: leaves of up to 8
+// triangles with a packet-aware SAH (node cost 2) were within noise of 12 and 16 and
+// 6 % faster than node cost 1 on incoherent rays; 64 SAH bins gained nothing over 32.
+
 //! Ray queries against a [`Scene`]: a two-level acceleration structure with one BVH per
 //! mesh (built once) and an instance level over them (rebuilt from the instances' world
 //! boxes when transforms change, so a moving object never rebuilds its own BVH).
@@ -18,35 +57,39 @@
 //!
 //! # Design
 //!
-//! * Mesh level ([`blas`]): binned SAH (32 bins, all three axes, leaves of up to 8
-//!   triangles) builds a binary tree, which is collapsed into four-wide nodes of 128
-//!   bytes (child boxes as structure of arrays, so one ray meets four boxes in 4-lane
-//!   arithmetic). Triangles are copied in leaf order as corner + two edges.
+//! * Mesh level: binned SAH (32 bins, all three axes) over triangle boxes, with the cost
+//!   of a leaf counted in packets of four triangles, builds a binary tree that is
+//!   collapsed into four-wide nodes of 128 bytes (child boxes as structure of arrays, so
+//!   one ray meets four boxes in 4-lane arithmetic). Triangles are copied in leaf order,
+//!   four to a 160-byte packet (corner and two edges per lane), and tested four at once.
 //! * Instance level: the same builder over the instances' world boxes (the mesh BVH's
-//!   box under `world_from_object`), rebuilt by [`Tracer::update`] in
-//!   O(n log n) for n instances; each node keeps the union of the masks below each
-//!   child, so masked-out instances are culled at the instance level. Rays enter a mesh
-//!   BVH through the precomputed `object_from_world`; the object-space direction is not
-//!   renormalised, so `t` stays in the units of the caller's ray.
+//!   box under `world_from_object`), rebuilt by [`Tracer::update`] (about a millisecond
+//!   for 1000 instances); each node keeps the union of the masks below each child, so
+//!   masked-out instances are culled at the instance level. Rays enter a mesh BVH through
+//!   the precomputed `object_from_world` (for translation-only instances, by moving the
+//!   origin alone); the object-space direction is not renormalised, so `t` stays in the
+//!   units of the caller's ray.
 //! * Traversal is ordered (nearest child first, far children culled on pop against the
 //!   closest hit), with a conservative slab test (exit distance widened by 2γ₃) and a
-//!   reciprocal direction that stays finite for zero direction components.
+//!   reciprocal direction that stays finite for zero direction components. The stack is
+//!   per thread and reused.
+//! * [`brute_force`] intersects every triangle; it is the oracle the BVH is tested
+//!   against, and [`ray_sets`] makes the benchmark rays.
 //!
-//! # Own BVH or `obvhs`?
-//!
-//! See `MEASUREMENTS` below; [`brute_force`] intersects every triangle and is the oracle
-//! the BVH is tested against.
+//! The measurements behind these choices (and against `obvhs` and Embree) are in a
+//! comment at the top of this file.
 
 mod blas;
 pub mod brute_force;
 mod build;
+pub mod ray_sets;
 pub mod triangle;
 mod wide;
 
 use crate::blas::Blas;
 use crate::build::{BuildParams, build_binary};
 use crate::wide::{Bvh4, Item, PreparedRay, StackEntry, traverse, with_stack};
-use illume_core::{Aabb, Affine3A, Ray, Vec2, Vec3A};
+use illume_core::{Aabb, Affine3A, Mat3A, Ray, Vec2, Vec3A};
 use illume_scene::{InstanceId, Scene};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -93,6 +136,8 @@ pub struct TracerStats {
 struct InstanceRecord {
     /// Maps world points to the mesh's object space.
     object_from_world: Affine3A,
+    /// True when `object_from_world` only translates (rays keep their direction).
+    translation_only: bool,
     /// Maps object points to world space (kept for [`Tracer::validate`]).
     world_from_object: Affine3A,
     /// World box of the mesh BVH's box, padded for rounding.
@@ -110,26 +155,61 @@ struct InstanceRecord {
 const INSTANCE_PARAMS: BuildParams = BuildParams {
     traversal_cost: 0.2,
     max_leaf: 1,
+    block: 1,
 };
+
+/// How mesh BVHs are built. The defaults are the fastest measured (see the top of this
+/// file); the knobs exist for measurement.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BvhSettings {
+    /// Largest number of triangles in a leaf (1..=64). Higher: shallower trees and less
+    /// memory, at the cost of more triangle tests per leaf.
+    pub max_leaf_triangles: usize,
+    /// Cost of visiting a node relative to one triangle-packet test, in the surface area
+    /// heuristic. Higher: fewer, fuller leaves.
+    pub node_cost: f32,
+    /// Count a leaf's cost in packets of four triangles (as they are tested) rather than
+    /// in triangles. True favours leaves of 4 and 8 triangles.
+    pub packet_aware_sah: bool,
+}
+
+impl Default for BvhSettings {
+    fn default() -> Self {
+        Self {
+            max_leaf_triangles: 8,
+            node_cost: 2.0,
+            packet_aware_sah: true,
+        }
+    }
+}
 
 /// Rays per rayon task in the batch queries.
 const BATCH_CHUNK: usize = 256;
 
 /// Answers ray queries against a scene.
 pub struct Tracer {
+    /// How mesh BVHs are built.
+    settings: BvhSettings,
     /// One BVH per scene mesh, indexed like `Scene::meshes`.
     blases: Vec<Blas>,
     /// Instance level; leaves index `instances`.
     tlas: Bvh4,
     /// Instances in instance-level leaf order.
     instances: Vec<InstanceRecord>,
+    /// Sizes and timings.
     stats: TracerStats,
 }
 
 impl Tracer {
     /// Builds the acceleration structure for `scene` at its current time.
     pub fn new(scene: &Scene) -> Self {
+        Self::with_settings(scene, BvhSettings::default())
+    }
+
+    /// [`Tracer::new`] with chosen mesh-BVH settings.
+    pub fn with_settings(scene: &Scene, settings: BvhSettings) -> Self {
         let mut tracer = Self {
+            settings,
             blases: Vec::new(),
             tlas: Bvh4 {
                 root: Item::NONE,
@@ -151,7 +231,7 @@ impl Tracer {
             let start = Instant::now();
             let new: Vec<Blas> = scene.meshes[self.blases.len()..]
                 .par_iter()
-                .map(Blas::build)
+                .map(|m| Blas::build(m, &self.settings))
                 .collect();
             self.stats.mesh_builds += new.len() as u64;
             self.blases.extend(new);
@@ -170,6 +250,7 @@ impl Tracer {
                     && object_from_world.matrix3.is_finite()
                     && object_from_world.translation.is_finite();
                 usable.then(|| InstanceRecord {
+                    translation_only: inst.world_from_object.matrix3 == Mat3A::IDENTITY,
                     object_from_world,
                     world_from_object: inst.world_from_object,
                     world_bounds: pad(blas.bounds().transformed(&inst.world_from_object)),
@@ -349,6 +430,10 @@ impl Tracer {
 #[inline(always)]
 fn object_ray(inst: &InstanceRecord, world_ray: &PreparedRay) -> PreparedRay {
     let m = &inst.object_from_world;
+    if inst.translation_only {
+        // Same direction: only the origin moves (no new reciprocals).
+        return world_ray.translated(m.translation);
+    }
     PreparedRay::new(
         m.transform_point3a(world_ray.origin),
         m.transform_vector3a(world_ray.dir),

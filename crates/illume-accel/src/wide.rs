@@ -136,7 +136,9 @@ impl Bvh4 {
             Item::leaf(root.first, root.count)
         } else {
             let mut mask = 0;
-            Item(collapse(bin, 0, &mut nodes, leaf_mask, &mut mask))
+            nodes.push(Node4::EMPTY);
+            collapse(bin, 0, &mut nodes, 0, leaf_mask, &mut mask);
+            Item(0)
         };
         Bvh4 {
             root: root_item,
@@ -151,15 +153,16 @@ impl Bvh4 {
     }
 }
 
-/// Writes the wide node for binary interior node `b` (and, recursively, its subtree);
-/// returns its index and ORs the subtree's mask into `mask`.
+/// Writes the wide node for binary interior node `b` into the `reserved` slot of `out`
+/// (and, recursively, its subtree) and ORs the subtree's mask into `mask`.
 fn collapse(
     bin: &BinaryBvh,
     b: usize,
     out: &mut Vec<Node4>,
+    reserved: usize,
     leaf_mask: &dyn Fn(u32, u32) -> u32,
     mask: &mut u32,
-) -> u32 {
+) {
     let node: &BinaryNode = &bin.nodes[b];
     debug_assert_eq!(node.count, 0);
     let mut kids: Vec<usize> = vec![node.first as usize, node.first as usize + 1];
@@ -181,8 +184,14 @@ fn collapse(
         kids.push(bin.nodes[k].first as usize);
         kids.push(bin.nodes[k].first as usize + 1);
     }
-    let index = out.len();
-    out.push(Node4::EMPTY);
+    // Siblings' nodes sit side by side (allocated before any of their subtrees).
+    let index = reserved;
+    let mut first_interior = out.len();
+    out.extend(
+        kids.iter()
+            .filter(|&&k| bin.nodes[k].count == 0)
+            .map(|_| Node4::EMPTY),
+    );
     let mut wide = Node4::EMPTY;
     for (i, &k) in kids.iter().enumerate() {
         let kid = &bin.nodes[k];
@@ -192,8 +201,11 @@ fn collapse(
                 leaf_mask(kid.first, kid.count),
             )
         } else {
+            let slot = first_interior;
+            first_interior += 1;
             let mut m = 0;
-            (collapse(bin, k, out, leaf_mask, &mut m), m)
+            collapse(bin, k, out, slot, leaf_mask, &mut m);
+            (slot as u32, m)
         };
         wide.children[i] = item;
         wide.masks[i] = m;
@@ -204,7 +216,6 @@ fn collapse(
         }
     }
     out[index] = wide;
-    index as u32
 }
 
 /// A ray prepared for box tests: origin, direction, robust reciprocal direction, and for
@@ -256,6 +267,22 @@ impl PreparedRay {
             near,
             far,
             t_min,
+        }
+    }
+
+    /// The same ray from `origin + offset`.
+    #[inline]
+    pub fn translated(&self, offset: Vec3A) -> Self {
+        let origin = self.origin + offset;
+        let origin_inv = [
+            origin.x * self.inv_dir[0],
+            origin.y * self.inv_dir[1],
+            origin.z * self.inv_dir[2],
+        ];
+        Self {
+            origin,
+            origin_inv,
+            ..*self
         }
     }
 
@@ -334,31 +361,39 @@ pub(crate) fn traverse<const MASKED: bool>(
         } else {
             let node = &bvh.nodes[current.node()];
             let (dist, mut bits) = ray.hit_boxes::<MASKED>(node, t_max, mask);
-            // Gather the hit children, then sort them nearest first (at most four).
-            let dist = dist.to_array();
-            let mut hits = [(0u32, 0f32); WIDTH];
-            let mut n = 0;
-            while bits != 0 {
-                let i = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                hits[n] = (node.children[i], dist[i]);
-                n += 1;
-            }
-            if n > 0 {
-                for i in 1..n {
-                    let mut j = i;
-                    while j > 0 && hits[j - 1].1 < hits[j].1 {
-                        hits.swap(j - 1, j);
-                        j -= 1;
-                    }
-                }
-                // Farthest first onto the stack; the nearest is visited now.
-                for &h in &hits[..n - 1] {
-                    stack[sp] = h;
-                    sp += 1;
-                }
-                current = Item(hits[n - 1].0);
+            if bits == 0 {
+                // Nothing hit: fall through to pop.
+            } else if bits & (bits - 1) == 0 {
+                // One child hit (the common case deep in the tree): visit it directly.
+                current = Item(node.children[bits.trailing_zeros() as usize]);
                 continue;
+            } else {
+                // Gather the hit children, then sort them nearest first (at most four).
+                let dist = dist.to_array();
+                let mut hits = [(0u32, 0f32); WIDTH];
+                let mut n = 0;
+                while bits != 0 {
+                    let i = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    hits[n] = (node.children[i], dist[i]);
+                    n += 1;
+                }
+                if n > 0 {
+                    for i in 1..n {
+                        let mut j = i;
+                        while j > 0 && hits[j - 1].1 < hits[j].1 {
+                            hits.swap(j - 1, j);
+                            j -= 1;
+                        }
+                    }
+                    // Farthest first onto the stack; the nearest is visited now.
+                    for &h in &hits[..n - 1] {
+                        stack[sp] = h;
+                        sp += 1;
+                    }
+                    current = Item(hits[n - 1].0);
+                    continue;
+                }
             }
         }
         // Pop the next child still nearer than the closest hit.

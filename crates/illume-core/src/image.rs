@@ -48,14 +48,22 @@ pub type RgbImage = Image<Rgb>;
 impl<T: Clone> Image<T> {
     /// An image filled with `value`.
     pub fn filled(width: u32, height: u32, value: T) -> Self {
-        Self { width, height, data: vec![value; width as usize * height as usize] }
+        Self {
+            width,
+            height,
+            data: vec![value; width as usize * height as usize],
+        }
     }
 }
 
 impl<T> Image<T> {
     /// An image from row-major pixels; `None` when the length does not match.
     pub fn from_vec(width: u32, height: u32, data: Vec<T>) -> Option<Self> {
-        (data.len() == width as usize * height as usize).then_some(Self { width, height, data })
+        (data.len() == width as usize * height as usize).then_some(Self {
+            width,
+            height,
+            data,
+        })
     }
 
     /// Width in pixels.
@@ -97,7 +105,11 @@ impl<T> Image<T> {
 
     /// Same pixels mapped through `f`.
     pub fn map<U>(&self, f: impl Fn(&T) -> U) -> Image<U> {
-        Image { width: self.width, height: self.height, data: self.data.iter().map(f).collect() }
+        Image {
+            width: self.width,
+            height: self.height,
+            data: self.data.iter().map(f).collect(),
+        }
     }
 }
 
@@ -121,9 +133,22 @@ impl RgbImage {
 
     /// Pixel-wise sum; panics if sizes differ (a programming error, not input).
     pub fn add(&self, other: &RgbImage) -> RgbImage {
-        assert_eq!((self.width, self.height), (other.width, other.height), "image sizes differ");
-        let data = self.data.iter().zip(&other.data).map(|(a, b)| *a + *b).collect();
-        Image { width: self.width, height: self.height, data }
+        assert_eq!(
+            (self.width, self.height),
+            (other.width, other.height),
+            "image sizes differ"
+        );
+        let data = self
+            .data
+            .iter()
+            .zip(&other.data)
+            .map(|(a, b)| *a + *b)
+            .collect();
+        Image {
+            width: self.width,
+            height: self.height,
+            data,
+        }
     }
 
     /// Reads an `.exr` (linear) or `.png` (sRGB-decoded to linear) image.
@@ -131,7 +156,9 @@ impl RgbImage {
         match extension(path).as_deref() {
             Some("exr") => read_exr(path),
             Some("png") | Some("jpg") | Some("jpeg") => read_ldr(path),
-            _ => Err(ImageError::UnsupportedFormat { path: path.to_owned() }),
+            _ => Err(ImageError::UnsupportedFormat {
+                path: path.to_owned(),
+            }),
         }
     }
 
@@ -140,13 +167,17 @@ impl RgbImage {
         match extension(path).as_deref() {
             Some("exr") => write_exr(self, path),
             Some("png") => write_png(self, path, tone),
-            _ => Err(ImageError::UnsupportedFormat { path: path.to_owned() }),
+            _ => Err(ImageError::UnsupportedFormat {
+                path: path.to_owned(),
+            }),
         }
     }
 }
 
 fn extension(path: &Path) -> Option<String> {
-    path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase())
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
 }
 
 /// How linear radiance becomes display values for 8-bit output.
@@ -162,7 +193,10 @@ pub struct ToneMap {
 
 impl Default for ToneMap {
     fn default() -> Self {
-        Self { exposure_ev: 0.0, curve: ToneCurve::Aces }
+        Self {
+            exposure_ev: 0.0,
+            curve: ToneCurve::Aces,
+        }
     }
 }
 
@@ -198,23 +232,52 @@ impl ToneMap {
 /// sRGB transfer (encode) of a display-linear value in [0, 1].
 #[inline]
 pub fn srgb_encode(x: f32) -> f32 {
-    if x <= 0.0031308 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 }
+    if x <= 0.0031308 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 /// sRGB transfer (decode) to display-linear.
 #[inline]
 pub fn srgb_decode(x: f32) -> f32 {
-    if x <= 0.04045 { x / 12.92 } else { ((x + 0.055) / 1.055).powf(2.4) }
+    if x <= 0.04045 {
+        x / 12.92
+    } else {
+        ((x + 0.055) / 1.055).powf(2.4)
+    }
 }
 
-/// Writes a linear image as 32-bit float RGB OpenEXR.
+/// Writes a linear image as 32-bit float RGB OpenEXR: ZIP compression (16 scan lines a
+/// block), increasing line order. The `exr` crate's default encoding (RLE, unspecified
+/// line order) crashes tinyexr-based readers (e.g. NVIDIA's FLIP tool); this encoding is
+/// read by every common OpenEXR reader.
 pub fn write_exr(img: &RgbImage, path: &Path) -> Result<(), ImageError> {
+    use exr::prelude::*;
     let w = img.width as usize;
-    exr::prelude::write_rgb_file(path, w, img.height as usize, |x, y| {
-        let p = img.data[y * w + x];
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+        let p = img.data[pos.y() * w + pos.x()];
         (p.x, p.y, p.z)
-    })
-    .map_err(|e| ImageError::Write { path: path.to_owned(), message: e.to_string() })
+    });
+    let layer = Layer::new(
+        (w, img.height as usize),
+        LayerAttributes::default(),
+        encoding,
+        channels,
+    );
+    Image::from_layer(layer)
+        .write()
+        .to_file(path)
+        .map_err(|e| ImageError::Write {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })
 }
 
 /// Reads the first RGB(A) layer of an OpenEXR file as linear RGB.
@@ -226,15 +289,22 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
             *img.get_mut(pos.x() as u32, pos.y() as u32) = Rgb::new(r, g, b);
         },
     )
-    .map_err(|e| ImageError::Read { path: path.to_owned(), message: e.to_string() })?;
+    .map_err(|e| ImageError::Read {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
     Ok(img.layer_data.channel_data.pixels)
 }
 
 /// Writes tone-mapped, sRGB-encoded 8-bit PNG.
 pub fn write_png(img: &RgbImage, path: &Path, tone: &ToneMap) -> Result<(), ImageError> {
     let bytes = to_srgb8(img, tone);
-    image::save_buffer(path, &bytes, img.width, img.height, image::ColorType::Rgb8)
-        .map_err(|e| ImageError::Write { path: path.to_owned(), message: e.to_string() })
+    image::save_buffer(path, &bytes, img.width, img.height, image::ColorType::Rgb8).map_err(|e| {
+        ImageError::Write {
+            path: path.to_owned(),
+            message: e.to_string(),
+        }
+    })
 }
 
 /// Tone-mapped sRGB 8-bit bytes (RGB, row-major).
@@ -250,14 +320,27 @@ pub fn to_srgb8(img: &RgbImage, tone: &ToneMap) -> Vec<u8> {
 
 /// Reads an 8-bit image (PNG, JPEG) and decodes sRGB to linear.
 pub fn read_ldr(path: &Path) -> Result<RgbImage, ImageError> {
-    let dynimg = image::open(path).map_err(|e| ImageError::Read { path: path.to_owned(), message: e.to_string() })?;
+    let dynimg = image::open(path).map_err(|e| ImageError::Read {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
     let rgb = dynimg.to_rgb8();
     let (w, h) = rgb.dimensions();
     let data = rgb
         .pixels()
-        .map(|p| Rgb::new(srgb_decode(p[0] as f32 / 255.0), srgb_decode(p[1] as f32 / 255.0), srgb_decode(p[2] as f32 / 255.0)))
+        .map(|p| {
+            Rgb::new(
+                srgb_decode(p[0] as f32 / 255.0),
+                srgb_decode(p[1] as f32 / 255.0),
+                srgb_decode(p[2] as f32 / 255.0),
+            )
+        })
         .collect();
-    Ok(Image { width: w, height: h, data })
+    Ok(Image {
+        width: w,
+        height: h,
+        data,
+    })
 }
 
 #[cfg(test)]
@@ -286,7 +369,14 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let img = RgbImage::filled(4, 4, Rgb::new(0.5, 0.2, 0.9));
         let p = dir.join("a.png");
-        img.write(&p, &ToneMap { exposure_ev: 0.0, curve: ToneCurve::Clamp }).unwrap();
+        img.write(
+            &p,
+            &ToneMap {
+                exposure_ev: 0.0,
+                curve: ToneCurve::Clamp,
+            },
+        )
+        .unwrap();
         let back = RgbImage::read(&p).unwrap();
         for px in back.pixels() {
             assert!((*px - Rgb::new(0.5, 0.2, 0.9)).abs().max_element() < 0.01);

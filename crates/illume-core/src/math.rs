@@ -47,13 +47,23 @@ impl Ray {
     /// A ray over `[0, ∞)`.
     #[inline]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        Self { origin, dir, t_min: 0.0, t_max: f32::INFINITY }
+        Self {
+            origin,
+            dir,
+            t_min: 0.0,
+            t_max: f32::INFINITY,
+        }
     }
 
     /// A ray over `[0, t_max]`.
     #[inline]
     pub fn segment(origin: Vec3, dir: Vec3, t_max: f32) -> Self {
-        Self { origin, dir, t_min: 0.0, t_max }
+        Self {
+            origin,
+            dir,
+            t_min: 0.0,
+            t_max,
+        }
     }
 
     /// The point at distance `t`.
@@ -69,7 +79,11 @@ impl Ray {
 #[inline]
 pub fn offset_ray_origin(p: Vec3, geometric_normal: Vec3, dir: Vec3) -> Vec3 {
     let scale = 1e-4 * (1.0 + p.abs().max_element());
-    let n = if geometric_normal.dot(dir) >= 0.0 { geometric_normal } else { -geometric_normal };
+    let n = if geometric_normal.dot(dir) >= 0.0 {
+        geometric_normal
+    } else {
+        -geometric_normal
+    };
     p + n * scale
 }
 
@@ -90,7 +104,10 @@ impl Default for Aabb {
 
 impl Aabb {
     /// The empty box (identity of [`Aabb::union`]).
-    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
 
     /// Box from two corners.
     #[inline]
@@ -106,13 +123,19 @@ impl Aabb {
     /// This box grown to contain `p`.
     #[inline]
     pub fn grow(self, p: Vec3) -> Self {
-        Self { min: self.min.min(p), max: self.max.max(p) }
+        Self {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
     }
 
     /// Smallest box containing both.
     #[inline]
     pub fn union(self, o: Aabb) -> Self {
-        Self { min: self.min.min(o.min), max: self.max.max(o.max) }
+        Self {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
     }
 
     /// True when the box contains no point.
@@ -124,7 +147,11 @@ impl Aabb {
     /// Size along each axis (zero for an empty box).
     #[inline]
     pub fn extent(&self) -> Vec3 {
-        if self.is_empty() { Vec3::ZERO } else { self.max - self.min }
+        if self.is_empty() {
+            Vec3::ZERO
+        } else {
+            self.max - self.min
+        }
     }
 
     /// Centre point.
@@ -161,7 +188,11 @@ impl Aabb {
         let t = Vec3::from(m.translation);
         let mut min = t;
         let mut max = t;
-        let cols = [Vec3::from(m.matrix3.x_axis), Vec3::from(m.matrix3.y_axis), Vec3::from(m.matrix3.z_axis)];
+        let cols = [
+            Vec3::from(m.matrix3.x_axis),
+            Vec3::from(m.matrix3.y_axis),
+            Vec3::from(m.matrix3.z_axis),
+        ];
         for (i, col) in cols.iter().enumerate() {
             let a = *col * self.min[i];
             let b = *col * self.max[i];
@@ -241,7 +272,9 @@ mod tests {
             let f = Frame::from_normal(n);
             assert!((f.s.length() - 1.0).abs() < 1e-4);
             assert!((f.t.length() - 1.0).abs() < 1e-4);
-            assert!(f.s.dot(f.t).abs() < 1e-4 && f.s.dot(n).abs() < 1e-4 && f.t.dot(n).abs() < 1e-4);
+            assert!(
+                f.s.dot(f.t).abs() < 1e-4 && f.s.dot(n).abs() < 1e-4 && f.t.dot(n).abs() < 1e-4
+            );
             let v = Vec3::new(0.3, -0.5, 0.8);
             assert!((f.to_local(f.to_world(v)) - v).length() < 1e-5);
         }
@@ -263,7 +296,9 @@ mod tests {
                 if i & 4 == 0 { b.min.z } else { b.max.z },
             );
             let p = m.transform_point3(c);
-            assert!(tb.contains(p) || (tb.min - 1e-4).cmple(p).all() && p.cmple(tb.max + 1e-4).all());
+            assert!(
+                tb.contains(p) || (tb.min - 1e-4).cmple(p).all() && p.cmple(tb.max + 1e-4).all()
+            );
         }
     }
 }

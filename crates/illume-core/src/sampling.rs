@@ -46,7 +46,10 @@ impl Pcg32 {
 
     /// Generator for `(seed, stream)`.
     pub fn new(seed: u64, stream: u64) -> Self {
-        let mut g = Self { state: 0, inc: (stream << 1) | 1 };
+        let mut g = Self {
+            state: 0,
+            inc: (stream << 1) | 1,
+        };
         g.next_u32();
         g.state = g.state.wrapping_add(seed);
         g.next_u32();
@@ -101,9 +104,10 @@ pub fn mix64(mut x: u64) -> u64 {
 
 /// The first 64 primes: Halton bases for dimensions 0..64.
 pub const PRIMES: [u32; 64] = [
-    2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71, 73, 79, 83, 89, 97, 101,
-    103, 107, 109, 113, 127, 131, 137, 139, 149, 151, 157, 163, 167, 173, 179, 181, 191, 193, 197, 199, 211,
-    223, 227, 229, 233, 239, 241, 251, 257, 263, 269, 271, 277, 281, 283, 293, 307, 311,
+    2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71, 73, 79, 83, 89, 97,
+    101, 103, 107, 109, 113, 127, 131, 137, 139, 149, 151, 157, 163, 167, 173, 179, 181, 191, 193,
+    197, 199, 211, 223, 227, 229, 233, 239, 241, 251, 257, 263, 269, 271, 277, 281, 283, 293, 307,
+    311,
 ];
 
 /// Radical inverse of `index` in `base` (the Halton coordinate), in `f64`.
@@ -180,12 +184,22 @@ pub struct HaltonStream<'a> {
 impl<'a> HaltonStream<'a> {
     /// Stream for point `index`, unscrambled.
     pub fn new(index: u64) -> Self {
-        Self { index, dim: 0, scramble: None, tail: None }
+        Self {
+            index,
+            dim: 0,
+            scramble: None,
+            tail: None,
+        }
     }
 
     /// Stream for point `index` with digit permutations.
     pub fn scrambled(index: u64, scramble: &'a HaltonScramble) -> Self {
-        Self { index, dim: 0, scramble: Some(scramble), tail: None }
+        Self {
+            index,
+            dim: 0,
+            scramble: Some(scramble),
+            tail: None,
+        }
     }
 
     /// The index this stream walks.
@@ -211,7 +225,9 @@ impl SampleStream for HaltonStream<'_> {
             (v as f32).min(ONE_MINUS_EPSILON)
         } else {
             let index = self.index;
-            self.tail.get_or_insert_with(|| Pcg32::new(mix64(index), 0x48616c74)).next_1d()
+            self.tail
+                .get_or_insert_with(|| Pcg32::new(mix64(index), 0x48616c74))
+                .next_1d()
         }
     }
 }
@@ -292,15 +308,23 @@ impl AliasTable {
     /// Table over non-negative `weights`; `None` when they sum to zero or any is not finite.
     pub fn new(weights: &[f32]) -> Option<Self> {
         let total: f64 = weights.iter().map(|&w| w as f64).sum();
-        if weights.is_empty() || total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !total.is_finite() || weights.iter().any(|w| *w < 0.0) {
+        if weights.is_empty()
+            || total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+            || !total.is_finite()
+            || weights.iter().any(|w| *w < 0.0)
+        {
             return None;
         }
         let n = weights.len();
         let pmf: Vec<f32> = weights.iter().map(|&w| (w as f64 / total) as f32).collect();
-        let mut scaled: Vec<f64> = weights.iter().map(|&w| w as f64 / total * n as f64).collect();
+        let mut scaled: Vec<f64> = weights
+            .iter()
+            .map(|&w| w as f64 / total * n as f64)
+            .collect();
         let mut prob = vec![1.0f32; n];
         let mut alias: Vec<u32> = (0..n as u32).collect();
-        let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| scaled[i] < 1.0);
+        let (mut small, mut large): (Vec<usize>, Vec<usize>) =
+            (0..n).partition(|&i| scaled[i] < 1.0);
         while let (Some(s), Some(&l)) = (small.pop(), large.last()) {
             prob[s] = scaled[s] as f32;
             alias[s] = l as u32;
@@ -310,7 +334,12 @@ impl AliasTable {
                 small.push(l);
             }
         }
-        Some(Self { prob, alias, pmf, total })
+        Some(Self {
+            prob,
+            alias,
+            pmf,
+            total,
+        })
     }
 
     /// Index drawn with probability proportional to its weight, and that probability.
@@ -321,7 +350,11 @@ impl AliasTable {
         let x = u * n as f32;
         let i = (x as usize).min(n - 1);
         let frac = x - i as f32;
-        let idx = if frac < self.prob[i] { i } else { self.alias[i] as usize };
+        let idx = if frac < self.prob[i] {
+            i
+        } else {
+            self.alias[i] as usize
+        };
         (idx, self.pmf[idx])
     }
 
@@ -353,9 +386,18 @@ mod tests {
 
     #[test]
     fn pcg_streams_are_reproducible_and_distinct() {
-        let a: Vec<u32> = { let mut g = Pcg32::new(1, 2); (0..8).map(|_| g.next_u32()).collect() };
-        let b: Vec<u32> = { let mut g = Pcg32::new(1, 2); (0..8).map(|_| g.next_u32()).collect() };
-        let c: Vec<u32> = { let mut g = Pcg32::new(1, 3); (0..8).map(|_| g.next_u32()).collect() };
+        let a: Vec<u32> = {
+            let mut g = Pcg32::new(1, 2);
+            (0..8).map(|_| g.next_u32()).collect()
+        };
+        let b: Vec<u32> = {
+            let mut g = Pcg32::new(1, 2);
+            (0..8).map(|_| g.next_u32()).collect()
+        };
+        let c: Vec<u32> = {
+            let mut g = Pcg32::new(1, 3);
+            (0..8).map(|_| g.next_u32()).collect()
+        };
         assert_eq!(a, b);
         assert_ne!(a, c);
     }
@@ -365,7 +407,12 @@ mod tests {
         // Reference output of pcg32_random_r from the PCG C library demo (seed 42, stream 54).
         let mut g = Pcg32::new(42, 54);
         let got: Vec<u32> = (0..6).map(|_| g.next_u32()).collect();
-        assert_eq!(got, [0xa15c02b7, 0x7b47f409, 0xba1d3330, 0x83d2f293, 0xbfa4784b, 0xcbed606e]);
+        assert_eq!(
+            got,
+            [
+                0xa15c02b7, 0x7b47f409, 0xba1d3330, 0x83d2f293, 0xbfa4784b, 0xcbed606e
+            ]
+        );
     }
 
     #[test]
@@ -380,8 +427,14 @@ mod tests {
     #[test]
     fn halton_stream_same_index_same_numbers() {
         let s = HaltonScramble::new(9);
-        let a: Vec<f32> = { let mut h = HaltonStream::scrambled(1234, &s); (0..80).map(|_| h.next_1d()).collect() };
-        let b: Vec<f32> = { let mut h = HaltonStream::scrambled(1234, &s); (0..80).map(|_| h.next_1d()).collect() };
+        let a: Vec<f32> = {
+            let mut h = HaltonStream::scrambled(1234, &s);
+            (0..80).map(|_| h.next_1d()).collect()
+        };
+        let b: Vec<f32> = {
+            let mut h = HaltonStream::scrambled(1234, &s);
+            (0..80).map(|_| h.next_1d()).collect()
+        };
         assert_eq!(a, b);
         assert!(a.iter().all(|&x| (0.0..1.0).contains(&x)));
     }
@@ -409,7 +462,10 @@ mod tests {
         }
         for i in 0..4 {
             let expected = w[i] / 8.0;
-            assert!((counts[i] as f32 / n as f32 - expected).abs() < 0.005, "bin {i}");
+            assert!(
+                (counts[i] as f32 / n as f32 - expected).abs() < 0.005,
+                "bin {i}"
+            );
             assert!((t.pmf(i) - expected).abs() < 1e-6);
         }
         assert!(AliasTable::new(&[0.0, 0.0]).is_none());

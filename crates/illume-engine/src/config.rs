@@ -55,19 +55,28 @@ pub enum ConfigError {
 impl Config {
     /// Reads a configuration file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io { path: path.into(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+            path: path.into(),
+            source,
+        })?;
         Self::parse(&text, path)
     }
 
     /// Parses configuration text; `path` names it in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
-        toml::from_str(text).map_err(|e| ConfigError::Parse { path: path.into(), message: e.to_string() })
+        toml::from_str(text).map_err(|e| ConfigError::Parse {
+            path: path.into(),
+            message: e.to_string(),
+        })
     }
 
     /// The per-frame budget the configured technique gets by default.
     pub fn budget(&self) -> Budget {
         match self.technique {
-            TechniqueKind::Reference => Budget { samples: Some(self.reference.spp_per_frame), ..Default::default() },
+            TechniqueKind::Reference => Budget {
+                samples: Some(self.reference.spp_per_frame),
+                ..Default::default()
+            },
             // photon_stream: its own photons_per_frame (deterministic mode) or the stream.
             TechniqueKind::PhotonStream => Budget::default(),
         }
@@ -80,15 +89,32 @@ mod tests {
 
     #[test]
     fn parses_tables_and_rejects_unknown_keys() {
-        let c = Config::parse("technique = \"reference\"\n[render]\nwidth = 10\n[reference]\nspp = 3\n", Path::new("a.toml")).unwrap();
+        let c = Config::parse(
+            "technique = \"reference\"\n[render]\nwidth = 10\n[reference]\nspp = 3\n",
+            Path::new("a.toml"),
+        )
+        .unwrap();
         assert_eq!((c.render.width, c.reference.spp), (10, 3));
-        let e = Config::parse("[render]\nwidht = 10\n", Path::new("cfg/a.toml")).unwrap_err().to_string();
+        let e = Config::parse("[render]\nwidht = 10\n", Path::new("cfg/a.toml"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("cfg/a.toml") && e.contains("widht"), "{e}");
-        let c = Config::parse("technique = \"photon_stream\"\n[photon_stream]\nvsl_count = 42\n", Path::new("c.toml")).unwrap();
-        assert_eq!((c.technique, c.photon_stream.vsl_count), (TechniqueKind::PhotonStream, 42));
-        let e = Config::parse("[photon_stream]\nvsl_cuont = 1\n", Path::new("d.toml")).unwrap_err().to_string();
+        let c = Config::parse(
+            "technique = \"photon_stream\"\n[photon_stream]\nvsl_count = 42\n",
+            Path::new("c.toml"),
+        )
+        .unwrap();
+        assert_eq!(
+            (c.technique, c.photon_stream.vsl_count),
+            (TechniqueKind::PhotonStream, 42)
+        );
+        let e = Config::parse("[photon_stream]\nvsl_cuont = 1\n", Path::new("d.toml"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("d.toml") && e.contains("vsl_cuont"), "{e}");
-        let e = Config::parse("technique = \"nope\"\n", Path::new("b.toml")).unwrap_err().to_string();
+        let e = Config::parse("technique = \"nope\"\n", Path::new("b.toml"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("b.toml") && e.contains("nope"), "{e}");
     }
 }

@@ -71,10 +71,18 @@ pub enum EngineError {
 impl Engine {
     /// An engine for `scene` with the technique and settings of `config`.
     pub fn new(scene: Scene, config: &Config) -> Result<Self, EngineError> {
-        scene.validate().map_err(|e| EngineError::InvalidScene(format!("{}: {e}", scene.source)))?;
+        scene
+            .validate()
+            .map_err(|e| EngineError::InvalidScene(format!("{}: {e}", scene.source)))?;
         let world = World::new(scene).shared();
         let technique = config.technique.build(&world, config)?;
-        Ok(Self { world, technique, renderer: Renderer::new(config.render.clone()), budget: config.budget(), frame_index: 0 })
+        Ok(Self {
+            world,
+            technique,
+            renderer: Renderer::new(config.render.clone()),
+            budget: config.budget(),
+            frame_index: 0,
+        })
     }
 
     /// The shared world (for reading the scene, or for tools that trace rays).
@@ -98,7 +106,10 @@ impl Engine {
     }
 
     /// Applies an interactive edit now; the technique sees the changes at once.
-    pub fn apply_edit(&mut self, edit: &Edit) -> Result<Vec<SceneChange>, illume_scene::change::EditError> {
+    pub fn apply_edit(
+        &mut self,
+        edit: &Edit,
+    ) -> Result<Vec<SceneChange>, illume_scene::change::EditError> {
         let changes = write_world(&self.world).apply_edit(edit)?;
         let world = read_world(&self.world);
         self.technique.scene_changed(&world, &changes);
@@ -117,12 +128,20 @@ impl Engine {
         let t1 = Instant::now();
         self.technique.advance(&world, &self.budget);
         let t2 = Instant::now();
-        let frame = self.renderer.render(&world, self.technique.as_mut(), self.frame_index);
+        let frame = self
+            .renderer
+            .render(&world, self.technique.as_mut(), self.frame_index);
         drop(world);
         self.frame_index += 1;
         let stats = self.technique.stats();
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
-        StepOutput { frame, changes, stats, update_ms: ms(t0, t1), advance_ms: ms(t1, t2) }
+        StepOutput {
+            frame,
+            changes,
+            stats,
+            update_ms: ms(t0, t1),
+            advance_ms: ms(t1, t2),
+        }
     }
 }
 

@@ -20,7 +20,8 @@ pub enum TechniqueKind {
 
 impl TechniqueKind {
     /// All techniques.
-    pub const ALL: &'static [TechniqueKind] = &[TechniqueKind::Reference, TechniqueKind::PhotonStream];
+    pub const ALL: &'static [TechniqueKind] =
+        &[TechniqueKind::Reference, TechniqueKind::PhotonStream];
 
     /// The technique's one name.
     pub fn name(self) -> &'static str {
@@ -31,12 +32,20 @@ impl TechniqueKind {
     }
 
     /// Builds the technique for `world` with its settings from `config`.
-    pub fn build(self, world: &SharedWorld, config: &Config) -> Result<Box<dyn Technique>, EngineError> {
+    pub fn build(
+        self,
+        world: &SharedWorld,
+        config: &Config,
+    ) -> Result<Box<dyn Technique>, EngineError> {
         Ok(match self {
             TechniqueKind::Reference => Box::new(ReferenceTechnique::new(config.reference.clone())),
             TechniqueKind::PhotonStream => Box::new(
-                PhotonStream::new(world, config.photon_stream.clone())
-                    .map_err(|e| EngineError::Technique { technique: self.name(), message: e.to_string() })?,
+                PhotonStream::new(world, config.photon_stream.clone()).map_err(|e| {
+                    EngineError::Technique {
+                        technique: self.name(),
+                        message: e.to_string(),
+                    }
+                })?,
             ),
         })
     }
@@ -46,9 +55,20 @@ impl std::str::FromStr for TechniqueKind {
     type Err = String;
 
     fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL.iter().copied().find(|k| k.name() == s).ok_or_else(|| {
-            format!("unknown technique '{s}' (have: {})", Self::ALL.iter().map(|k| k.name()).collect::<Vec<_>>().join(", "))
-        })
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                format!(
+                    "unknown technique '{s}' (have: {})",
+                    Self::ALL
+                        .iter()
+                        .map(|k| k.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })
     }
 }
 

@@ -18,7 +18,7 @@
 
 use illume_core::image::RgbImage;
 use illume_core::sampling::{Pcg32, mix64};
-use illume_core::{INV_PI, Ray, Rgb, Vec2};
+use illume_core::{INV_PI, Rgb, Vec2};
 use illume_transport::{GBuffer, GBufferPixel, Technique, World};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -168,16 +168,7 @@ pub fn direct_at(
         if cos <= 0.0 || ng.dot(s.wi) <= 0.0 {
             return Rgb::ZERO;
         }
-        let origin = hit.spawn_origin(s.wi);
-        let t_max = if s.distance.is_finite() {
-            (s.distance - 2e-4 * (1.0 + s.distance)).max(0.0)
-        } else {
-            f32::INFINITY
-        };
-        if world.tracer.occluded(
-            &Ray::segment(origin, s.wi, t_max),
-            illume_scene::MASK_DEFAULT,
-        ) {
+        if !world.unoccluded(hit, &s) {
             return Rgb::ZERO;
         }
         f * s.weight * cos

@@ -26,11 +26,18 @@ impl Default for Trs {
 
 impl Trs {
     /// No translation, rotation or scale.
-    pub const IDENTITY: Trs = Trs { translation: Vec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE };
+    pub const IDENTITY: Trs = Trs {
+        translation: Vec3::ZERO,
+        rotation: Quat::IDENTITY,
+        scale: Vec3::ONE,
+    };
 
     /// A pure translation.
     pub fn from_translation(t: Vec3) -> Self {
-        Self { translation: t, ..Self::IDENTITY }
+        Self {
+            translation: t,
+            ..Self::IDENTITY
+        }
     }
 
     /// The affine matrix `T · R · S`.
@@ -41,7 +48,11 @@ impl Trs {
     /// Decomposes an affine matrix (exact for matrices without shear).
     pub fn from_affine(m: &Affine3A) -> Self {
         let (scale, rotation, translation) = m.to_scale_rotation_translation();
-        Self { translation, rotation, scale }
+        Self {
+            translation,
+            rotation,
+            scale,
+        }
     }
 
     /// True when every component is finite.
@@ -98,7 +109,10 @@ pub struct Animation {
 impl Animation {
     /// Time of the last key over all channels [s].
     pub fn duration(&self) -> f64 {
-        self.channels.iter().filter_map(|c| c.times.last()).fold(0.0f32, |a, &b| a.max(b)) as f64
+        self.channels
+            .iter()
+            .filter_map(|c| c.times.last())
+            .fold(0.0f32, |a, &b| a.max(b)) as f64
     }
 
     /// Applies every channel at time `t` to the nodes' local transforms in `locals`.
@@ -133,7 +147,10 @@ where
 {
     let u2 = u * u;
     let u3 = u2 * u;
-    p0 * (2.0 * u3 - 3.0 * u2 + 1.0) + m0 * (dt * (u3 - 2.0 * u2 + u)) + p1 * (-2.0 * u3 + 3.0 * u2) + m1 * (dt * (u3 - u2))
+    p0 * (2.0 * u3 - 3.0 * u2 + 1.0)
+        + m0 * (dt * (u3 - 2.0 * u2 + u))
+        + p1 * (-2.0 * u3 + 3.0 * u2)
+        + m1 * (dt * (u3 - u2))
 }
 
 fn sample_vec3(times: &[f32], v: &[Vec3], interp: Interpolation, t: f32) -> Vec3 {
@@ -144,7 +161,14 @@ fn sample_vec3(times: &[f32], v: &[Vec3], interp: Interpolation, t: f32) -> Vec3
             if last || u == 0.0 {
                 return v[3 * i + 1];
             }
-            hermite(v[3 * i + 1], v[3 * i + 2], v[3 * (i + 1) + 1], v[3 * (i + 1)], u, dt)
+            hermite(
+                v[3 * i + 1],
+                v[3 * i + 2],
+                v[3 * (i + 1) + 1],
+                v[3 * (i + 1)],
+                u,
+                dt,
+            )
         }
         Interpolation::Step => v[i],
         Interpolation::Linear => {
@@ -166,7 +190,14 @@ fn sample_quat(times: &[f32], v: &[Vec4], interp: Interpolation, t: f32) -> Quat
             if last || u == 0.0 {
                 q(v[3 * i + 1])
             } else {
-                q(hermite(v[3 * i + 1], v[3 * i + 2], v[3 * (i + 1) + 1], v[3 * (i + 1)], u, dt))
+                q(hermite(
+                    v[3 * i + 1],
+                    v[3 * i + 2],
+                    v[3 * (i + 1) + 1],
+                    v[3 * (i + 1)],
+                    u,
+                    dt,
+                ))
             }
         }
         Interpolation::Step => q(v[i]),
@@ -188,9 +219,15 @@ impl Channel {
             return;
         }
         match &self.values {
-            ChannelValues::Translation(v) => trs.translation = sample_vec3(&self.times, v, self.interpolation, t),
-            ChannelValues::Scale(v) => trs.scale = sample_vec3(&self.times, v, self.interpolation, t),
-            ChannelValues::Rotation(v) => trs.rotation = sample_quat(&self.times, v, self.interpolation, t),
+            ChannelValues::Translation(v) => {
+                trs.translation = sample_vec3(&self.times, v, self.interpolation, t)
+            }
+            ChannelValues::Scale(v) => {
+                trs.scale = sample_vec3(&self.times, v, self.interpolation, t)
+            }
+            ChannelValues::Rotation(v) => {
+                trs.rotation = sample_quat(&self.times, v, self.interpolation, t)
+            }
         }
     }
 
@@ -200,16 +237,30 @@ impl Channel {
         if n == 0 {
             return Err("channel has no keys".into());
         }
-        if self.times.windows(2).any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater)) || self.times.iter().any(|t| !t.is_finite()) {
+        if self
+            .times
+            .windows(2)
+            .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+            || self.times.iter().any(|t| !t.is_finite())
+        {
             return Err("key times are not finite and strictly increasing".into());
         }
-        let per_key = if self.interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+        let per_key = if self.interpolation == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        };
         let (len, finite) = match &self.values {
-            ChannelValues::Translation(v) | ChannelValues::Scale(v) => (v.len(), v.iter().all(|x| x.is_finite())),
+            ChannelValues::Translation(v) | ChannelValues::Scale(v) => {
+                (v.len(), v.iter().all(|x| x.is_finite()))
+            }
             ChannelValues::Rotation(v) => (v.len(), v.iter().all(|x| x.is_finite())),
         };
         if len != n * per_key {
-            return Err(format!("{len} values for {n} keys (expected {})", n * per_key));
+            return Err(format!(
+                "{len} values for {n} keys (expected {})",
+                n * per_key
+            ));
         }
         if !finite {
             return Err("a key value is not finite".into());
@@ -223,7 +274,12 @@ mod tests {
     use super::*;
 
     fn chan(values: ChannelValues, times: Vec<f32>, interpolation: Interpolation) -> Channel {
-        Channel { node: NodeId(0), times, values, interpolation }
+        Channel {
+            node: NodeId(0),
+            times,
+            values,
+            interpolation,
+        }
     }
 
     #[test]
@@ -234,7 +290,14 @@ mod tests {
             Interpolation::Linear,
         );
         let mut trs = Trs::IDENTITY;
-        for (t, x) in [(0.0, 0.0), (1.0, 0.0), (1.25, 0.5), (1.5, 1.0), (2.0, 2.0), (9.0, 2.0)] {
+        for (t, x) in [
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (1.25, 0.5),
+            (1.5, 1.0),
+            (2.0, 2.0),
+            (9.0, 2.0),
+        ] {
             c.apply(t, &mut trs);
             assert!((trs.translation.x - x).abs() < 1e-6, "t={t}");
         }
@@ -242,7 +305,11 @@ mod tests {
 
     #[test]
     fn step_holds_previous_key() {
-        let c = chan(ChannelValues::Scale(vec![Vec3::ONE, Vec3::splat(3.0)]), vec![0.0, 1.0], Interpolation::Step);
+        let c = chan(
+            ChannelValues::Scale(vec![Vec3::ONE, Vec3::splat(3.0)]),
+            vec![0.0, 1.0],
+            Interpolation::Step,
+        );
         let mut trs = Trs::IDENTITY;
         c.apply(0.999, &mut trs);
         assert_eq!(trs.scale, Vec3::ONE);
@@ -254,33 +321,65 @@ mod tests {
     fn cubic_spline_matches_hermite_by_hand() {
         // Keys at t=0 (p=0, out-tangent 1) and t=2 (p=1, in-tangent 0); 1D in x.
         let v = vec![
-            Vec3::ZERO, Vec3::ZERO, Vec3::X, // key 0: in, value, out
-            Vec3::ZERO, Vec3::X, Vec3::ZERO, // key 1
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::X, // key 0: in, value, out
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::ZERO, // key 1
         ];
-        let c = chan(ChannelValues::Translation(v), vec![0.0, 2.0], Interpolation::CubicSpline);
+        let c = chan(
+            ChannelValues::Translation(v),
+            vec![0.0, 2.0],
+            Interpolation::CubicSpline,
+        );
         let mut trs = Trs::IDENTITY;
         c.apply(1.0, &mut trs);
         // u = 0.5, dt = 2: h00 = .5, h10 = .125, h01 = .5, h11 = -.125 → 0 + 2·.125·1 + .5·1 + 0 = 0.75
-        assert!((trs.translation.x - 0.75).abs() < 1e-6, "{}", trs.translation.x);
+        assert!(
+            (trs.translation.x - 0.75).abs() < 1e-6,
+            "{}",
+            trs.translation.x
+        );
     }
 
     #[test]
     fn rotation_slerps_at_constant_speed() {
         let q0 = Quat::IDENTITY;
         let q1 = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
-        let c = chan(ChannelValues::Rotation(vec![Vec4::from(q0), Vec4::from(q1)]), vec![0.0, 1.0], Interpolation::Linear);
+        let c = chan(
+            ChannelValues::Rotation(vec![Vec4::from(q0), Vec4::from(q1)]),
+            vec![0.0, 1.0],
+            Interpolation::Linear,
+        );
         let mut trs = Trs::IDENTITY;
         c.apply(0.5, &mut trs);
-        assert!(trs.rotation.angle_between(Quat::from_rotation_y(std::f32::consts::FRAC_PI_4)) < 1e-5);
+        assert!(
+            trs.rotation
+                .angle_between(Quat::from_rotation_y(std::f32::consts::FRAC_PI_4))
+                < 1e-5
+        );
     }
 
     #[test]
     fn validate_rejects_bad_channels() {
-        let bad_count = chan(ChannelValues::Translation(vec![Vec3::ZERO]), vec![0.0, 1.0], Interpolation::Linear);
+        let bad_count = chan(
+            ChannelValues::Translation(vec![Vec3::ZERO]),
+            vec![0.0, 1.0],
+            Interpolation::Linear,
+        );
         assert!(bad_count.validate().is_err());
-        let bad_order = chan(ChannelValues::Translation(vec![Vec3::ZERO; 2]), vec![1.0, 0.5], Interpolation::Linear);
+        let bad_order = chan(
+            ChannelValues::Translation(vec![Vec3::ZERO; 2]),
+            vec![1.0, 0.5],
+            Interpolation::Linear,
+        );
         assert!(bad_order.validate().is_err());
-        let nan = chan(ChannelValues::Translation(vec![Vec3::NAN; 2]), vec![0.0, 1.0], Interpolation::Linear);
+        let nan = chan(
+            ChannelValues::Translation(vec![Vec3::NAN; 2]),
+            vec![0.0, 1.0],
+            Interpolation::Linear,
+        );
         assert!(nan.validate().is_err());
     }
 }

@@ -26,7 +26,12 @@ pub fn load(name: &str) -> Result<Scene, String> {
         "furnace" => furnace(0.5, Rgb::ONE),
         "cornell-spot" => cornell_spot(),
         "cube-in-box" => cube_in_box(),
-        _ => return Err(format!("builtin:{name}: no such built-in scene (have: {})", NAMES.join(", "))),
+        _ => {
+            return Err(format!(
+                "builtin:{name}: no such built-in scene (have: {})",
+                NAMES.join(", ")
+            ));
+        }
     };
     s.source = format!("builtin:{name}");
     s.set_time(0.0);
@@ -65,12 +70,23 @@ impl SceneBuilder {
 
     /// Adds a node with a local transform.
     pub fn node(&mut self, name: &str, parent: Option<NodeId>, local: Trs) -> NodeId {
-        self.scene.nodes.push(Node { name: name.into(), parent, local, world_from_node: Affine3A::IDENTITY });
+        self.scene.nodes.push(Node {
+            name: name.into(),
+            parent,
+            local,
+            world_from_node: Affine3A::IDENTITY,
+        });
         NodeId(self.scene.nodes.len() as u32 - 1)
     }
 
     /// Adds an instance of `mesh` at `node`.
-    pub fn instance(&mut self, name: &str, mesh: MeshId, node: NodeId, dynamic: bool) -> InstanceId {
+    pub fn instance(
+        &mut self,
+        name: &str,
+        mesh: MeshId,
+        node: NodeId,
+        dynamic: bool,
+    ) -> InstanceId {
         self.scene.instances.push(Instance {
             name: name.into(),
             mesh,
@@ -90,13 +106,23 @@ impl SceneBuilder {
 
     /// Adds a light at `node`.
     pub fn light(&mut self, name: &str, kind: LightKind, node: NodeId) -> LightId {
-        self.scene.lights.push(Light { name: name.into(), kind, node, world_from_light: Affine3A::IDENTITY });
+        self.scene.lights.push(Light {
+            name: name.into(),
+            kind,
+            node,
+            world_from_light: Affine3A::IDENTITY,
+        });
         LightId(self.scene.lights.len() as u32 - 1)
     }
 
     /// Sets the camera at `node`.
     pub fn camera(&mut self, name: &str, yfov_rad: f32, node: NodeId) {
-        self.scene.camera = Camera { name: name.into(), yfov_rad, node, world_from_camera: Affine3A::IDENTITY };
+        self.scene.camera = Camera {
+            name: name.into(),
+            yfov_rad,
+            node,
+            world_from_camera: Affine3A::IDENTITY,
+        };
     }
 
     /// Adds an animation; the first one added becomes active.
@@ -137,7 +163,12 @@ pub fn quad(center: Vec3, u: Vec3, v: Vec3, material: MaterialId) -> Mesh {
 pub fn append_quad(m: &mut Mesh, center: Vec3, u: Vec3, v: Vec3, material: MaterialId) {
     let base = m.positions.len() as u32;
     let n = u.cross(v).normalize();
-    for (a, b, uv) in [(-1.0, -1.0, Vec2::new(0.0, 1.0)), (1.0, -1.0, Vec2::new(1.0, 1.0)), (1.0, 1.0, Vec2::new(1.0, 0.0)), (-1.0, 1.0, Vec2::ZERO)] {
+    for (a, b, uv) in [
+        (-1.0, -1.0, Vec2::new(0.0, 1.0)),
+        (1.0, -1.0, Vec2::new(1.0, 1.0)),
+        (1.0, 1.0, Vec2::new(1.0, 0.0)),
+        (-1.0, 1.0, Vec2::ZERO),
+    ] {
         m.positions.push(center + u * a + v * b);
         m.normals.push(n);
         m.uvs.push(uv);
@@ -150,7 +181,10 @@ pub fn append_quad(m: &mut Mesh, center: Vec3, u: Vec3, v: Vec3, material: Mater
 /// Axis-aligned box `[-1, 1]³` with faces pointing outwards (`inward = false`) or
 /// inwards.
 pub fn unit_box(material: MaterialId, inward: bool) -> Mesh {
-    let mut m = Mesh { name: "box".into(), ..Default::default() };
+    let mut m = Mesh {
+        name: "box".into(),
+        ..Default::default()
+    };
     let s = if inward { -1.0 } else { 1.0 };
     for axis in 0..3 {
         for sign in [-1.0f32, 1.0] {
@@ -161,7 +195,11 @@ pub fn unit_box(material: MaterialId, inward: bool) -> Mesh {
             let mut v = Vec3::ZERO;
             v[(axis + 2) % 3] = 1.0;
             // Orient so that u × v = n·s.
-            let (u, v) = if u.cross(v).dot(n * s) > 0.0 { (u, v) } else { (v, u) };
+            let (u, v) = if u.cross(v).dot(n * s) > 0.0 {
+                (u, v)
+            } else {
+                (v, u)
+            };
             append_quad(&mut m, n, u, v, material);
         }
     }
@@ -171,15 +209,25 @@ pub fn unit_box(material: MaterialId, inward: bool) -> Mesh {
 /// UV sphere of radius `r` about the origin with smooth normals, `stacks` × `slices`,
 /// faces pointing outwards (or inwards).
 pub fn uv_sphere(r: f32, slices: u32, stacks: u32, material: MaterialId, inward: bool) -> Mesh {
-    let mut m = Mesh { name: "sphere".into(), ..Default::default() };
+    let mut m = Mesh {
+        name: "sphere".into(),
+        ..Default::default()
+    };
     for i in 0..=stacks {
         let theta = PI * i as f32 / stacks as f32;
         for j in 0..=slices {
             let phi = 2.0 * PI * j as f32 / slices as f32;
-            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
             m.positions.push(n * r);
             m.normals.push(if inward { -n } else { n });
-            m.uvs.push(Vec2::new(j as f32 / slices as f32, i as f32 / stacks as f32));
+            m.uvs.push(Vec2::new(
+                j as f32 / slices as f32,
+                i as f32 / stacks as f32,
+            ));
         }
     }
     let row = slices + 1;
@@ -202,13 +250,21 @@ pub fn uv_sphere(r: f32, slices: u32, stacks: u32, material: MaterialId, inward:
 }
 
 fn lambert(name: &str, rgb: [f32; 3], double_sided: bool) -> Material {
-    Material { name: name.into(), base_color: Rgb::from(rgb), double_sided, ..Default::default() }
+    Material {
+        name: name.into(),
+        base_color: Rgb::from(rgb),
+        double_sided,
+        ..Default::default()
+    }
 }
 
 /// The furnace: closed sphere (radius 1, inner faces), albedo `rho`, emission `le`.
 pub fn furnace(rho: f32, le: Rgb) -> Scene {
     let mut b = SceneBuilder::new();
-    let mat = b.material(Material { emission: le, ..lambert("furnace", [rho; 3], false) });
+    let mat = b.material(Material {
+        emission: le,
+        ..lambert("furnace", [rho; 3], false)
+    });
     let mesh = b.mesh(uv_sphere(1.0, 64, 32, mat, true));
     b.placed("sphere", mesh, Trs::IDENTITY, false);
     let cam = b.node("camera", None, Trs::IDENTITY);
@@ -217,7 +273,12 @@ pub fn furnace(rho: f32, le: Rgb) -> Scene {
 }
 
 fn linear_translation(node: NodeId, times: &[f32], values: &[Vec3]) -> Channel {
-    Channel { node, times: times.to_vec(), values: ChannelValues::Translation(values.to_vec()), interpolation: Interpolation::Linear }
+    Channel {
+        node,
+        times: times.to_vec(),
+        values: ChannelValues::Translation(values.to_vec()),
+        interpolation: Interpolation::Linear,
+    }
 }
 
 /// The Cornell box the built-ins share: open at +z, one-sided walls facing inwards.
@@ -225,12 +286,39 @@ fn cornell_walls(b: &mut SceneBuilder) -> (MaterialId, MeshId) {
     let white = b.material(lambert("white", [0.75, 0.75, 0.75], false));
     let red = b.material(lambert("red", [0.63, 0.065, 0.05], false));
     let green = b.material(lambert("green", [0.14, 0.45, 0.091], false));
-    let mut walls = Mesh { name: "cornell_box".into(), ..Default::default() };
-    append_quad(&mut walls, Vec3::new(0.0, 0.0, 0.0), Vec3::Z, Vec3::X, white); // floor, faces +y
-    append_quad(&mut walls, Vec3::new(0.0, 2.0, 0.0), Vec3::X, Vec3::Z, white); // ceiling, faces −y
-    append_quad(&mut walls, Vec3::new(0.0, 1.0, -1.0), Vec3::X, Vec3::Y, white); // back, faces +z
+    let mut walls = Mesh {
+        name: "cornell_box".into(),
+        ..Default::default()
+    };
+    append_quad(
+        &mut walls,
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::Z,
+        Vec3::X,
+        white,
+    ); // floor, faces +y
+    append_quad(
+        &mut walls,
+        Vec3::new(0.0, 2.0, 0.0),
+        Vec3::X,
+        Vec3::Z,
+        white,
+    ); // ceiling, faces −y
+    append_quad(
+        &mut walls,
+        Vec3::new(0.0, 1.0, -1.0),
+        Vec3::X,
+        Vec3::Y,
+        white,
+    ); // back, faces +z
     append_quad(&mut walls, Vec3::new(-1.0, 1.0, 0.0), Vec3::Y, Vec3::Z, red); // left, faces +x
-    append_quad(&mut walls, Vec3::new(1.0, 1.0, 0.0), Vec3::Z, Vec3::Y, green); // right, faces −x
+    append_quad(
+        &mut walls,
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::Z,
+        Vec3::Y,
+        green,
+    ); // right, faces −x
     let mesh = b.mesh(walls);
     (white, mesh)
 }
@@ -244,28 +332,68 @@ fn cornell_spot() -> Scene {
     b.placed(
         "tall_box",
         tall,
-        Trs { translation: Vec3::new(-0.45, 0.6, -0.5), rotation: Quat::from_rotation_y(18f32.to_radians()), scale: Vec3::new(0.3, 0.6, 0.3) },
+        Trs {
+            translation: Vec3::new(-0.45, 0.6, -0.5),
+            rotation: Quat::from_rotation_y(18f32.to_radians()),
+            scale: Vec3::new(0.3, 0.6, 0.3),
+        },
         false,
     );
     let sphere_mesh = b.mesh(uv_sphere(0.3, 48, 24, blue, false));
-    let sphere = b.placed("sphere", sphere_mesh, Trs::from_translation(Vec3::new(-0.5, 0.3, 0.2)), true);
+    let sphere = b.placed(
+        "sphere",
+        sphere_mesh,
+        Trs::from_translation(Vec3::new(-0.5, 0.3, 0.2)),
+        true,
+    );
     let sphere_node = b.scene().instances[sphere.index()].node;
-    let cam = b.node("camera", None, Trs { rotation: Quat::from_rotation_x(-5f32.to_radians()), ..Trs::from_translation(Vec3::new(0.0, 1.0, 3.0)) });
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_x(-5f32.to_radians()),
+            ..Trs::from_translation(Vec3::new(0.0, 1.0, 3.0))
+        },
+    );
     b.camera("camera", 40f32.to_radians(), cam);
     let spot_pos = Vec3::new(-0.5, 1.9, 0.6);
-    let spot_node = b.node("spot_light", None, Trs { rotation: Quat::from_rotation_x(-1.0077), ..Trs::from_translation(spot_pos) });
+    let spot_node = b.node(
+        "spot_light",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_x(-1.0077),
+            ..Trs::from_translation(spot_pos)
+        },
+    );
     b.light(
         "spot",
-        LightKind::Spot { intensity: Rgb::new(10.0, 9.0, 8.0), inner_cone_rad: 25f32.to_radians(), outer_cone_rad: 35f32.to_radians() },
+        LightKind::Spot {
+            intensity: Rgb::new(10.0, 9.0, 8.0),
+            inner_cone_rad: 25f32.to_radians(),
+            outer_cone_rad: 35f32.to_radians(),
+        },
         spot_node,
     );
-    let sphere_path = [Vec3::new(-0.5, 0.3, 0.2), Vec3::new(0.1, 0.3, 0.4), Vec3::new(0.5, 0.3, 0.1)];
+    let sphere_path = [
+        Vec3::new(-0.5, 0.3, 0.2),
+        Vec3::new(0.1, 0.3, 0.4),
+        Vec3::new(0.5, 0.3, 0.1),
+    ];
     let light_path = [spot_pos, Vec3::new(0.5, 1.9, 0.6)];
     let move_sphere = linear_translation(sphere_node, &[0.0, 1.0, 2.0], &sphere_path);
     let move_light = linear_translation(spot_node, &[0.0, 2.0], &light_path);
-    b.animation(Animation { name: "move".into(), channels: vec![move_sphere.clone(), move_light.clone()] });
-    b.animation(Animation { name: "move_sphere".into(), channels: vec![move_sphere] });
-    b.animation(Animation { name: "move_light".into(), channels: vec![move_light] });
+    b.animation(Animation {
+        name: "move".into(),
+        channels: vec![move_sphere.clone(), move_light.clone()],
+    });
+    b.animation(Animation {
+        name: "move_sphere".into(),
+        channels: vec![move_sphere],
+    });
+    b.animation(Animation {
+        name: "move_light".into(),
+        channels: vec![move_light],
+    });
     b.finish("builtin:cornell-spot")
 }
 
@@ -274,17 +402,63 @@ fn cube_in_box() -> Scene {
     let white = b.material(lambert("white", [0.75, 0.75, 0.75], false));
     let orange = b.material(lambert("orange", [0.8, 0.35, 0.08], false));
     let room = b.mesh(unit_box(white, true));
-    b.placed("box", room, Trs { translation: Vec3::new(0.0, 1.0, 0.0), ..Trs::IDENTITY }, false);
+    b.placed(
+        "box",
+        room,
+        Trs {
+            translation: Vec3::new(0.0, 1.0, 0.0),
+            ..Trs::IDENTITY
+        },
+        false,
+    );
     let cube_mesh = b.mesh(unit_box(orange, false));
     let start = Vec3::new(-0.5, 0.2, -0.4);
-    let cube = b.placed("cube", cube_mesh, Trs { scale: Vec3::splat(0.2), ..Trs::from_translation(start) }, true);
+    let cube = b.placed(
+        "cube",
+        cube_mesh,
+        Trs {
+            scale: Vec3::splat(0.2),
+            ..Trs::from_translation(start)
+        },
+        true,
+    );
     let cube_node = b.scene().instances[cube.index()].node;
-    let light = b.node("point_light", None, Trs::from_translation(Vec3::new(0.0, 1.8, -0.2)));
-    b.light("point", LightKind::Point { intensity: Rgb::ONE }, light);
-    let cam = b.node("camera", None, Trs { rotation: Quat::from_rotation_x(-12f32.to_radians()), ..Trs::from_translation(Vec3::new(0.0, 1.1, 0.95)) });
+    let light = b.node(
+        "point_light",
+        None,
+        Trs::from_translation(Vec3::new(0.0, 1.8, -0.2)),
+    );
+    b.light(
+        "point",
+        LightKind::Point {
+            intensity: Rgb::ONE,
+        },
+        light,
+    );
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_x(-12f32.to_radians()),
+            ..Trs::from_translation(Vec3::new(0.0, 1.1, 0.95))
+        },
+    );
     b.camera("camera", 60f32.to_radians(), cam);
-    let path = [start, Vec3::new(0.5, 0.2, -0.4), Vec3::new(0.5, 0.2, 0.3), Vec3::new(-0.5, 0.2, 0.3), start];
-    b.animation(Animation { name: "move".into(), channels: vec![linear_translation(cube_node, &[0.0, 1.0, 2.0, 3.0, 4.0], &path)] });
+    let path = [
+        start,
+        Vec3::new(0.5, 0.2, -0.4),
+        Vec3::new(0.5, 0.2, 0.3),
+        Vec3::new(-0.5, 0.2, 0.3),
+        start,
+    ];
+    b.animation(Animation {
+        name: "move".into(),
+        channels: vec![linear_translation(
+            cube_node,
+            &[0.0, 1.0, 2.0, 3.0, 4.0],
+            &path,
+        )],
+    });
     b.finish("builtin:cube-in-box")
 }
 
@@ -322,7 +496,10 @@ mod tests {
             }
             // Facing inwards: geometric normal points towards the centre.
             let n = (v[1] - v[0]).cross(v[2] - v[0]);
-            assert!(n.dot((v[0] + v[1] + v[2]) / 3.0) < 0.0, "triangle {t} faces outwards");
+            assert!(
+                n.dot((v[0] + v[1] + v[2]) / 3.0) < 0.0,
+                "triangle {t} faces outwards"
+            );
         }
         assert!(edges.values().all(|&c| c == 2), "sphere is not closed");
     }

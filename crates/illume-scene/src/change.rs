@@ -123,7 +123,11 @@ impl Scene {
         for (i, inst) in self.instances.iter_mut().enumerate() {
             let to = self.nodes[inst.node.index()].world_from_node;
             if to != inst.world_from_object {
-                changes.push(SceneChange::InstanceMoved { instance: InstanceId(i as u32), from: inst.world_from_object, to });
+                changes.push(SceneChange::InstanceMoved {
+                    instance: InstanceId(i as u32),
+                    from: inst.world_from_object,
+                    to,
+                });
                 inst.world_from_object = to;
             }
         }
@@ -132,13 +136,20 @@ impl Scene {
             if to != light.world_from_light {
                 let before = light.clone();
                 light.world_from_light = to;
-                changes.push(SceneChange::LightChanged { light: LightId(i as u32), from: Box::new(before), to: Box::new(light.clone()) });
+                changes.push(SceneChange::LightChanged {
+                    light: LightId(i as u32),
+                    from: Box::new(before),
+                    to: Box::new(light.clone()),
+                });
             }
         }
         if let Some(node) = self.nodes.get(self.camera.node.index()) {
             let to = node.world_from_node;
             if to != self.camera.world_from_camera {
-                changes.push(SceneChange::CameraMoved { from: self.camera.world_from_camera, to });
+                changes.push(SceneChange::CameraMoved {
+                    from: self.camera.world_from_camera,
+                    to,
+                });
                 self.camera.world_from_camera = to;
             }
         }
@@ -169,7 +180,11 @@ impl Scene {
             None => Err(format!(
                 "{}: no animation named '{name}' (have: {})",
                 self.source,
-                self.animations.iter().map(|a| a.name.as_str()).collect::<Vec<_>>().join(", ")
+                self.animations
+                    .iter()
+                    .map(|a| a.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             )),
         }
     }
@@ -178,17 +193,33 @@ impl Scene {
     /// the local transform that puts it at the requested world transform.
     pub fn apply_edit(&mut self, edit: &Edit) -> Result<Vec<SceneChange>, EditError> {
         match edit {
-            Edit::SetInstanceTransform { instance, world_from_object } => {
+            Edit::SetInstanceTransform {
+                instance,
+                world_from_object,
+            } => {
                 let node = self
                     .instances
                     .get(instance.index())
-                    .ok_or(EditError::NoSuchItem { what: "instance", index: instance.0 })?
+                    .ok_or(EditError::NoSuchItem {
+                        what: "instance",
+                        index: instance.0,
+                    })?
                     .node;
                 self.place_node(node, world_from_object, "instance transform")?;
                 Ok(self.update_world_transforms())
             }
-            Edit::SetLightTransform { light, world_from_light } => {
-                let node = self.lights.get(light.index()).ok_or(EditError::NoSuchItem { what: "light", index: light.0 })?.node;
+            Edit::SetLightTransform {
+                light,
+                world_from_light,
+            } => {
+                let node = self
+                    .lights
+                    .get(light.index())
+                    .ok_or(EditError::NoSuchItem {
+                        what: "light",
+                        index: light.0,
+                    })?
+                    .node;
                 self.place_node(node, world_from_light, "light transform")?;
                 Ok(self.update_world_transforms())
             }
@@ -198,11 +229,23 @@ impl Scene {
                 Ok(self.update_world_transforms())
             }
             Edit::SetLightKind { light, kind } => {
-                let l = self.lights.get_mut(light.index()).ok_or(EditError::NoSuchItem { what: "light", index: light.0 })?;
+                let l = self
+                    .lights
+                    .get_mut(light.index())
+                    .ok_or(EditError::NoSuchItem {
+                        what: "light",
+                        index: light.0,
+                    })?;
                 let finite = match kind {
                     LightKind::Point { intensity } => intensity.is_finite(),
-                    LightKind::Spot { intensity, inner_cone_rad, outer_cone_rad } => {
-                        intensity.is_finite() && inner_cone_rad.is_finite() && outer_cone_rad.is_finite()
+                    LightKind::Spot {
+                        intensity,
+                        inner_cone_rad,
+                        outer_cone_rad,
+                    } => {
+                        intensity.is_finite()
+                            && inner_cone_rad.is_finite()
+                            && outer_cone_rad.is_finite()
                     }
                     LightKind::Directional { irradiance } => irradiance.is_finite(),
                 };
@@ -211,20 +254,39 @@ impl Scene {
                 }
                 let before = l.clone();
                 l.kind = *kind;
-                Ok(vec![SceneChange::LightChanged { light: *light, from: Box::new(before), to: Box::new(l.clone()) }])
+                Ok(vec![SceneChange::LightChanged {
+                    light: *light,
+                    from: Box::new(before),
+                    to: Box::new(l.clone()),
+                }])
             }
             Edit::SetMaterial { material, value } => {
-                let m = self.materials.get_mut(material.index()).ok_or(EditError::NoSuchItem { what: "material", index: material.0 })?;
+                let m = self
+                    .materials
+                    .get_mut(material.index())
+                    .ok_or(EditError::NoSuchItem {
+                        what: "material",
+                        index: material.0,
+                    })?;
                 if !value.base_color.is_finite() || !value.emission.is_finite() {
                     return Err(EditError::NotFinite { what: "material" });
                 }
                 let before = std::mem::replace(m, value.clone());
-                Ok(vec![SceneChange::MaterialChanged { material: *material, from: Box::new(before), to: Box::new(value.clone()) }])
+                Ok(vec![SceneChange::MaterialChanged {
+                    material: *material,
+                    from: Box::new(before),
+                    to: Box::new(value.clone()),
+                }])
             }
         }
     }
 
-    fn place_node(&mut self, node: NodeId, world: &Affine3A, what: &'static str) -> Result<(), EditError> {
+    fn place_node(
+        &mut self,
+        node: NodeId,
+        world: &Affine3A,
+        what: &'static str,
+    ) -> Result<(), EditError> {
         if !affine_is_finite(world) {
             return Err(EditError::NotFinite { what });
         }
@@ -267,7 +329,12 @@ mod tests {
             assert_eq!(to, s.instances[id.index()].world_from_object);
             assert_ne!(from, to);
         }
-        assert!(changes.iter().any(|c| matches!(c, SceneChange::LightChanged { .. })), "the spot light must move");
+        assert!(
+            changes
+                .iter()
+                .any(|c| matches!(c, SceneChange::LightChanged { .. })),
+            "the spot light must move"
+        );
         // Same time again: nothing changes.
         assert!(s.set_time(1.0).is_empty());
     }
@@ -276,15 +343,33 @@ mod tests {
     fn edit_moves_instance_and_rejects_nan() {
         let mut s = crate::builtin::load("cornell-spot").unwrap();
         let target = Affine3A::from_translation(Vec3::new(0.1, 0.2, 0.3));
-        let ch = s.apply_edit(&Edit::SetInstanceTransform { instance: InstanceId(0), world_from_object: target }).unwrap();
+        let ch = s
+            .apply_edit(&Edit::SetInstanceTransform {
+                instance: InstanceId(0),
+                world_from_object: target,
+            })
+            .unwrap();
         assert_eq!(ch.len(), 1);
-        assert!((s.instances[0].world_from_object.translation - target.translation).length() < 1e-6);
+        assert!(
+            (s.instances[0].world_from_object.translation - target.translation).length() < 1e-6
+        );
         let bad = Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0));
         assert_eq!(
-            s.apply_edit(&Edit::SetInstanceTransform { instance: InstanceId(0), world_from_object: bad }),
-            Err(EditError::NotFinite { what: "instance transform" })
+            s.apply_edit(&Edit::SetInstanceTransform {
+                instance: InstanceId(0),
+                world_from_object: bad
+            }),
+            Err(EditError::NotFinite {
+                what: "instance transform"
+            })
         );
-        assert!(s.apply_edit(&Edit::SetInstanceTransform { instance: InstanceId(999), world_from_object: target }).is_err());
+        assert!(
+            s.apply_edit(&Edit::SetInstanceTransform {
+                instance: InstanceId(999),
+                world_from_object: target
+            })
+            .is_err()
+        );
     }
 
     #[test]
@@ -293,7 +378,19 @@ mod tests {
         let mut m = s.materials[0].clone();
         let old = m.clone();
         m.base_color = Vec3::new(0.1, 0.2, 0.3);
-        let ch = s.apply_edit(&Edit::SetMaterial { material: MaterialId(0), value: m.clone() }).unwrap();
-        assert_eq!(ch, vec![SceneChange::MaterialChanged { material: MaterialId(0), from: Box::new(old), to: Box::new(m) }]);
+        let ch = s
+            .apply_edit(&Edit::SetMaterial {
+                material: MaterialId(0),
+                value: m.clone(),
+            })
+            .unwrap();
+        assert_eq!(
+            ch,
+            vec![SceneChange::MaterialChanged {
+                material: MaterialId(0),
+                from: Box::new(old),
+                to: Box::new(m)
+            }]
+        );
     }
 }

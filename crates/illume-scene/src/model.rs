@@ -72,7 +72,11 @@ impl Mesh {
     #[inline]
     pub fn triangle(&self, t: usize) -> [Vec3; 3] {
         let [a, b, c] = self.indices[t];
-        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
     }
 
     /// Object-space area of triangle `t`.
@@ -91,22 +95,50 @@ impl Mesh {
     pub fn validate(&self, material_count: usize) -> Result<(), String> {
         let n = self.positions.len();
         if !self.normals.is_empty() && self.normals.len() != n {
-            return Err(format!("{} normals for {} positions", self.normals.len(), n));
+            return Err(format!(
+                "{} normals for {} positions",
+                self.normals.len(),
+                n
+            ));
         }
         if !self.uvs.is_empty() && self.uvs.len() != n {
             return Err(format!("{} UVs for {} positions", self.uvs.len(), n));
         }
         if self.triangle_materials.len() != self.indices.len() {
-            return Err(format!("{} triangle materials for {} triangles", self.triangle_materials.len(), self.indices.len()));
+            return Err(format!(
+                "{} triangle materials for {} triangles",
+                self.triangle_materials.len(),
+                self.indices.len()
+            ));
         }
-        if let Some((i, p)) = self.positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+        if let Some((i, p)) = self
+            .positions
+            .iter()
+            .enumerate()
+            .find(|(_, p)| !p.is_finite())
+        {
             return Err(format!("position {i} is not finite: {p}"));
         }
-        if let Some((t, tri)) = self.indices.iter().enumerate().find(|(_, tri)| tri.iter().any(|&v| v as usize >= n)) {
-            return Err(format!("triangle {t} has vertex index {tri:?} out of range 0..{n}"));
+        if let Some((t, tri)) = self
+            .indices
+            .iter()
+            .enumerate()
+            .find(|(_, tri)| tri.iter().any(|&v| v as usize >= n))
+        {
+            return Err(format!(
+                "triangle {t} has vertex index {tri:?} out of range 0..{n}"
+            ));
         }
-        if let Some((t, m)) = self.triangle_materials.iter().enumerate().find(|(_, m)| m.index() >= material_count) {
-            return Err(format!("triangle {t} uses material {} of {material_count}", m.0));
+        if let Some((t, m)) = self
+            .triangle_materials
+            .iter()
+            .enumerate()
+            .find(|(_, m)| m.index() >= material_count)
+        {
+            return Err(format!(
+                "triangle {t} uses material {} of {material_count}",
+                m.0
+            ));
         }
         Ok(())
     }
@@ -272,7 +304,9 @@ impl Light {
 
     /// Unit world direction the light shines in (spot and directional: local −Z).
     pub fn direction(&self) -> Vec3 {
-        self.world_from_light.transform_vector3(-Vec3::Z).normalize_or(-Vec3::Y)
+        self.world_from_light
+            .transform_vector3(-Vec3::Z)
+            .normalize_or(-Vec3::Y)
     }
 
     /// Radiant power Φ [W] per channel. Directional lights need the radius of the
@@ -280,9 +314,11 @@ impl Light {
     pub fn power(&self, scene_radius: f32) -> Rgb {
         match self.kind {
             LightKind::Point { intensity } => intensity * 4.0 * PI,
-            LightKind::Spot { intensity, inner_cone_rad, outer_cone_rad } => {
-                intensity * spot_solid_angle(inner_cone_rad, outer_cone_rad)
-            }
+            LightKind::Spot {
+                intensity,
+                inner_cone_rad,
+                outer_cone_rad,
+            } => intensity * spot_solid_angle(inner_cone_rad, outer_cone_rad),
             LightKind::Directional { irradiance } => irradiance * PI * scene_radius * scene_radius,
         }
     }
@@ -384,7 +420,12 @@ pub struct Scene {
 
 impl Default for Camera {
     fn default() -> Self {
-        Self { name: "camera".into(), yfov_rad: 40f32.to_radians(), node: NodeId(0), world_from_camera: Affine3A::IDENTITY }
+        Self {
+            name: "camera".into(),
+            yfov_rad: 40f32.to_radians(),
+            node: NodeId(0),
+            world_from_camera: Affine3A::IDENTITY,
+        }
     }
 }
 
@@ -393,13 +434,20 @@ impl Scene {
     pub fn bounds(&self) -> Aabb {
         self.instances
             .iter()
-            .map(|i| self.meshes[i.mesh.index()].bounds().transformed(&i.world_from_object))
+            .map(|i| {
+                self.meshes[i.mesh.index()]
+                    .bounds()
+                    .transformed(&i.world_from_object)
+            })
             .fold(Aabb::EMPTY, Aabb::union)
     }
 
     /// Total triangles over all instances.
     pub fn instanced_triangle_count(&self) -> usize {
-        self.instances.iter().map(|i| self.meshes[i.mesh.index()].triangle_count()).sum()
+        self.instances
+            .iter()
+            .map(|i| self.meshes[i.mesh.index()].triangle_count())
+            .sum()
     }
 
     /// Albedo ρ of `material` at `uv` (texture × factor).
@@ -413,7 +461,9 @@ impl Scene {
 
     /// Duration of the active animation [s] (0 without one).
     pub fn animation_duration(&self) -> f64 {
-        self.active_animation.map(|a| self.animations[a].duration()).unwrap_or(0.0)
+        self.active_animation
+            .map(|a| self.animations[a].duration())
+            .unwrap_or(0.0)
     }
 
     /// Total emitted power of emissive triangles [W] per channel: Σ π·Le·A (one-sided).
@@ -424,7 +474,9 @@ impl Scene {
             for (t, m) in mesh.triangle_materials.iter().enumerate() {
                 let mat = &self.materials[m.index()];
                 if mat.is_emissive() {
-                    let [a, b, c] = mesh.triangle(t).map(|p| inst.world_from_object.transform_point3(p));
+                    let [a, b, c] = mesh
+                        .triangle(t)
+                        .map(|p| inst.world_from_object.transform_point3(p));
                     total += mat.emission * PI * 0.5 * (b - a).cross(c - a).length();
                 }
             }
@@ -446,23 +498,38 @@ impl Scene {
     /// Checks every cross-reference and value; the message names the offending item.
     pub fn validate(&self) -> Result<(), String> {
         for (i, m) in self.meshes.iter().enumerate() {
-            m.validate(self.materials.len()).map_err(|e| format!("mesh {i} '{}': {e}", m.name))?;
+            m.validate(self.materials.len())
+                .map_err(|e| format!("mesh {i} '{}': {e}", m.name))?;
         }
         for (i, m) in self.materials.iter().enumerate() {
-            if !m.base_color.is_finite() || !m.emission.is_finite() || m.emission.min_element() < 0.0 {
-                return Err(format!("material {i} '{}': colour or emission not finite or negative", m.name));
+            if !m.base_color.is_finite()
+                || !m.emission.is_finite()
+                || m.emission.min_element() < 0.0
+            {
+                return Err(format!(
+                    "material {i} '{}': colour or emission not finite or negative",
+                    m.name
+                ));
             }
             if let Some(t) = m.base_color_texture
                 && t.index() >= self.textures.len()
             {
-                return Err(format!("material {i} '{}': texture {} of {}", m.name, t.0, self.textures.len()));
+                return Err(format!(
+                    "material {i} '{}': texture {} of {}",
+                    m.name,
+                    t.0,
+                    self.textures.len()
+                ));
             }
         }
         for (i, n) in self.nodes.iter().enumerate() {
             if let Some(p) = n.parent
                 && p.index() >= i
             {
-                return Err(format!("node {i} '{}': parent {} does not come first", n.name, p.0));
+                return Err(format!(
+                    "node {i} '{}': parent {} does not come first",
+                    n.name, p.0
+                ));
             }
             if !n.local.is_finite() {
                 return Err(format!("node {i} '{}': transform is not finite", n.name));
@@ -470,7 +537,10 @@ impl Scene {
         }
         for (i, inst) in self.instances.iter().enumerate() {
             if inst.mesh.index() >= self.meshes.len() || inst.node.index() >= self.nodes.len() {
-                return Err(format!("instance {i} '{}': mesh or node out of range", inst.name));
+                return Err(format!(
+                    "instance {i} '{}': mesh or node out of range",
+                    inst.name
+                ));
             }
         }
         for (i, l) in self.lights.iter().enumerate() {
@@ -481,7 +551,10 @@ impl Scene {
         for (i, a) in self.animations.iter().enumerate() {
             for c in &a.channels {
                 if c.node.index() >= self.nodes.len() {
-                    return Err(format!("animation {i} '{}': channel targets missing node {}", a.name, c.node.0));
+                    return Err(format!(
+                        "animation {i} '{}': channel targets missing node {}",
+                        a.name, c.node.0
+                    ));
                 }
             }
         }

@@ -1,6 +1,6 @@
 //! A scene with its tracer and light set, updated together.
 
-use crate::lights::LightSet;
+use crate::lights::{LightSample, LightSet};
 use crate::surface::SurfaceHit;
 use illume_accel::{Hit, Tracer};
 use illume_core::Ray;
@@ -77,5 +77,21 @@ impl World {
     /// Surface description of a hit.
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
         SurfaceHit::new(&self.scene, ray, hit)
+    }
+
+    /// True when nothing visible to the default mask lies between `hit` and the light
+    /// point of `sample` (the shadow ray leaves from just off the surface and stops just
+    /// short of the light; directional samples reach to infinity).
+    pub fn unoccluded(&self, hit: &SurfaceHit, sample: &LightSample) -> bool {
+        let origin = hit.spawn_origin(sample.wi);
+        let t_max = if sample.distance.is_finite() {
+            (sample.distance - 2e-4 * (1.0 + sample.distance)).max(0.0)
+        } else {
+            f32::INFINITY
+        };
+        !self.tracer.occluded(
+            &Ray::segment(origin, sample.wi, t_max),
+            illume_scene::MASK_DEFAULT,
+        )
     }
 }

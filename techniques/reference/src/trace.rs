@@ -47,7 +47,10 @@ pub fn radiance(
 ) -> PathRadiance {
     match world.trace(ray, illume_scene::MASK_DEFAULT) {
         Some(hit) => {
-            let mut out = PathRadiance { emitted: hit.emission, ..Default::default() };
+            let mut out = PathRadiance {
+                emitted: hit.emission,
+                ..Default::default()
+            };
             continue_path(world, hit, sampler, settings, &mut out);
             out
         }
@@ -78,24 +81,13 @@ pub fn continue_path(
         // Next-event estimation: light reaching this vertex directly.
         if let Some(ls) = world.lights.sample_incident(hit.position, sampler) {
             let cos = n.dot(ls.wi);
-            if cos > 0.0 && ng.dot(ls.wi) > 0.0 {
-                let origin = hit.spawn_origin(ls.wi);
-                let t_max = if ls.distance.is_finite() {
-                    (ls.distance - 2e-4 * (1.0 + ls.distance)).max(0.0)
+            if cos > 0.0 && ng.dot(ls.wi) > 0.0 && world.unoccluded(&hit, &ls) {
+                let w = if ls.pdf > 0.0 {
+                    power_heuristic(ls.pdf, lambert_pdf(n, ls.wi))
                 } else {
-                    f32::INFINITY
+                    1.0
                 };
-                if !world.tracer.occluded(
-                    &Ray::segment(origin, ls.wi, t_max),
-                    illume_scene::MASK_DEFAULT,
-                ) {
-                    let w = if ls.pdf > 0.0 {
-                        power_heuristic(ls.pdf, lambert_pdf(n, ls.wi))
-                    } else {
-                        1.0
-                    };
-                    out.add(bounces + 1, throughput * f * ls.weight * (cos * w));
-                }
+                out.add(bounces + 1, throughput * f * ls.weight * (cos * w));
             }
         }
         // BSDF sampling.
