@@ -235,8 +235,10 @@ fn latency_table() {
     println!(
         "\n### Latency after a change vs pool size (builtin:cornell-spot, 100 VSLs, streaming, no rendering)\n"
     );
-    println!("| pool size [impacts] | impacts/s | predicted pool/rate [s] | measured [s] |");
-    println!("|---|---|---|---|");
+    println!(
+        "| pool size [impacts] | impacts/s before | pool/rate before [s] | measured [s] | impacts/s during | pool/rate during [s] |"
+    );
+    println!("|---|---|---|---|---|---|");
     for pool in [25_000u32, 50_000, 100_000, 200_000, 400_000] {
         let world: SharedWorld =
             World::new(illume_scene::builtin::load("cornell-spot").expect("builtin")).shared();
@@ -266,6 +268,7 @@ fn latency_table() {
             })
             .expect("edit");
         let t0 = Instant::now();
+        let shot0 = stat(&ps, "photon_stream.impacts_shot");
         ps.scene_changed(&world.read().unwrap(), &changes);
         while stat(&ps, "photon_stream.stale_fraction") > 0.0
             && t0.elapsed() < Duration::from_secs(120)
@@ -273,9 +276,11 @@ fn latency_table() {
             std::thread::sleep(Duration::from_millis(2));
         }
         let measured = t0.elapsed().as_secs_f64();
+        let during = (stat(&ps, "photon_stream.impacts_shot") - shot0) / measured;
         println!(
-            "| {pool} | {rate:.3e} | {:.3} | {measured:.3} |",
-            pool as f64 / rate
+            "| {pool} | {rate:.3e} | {:.3} | {measured:.3} | {during:.3e} | {:.3} |",
+            pool as f64 / rate,
+            pool as f64 / during
         );
     }
 }
