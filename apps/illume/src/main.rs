@@ -2,11 +2,14 @@
 //!
 //! * `illume render SCENE` — one image (reference path tracer or a technique);
 //! * `illume info SCENE` — what a scene holds (triangles, instances, lights and power);
-//! * `illume compare A B` — image metrics between two images or two frame folders.
+//! * `illume compare A B` — image metrics between two images or two frame folders;
+//! * `illume animate SCENE` — an animation: numbered frames, a preview, a per-frame CSV;
+//! * `illume demo` — photon streaming on `builtin:cornell-spot` in real time.
 //!
 //! SCENE is a file (`.gltf`, `.glb`, `.obj`, `.ply`) or `builtin:NAME`
 //! (`builtin:cornell-spot`, `builtin:cube-in-box`, `builtin:furnace`).
 
+mod animate;
 mod compare;
 mod info;
 mod progress;
@@ -28,6 +31,12 @@ enum Command {
     Render(render::RenderArgs),
     /// Describe a scene: geometry, lights and their power, animations, bounds.
     Info(info::InfoArgs),
+    /// Render an animation: numbered PNG (and EXR) frames, a GIF/MP4 preview, a
+    /// per-frame CSV of timings and counters.
+    Animate(animate::AnimateArgs),
+    /// The main demo: photon streaming on builtin:cornell-spot with the sphere and the
+    /// spot light moving, in real time; writes out/demo/ and prints frames per second.
+    Demo(animate::DemoArgs),
     /// Compare two images (EXR/PNG) or two folders of frames with image metrics.
     Compare(compare::CompareArgs),
 }
@@ -38,6 +47,8 @@ fn main() {
         Command::Render(a) => render::run(a),
         Command::Info(a) => info::run(a),
         Command::Compare(a) => compare::run(a),
+        Command::Animate(a) => animate::run(a),
+        Command::Demo(a) => animate::demo(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

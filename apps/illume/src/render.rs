@@ -17,7 +17,7 @@ pub struct RenderArgs {
     pub scene: PathBuf,
     /// Technique supplying indirect light; `reference` renders everything with the
     /// reference path tracer.
-    #[arg(long, default_value = "reference")]
+    #[arg(long, default_value = "photon_stream")]
     pub technique: TechniqueKind,
     /// Scene time [s] at which the active animation is evaluated.
     #[arg(long, default_value_t = 0.0)]

@@ -11,6 +11,7 @@
 //! ```
 
 use crate::TechniqueKind;
+use illume_photon_stream::PhotonStreamSettings;
 use illume_reference::ReferenceSettings;
 use illume_render::RenderSettings;
 use illume_transport::Budget;
@@ -20,12 +21,14 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Config {
-    /// The technique supplying indirect light. Default `reference`.
+    /// The technique supplying indirect light. Default `photon_stream`.
     pub technique: TechniqueKind,
     /// The renderer (`[render]`).
     pub render: RenderSettings,
     /// The reference path tracer (`[reference]`).
     pub reference: ReferenceSettings,
+    /// Photon streaming with VSLs (`[photon_stream]`).
+    pub photon_stream: PhotonStreamSettings,
 }
 
 /// Why a configuration file was rejected.
@@ -69,9 +72,13 @@ impl Config {
 
     /// The per-frame budget the configured technique gets by default.
     pub fn budget(&self) -> Budget {
-        Budget {
-            samples: Some(self.reference.spp_per_frame),
-            ..Default::default()
+        match self.technique {
+            TechniqueKind::Reference => Budget {
+                samples: Some(self.reference.spp_per_frame),
+                ..Default::default()
+            },
+            // photon_stream: its own photons_per_frame (deterministic mode) or the stream.
+            TechniqueKind::PhotonStream => Budget::default(),
         }
     }
 }
@@ -92,6 +99,19 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("cfg/a.toml") && e.contains("widht"), "{e}");
+        let c = Config::parse(
+            "technique = \"photon_stream\"\n[photon_stream]\nvsl_count = 42\n",
+            Path::new("c.toml"),
+        )
+        .unwrap();
+        assert_eq!(
+            (c.technique, c.photon_stream.vsl_count),
+            (TechniqueKind::PhotonStream, 42)
+        );
+        let e = Config::parse("[photon_stream]\nvsl_cuont = 1\n", Path::new("d.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("d.toml") && e.contains("vsl_cuont"), "{e}");
         let e = Config::parse("technique = \"nope\"\n", Path::new("b.toml"))
             .unwrap_err()
             .to_string();

@@ -1,6 +1,7 @@
 //! The closed set of techniques, selected by name.
 
 use crate::{Config, EngineError};
+use illume_photon_stream::PhotonStream;
 use illume_reference::ReferenceTechnique;
 use illume_transport::{SharedWorld, Technique};
 
@@ -10,29 +11,42 @@ use illume_transport::{SharedWorld, Technique};
 #[serde(rename_all = "snake_case")]
 pub enum TechniqueKind {
     /// The reference path tracer (ground truth).
-    #[default]
     Reference,
+    /// Photon streaming with virtual surface lights (Meneveaux & Bridault 2008),
+    /// illume's default technique.
+    #[default]
+    PhotonStream,
 }
 
 impl TechniqueKind {
     /// All techniques.
-    pub const ALL: &'static [TechniqueKind] = &[TechniqueKind::Reference];
+    pub const ALL: &'static [TechniqueKind] =
+        &[TechniqueKind::Reference, TechniqueKind::PhotonStream];
 
     /// The technique's one name.
     pub fn name(self) -> &'static str {
         match self {
             TechniqueKind::Reference => "reference",
+            TechniqueKind::PhotonStream => "photon_stream",
         }
     }
 
     /// Builds the technique for `world` with its settings from `config`.
     pub fn build(
         self,
-        _world: &SharedWorld,
+        world: &SharedWorld,
         config: &Config,
     ) -> Result<Box<dyn Technique>, EngineError> {
         Ok(match self {
             TechniqueKind::Reference => Box::new(ReferenceTechnique::new(config.reference.clone())),
+            TechniqueKind::PhotonStream => Box::new(
+                PhotonStream::new(world, config.photon_stream.clone()).map_err(|e| {
+                    EngineError::Technique {
+                        technique: self.name(),
+                        message: e.to_string(),
+                    }
+                })?,
+            ),
         })
     }
 }

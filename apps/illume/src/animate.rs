@@ -1,0 +1,333 @@
+//! `illume animate` and `illume demo`: render an animation frame by frame with a
+//! technique, write numbered frames, an animated preview and a per-frame CSV.
+
+use crate::progress;
+use crate::render::load_scene;
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use illume_core::image::{RgbImage, ToneMap, to_srgb8, write_exr};
+use illume_engine::{Config, Engine, TechniqueKind};
+use illume_photon_stream::StreamMode;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Arguments of `illume animate`.
+#[derive(Args, Clone)]
+pub struct AnimateArgs {
+    /// Scene file (.gltf, .glb, .obj, .ply) or builtin:NAME.
+    pub scene: PathBuf,
+    /// Technique supplying indirect light.
+    #[arg(long, default_value = "photon_stream")]
+    pub technique: TechniqueKind,
+    /// Animation to play (default: the scene's first).
+    #[arg(long)]
+    pub animation: Option<String>,
+    /// Length of the sequence [s] (default: the animation's duration, or 2 s).
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Frames per second of scene time (deterministic mode) and of the preview.
+    #[arg(long, default_value_t = 15.0)]
+    pub fps: f64,
+    /// Real time: scene time follows the wall clock, frames are rendered as fast as
+    /// they come, photons stream in a background thread (photon_stream).
+    #[arg(long, conflicts_with = "photons_per_frame")]
+    pub realtime: bool,
+    /// Deterministic: shoot exactly N photons between frames (reproducible frames).
+    /// Default when --realtime is not given (with the technique's photons_per_frame).
+    #[arg(long)]
+    pub photons_per_frame: Option<u64>,
+    /// Play the animation forwards then backwards (ping-pong) when the sequence is
+    /// longer than the animation.
+    #[arg(long)]
+    pub ping_pong: bool,
+    /// Number of VSLs (photon_stream's vsl_count).
+    #[arg(long)]
+    pub vsls: Option<u32>,
+    /// Image width [pixels].
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height [pixels].
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Output folder: frame_NNNNN.png, frames.csv, preview.gif or preview.mp4.
+    #[arg(long, short, default_value = "out/animate")]
+    pub output: PathBuf,
+    /// Also write linear frame_NNNNN.exr.
+    #[arg(long)]
+    pub exr: bool,
+    /// Exposure for PNG and preview output [stops].
+    #[arg(long, default_value_t = 0.0)]
+    pub exposure: f32,
+    /// TOML configuration (technique settings tables); flags override it.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+}
+
+/// Arguments of `illume demo`.
+#[derive(Args)]
+pub struct DemoArgs {
+    /// Output folder.
+    #[arg(long, short, default_value = "out/demo")]
+    pub output: PathBuf,
+    /// Length of the demo [s of wall-clock time].
+    #[arg(long, default_value_t = 6.0)]
+    pub duration: f64,
+    /// Image width [pixels].
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    /// Image height [pixels].
+    #[arg(long, default_value_t = 480)]
+    pub height: u32,
+    /// Number of VSLs.
+    #[arg(long, default_value_t = 100)]
+    pub vsls: u32,
+}
+
+/// Scene time of sequence time `t`: the animation time itself, or ping-pong over it.
+fn scene_time(t: f64, animation_s: f64, ping_pong: bool) -> f64 {
+    if !ping_pong || animation_s <= 0.0 {
+        return t;
+    }
+    let period = 2.0 * animation_s;
+    let u = t.rem_euclid(period);
+    if u <= animation_s { u } else { period - u }
+}
+
+struct StoredFrame {
+    srgb8: Vec<u8>,
+    hdr: Option<RgbImage>,
+}
+
+/// Runs `illume animate`.
+pub fn run(a: AnimateArgs) -> Result<()> {
+    let mut config = match &a.config {
+        Some(p) => Config::load(p)?,
+        None => Config::default(),
+    };
+    config.technique = a.technique;
+    if let Some(w) = a.width {
+        config.render.width = w;
+    }
+    if let Some(h) = a.height {
+        config.render.height = h;
+    }
+    if let Some(n) = a.vsls {
+        config.photon_stream.vsl_count = n;
+    }
+    if a.realtime {
+        config.photon_stream.mode = StreamMode::Streaming;
+    } else {
+        config.photon_stream.mode = StreamMode::Deterministic;
+        if let Some(n) = a.photons_per_frame {
+            config.photon_stream.photons_per_frame = n;
+        }
+    }
+    if !(a.fps > 0.0 && a.fps.is_finite()) {
+        bail!("--fps must be positive, got {}", a.fps);
+    }
+    let (w, h) = (config.render.width, config.render.height);
+    if w == 0 || h == 0 {
+        bail!("image size must be at least 1×1");
+    }
+    let scene = load_scene(&a.scene, a.animation.as_deref(), 0.0)?;
+    let animation_s = scene.animation_duration();
+    let duration = a
+        .duration
+        .unwrap_or(if animation_s > 0.0 { animation_s } else { 2.0 });
+    if !(duration >= 0.0 && duration.is_finite()) {
+        bail!("--duration must be a non-negative number of seconds");
+    }
+    std::fs::create_dir_all(&a.output)
+        .with_context(|| format!("{}: cannot create folder", a.output.display()))?;
+    let tone = ToneMap {
+        exposure_ev: a.exposure,
+        ..Default::default()
+    };
+    let mut engine = Engine::new(scene, &config)?;
+    let planned = (duration * a.fps).round() as u64 + 1;
+    let pb = progress::bar(planned, if a.realtime { "real time" } else { "frames" });
+    let mut csv_header: Option<Vec<String>> = None;
+    let mut csv_rows: Vec<String> = Vec::new();
+    let mut stored: Vec<StoredFrame> = Vec::new();
+    let start = Instant::now();
+    let mut render_s = 0.0;
+    let mut index = 0u64;
+    loop {
+        let t = if a.realtime {
+            start.elapsed().as_secs_f64().min(duration)
+        } else {
+            index as f64 / a.fps
+        };
+        if !a.realtime && t > duration + 1e-9 {
+            break;
+        }
+        let t_frame = Instant::now();
+        let out = engine.step(scene_time(t, animation_s, a.ping_pong));
+        render_s += t_frame.elapsed().as_secs_f64();
+        let ft = out.frame.timings;
+        let names: Vec<String> = out.stats.iter().map(|(n, _)| n.clone()).collect();
+        if csv_header.is_none() {
+            csv_header = Some(names.clone());
+        }
+        let mut row = format!(
+            "{index},{t:.6},{:.6},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
+            start.elapsed().as_secs_f64(),
+            out.update_ms,
+            out.advance_ms,
+            ft.gbuffer_ms,
+            ft.direct_ms,
+            ft.indirect_ms,
+            ft.total_ms
+        );
+        for (_, v) in &out.stats {
+            row += &format!(",{v}");
+        }
+        csv_rows.push(row);
+        let frame = StoredFrame {
+            srgb8: to_srgb8(&out.frame.full, &tone),
+            hdr: a.exr.then(|| out.frame.full.clone()),
+        };
+        if a.realtime {
+            stored.push(frame); // written after the run, so disk I/O does not slow the loop
+        } else {
+            write_frame(&a.output, index, &frame, w, h)?;
+            stored.push(StoredFrame {
+                srgb8: frame.srgb8,
+                hdr: None,
+            });
+        }
+        index += 1;
+        pb.set_position(index.min(planned));
+        if a.realtime && t >= duration {
+            break;
+        }
+    }
+    pb.finish_and_clear();
+    let wall = start.elapsed().as_secs_f64();
+    if a.realtime {
+        for (i, f) in stored.iter().enumerate() {
+            write_frame(&a.output, i as u64, f, w, h)?;
+        }
+    }
+    let csv_path = a.output.join("frames.csv");
+    let mut csv = std::fs::File::create(&csv_path)
+        .with_context(|| format!("{}: cannot create", csv_path.display()))?;
+    let header = csv_header.unwrap_or_default();
+    writeln!(
+        csv,
+        "frame,time_s,wall_s,update_ms,advance_ms,gbuffer_ms,direct_ms,indirect_ms,render_ms{}",
+        header.iter().map(|n| format!(",{n}")).collect::<String>()
+    )?;
+    for r in &csv_rows {
+        writeln!(csv, "{r}")?;
+    }
+    let preview = write_preview(
+        &a.output,
+        &stored,
+        w,
+        h,
+        if a.realtime {
+            index as f64 / wall
+        } else {
+            a.fps
+        },
+    )?;
+    eprintln!(
+        "{} frames of {}×{} with {} in {wall:.2} s: {:.2} frames per second (rendering alone {:.2} fps)",
+        index,
+        w,
+        h,
+        config.technique,
+        index as f64 / wall,
+        index as f64 / render_s
+    );
+    eprintln!(
+        "wrote {}/frame_NNNNN.png{}, {}, {}",
+        a.output.display(),
+        if a.exr { " (+ .exr)" } else { "" },
+        csv_path.display(),
+        preview.display()
+    );
+    Ok(())
+}
+
+fn write_frame(dir: &Path, index: u64, f: &StoredFrame, w: u32, h: u32) -> Result<()> {
+    let path = dir.join(format!("frame_{index:05}.png"));
+    image::save_buffer(&path, &f.srgb8, w, h, image::ColorType::Rgb8)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    if let Some(hdr) = &f.hdr {
+        write_exr(hdr, &path.with_extension("exr"))?;
+    }
+    Ok(())
+}
+
+/// MP4 through ffmpeg when it is on PATH, else an animated GIF (half size).
+fn write_preview(dir: &Path, frames: &[StoredFrame], w: u32, h: u32, fps: f64) -> Result<PathBuf> {
+    let ffmpeg_ok = std::process::Command::new("ffmpeg")
+        .arg("-version")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if ffmpeg_ok {
+        let out = dir.join("preview.mp4");
+        let status = std::process::Command::new("ffmpeg")
+            .args([
+                "-y",
+                "-loglevel",
+                "error",
+                "-framerate",
+                &format!("{fps:.3}"),
+                "-i",
+            ])
+            .arg(dir.join("frame_%05d.png"))
+            .args([
+                "-pix_fmt",
+                "yuv420p",
+                "-vf",
+                "scale=trunc(iw/2)*2:trunc(ih/2)*2",
+            ])
+            .arg(&out)
+            .status()
+            .context("running ffmpeg")?;
+        if status.success() {
+            return Ok(out);
+        }
+        eprintln!("warning: ffmpeg failed ({status}); writing a GIF instead");
+    }
+    let out = dir.join("preview.gif");
+    let file =
+        std::fs::File::create(&out).with_context(|| format!("{}: cannot create", out.display()))?;
+    let mut enc = image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(file), 30);
+    enc.set_repeat(image::codecs::gif::Repeat::Infinite)?;
+    let (pw, ph) = ((w / 2).max(1), (h / 2).max(1));
+    let delay = image::Delay::from_numer_denom_ms((1000.0 / fps.max(1.0)) as u32, 1);
+    for f in frames {
+        let rgb = image::RgbImage::from_raw(w, h, f.srgb8.clone()).context("frame size")?;
+        let small = image::imageops::resize(&rgb, pw, ph, image::imageops::FilterType::Triangle);
+        let rgba = image::DynamicImage::ImageRgb8(small).to_rgba8();
+        enc.encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))?;
+    }
+    Ok(out)
+}
+
+/// Runs `illume demo`: builtin:cornell-spot, sphere and spot light moving, photon
+/// streaming in real time.
+pub fn demo(d: DemoArgs) -> Result<()> {
+    run(AnimateArgs {
+        scene: PathBuf::from("builtin:cornell-spot"),
+        technique: TechniqueKind::PhotonStream,
+        animation: Some("move".into()),
+        duration: Some(d.duration),
+        fps: 15.0,
+        realtime: true,
+        photons_per_frame: None,
+        ping_pong: true,
+        vsls: Some(d.vsls),
+        width: Some(d.width),
+        height: Some(d.height),
+        output: d.output,
+        exr: false,
+        exposure: 0.0,
+        config: None,
+    })
+}

@@ -1,0 +1,346 @@
+//! Photon streaming benchmarks (the paper's Tables 2–3 in kind, photon rate, latency).
+//!
+//! `cargo bench -p illume-photon-stream --bench photon_stream [-- SECTION...]` with
+//! SECTION among `fps`, `rate`, `latency`, `visibility` (default: all). Prints Markdown tables.
+//!
+//! * `fps` — frames per second of whole frames (G-buffer + direct light with one shadow
+//!   ray + VSL indirect) at 800×600 and 1280×1024 for 10/50/100/200 VSLs on the Cornell
+//!   box, Cornell dragon and Dabrovic Sponza (`../shared/scenes`, or `ILLUME_SCENES`),
+//!   with the streaming thread running. As in the paper, each scene is lit by one spot
+//!   light (file emitters are switched off).
+//! * `rate` — photon impacts per second of the streaming thread (alone) against the
+//!   tracer's incoherent closest-hit rays per second on one thread.
+//! * `visibility` — cost of the VSL visibility modes (beyond the paper).
+//! * `latency` — time until no photon from before a change is left in the pool,
+//!   against pool size / impact rate, on `builtin:cornell-spot`.
+
+use illume_core::sampling::{Pcg32, SampleStream, uniform_sphere};
+use illume_core::{Affine3A, Quat, Ray, Rgb, Vec3};
+use illume_photon_stream::{PhotonStream, PhotonStreamSettings, VisibilityMode};
+use illume_render::{RenderSettings, Renderer};
+use illume_scene::{Edit, InstanceId, Light, LightKind, Node, Scene, Trs};
+use illume_transport::{SharedWorld, Technique, World};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+fn scenes_dir() -> PathBuf {
+    std::env::var_os("ILLUME_SCENES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes"))
+}
+
+/// The scene with its emitters switched off and one spot light shining down from
+/// near the top of its bounds (the paper's setup).
+fn with_spot(mut scene: Scene) -> Scene {
+    for m in &mut scene.materials {
+        m.emission = Rgb::ZERO;
+    }
+    scene.lights.clear();
+    let b = scene.bounds();
+    let c = b.center();
+    let e = b.extent();
+    let pos = Vec3::new(c.x, b.max.y - 0.05 * e.y, c.z);
+    let node = illume_scene::NodeId(scene.nodes.len() as u32);
+    scene.nodes.push(Node {
+        name: "bench_spot".into(),
+        parent: None,
+        local: Trs {
+            translation: pos,
+            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+            scale: Vec3::ONE,
+        },
+        world_from_node: Affine3A::IDENTITY,
+    });
+    let intensity = 10.0 * (e.y / 2.0).powi(2);
+    scene.lights.push(Light {
+        name: "bench_spot".into(),
+        kind: LightKind::Spot {
+            intensity: Rgb::splat(intensity),
+            inner_cone_rad: 30f32.to_radians(),
+            outer_cone_rad: 45f32.to_radians(),
+        },
+        node,
+        world_from_light: Affine3A::IDENTITY,
+    });
+    scene.update_world_transforms();
+    scene
+}
+
+fn load(name: &str) -> Scene {
+    let path = scenes_dir().join(name);
+    let scene =
+        illume_scene::load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    with_spot(scene)
+}
+
+const SCENES: [(&str, &str); 3] = [
+    ("Cornell box", "cornell_box/CornellBox-Sphere.obj"),
+    ("Cornell dragon", "cornell_dragon/cornell_dragon.obj"),
+    ("Sponza", "dabrovic_sponza/sponza.obj"),
+];
+
+fn fps_table() {
+    println!("\n### Frames per second (whole frame, streaming thread running)\n");
+    println!("| scene | resolution | 10 VSLs | 50 VSLs | 100 VSLs | 200 VSLs |");
+    println!("|---|---|---|---|---|---|");
+    let mut shading = Vec::new();
+    for (label, file) in SCENES {
+        let world: SharedWorld = World::new(load(file)).shared();
+        for (w, h) in [(800u32, 600u32), (1280, 1024)] {
+            let mut row = format!("| {label} | {w}×{h} |");
+            for n in [10u32, 50, 100, 200] {
+                let mut ps = PhotonStream::new(
+                    &world,
+                    PhotonStreamSettings {
+                        vsl_count: n,
+                        ..Default::default()
+                    },
+                )
+                .expect("photon_stream");
+                let renderer = Renderer::new(RenderSettings {
+                    width: w,
+                    height: h,
+                    area_light_samples: 1,
+                    ..Default::default()
+                });
+                {
+                    let guard = world.read().unwrap();
+                    ps.warm_up(&guard);
+                    let _ = renderer.render(&guard, &mut ps, 0);
+                }
+                let t0 = Instant::now();
+                let (mut frames, mut indirect_ms, mut gbuffer_ms, mut direct_ms) =
+                    (0u32, 0.0, 0.0, 0.0);
+                while frames < 3 || (t0.elapsed() < Duration::from_secs(2) && frames < 30) {
+                    let guard = world.read().unwrap();
+                    let f = renderer.render(&guard, &mut ps, frames as u64 + 1);
+                    indirect_ms += f.timings.indirect_ms;
+                    gbuffer_ms += f.timings.gbuffer_ms;
+                    direct_ms += f.timings.direct_ms;
+                    frames += 1;
+                }
+                let fps = frames as f64 / t0.elapsed().as_secs_f64();
+                let k = frames as f64;
+                row += &format!(" {fps:.1} |");
+                let tile = ps.last_shade().vsls_per_tile();
+                let rate = ps.impacts_per_s();
+                shading.push(format!(
+                    "| {label} | {w}×{h} | {n} | {:.1} | {:.1} | {:.1} | {tile:.1} | {:.0} |",
+                    gbuffer_ms / k,
+                    direct_ms / k,
+                    indirect_ms / k,
+                    rate
+                ));
+            }
+            println!("{row}");
+        }
+    }
+    println!("\n### Frame breakdown [ms per frame]\n");
+    println!(
+        "| scene | resolution | VSLs | G-buffer | direct | VSL indirect | VSLs/tile after culling | impacts/s while rendering |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for r in shading {
+        println!("{r}");
+    }
+}
+
+/// Incoherent closest-hit rays/s and photon impacts/s (with rays/s) on this one thread,
+/// measured in alternating slices so machine load affects both alike.
+fn rates_on_one_thread(world: &World, ps: &PhotonStream) -> (f64, f64, f64) {
+    let b = world.scene.bounds();
+    let mut rng = Pcg32::new(1, 2);
+    let emitter = illume_photon_stream::emit::Emitter::new(
+        world,
+        ps.vsls(),
+        1.0 / ps.snapshot().quantum_w,
+        32,
+        7,
+    );
+    let (mut ray_n, mut ray_s, mut imp_n, mut prays_n, mut imp_s) =
+        (0usize, 0.0, 0usize, 0u64, 0.0);
+    let mut hits = 0usize;
+    let mut next_photon = 0u64;
+    for round in 0..10 {
+        let t0 = Instant::now();
+        let _ = round;
+        while t0.elapsed() < Duration::from_millis(200) {
+            // Fresh rays every time (never re-traced, so no cache reuse across rounds).
+            for _ in 0..5000 {
+                let u = Vec3::new(rng.next_1d(), rng.next_1d(), rng.next_1d());
+                let r = Ray::new(b.min + u * b.extent(), uniform_sphere(rng.next_2d()));
+                hits += world
+                    .tracer
+                    .intersect(&r, illume_scene::MASK_DEFAULT)
+                    .is_some() as usize;
+            }
+            ray_n += 5000;
+        }
+        ray_s += t0.elapsed().as_secs_f64();
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_millis(200) {
+            let batch = emitter.trace(world, next_photon, 1000);
+            next_photon += 1000;
+            imp_n += batch.impacts.len();
+            prays_n += batch.rays;
+        }
+        imp_s += t0.elapsed().as_secs_f64();
+    }
+    std::hint::black_box(hits);
+    (
+        ray_n as f64 / ray_s,
+        imp_n as f64 / imp_s,
+        prays_n as f64 / imp_s,
+    )
+}
+
+fn rate_table() {
+    println!("\n### Photon impacts per second vs tracer rays per second (one thread each)\n");
+    println!(
+        "Incoherent rays: random origins in the scene bounds, uniform directions, closest hit. Photon"
+    );
+    println!(
+        "tracing: emission, closest hit, surface, Russian roulette, nearest VSL (same thread, alternating"
+    );
+    println!("0.2 s slices). Stream: the simulation thread alone, pool updates included.\n");
+    println!(
+        "| scene | tracer rays/s | photon rays/s | impacts/s | impacts/s ÷ rays/s | stream impacts/s | stream ÷ rays/s |"
+    );
+    println!("|---|---|---|---|---|---|---|");
+    for (label, file) in SCENES {
+        let world: SharedWorld = World::new(load(file)).shared();
+        let mut ps = PhotonStream::new(
+            &world,
+            PhotonStreamSettings {
+                vsl_count: 100,
+                start_paused: true,
+                ..Default::default()
+            },
+        )
+        .expect("photon_stream");
+        let (rays, impacts, prays) = rates_on_one_thread(&world.read().unwrap(), &ps);
+        ps.warm_up(&world.read().unwrap());
+        ps.resume();
+        std::thread::sleep(Duration::from_secs(2));
+        let stream = ps.impacts_per_s();
+        println!(
+            "| {label} | {rays:.3e} | {prays:.3e} | {impacts:.3e} | {:.2} | {stream:.3e} | {:.2} |",
+            impacts / rays,
+            stream / rays
+        );
+    }
+}
+
+fn latency_table() {
+    println!(
+        "\n### Latency after a change vs pool size (builtin:cornell-spot, 100 VSLs, streaming, no rendering)\n"
+    );
+    println!(
+        "| pool size [impacts] | impacts/s before | pool/rate before [s] | measured [s] | impacts/s during | pool/rate during [s] |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for pool in [25_000u32, 50_000, 100_000, 200_000, 400_000] {
+        let world: SharedWorld =
+            World::new(illume_scene::builtin::load("cornell-spot").expect("builtin")).shared();
+        let mut ps = PhotonStream::new(
+            &world,
+            PhotonStreamSettings {
+                pool_size: pool,
+                ..Default::default()
+            },
+        )
+        .expect("photon_stream");
+        ps.warm_up(&world.read().unwrap());
+        std::thread::sleep(Duration::from_millis(1500));
+        let stat = |ps: &PhotonStream, name: &str| {
+            ps.stats()
+                .into_iter()
+                .find(|(n, _)| n == name)
+                .map_or(0.0, |s| s.1)
+        };
+        let rate = stat(&ps, "photon_stream.impacts_per_s");
+        let changes = world
+            .write()
+            .unwrap()
+            .apply_edit(&Edit::SetInstanceTransform {
+                instance: InstanceId(2),
+                world_from_object: Affine3A::from_translation(Vec3::new(0.45, 0.3, 0.1)),
+            })
+            .expect("edit");
+        let t0 = Instant::now();
+        let shot0 = stat(&ps, "photon_stream.impacts_shot");
+        ps.scene_changed(&world.read().unwrap(), &changes);
+        while stat(&ps, "photon_stream.stale_fraction") > 0.0
+            && t0.elapsed() < Duration::from_secs(120)
+        {
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        let measured = t0.elapsed().as_secs_f64();
+        let during = (stat(&ps, "photon_stream.impacts_shot") - shot0) / measured;
+        println!(
+            "| {pool} | {rate:.3e} | {:.3} | {measured:.3} | {during:.3e} | {:.3} |",
+            pool as f64 / rate,
+            pool as f64 / during
+        );
+    }
+}
+
+fn visibility_table() {
+    println!("\n### Cost of VSL visibility (Cornell box, 800×600, 100 VSLs, indirect pass only)\n");
+    println!("| visibility | indirect ms/frame | shadow rays/frame |");
+    println!("|---|---|---|");
+    let world: SharedWorld = World::new(load(SCENES[0].1)).shared();
+    let guard = world.read().unwrap();
+    let g = illume_transport::GBuffer::render(&guard, 800, 600, illume_core::Vec2::splat(0.5));
+    for vis in [
+        VisibilityMode::Off,
+        VisibilityMode::Stochastic,
+        VisibilityMode::All,
+    ] {
+        let mut ps = PhotonStream::new(
+            &world,
+            PhotonStreamSettings {
+                visibility: vis,
+                start_paused: true,
+                ..Default::default()
+            },
+        )
+        .expect("photon_stream");
+        ps.warm_up(&guard);
+        let _ = ps.indirect(&guard, &g);
+        let t0 = Instant::now();
+        let n = 3;
+        for _ in 0..n {
+            let _ = ps.indirect(&guard, &g);
+        }
+        let ms = t0.elapsed().as_secs_f64() * 1e3 / n as f64;
+        println!(
+            "| {vis:?} | {ms:.1} | {:.3e} |",
+            ps.last_shade().shadow_rays as f64
+        );
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let want = |s: &str| args.is_empty() || args.iter().any(|a| a == s);
+    println!(
+        "machine: {} threads available",
+        std::thread::available_parallelism().map_or(0, |n| n.get())
+    );
+    if want("rate") {
+        rate_table();
+    }
+    if want("latency") {
+        latency_table();
+    }
+    if want("visibility") {
+        visibility_table();
+    }
+    if want("fps") {
+        fps_table();
+    }
+}

@@ -1,0 +1,149 @@
+//! Photon emission and tracing (§0.7.1): equal-power photons from lights chosen by
+//! power, Russian roulette on albedo at each impact (the shared
+//! [`trace_photon`](illume_transport::photon::trace_photon) kernel, through the world's
+//! tracer), and each impact turned into a pool entry for its nearest VSL.
+//!
+//! What an impact deposits: the flux *leaving* the surface it hit, ρ(x)·Φ_arriving
+//! (diffusely reflected), for every impact of the path (bounce 0, 1, 2, …). Shading a
+//! point with these VSLs therefore gives light reflected two or more times: exactly the
+//! reference's `indirect` image, never direct light (the renderer's).
+//!
+//! Photon `seq` uses PCG stream `seq` of the technique's seed, so the same photon index
+//! in the same world gives the same path, whatever the thread count.
+
+use crate::placement::VslSet;
+use crate::pool::{PoolImpact, to_quanta};
+use illume_core::Affine3A;
+use illume_core::sampling::{Pcg32, mix64};
+use illume_transport::World;
+use illume_transport::photon::{PhotonPathSettings, trace_photon};
+use rayon::prelude::*;
+
+/// Traced photons ready for the pool: impacts of photon `k` are
+/// `impacts[ends[k − 1]..ends[k]]` (zero impacts allowed).
+#[derive(Clone, Debug, Default)]
+pub struct PhotonBatch {
+    /// Pool entries of every photon, in photon order.
+    pub impacts: Vec<PoolImpact>,
+    /// End offset of each photon's impacts.
+    pub ends: Vec<u32>,
+    /// Rays traced.
+    pub rays: u64,
+}
+
+impl PhotonBatch {
+    /// Number of photons.
+    pub fn photons(&self) -> usize {
+        self.ends.len()
+    }
+
+    /// The impacts of each photon in order.
+    pub fn paths(&self) -> impl Iterator<Item = &[PoolImpact]> {
+        let mut start = 0usize;
+        self.ends.iter().map(move |&e| {
+            let s = &self.impacts[start..e as usize];
+            start = e as usize;
+            s
+        })
+    }
+
+    fn append(&mut self, mut other: PhotonBatch) {
+        let base = self.impacts.len() as u32;
+        self.impacts.append(&mut other.impacts);
+        self.ends.extend(other.ends.iter().map(|e| e + base));
+        self.rays += other.rays;
+    }
+}
+
+/// Everything photon tracing needs besides the world.
+pub struct Emitter<'a> {
+    /// The VSLs impacts are assigned to.
+    pub vsls: &'a VslSet,
+    /// `object_from_world` of every instance (inverse of its current transform).
+    pub object_from_world: Vec<Affine3A>,
+    /// 1 / (watts per quantum).
+    pub inv_quantum: f64,
+    /// Path settings (bounce limit, mask).
+    pub path: PhotonPathSettings,
+    /// Seed of the photon streams.
+    pub seed: u64,
+}
+
+impl<'a> Emitter<'a> {
+    /// An emitter for `world`'s current instance transforms.
+    pub fn new(
+        world: &World,
+        vsls: &'a VslSet,
+        inv_quantum: f64,
+        max_bounces: u32,
+        seed: u64,
+    ) -> Self {
+        let object_from_world = world
+            .scene
+            .instances
+            .iter()
+            .map(|i| i.world_from_object.inverse())
+            .collect();
+        Self {
+            vsls,
+            object_from_world,
+            inv_quantum,
+            path: PhotonPathSettings {
+                max_bounces,
+                ..Default::default()
+            },
+            seed: mix64(seed ^ 0x9407_0a57),
+        }
+    }
+
+    /// Traces photons `first..first + count` sequentially.
+    pub fn trace(&self, world: &World, first: u64, count: u64) -> PhotonBatch {
+        let mut batch = PhotonBatch {
+            impacts: Vec::with_capacity(count as usize * 3),
+            ends: Vec::with_capacity(count as usize),
+            rays: 0,
+        };
+        for seq in first..first + count {
+            let mut rng = Pcg32::new(self.seed, seq);
+            let stats = trace_photon(world, &mut rng, &self.path, |imp| {
+                let inst = imp.hit.instance;
+                let p_object =
+                    self.object_from_world[inst.index()].transform_point3(imp.hit.position);
+                let Some(vsl) = self.vsls.nearest(inst, p_object) else {
+                    return;
+                };
+                let side = u32::from(!imp.hit.front_face);
+                let out = imp.hit.albedo * imp.flux; // flux leaving the surface, ρ·Φ
+                batch.impacts.push(PoolImpact {
+                    slot: 2 * vsl + side,
+                    quanta: [
+                        to_quanta(out.x, self.inv_quantum),
+                        to_quanta(out.y, self.inv_quantum),
+                        to_quanta(out.z, self.inv_quantum),
+                    ],
+                });
+            });
+            batch.rays += stats.rays as u64;
+            batch.ends.push(batch.impacts.len() as u32);
+        }
+        batch
+    }
+
+    /// Traces photons `first..first + count` in parallel (rayon); the result is the
+    /// same as [`Emitter::trace`], bit for bit.
+    pub fn trace_parallel(&self, world: &World, first: u64, count: u64) -> PhotonBatch {
+        const CHUNK: u64 = 512;
+        let chunks: Vec<PhotonBatch> = (0..count.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let start = first + c * CHUNK;
+                self.trace(world, start, CHUNK.min(first + count - start))
+            })
+            .collect();
+        let mut out = PhotonBatch::default();
+        for c in chunks {
+            out.append(c);
+        }
+        out
+    }
+}

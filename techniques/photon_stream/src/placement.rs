@@ -1,0 +1,602 @@
+//! VSL placement (§0.4.2, Figure 4, Algorithm 1) and the per-object nearest-VSL index.
+//!
+//! 1. The VSL count N_v is shared among objects (instances) by world surface area;
+//!    each object gets `max(1, ⌈(1 + oversampling)·N_v·A_o/A⌉)` candidates.
+//! 2. Each candidate picks a triangle of its object with probability ∝ area and a
+//!    uniform point on it after the triangle is shrunk about its centroid by
+//!    `triangle_scale` (points stay off edges).
+//! 3. Algorithm 1 removes, until N_v remain, the candidate with the smallest
+//!    (d_min1, d_min2): d_min1 finds the closest pair, d_min2 picks which of the two
+//!    sits in the denser neighbourhood. Each VSL keeps its two nearest neighbours, so a
+//!    removal only rescans the VSLs that had the removed one as a neighbour: O(n) per
+//!    removal instead of O(n²). The last VSL of an object is never removed.
+//! 4. Each VSL's represented area A_s is its share of its object's area: the object's
+//!    surface is sampled uniformly and every sample is assigned to its nearest VSL (the
+//!    same rule that assigns photons), so A_s is the area of its Voronoi cell on the
+//!    surface.
+//!
+//! VSLs live in object space (they move with their object); distances in Algorithm 1
+//! are measured in world space at construction time.
+
+use illume_core::sampling::{AliasTable, Pcg32, SampleStream, uniform_triangle};
+use illume_core::{Aabb, Vec3, transform_normal};
+use illume_scene::{InstanceId, Scene};
+
+/// One virtual surface light (§0.4.1): a surface element attached to an object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Vsl {
+    /// The object (instance) it is attached to.
+    pub instance: InstanceId,
+    /// Centre in the object's space [m, object units].
+    pub position_object: Vec3,
+    /// Unit normal in object space (the front face's side; the back side is `−normal`).
+    pub normal_object: Vec3,
+    /// World area of the surface it represents [m²] (its Voronoi cell on the object).
+    pub area_m2: f32,
+}
+
+/// All VSLs of a scene, grouped by instance, with one nearest-neighbour index per
+/// instance in object space (built once: VSLs never move relative to their object).
+#[derive(Clone, Debug)]
+pub struct VslSet {
+    vsls: Vec<Vsl>,
+    /// `first[i]..first[i + 1]` are the VSLs of instance `i`.
+    first: Vec<u32>,
+    trees: Vec<NearestIndex>,
+}
+
+/// Inputs of placement.
+#[derive(Clone, Copy, Debug)]
+pub struct PlacementSettings {
+    /// N_v.
+    pub vsl_count: u32,
+    /// Extra candidates as a fraction of N_v (0.10 in the paper).
+    pub oversampling: f32,
+    /// Triangle shrink factor about the centroid, in (0, 1].
+    pub triangle_scale: f32,
+    /// Seed.
+    pub seed: u64,
+}
+
+struct Candidate {
+    instance: u32,
+    position_object: Vec3,
+    normal_object: Vec3,
+    position_world: Vec3,
+}
+
+/// World area of every triangle of instance `i`.
+fn world_triangle_areas(scene: &Scene, i: usize) -> Vec<f32> {
+    let inst = &scene.instances[i];
+    let mesh = &scene.meshes[inst.mesh.index()];
+    (0..mesh.triangle_count())
+        .map(|t| {
+            let [a, b, c] = mesh
+                .triangle(t)
+                .map(|p| inst.world_from_object.transform_point3(p));
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .collect()
+}
+
+/// A uniform point of triangle `t` shrunk by `scale` about its centroid, with the
+/// object-space normal there (shading normal on the geometric normal's side).
+fn point_on_triangle(
+    mesh: &illume_scene::Mesh,
+    t: usize,
+    scale: f32,
+    u: illume_core::Vec2,
+) -> (Vec3, Vec3) {
+    let [p0, p1, p2] = mesh.triangle(t);
+    let b = uniform_triangle(u);
+    let (b0, b1, b2) = (1.0 - b.x - b.y, b.x, b.y);
+    // Shrinking the triangle about its centroid = pulling barycentrics towards 1/3.
+    let third = 1.0 / 3.0;
+    let (b0, b1, b2) = (
+        third + scale * (b0 - third),
+        third + scale * (b1 - third),
+        third + scale * (b2 - third),
+    );
+    let p = p0 * b0 + p1 * b1 + p2 * b2;
+    let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Y);
+    let n = if mesh.normals.is_empty() {
+        ng
+    } else {
+        let [i0, i1, i2] = mesh.indices[t].map(|i| i as usize);
+        let n = (mesh.normals[i0] * b0 + mesh.normals[i1] * b1 + mesh.normals[i2] * b2)
+            .normalize_or(ng);
+        if n.dot(ng) < 0.0 { -n } else { n }
+    };
+    (p, n)
+}
+
+impl VslSet {
+    /// Places VSLs on every instance of `scene` at its current time (§0.4.2). Instances
+    /// without area get none; every other instance gets at least one.
+    pub fn place(scene: &Scene, settings: &PlacementSettings) -> Self {
+        let areas: Vec<Vec<f32>> = (0..scene.instances.len())
+            .map(|i| world_triangle_areas(scene, i))
+            .collect();
+        let object_area: Vec<f64> = areas
+            .iter()
+            .map(|a| a.iter().map(|&x| x as f64).sum())
+            .collect();
+        let total: f64 = object_area.iter().sum();
+        let objects_with_area = object_area.iter().filter(|&&a| a > 0.0).count();
+        let mut candidates = Vec::new();
+        let mut rng = Pcg32::new(settings.seed, 0x7a5c_e11e);
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let Some(table) = AliasTable::new(&areas[i]) else {
+                continue;
+            };
+            let share = object_area[i] / total;
+            let count = ((1.0 + settings.oversampling as f64) * settings.vsl_count as f64 * share)
+                .ceil()
+                .max(1.0) as usize;
+            let mesh = &scene.meshes[inst.mesh.index()];
+            for _ in 0..count {
+                let (t, _) = table.sample(rng.next_1d());
+                let (p, n) = point_on_triangle(mesh, t, settings.triangle_scale, rng.next_2d());
+                candidates.push(Candidate {
+                    instance: i as u32,
+                    position_object: p,
+                    normal_object: n,
+                    position_world: inst.world_from_object.transform_point3(p),
+                });
+            }
+        }
+        let positions: Vec<Vec3> = candidates.iter().map(|c| c.position_world).collect();
+        let objects: Vec<u32> = candidates.iter().map(|c| c.instance).collect();
+        let target = (settings.vsl_count as usize).max(objects_with_area);
+        let keep = remove_closest(&positions, &objects, target).keep;
+        let mut kept: Vec<Candidate> = candidates
+            .into_iter()
+            .zip(keep)
+            .filter_map(|(c, k)| k.then_some(c))
+            .collect();
+        kept.sort_by_key(|c| c.instance); // stable: placement order within an object
+        let mut first = vec![0u32; scene.instances.len() + 1];
+        for c in &kept {
+            first[c.instance as usize + 1] += 1;
+        }
+        for i in 0..scene.instances.len() {
+            first[i + 1] += first[i];
+        }
+        let mut vsls: Vec<Vsl> = kept
+            .iter()
+            .map(|c| Vsl {
+                instance: InstanceId(c.instance),
+                position_object: c.position_object,
+                normal_object: c.normal_object,
+                area_m2: 0.0,
+            })
+            .collect();
+        let trees: Vec<NearestIndex> = (0..scene.instances.len())
+            .map(|i| {
+                let r = first[i] as usize..first[i + 1] as usize;
+                let bounds = scene.meshes[scene.instances[i].mesh.index()].bounds();
+                NearestIndex::new(
+                    vsls[r.clone()]
+                        .iter()
+                        .zip(r.clone())
+                        .map(|(v, g)| (v.position_object, g as u32))
+                        .collect(),
+                    bounds,
+                )
+            })
+            .collect();
+        // A_s: the object's area split by nearest-VSL assignment of uniform samples.
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let (lo, hi) = (first[i] as usize, first[i + 1] as usize);
+            let Some(table) = AliasTable::new(&areas[i]) else {
+                continue;
+            };
+            let mesh = &scene.meshes[inst.mesh.index()];
+            let samples = 256 * (hi - lo);
+            let mut counts = vec![0u32; hi - lo];
+            for _ in 0..samples {
+                let (t, _) = table.sample(rng.next_1d());
+                let (p, _) = point_on_triangle(mesh, t, 1.0, rng.next_2d());
+                if let Some((g, _)) = trees[i].nearest(p) {
+                    counts[g as usize - lo] += 1;
+                }
+            }
+            for (k, c) in counts.iter().enumerate() {
+                // At least one sample's worth, so no VSL claims zero area.
+                vsls[lo + k].area_m2 =
+                    (object_area[i] * (*c).max(1) as f64 / samples as f64) as f32;
+            }
+        }
+        Self { vsls, first, trees }
+    }
+
+    /// A set from explicit VSLs (tests, tools); `instance_count` instances.
+    pub fn from_vsls(mut vsls: Vec<Vsl>, instance_count: usize) -> Self {
+        let bounds = Aabb::from_points(vsls.iter().map(|v| v.position_object));
+        vsls.sort_by_key(|v| v.instance);
+        let mut first = vec![0u32; instance_count + 1];
+        for v in &vsls {
+            first[v.instance.index() + 1] += 1;
+        }
+        for i in 0..instance_count {
+            first[i + 1] += first[i];
+        }
+        let trees = (0..instance_count)
+            .map(|i| {
+                let r = first[i] as usize..first[i + 1] as usize;
+                NearestIndex::new(
+                    vsls[r.clone()]
+                        .iter()
+                        .zip(r.clone())
+                        .map(|(v, g)| (v.position_object, g as u32))
+                        .collect(),
+                    bounds,
+                )
+            })
+            .collect();
+        Self { vsls, first, trees }
+    }
+
+    /// The VSLs, grouped by instance.
+    pub fn vsls(&self) -> &[Vsl] {
+        &self.vsls
+    }
+
+    /// Number of VSLs.
+    pub fn len(&self) -> usize {
+        self.vsls.len()
+    }
+
+    /// True when there is none.
+    pub fn is_empty(&self) -> bool {
+        self.vsls.is_empty()
+    }
+
+    /// Number of VSLs attached to `instance`.
+    pub fn count_on(&self, instance: InstanceId) -> usize {
+        let i = instance.index();
+        (self.first[i + 1] - self.first[i]) as usize
+    }
+
+    /// The VSL of `instance` nearest to `position_object` (object space), by the
+    /// per-object index; `None` if the instance has no VSL.
+    #[inline]
+    pub fn nearest(&self, instance: InstanceId, position_object: Vec3) -> Option<u32> {
+        self.trees
+            .get(instance.index())?
+            .nearest(position_object)
+            .map(|(g, _)| g)
+    }
+
+    /// World positions and unit normals of every VSL for the scene's current transforms.
+    pub fn world_frames(&self, scene: &Scene) -> (Vec<Vec3>, Vec<Vec3>) {
+        self.vsls
+            .iter()
+            .map(|v| {
+                let m = &scene.instances[v.instance.index()].world_from_object;
+                (
+                    m.transform_point3(v.position_object),
+                    transform_normal(m, v.normal_object),
+                )
+            })
+            .unzip()
+    }
+}
+
+/// Result of [`remove_closest`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Removal {
+    /// `keep[i]`: point `i` survived.
+    pub keep: Vec<bool>,
+    /// Removed points in removal order.
+    pub order: Vec<usize>,
+}
+
+/// Two nearest alive neighbours of `i` by linear scan: (d1², n1, d2², n2).
+fn two_nearest(points: &[Vec3], alive: &[bool], i: usize) -> (f32, u32, f32, u32) {
+    let (mut d1, mut n1, mut d2, mut n2) = (f32::INFINITY, u32::MAX, f32::INFINITY, u32::MAX);
+    for (j, p) in points.iter().enumerate() {
+        if j == i || !alive[j] {
+            continue;
+        }
+        let d = p.distance_squared(points[i]);
+        if d < d1 {
+            (d2, n2) = (d1, n1);
+            (d1, n1) = (d, j as u32);
+        } else if d < d2 {
+            (d2, n2) = (d, j as u32);
+        }
+    }
+    (d1, n1, d2, n2)
+}
+
+/// Algorithm 1: removes points until `target` remain (or no removable point is left),
+/// each time the one with the smallest `(d_min1, d_min2)`; a point that is the last of
+/// its object (`objects[i]`) is never removed. Ties go to the lower index.
+pub fn remove_closest(points: &[Vec3], objects: &[u32], target: usize) -> Removal {
+    let n = points.len();
+    assert_eq!(n, objects.len(), "one object id per point");
+    let mut alive = vec![true; n];
+    let mut per_object = std::collections::HashMap::<u32, usize>::new();
+    for &o in objects {
+        *per_object.entry(o).or_default() += 1;
+    }
+    let mut near: Vec<(f32, u32, f32, u32)> =
+        (0..n).map(|i| two_nearest(points, &alive, i)).collect();
+    let mut remaining = n;
+    let mut order = Vec::new();
+    while remaining > target {
+        let mut best: Option<usize> = None;
+        for i in 0..n {
+            if !alive[i] || per_object[&objects[i]] <= 1 {
+                continue;
+            }
+            let better = match best {
+                None => true,
+                Some(b) => (near[i].0, near[i].2) < (near[b].0, near[b].2),
+            };
+            if better {
+                best = Some(i);
+            }
+        }
+        let Some(k) = best else { break };
+        alive[k] = false;
+        remaining -= 1;
+        order.push(k);
+        *per_object.get_mut(&objects[k]).expect("counted") -= 1;
+        for i in 0..n {
+            if alive[i] && (near[i].1 == k as u32 || near[i].3 == k as u32) {
+                near[i] = two_nearest(points, &alive, i);
+            }
+        }
+    }
+    Removal { keep: alive, order }
+}
+
+/// Exact nearest-point queries in O(1) for points inside a box (the object's bounds): a
+/// uniform grid whose every cell lists the only points that can be nearest to any
+/// position in it (those whose distance to the cell is at most the smallest distance,
+/// over all points, to the cell's farthest corner). Outside the box, or with too many
+/// points for the grid, a k-d tree answers.
+#[derive(Clone, Debug, Default)]
+pub struct NearestIndex {
+    kd: KdTree,
+    grid: Option<CandidateGrid>,
+}
+
+#[derive(Clone, Debug)]
+struct CandidateGrid {
+    bounds: Aabb,
+    res: [u32; 3],
+    inv_cell: Vec3,
+    offsets: Vec<u32>,
+    candidates: Vec<(Vec3, u32)>,
+}
+
+/// Largest point count that gets a grid (its build costs cells × points).
+const GRID_MAX_POINTS: usize = 4096;
+
+impl NearestIndex {
+    /// Index over `(point, id)` pairs for queries mostly inside `bounds`.
+    pub fn new(items: Vec<(Vec3, u32)>, bounds: Aabb) -> Self {
+        let grid = (!items.is_empty() && items.len() <= GRID_MAX_POINTS && !bounds.is_empty())
+            .then(|| CandidateGrid::new(&items, bounds));
+        Self {
+            kd: KdTree::new(items),
+            grid,
+        }
+    }
+
+    /// The id of the point nearest to `q` and its squared distance.
+    #[inline]
+    pub fn nearest(&self, q: Vec3) -> Option<(u32, f32)> {
+        if let Some(g) = &self.grid
+            && g.bounds.contains(q)
+        {
+            let c = ((q - g.bounds.min) * g.inv_cell)
+                .as_uvec3()
+                .min(illume_core::UVec3::from(g.res) - 1);
+            let cell = ((c.z * g.res[1] + c.y) * g.res[0] + c.x) as usize;
+            let mut best = (u32::MAX, f32::INFINITY);
+            for &(p, id) in &g.candidates[g.offsets[cell] as usize..g.offsets[cell + 1] as usize] {
+                let d = p.distance_squared(q);
+                if d < best.1 || (d == best.1 && id < best.0) {
+                    best = (id, d);
+                }
+            }
+            return Some(best);
+        }
+        self.kd.nearest(q)
+    }
+}
+
+impl CandidateGrid {
+    fn new(items: &[(Vec3, u32)], bounds: Aabb) -> Self {
+        let e = bounds.extent();
+        let pad = 1e-4 * (1.0 + e.max_element());
+        let bounds = Aabb::new(bounds.min - pad, bounds.max + pad);
+        let e = bounds.extent();
+        let cells_wanted = (8 * items.len()).clamp(64, 32_768) as f32;
+        let cell = (e.x * e.y * e.z / cells_wanted)
+            .cbrt()
+            .max(e.max_element() / 64.0);
+        let res = [0, 1, 2].map(|a| ((e[a] / cell).ceil() as u32).clamp(1, 64));
+        let size = Vec3::new(
+            e.x / res[0] as f32,
+            e.y / res[1] as f32,
+            e.z / res[2] as f32,
+        );
+        let mut offsets = vec![0u32];
+        let mut candidates = Vec::new();
+        for z in 0..res[2] {
+            for y in 0..res[1] {
+                for x in 0..res[0] {
+                    let lo = bounds.min + size * Vec3::new(x as f32, y as f32, z as f32);
+                    let hi = lo + size;
+                    let far2 = |p: Vec3| (p - lo).abs().max((p - hi).abs()).length_squared();
+                    let near2 = |p: Vec3| (p.clamp(lo, hi) - p).length_squared();
+                    let bound = items
+                        .iter()
+                        .map(|(p, _)| far2(*p))
+                        .fold(f32::INFINITY, f32::min);
+                    // A relative margin covers rounding in the distances.
+                    let bound = bound * (1.0 + 1e-5) + 1e-12;
+                    candidates.extend(items.iter().filter(|(p, _)| near2(*p) <= bound).copied());
+                    offsets.push(candidates.len() as u32);
+                }
+            }
+        }
+        Self {
+            bounds,
+            res,
+            inv_cell: Vec3::ONE / size,
+            offsets,
+            candidates,
+        }
+    }
+}
+
+/// A static 3-d tree over points (implicit: the median of each range is the node).
+#[derive(Clone, Debug, Default)]
+pub struct KdTree {
+    points: Vec<Vec3>,
+    ids: Vec<u32>,
+    axes: Vec<u8>,
+}
+
+impl KdTree {
+    /// Builds the tree over `(point, id)` pairs.
+    pub fn new(mut items: Vec<(Vec3, u32)>) -> Self {
+        let mut axes = vec![0u8; items.len()];
+        build(&mut items, &mut axes);
+        let (points, ids) = items.into_iter().unzip();
+        Self { points, ids, axes }
+    }
+
+    /// The id of the point nearest to `q` and its squared distance.
+    #[inline]
+    pub fn nearest(&self, q: Vec3) -> Option<(u32, f32)> {
+        if self.points.is_empty() {
+            return None;
+        }
+        let mut best = (0usize, f32::INFINITY);
+        self.search(0, self.points.len(), q, &mut best);
+        Some((self.ids[best.0], best.1))
+    }
+
+    fn search(&self, lo: usize, hi: usize, q: Vec3, best: &mut (usize, f32)) {
+        if lo >= hi {
+            return;
+        }
+        let mid = lo + (hi - lo) / 2;
+        let p = self.points[mid];
+        let d = p.distance_squared(q);
+        if d < best.1 || (d == best.1 && self.ids[mid] < self.ids[best.0]) {
+            *best = (mid, d);
+        }
+        let axis = self.axes[mid] as usize;
+        let diff = q[axis] - p[axis];
+        let (near, far) = if diff < 0.0 {
+            ((lo, mid), (mid + 1, hi))
+        } else {
+            ((mid + 1, hi), (lo, mid))
+        };
+        self.search(near.0, near.1, q, best);
+        if diff * diff <= best.1 {
+            self.search(far.0, far.1, q, best);
+        }
+    }
+}
+
+fn build(items: &mut [(Vec3, u32)], axes: &mut [u8]) {
+    if items.len() <= 1 {
+        return;
+    }
+    let bounds = illume_core::Aabb::from_points(items.iter().map(|i| i.0));
+    let e = bounds.extent();
+    let axis = if e.x >= e.y && e.x >= e.z {
+        0
+    } else if e.y >= e.z {
+        1
+    } else {
+        2
+    };
+    let mid = items.len() / 2;
+    items.select_nth_unstable_by(mid, |a, b| a.0[axis].total_cmp(&b.0[axis]));
+    axes[mid] = axis as u8;
+    let (left, right) = items.split_at_mut(mid);
+    let (left_axes, right_axes) = axes.split_at_mut(mid);
+    build(left, left_axes);
+    build(&mut right[1..], &mut right_axes[1..]);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kd_tree_matches_linear_scan() {
+        let mut rng = Pcg32::new(3, 4);
+        let pts: Vec<(Vec3, u32)> = (0..300)
+            .map(|i| {
+                (
+                    Vec3::new(rng.next_1d(), rng.next_1d() * 0.1, rng.next_1d() * 3.0),
+                    i,
+                )
+            })
+            .collect();
+        let tree = KdTree::new(pts.clone());
+        for _ in 0..2000 {
+            let q = Vec3::new(
+                rng.next_1d() * 1.4 - 0.2,
+                rng.next_1d() - 0.5,
+                rng.next_1d() * 3.5 - 0.2,
+            );
+            let (id, d) = tree.nearest(q).unwrap();
+            let best = pts
+                .iter()
+                .map(|(p, _)| p.distance_squared(q))
+                .fold(f32::INFINITY, f32::min);
+            assert_eq!(d, best);
+            assert_eq!(pts[id as usize].0.distance_squared(q), best);
+        }
+        assert!(KdTree::new(vec![]).nearest(Vec3::ZERO).is_none());
+    }
+
+    #[test]
+    fn candidate_grid_matches_linear_scan_inside_and_outside_its_box() {
+        let mut rng = Pcg32::new(8, 9);
+        // Points on two faces of a box (surface-like, as VSLs are).
+        let pts: Vec<(Vec3, u32)> = (0..150)
+            .map(|i| {
+                let (a, b) = (rng.next_1d() * 2.0 - 1.0, rng.next_1d() * 2.0);
+                (
+                    if i % 2 == 0 {
+                        Vec3::new(a, 0.0, b - 1.0)
+                    } else {
+                        Vec3::new(-1.0, b, a)
+                    },
+                    i,
+                )
+            })
+            .collect();
+        let bounds = Aabb::new(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 2.0, 1.0));
+        let index = NearestIndex::new(pts.clone(), bounds);
+        assert!(index.grid.is_some());
+        for k in 0..20_000 {
+            let spread = if k % 4 == 0 { 3.0 } else { 1.0 }; // some queries outside the box
+            let q = Vec3::new(
+                (rng.next_1d() * 2.0 - 1.0) * spread,
+                rng.next_1d() * 2.0 * spread,
+                (rng.next_1d() * 2.0 - 1.0) * spread,
+            );
+            let (id, d) = index.nearest(q).unwrap();
+            let best = pts
+                .iter()
+                .map(|(p, _)| p.distance_squared(q))
+                .fold(f32::INFINITY, f32::min);
+            assert_eq!(d, best, "query {q}");
+            assert_eq!(pts[id as usize].0.distance_squared(q), best);
+        }
+    }
+}

@@ -1,0 +1,223 @@
+//! Settings of photon streaming (`[photon_stream]` table), written as a tuning guide.
+
+use serde::{Deserialize, Serialize};
+
+/// How photons are shot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum StreamMode {
+    /// §0.7.2: a long-lived simulation thread shoots photons continuously while frames
+    /// are rendered; each frame reads a snapshot of the VSL powers. Interactive, not
+    /// reproducible frame by frame.
+    #[default]
+    Streaming,
+    /// A fixed number of photons between frames ([`PhotonStreamSettings::photons_per_frame`]
+    /// or [`Budget::photons`](illume_transport::Budget)), shot inside
+    /// `Technique::advance`: the same settings give the same frames bit for bit.
+    Deterministic,
+}
+
+/// What a scene change does to the photon pool (§0.5 and §0.9.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ChangePolicy {
+    /// The paper's default: new photons see the new scene at once and old photons age
+    /// out of the FIFO pool (latency = pool size / impact rate).
+    #[default]
+    AgeOut,
+    /// The paper's alternative (§0.9.1): empty the whole pool on any change. No stale
+    /// light, but the image is dark/noisy until the pool refills.
+    Flush,
+}
+
+/// Whether VSL shading traces shadow rays (beyond the paper, which has none: §0.6,
+/// Figure 7's over-illumination).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum VisibilityMode {
+    /// The paper: no VSL shadows. Fast; over-illuminates points that a VSL cannot see.
+    #[default]
+    Off,
+    /// One shadow ray from every pixel to every VSL that lights it. Removes the
+    /// over-illumination; costs pixels × VSLs rays per frame.
+    All,
+    /// [`PhotonStreamSettings::visibility_rays`] shadow rays per pixel to VSLs chosen
+    /// with probability proportional to their unshadowed contribution (an unbiased
+    /// estimate of the shadowed sum, with per-pixel noise).
+    Stochastic,
+}
+
+/// Photon streaming settings. Defaults follow the paper where it gives a value.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PhotonStreamSettings {
+    /// N_v, the number of virtual surface lights (§0.4.2, a user parameter). Higher:
+    /// smoother, more detailed indirect light, at a shading cost linear in the count
+    /// (pixels × VSLs). Never fewer than one per object. Default 100 (Tables 2–3 use
+    /// 10–200).
+    pub vsl_count: u32,
+    /// Extra candidates placed before Algorithm 1 removes the closest ones, as a
+    /// fraction of `vsl_count` (§0.4.2: "an increase of 10 % provides interesting
+    /// results"). Higher: more even spacing, at a placement cost growing with the
+    /// candidates. Default 0.10.
+    pub oversampling: f32,
+    /// Scale applied to each triangle about its centroid before a VSL is placed on it
+    /// (§0.4.2, Figure 4a), in (0, 1]. Lower: VSLs further from edges and corners (fewer
+    /// light spots), at the cost of leaving triangle borders uncovered. Default 0.8.
+    pub triangle_scale: f32,
+    /// Photon impacts the FIFO pool holds (§0.3, §0.5). Higher: less noise in VSL powers,
+    /// at the cost of latency after a change (latency = pool size / impact rate) and
+    /// 32 bytes per impact. Default 100 000.
+    pub pool_size: u32,
+    /// Streaming or reproducible shooting. Default [`StreamMode::Streaming`].
+    pub mode: StreamMode,
+    /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
+    /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
+    /// cost linear in the count. Default 20 000.
+    pub photons_per_frame: u64,
+    /// Photons the streaming thread traces per world read-lock (one batch, about a
+    /// millisecond of work). Higher: less locking overhead, at the cost of longer waits
+    /// for scene updates (the frame loop's write lock). Default 256.
+    pub batch_photons: u32,
+    /// What a scene change does to the pool. Default [`ChangePolicy::AgeOut`].
+    pub on_change: ChangePolicy,
+    /// ε of §0.7.3 [W/(m²·sr)]: a VSL is ignored where its unoccluded contribution bound
+    /// Φ_s·R/(π r²) falls below ε, i.e. beyond r_ε = sqrt(Φ_s·R/(π ε)). Higher: more
+    /// culling (faster), at the cost of cutting off faint light. Default 1e-6 (paper).
+    pub epsilon: f32,
+    /// Side of the square screen tiles VSLs are culled against [pixels]. Smaller:
+    /// tighter culling, at a per-tile overhead. Default 16.
+    pub tile_size: u32,
+    /// VSL shadow rays (beyond the paper). Default [`VisibilityMode::Off`].
+    pub visibility: VisibilityMode,
+    /// Shadow rays per pixel in [`VisibilityMode::Stochastic`]. Higher: less noise, at a
+    /// cost linear in the count. Default 8.
+    pub visibility_rays: u32,
+    /// Longest photon path in bounces, a safety net behind Russian roulette (§0.7.1).
+    /// Default 32.
+    pub max_bounces: u32,
+    /// Fill the pool synchronously (on the calling thread and rayon) before the first
+    /// frame, so the first frame is already converged (the paper renders at once and
+    /// lets the stream fill in). False: frames start dark and brighten as the pool
+    /// fills. Default true.
+    pub warm_up: bool,
+    /// Start with the simulation thread paused ([`StreamMode::Streaming`]). Default false.
+    pub start_paused: bool,
+    /// Seed of VSL placement and photon paths: the same seed gives the same VSLs and,
+    /// in deterministic mode, the same frames. Default 0.
+    pub seed: u64,
+}
+
+impl Default for PhotonStreamSettings {
+    fn default() -> Self {
+        Self {
+            vsl_count: 100,
+            oversampling: 0.10,
+            triangle_scale: 0.8,
+            pool_size: 100_000,
+            mode: StreamMode::Streaming,
+            photons_per_frame: 20_000,
+            batch_photons: 256,
+            on_change: ChangePolicy::AgeOut,
+            epsilon: 1e-6,
+            tile_size: 16,
+            visibility: VisibilityMode::Off,
+            visibility_rays: 8,
+            max_bounces: 32,
+            warm_up: true,
+            start_paused: false,
+            seed: 0,
+        }
+    }
+}
+
+impl PhotonStreamSettings {
+    /// Preset for tests and reproducible animations: deterministic shooting, the
+    /// paper's other defaults.
+    pub fn deterministic() -> Self {
+        Self {
+            mode: StreamMode::Deterministic,
+            ..Self::default()
+        }
+    }
+
+    /// Preset for interactive previews: 50 VSLs, a smaller pool (lower latency).
+    pub fn interactive() -> Self {
+        Self {
+            vsl_count: 50,
+            pool_size: 50_000,
+            ..Self::default()
+        }
+    }
+
+    /// Preset for stills: 200 VSLs, a large pool, stochastic VSL visibility.
+    pub fn quality() -> Self {
+        Self {
+            vsl_count: 200,
+            pool_size: 1_000_000,
+            visibility: VisibilityMode::Stochastic,
+            ..Self::default()
+        }
+    }
+
+    /// The preset named `name` (`default`, `deterministic`, `interactive`, `quality`).
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "default" => Some(Self::default()),
+            "deterministic" => Some(Self::deterministic()),
+            "interactive" => Some(Self::interactive()),
+            "quality" => Some(Self::quality()),
+            _ => None,
+        }
+    }
+
+    /// Checks every value; the error names the field.
+    pub fn validate(&self) -> Result<(), crate::PhotonStreamError> {
+        let bad = |field: &'static str, reason: String| {
+            Err(crate::PhotonStreamError::InvalidSetting { field, reason })
+        };
+        if self.vsl_count == 0 {
+            return bad("vsl_count", "must be at least 1".into());
+        }
+        if !(self.oversampling >= 0.0 && self.oversampling <= 10.0) {
+            return bad(
+                "oversampling",
+                format!("{} is not in [0, 10]", self.oversampling),
+            );
+        }
+        if !(self.triangle_scale > 0.0 && self.triangle_scale <= 1.0) {
+            return bad(
+                "triangle_scale",
+                format!("{} is not in (0, 1]", self.triangle_scale),
+            );
+        }
+        if (self.pool_size as u64) < self.max_bounces as u64 + 1 {
+            return bad(
+                "pool_size",
+                format!(
+                    "{} cannot hold one photon path of max_bounces + 1 impacts",
+                    self.pool_size
+                ),
+            );
+        }
+        if self.batch_photons == 0 {
+            return bad("batch_photons", "must be at least 1".into());
+        }
+        if !(self.epsilon >= 0.0 && self.epsilon.is_finite()) {
+            return bad(
+                "epsilon",
+                format!("{} is not a finite non-negative radiance", self.epsilon),
+            );
+        }
+        if self.tile_size == 0 {
+            return bad("tile_size", "must be at least 1".into());
+        }
+        if self.visibility == VisibilityMode::Stochastic && self.visibility_rays == 0 {
+            return bad(
+                "visibility_rays",
+                "stochastic visibility needs at least 1 ray".into(),
+            );
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,299 @@
+//! [`PhotonStream`]: VSLs, the shared photon pool, the simulation thread, and the
+//! [`Technique`] implementation the renderer drives.
+
+use crate::emit::Emitter;
+use crate::placement::{PlacementSettings, VslSet};
+use crate::pool::PhotonPool;
+use crate::settings::{PhotonStreamSettings, StreamMode};
+use crate::shade::{ShadeStats, VslField, shade};
+use crate::stream::{PoolSnapshot, SharedPool, StreamConfig, spawn};
+use crate::{PhotonStreamError, update};
+use illume_core::Rgb;
+use illume_core::image::RgbImage;
+use illume_scene::SceneChange;
+use illume_transport::{Budget, GBuffer, SharedWorld, Technique, TechniqueStats, World};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+/// Photon streaming with virtual surface lights (technique name `photon_stream`).
+pub struct PhotonStream {
+    settings: PhotonStreamSettings,
+    vsls: Arc<VslSet>,
+    shared: Arc<SharedPool>,
+    thread: Option<JoinHandle<()>>,
+    inv_quantum: f64,
+    frames: u64,
+    last_shade: ShadeStats,
+    shading_ms: f64,
+    warmed_up: bool,
+}
+
+/// VSL fluxes [W] from a pool snapshot: front and back side of each VSL.
+pub fn fluxes(snapshot: &PoolSnapshot) -> (Vec<Rgb>, Vec<Rgb>) {
+    let scale = if snapshot.photons == 0 {
+        0.0
+    } else {
+        snapshot.quantum_w / snapshot.photons as f64
+    };
+    let to_w = |q: &[u64; 3]| {
+        Rgb::new(
+            (q[0] as f64 * scale) as f32,
+            (q[1] as f64 * scale) as f32,
+            (q[2] as f64 * scale) as f32,
+        )
+    };
+    snapshot
+        .quanta
+        .chunks_exact(2)
+        .map(|c| (to_w(&c[0]), to_w(&c[1])))
+        .unzip()
+}
+
+impl PhotonStream {
+    /// Places the VSLs on `world`'s scene and, in [`StreamMode::Streaming`], starts the
+    /// simulation thread (which keeps a clone of `world` and read-locks it per batch).
+    pub fn new(
+        world: &SharedWorld,
+        settings: PhotonStreamSettings,
+    ) -> Result<Self, PhotonStreamError> {
+        settings.validate()?;
+        let (vsls, quantum_w) = {
+            let w = world.read().map_err(|_| PhotonStreamError::PoisonedWorld)?;
+            let vsls = VslSet::place(
+                &w.scene,
+                &PlacementSettings {
+                    vsl_count: settings.vsl_count,
+                    oversampling: settings.oversampling,
+                    triangle_scale: settings.triangle_scale,
+                    seed: settings.seed,
+                },
+            );
+            if vsls.is_empty() {
+                return Err(PhotonStreamError::NoSurfaces {
+                    scene: w.scene.source.clone(),
+                });
+            }
+            // 2^24 quanta per photon of the scene's total power: 6e-8 relative precision.
+            let power = w.lights.total_power().max_element() as f64;
+            (
+                vsls,
+                if power > 0.0 {
+                    power / (1u64 << 24) as f64
+                } else {
+                    1e-12
+                },
+            )
+        };
+        let vsls = Arc::new(vsls);
+        let pool = PhotonPool::new(settings.pool_size as usize, vsls.len(), quantum_w);
+        let shared = Arc::new(SharedPool::new(pool, settings.start_paused));
+        let inv_quantum = 1.0 / quantum_w;
+        let thread = match settings.mode {
+            StreamMode::Streaming => Some(
+                spawn(
+                    Arc::clone(world),
+                    Arc::clone(&vsls),
+                    Arc::clone(&shared),
+                    StreamConfig {
+                        batch_photons: settings.batch_photons as u64,
+                        max_bounces: settings.max_bounces,
+                        seed: settings.seed,
+                        inv_quantum,
+                    },
+                )
+                .map_err(PhotonStreamError::Thread)?,
+            ),
+            StreamMode::Deterministic => None,
+        };
+        Ok(Self {
+            settings,
+            vsls,
+            shared,
+            thread,
+            inv_quantum,
+            frames: 0,
+            last_shade: ShadeStats::default(),
+            shading_ms: 0.0,
+            warmed_up: false,
+        })
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &PhotonStreamSettings {
+        &self.settings
+    }
+
+    /// The placed VSLs.
+    pub fn vsls(&self) -> &VslSet {
+        &self.vsls
+    }
+
+    /// Shoots `count` photons now, on the calling thread and rayon (the deterministic
+    /// mode's step; usable in streaming mode too, e.g. to warm the pool up).
+    pub fn shoot(&mut self, world: &World, count: u64) {
+        let emitter = Emitter::new(
+            world,
+            &self.vsls,
+            self.inv_quantum,
+            self.settings.max_bounces,
+            self.settings.seed,
+        );
+        let epoch = self.shared.epoch();
+        let first = self.shared.reserve(count);
+        let batch = emitter.trace_parallel(world, first, count);
+        self.shared.apply(&batch, epoch);
+    }
+
+    /// Shoots photons until the pool is full (or 4 × pool size photons were shot, for
+    /// scenes where most photons escape). Returns the photons shot.
+    pub fn warm_up(&mut self, world: &World) -> u64 {
+        let capacity = self.settings.pool_size as u64;
+        let mut shot = 0;
+        while (self.shared.lock().pool.len() as u64) < capacity && shot < 4 * capacity {
+            let n = (capacity / 4).clamp(1000, 50_000);
+            self.shoot(world, n);
+            shot += n;
+        }
+        self.warmed_up = true;
+        shot
+    }
+
+    /// A consistent copy of the VSL powers.
+    pub fn snapshot(&self) -> PoolSnapshot {
+        self.shared.snapshot()
+    }
+
+    /// The VSL field in world space for `world`'s current transforms.
+    pub fn field(&self, world: &World) -> VslField {
+        let (front_w, back_w) = fluxes(&self.snapshot());
+        let (positions, normals) = self.vsls.world_frames(&world.scene);
+        let area_m2 = self.vsls.vsls().iter().map(|v| v.area_m2).collect();
+        VslField {
+            positions,
+            normals,
+            front_w,
+            back_w,
+            area_m2,
+        }
+    }
+
+    /// Pauses the simulation thread (no effect in deterministic mode).
+    pub fn pause(&self) {
+        self.shared.set_paused(true);
+    }
+
+    /// Resumes the simulation thread.
+    pub fn resume(&self) {
+        self.shared.set_paused(false);
+    }
+
+    /// True while paused.
+    pub fn is_paused(&self) -> bool {
+        self.shared.is_paused()
+    }
+
+    /// Checks the pool's invariants (power conservation, K); see
+    /// [`PhotonPool::validate`].
+    pub fn validate(&self) -> Result<(), String> {
+        self.shared.lock().pool.validate()
+    }
+
+    /// Impacts per second measured by the stream (0 until measured).
+    pub fn impacts_per_s(&self) -> f64 {
+        self.shared.lock().impacts_per_s
+    }
+
+    /// Stats of the last shading pass.
+    pub fn last_shade(&self) -> ShadeStats {
+        self.last_shade
+    }
+}
+
+impl Drop for PhotonStream {
+    fn drop(&mut self) {
+        self.shared.request_stop();
+        if let Some(t) = self.thread.take() {
+            // A panicked simulation thread has nothing left to clean up.
+            let _ = t.join();
+        }
+    }
+}
+
+impl Technique for PhotonStream {
+    fn name(&self) -> &'static str {
+        "photon_stream"
+    }
+
+    fn scene_changed(&mut self, _world: &World, changes: &[SceneChange]) {
+        update::on_changes(&self.shared, self.settings.on_change, changes);
+    }
+
+    /// First call with [`PhotonStreamSettings::warm_up`]: fills the pool. Then, in
+    /// deterministic mode: shoots `budget.photons` (default
+    /// [`PhotonStreamSettings::photons_per_frame`]). Streaming mode: nothing (the thread
+    /// runs by itself); `budget` is ignored.
+    fn advance(&mut self, world: &World, budget: &Budget) {
+        if self.settings.warm_up && !self.warmed_up {
+            self.warm_up(world);
+        }
+        if self.settings.mode == StreamMode::Deterministic {
+            let n = budget.photons.unwrap_or(self.settings.photons_per_frame);
+            self.shoot(world, n);
+        }
+    }
+
+    fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
+        let t0 = Instant::now();
+        let field = self.field(world);
+        let (img, stats) = shade(world, gbuffer, &field, &self.settings, self.frames);
+        self.frames += 1;
+        self.last_shade = stats;
+        self.shading_ms = t0.elapsed().as_secs_f64() * 1e3;
+        img
+    }
+
+    fn stats(&self) -> TechniqueStats {
+        let now = self.shared.now_s();
+        let s = self.shared.lock();
+        let pool = &s.pool;
+        let age = pool.oldest_time_s().map_or(0.0, |t| now - t);
+        let stale = if pool.photons() == 0 {
+            0.0
+        } else {
+            let evicted = pool.photons_pushed() - pool.photons();
+            s.photons_at_change.saturating_sub(evicted) as f64 / pool.photons() as f64
+        };
+        let latency = if s.impacts_per_s > 0.0 {
+            pool.capacity() as f64 / s.impacts_per_s
+        } else {
+            f64::INFINITY
+        };
+        let v = |name: &str, x: f64| (format!("photon_stream.{name}"), x);
+        vec![
+            v("photons_shot", pool.photons_pushed() as f64),
+            v("impacts_shot", pool.impacts_pushed() as f64),
+            v("photons_per_s", s.photons_per_s),
+            v("impacts_per_s", s.impacts_per_s),
+            v("rays_per_s", s.rays_per_s),
+            v("pool_impacts", pool.len() as f64),
+            v("pool_fill", pool.len() as f64 / pool.capacity() as f64),
+            v("pool_photons", pool.photons() as f64),
+            v("pool_age_s", age),
+            v("latency_s", latency),
+            v("stale_fraction", stale),
+            v("vsl_count", self.vsls.len() as f64),
+            v("vsls_per_tile", self.last_shade.vsls_per_tile()),
+            v("shading_ms", self.shading_ms),
+            v("shadow_rays", self.last_shade.shadow_rays as f64),
+            v("paused", if self.shared.is_paused() { 1.0 } else { 0.0 }),
+        ]
+    }
+
+    fn reset(&mut self) {
+        self.shared.flush();
+        self.warmed_up = false;
+        self.frames = 0;
+        self.last_shade = ShadeStats::default();
+    }
+}

@@ -1,0 +1,222 @@
+//! Multi-thread processing (§0.7.2): one long-lived simulation thread shoots photons
+//! forever while the frame loop renders.
+//!
+//! Each batch of [`PhotonStreamSettings::batch_photons`](crate::PhotonStreamSettings)
+//! photons is traced under a *read* lock of the shared world (so the frame loop's write
+//! lock for a scene update waits at most one batch), then applied to the pool under the
+//! pool mutex — the mutual exclusion of §0.7.2 that keeps every VSL's red, green and
+//! blue coherent. The renderer copies all VSL powers under the same mutex
+//! ([`SharedPool::snapshot`]): a consistent snapshot of the whole field, never a torn
+//! RGB. A flush bumps an epoch so a batch traced before it is discarded, not applied.
+
+use crate::emit::{Emitter, PhotonBatch};
+use crate::placement::VslSet;
+use crate::pool::PhotonPool;
+use illume_transport::SharedWorld;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::time::Instant;
+
+/// The pool and its rate measurements, behind one mutex.
+#[derive(Debug)]
+pub struct PoolState {
+    /// The FIFO pool and VSL power sums.
+    pub pool: PhotonPool,
+    /// Incremented by every flush; batches traced under an older epoch are dropped.
+    pub epoch: u64,
+    /// Impacts per second over the last measurement window.
+    pub impacts_per_s: f64,
+    /// Photons per second over the last measurement window.
+    pub photons_per_s: f64,
+    /// Rays per second over the last measurement window.
+    pub rays_per_s: f64,
+    /// Rays traced in total.
+    pub rays: u64,
+    /// Photons pushed when the last scene change happened (for the stale fraction).
+    pub photons_at_change: u64,
+    window: Option<(Instant, u64, u64, u64)>,
+}
+
+/// A consistent copy of the VSL field.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoolSnapshot {
+    /// Power accumulators in quanta, index `2·vsl + side`.
+    pub quanta: Vec<[u64; 3]>,
+    /// K, the photons the powers are summed over.
+    pub photons: u64,
+    /// Watts per quantum.
+    pub quantum_w: f64,
+}
+
+/// State shared by the technique and its simulation thread.
+#[derive(Debug)]
+pub struct SharedPool {
+    state: Mutex<PoolState>,
+    paused: Mutex<bool>,
+    wake: Condvar,
+    stop: AtomicBool,
+    next_seq: AtomicU64,
+    start: Instant,
+}
+
+impl SharedPool {
+    /// A shared pool around `pool`.
+    pub fn new(pool: PhotonPool, paused: bool) -> Self {
+        Self {
+            state: Mutex::new(PoolState {
+                pool,
+                epoch: 0,
+                impacts_per_s: 0.0,
+                photons_per_s: 0.0,
+                rays_per_s: 0.0,
+                rays: 0,
+                photons_at_change: 0,
+                window: None,
+            }),
+            paused: Mutex::new(paused),
+            wake: Condvar::new(),
+            stop: AtomicBool::new(false),
+            next_seq: AtomicU64::new(0),
+            start: Instant::now(),
+        }
+    }
+
+    /// Locks the pool state (a poisoned lock is recovered: the pool's invariants hold
+    /// after every completed operation).
+    pub fn lock(&self) -> MutexGuard<'_, PoolState> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Seconds since construction (the clock of pool stamps).
+    pub fn now_s(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    /// Reserves `count` photon indices.
+    pub fn reserve(&self, count: u64) -> u64 {
+        self.next_seq.fetch_add(count, Ordering::Relaxed)
+    }
+
+    /// Applies a traced batch unless a flush happened since `epoch`. Returns whether it
+    /// was applied.
+    pub fn apply(&self, batch: &PhotonBatch, epoch: u64) -> bool {
+        let now = Instant::now();
+        let t = self.now_s();
+        let mut s = self.lock();
+        if s.epoch != epoch {
+            return false;
+        }
+        s.pool.stamp(t);
+        for path in batch.paths() {
+            s.pool.push_photon(path);
+        }
+        s.rays += batch.rays;
+        let (photons, impacts, rays) = (s.pool.photons_pushed(), s.pool.impacts_pushed(), s.rays);
+        match s.window {
+            None => s.window = Some((now, photons, impacts, rays)),
+            Some((t0, p0, i0, r0)) => {
+                let dt = (now - t0).as_secs_f64();
+                if dt >= 0.25 {
+                    s.photons_per_s = (photons - p0) as f64 / dt;
+                    s.impacts_per_s = (impacts - i0) as f64 / dt;
+                    s.rays_per_s = (rays - r0) as f64 / dt;
+                    s.window = Some((now, photons, impacts, rays));
+                }
+            }
+        }
+        true
+    }
+
+    /// Copies every VSL power and K under the mutex.
+    pub fn snapshot(&self) -> PoolSnapshot {
+        let s = self.lock();
+        PoolSnapshot {
+            quanta: s.pool.power_quanta().to_vec(),
+            photons: s.pool.photons(),
+            quantum_w: s.pool.quantum_w(),
+        }
+    }
+
+    /// Empties the pool and invalidates batches in flight.
+    pub fn flush(&self) {
+        let mut s = self.lock();
+        s.epoch += 1;
+        s.pool.flush();
+        s.window = None;
+    }
+
+    /// The current epoch.
+    pub fn epoch(&self) -> u64 {
+        self.lock().epoch
+    }
+
+    /// Pauses or resumes the simulation thread.
+    pub fn set_paused(&self, paused: bool) {
+        *self.paused.lock().unwrap_or_else(|e| e.into_inner()) = paused;
+        if !paused {
+            self.lock().window = None;
+        }
+        self.wake.notify_all();
+    }
+
+    /// True while paused.
+    pub fn is_paused(&self) -> bool {
+        *self.paused.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Asks the simulation thread to end.
+    pub fn request_stop(&self) {
+        self.stop.store(true, Ordering::Release);
+        self.wake.notify_all();
+    }
+
+    /// Blocks while paused; returns false when asked to stop.
+    fn wait_running(&self) -> bool {
+        let mut paused = self.paused.lock().unwrap_or_else(|e| e.into_inner());
+        while *paused && !self.stop.load(Ordering::Acquire) {
+            paused = self.wake.wait(paused).unwrap_or_else(|e| e.into_inner());
+        }
+        !self.stop.load(Ordering::Acquire)
+    }
+}
+
+/// What the simulation thread needs.
+pub struct StreamConfig {
+    /// Photons per world read-lock.
+    pub batch_photons: u64,
+    /// Bounce limit.
+    pub max_bounces: u32,
+    /// Seed.
+    pub seed: u64,
+    /// 1 / (watts per quantum).
+    pub inv_quantum: f64,
+}
+
+/// Starts the simulation thread; it runs until [`SharedPool::request_stop`].
+pub fn spawn(
+    world: SharedWorld,
+    vsls: Arc<VslSet>,
+    shared: Arc<SharedPool>,
+    config: StreamConfig,
+) -> std::io::Result<std::thread::JoinHandle<()>> {
+    std::thread::Builder::new()
+        .name("photon_stream".into())
+        .spawn(move || {
+            while shared.wait_running() {
+                let (batch, epoch) = {
+                    let w = world.read().unwrap_or_else(|e| e.into_inner());
+                    let epoch = shared.epoch();
+                    let emitter = Emitter::new(
+                        &w,
+                        &vsls,
+                        config.inv_quantum,
+                        config.max_bounces,
+                        config.seed,
+                    );
+                    let first = shared.reserve(config.batch_photons);
+                    (emitter.trace(&w, first, config.batch_photons), epoch)
+                };
+                shared.apply(&batch, epoch);
+            }
+        })
+}
