@@ -2,11 +2,13 @@
 //!
 //! * `illume render SCENE` — one image (reference path tracer or a technique);
 //! * `illume info SCENE` — what a scene holds (triangles, instances, lights and power);
-//! * `illume compare A B` — image metrics between two images or two frame folders.
+//! * `illume compare A B` — image metrics between two images or two frame folders;
+//! * `illume bench SCENARIO.toml` — run a benchmark scenario and write its report.
 //!
 //! SCENE is a file (`.gltf`, `.glb`, `.obj`, `.ply`) or `builtin:NAME`
 //! (`builtin:cornell-spot`, `builtin:cube-in-box`, `builtin:furnace`).
 
+mod bench;
 mod compare;
 mod info;
 mod progress;
@@ -30,6 +32,8 @@ enum Command {
     Info(info::InfoArgs),
     /// Compare two images (EXR/PNG) or two folders of frames with image metrics.
     Compare(compare::CompareArgs),
+    /// Run a benchmark scenario: techniques vs the converged reference, report and plots.
+    Bench(bench::BenchArgs),
 }
 
 fn main() {
@@ -38,6 +42,7 @@ fn main() {
         Command::Render(a) => render::run(a),
         Command::Info(a) => info::run(a),
         Command::Compare(a) => compare::run(a),
+        Command::Bench(a) => bench::run_bench(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
