@@ -3,7 +3,7 @@
 //! illume-metrics' plotting functions.
 
 use crate::error::BenchError;
-use crate::run::{BenchOutcome, FrameRecord, RunOptions, median};
+use crate::run::{BenchOutcome, FrameRecord, RunOptions};
 use crate::scenario::Scenario;
 use illume_metrics::report::{Bar, Cell, Series, Table, plot_bars, plot_lines, write_csv};
 use illume_metrics::{Counters, Metric};
@@ -85,7 +85,7 @@ pub fn summary_table(scenario: &Scenario, outcome: &BenchOutcome) -> Table {
                 .count();
             let mut row = vec![
                 Cell::Text(s.series.clone()),
-                Cell::Number(frames as f64),
+                Cell::Text(frames.to_string()),
                 Cell::Number(s.median_frame_ms),
                 Cell::Number(1000.0 / s.median_frame_ms),
             ];
@@ -121,8 +121,8 @@ pub fn latency_table(outcome: &BenchOutcome) -> Table {
                 Cell::Text(s.series.clone()),
                 Cell::Text(e.name.clone()),
                 Cell::Number(e.at_s),
-                Cell::Number(e.frame as f64),
-                l.frames.map_or_else(never, |f| Cell::Number(f as f64)),
+                Cell::Text(e.frame.to_string()),
+                l.frames.map_or_else(never, |f| Cell::Text(f.to_string())),
                 l.seconds.map_or_else(never, Cell::Number),
             ]);
         }
@@ -333,10 +333,10 @@ fn markdown(
     let _ = write!(md, "## Plots\n\n{plots}");
     let _ = write!(
         md,
-        "## Per-frame results\n\n`results.csv`: one row per series per frame ({} rows); \
-         median frame time over all rows {:.3} ms.\n\n",
-        outcome.records.len(),
-        median(outcome.records.iter().map(|r| r.frame_ms).collect())
+        "## Per-frame results\n\n`results.csv`: one row per series per frame ({} rows): \
+         time, frame time, each metric, flicker against the previous frame, and every \
+         counter the technique reports.\n\n",
+        outcome.records.len()
     );
     let _ = write!(
         md,

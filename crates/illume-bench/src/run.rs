@@ -495,8 +495,9 @@ fn measure_frame(
 }
 
 /// The progressive reference path tracer given `frame_ms[i]` of wall-clock time at
-/// frame `i` (at least one sample per pixel), accumulating while the frame's converged
-/// reference key (the scene state) stays the same.
+/// frame `i` (whole samples per pixel, at least one; the time actually spent is the
+/// record's `frame_ms`), accumulating while the frame's converged reference key (the
+/// scene state) stays the same.
 #[expect(
     clippy::too_many_arguments,
     reason = "the run's shared inputs; bundling them would only rename them"
@@ -530,9 +531,14 @@ fn run_equal_time(
             tracer.reset();
         }
         let before = tracer.samples();
+        // One sample per pixel at a time; stop when one more would end farther from the
+        // budget than stopping now (the last pass's time predicts the next one's), so
+        // the time spent matches the budget to half a pass on average, never below 1 spp.
         loop {
+            let pass = Instant::now();
             tracer.add_samples(&world, 1);
-            if start.elapsed().as_secs_f64() * 1e3 >= frame_ms[i] {
+            let pass_ms = pass.elapsed().as_secs_f64() * 1e3;
+            if start.elapsed().as_secs_f64() * 1e3 + 0.5 * pass_ms >= frame_ms[i] {
                 break;
             }
         }
