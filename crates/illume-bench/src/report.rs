@@ -177,8 +177,8 @@ fn metric_series(outcome: &BenchOutcome, metric: Metric) -> Vec<Series> {
 /// Writes `results.csv`, `report.md` and the plots into `options.output_dir`:
 /// `error_vs_time.svg` (the error metric), `error_vs_time_METRIC.svg` (each other
 /// metric), `fps.svg` (the techniques' frames per second per frame; the equal-time
-/// series match them by construction and are left out) and `latency.svg` (one bar per
-/// series and event; events that never settle have no bar).
+/// series match them by construction and are left out) and `latency_K.svg` for event
+/// `K` (one bar per series; a series that never settles has no bar).
 pub fn write_report(
     scenario: &Scenario,
     outcome: &BenchOutcome,
@@ -238,23 +238,23 @@ pub fn write_report(
         "### Frames per second\n\n![fps per frame](fps.svg)\n\n"
     );
     plots.push(path);
-    let bars: Vec<Bar> = outcome
-        .summaries
-        .iter()
-        .flat_map(|s| {
-            outcome.events.iter().zip(&s.latencies).map(|(e, l)| Bar {
-                label: format!("{} / {}", s.series, e.name),
-                value: l.seconds.unwrap_or(f64::NAN),
+    let _ = write!(plot_md, "### Latency after each event\n\n");
+    for (k, event) in outcome.events.iter().enumerate() {
+        let bars: Vec<Bar> = outcome
+            .summaries
+            .iter()
+            .map(|s| Bar {
+                label: s.series.clone(),
+                value: s.latencies[k].seconds.unwrap_or(f64::NAN),
             })
-        })
-        .collect();
-    let path = dir.join("latency.svg");
-    plot_bars(&path, "latency after each event", "latency [s]", &bars)?;
-    let _ = write!(
-        plot_md,
-        "### Latency\n\n![latency after each event](latency.svg)\n\n"
-    );
-    plots.push(path);
+            .collect();
+        let name = format!("latency_{k}.svg");
+        let path = dir.join(&name);
+        let title = format!("latency after \"{}\" (frame {})", event.name, event.frame);
+        plot_bars(&path, &title, "latency [s]", &bars)?;
+        let _ = write!(plot_md, "![{title}]({name})\n\n");
+        plots.push(path);
+    }
 
     let report_md = dir.join("report.md");
     let md = markdown(scenario, outcome, options, &plot_md);

@@ -177,8 +177,9 @@ pub fn run(
     let settings = reference_settings(scenario);
     let keys = reference_keys(scenario, &scene, &identity, &settings, &times)?;
     let mut cache = ReferenceCache::new(&options.cache_dir);
-    let references =
-        converged_references(scenario, &scene, &keys, &settings, &mut cache, progress)?;
+    let references = converged_references(
+        scenario, &scene, &times, &keys, &settings, &mut cache, progress,
+    )?;
     progress.message(&format!(
         "converged references: {} distinct, {} from the cache, {} rendered ({})",
         references.unique,
@@ -287,6 +288,7 @@ impl References {
 fn converged_references(
     scenario: &Scenario,
     scene: &Scene,
+    times: &[f64],
     keys: &[CacheKey],
     settings: &ReferenceSettings,
     cache: &mut ReferenceCache,
@@ -310,9 +312,9 @@ fn converged_references(
     let mut world = World::new(scene.clone());
     let mut replay = Replay::new(scenario);
     let mut rendered = 0u64;
-    for (i, key) in keys.iter().enumerate() {
-        replay.apply_due(&mut world, scenario.frame_times()[i])?;
-        world.set_time(scenario.frame_times()[i]);
+    for (key, &t) in keys.iter().zip(times) {
+        replay.apply_due(&mut world, t)?;
+        world.set_time(t);
         let slot = unique[&key.hash];
         if images[slot].is_some() {
             continue;

@@ -74,12 +74,14 @@ fn tiny_scenario_runs_end_to_end_and_reuses_its_references() {
         "error_vs_time.svg",
         "error_vs_time_rmse.svg",
         "fps.svg",
-        "latency.svg",
+        "latency_0.svg",
+        "latency_1.svg",
     ] {
         let p = options.output_dir.join(name);
         let svg = std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(svg.contains("<svg"), "{name} is not an SVG");
     }
+    assert_eq!(files.plots.len(), 6, "{:?}", files.plots);
     assert!(
         options
             .output_dir
