@@ -391,8 +391,18 @@ fn events(
     events
 }
 
-/// Runs technique entry `k` over the frames; returns its records and, with
-/// `keep_frames`, its frames.
+/// One timed frame before measurement.
+struct TimedFrame {
+    time_s: f64,
+    frame_ms: f64,
+    image: RgbImage,
+    counters: Counters,
+}
+
+/// Runs technique entry `k` over the frames and measures them; returns its records and,
+/// with `keep_frames`, its frames. The frames are measured after the timed loop, so a
+/// technique with a background thread (photon streaming) gets no untimed work time
+/// between frames.
 fn run_technique(
     scenario: &Scenario,
     k: usize,
@@ -412,9 +422,7 @@ fn run_technique(
     })?;
     engine.set_budget(scenario.technique_budget(k, &config));
     let mut replay = Replay::new(scenario);
-    let mut records = Vec::with_capacity(times.len());
-    let mut previous: Option<RgbImage> = None;
-    let mut kept = Vec::new();
+    let mut frames = Vec::with_capacity(times.len());
     progress.begin(spec.label(), times.len() as u64);
     for (i, &t) in times.iter().enumerate() {
         let start = Instant::now();
@@ -428,72 +436,67 @@ fn run_technique(
         counters.set("engine.update_ms", out.update_ms);
         counters.set("engine.advance_ms", out.advance_ms);
         counters.set("engine.render_ms", out.frame.timings.total_ms);
-        let (record, image) = measure_frame(
-            scenario,
-            spec.label(),
-            &spec.name,
-            i,
-            t,
+        frames.push(TimedFrame {
+            time_s: t,
             frame_ms,
-            out.frame.full,
-            previous.as_ref(),
-            references,
+            image: out.frame.full,
             counters,
-        )?;
-        records.push(record);
-        if keep_frames {
-            kept.push(image.clone());
-        }
-        previous = Some(image);
+        });
         progress.set(i as u64 + 1);
     }
     progress.end();
-    Ok((records, kept))
+    // Stop the technique (and any thread it runs) before measuring.
+    drop(engine);
+    measure_series(
+        scenario,
+        spec.label(),
+        &spec.name,
+        frames,
+        references,
+        keep_frames,
+    )
 }
 
-/// Measures frame `i` against its converged reference, and the flicker against the
-/// previous frame; returns the record and the frame.
-#[expect(
-    clippy::too_many_arguments,
-    reason = "one call site per series kind; a struct would only rename the arguments"
-)]
-fn measure_frame(
+/// Measures each frame against its converged reference and the previous frame (flicker).
+fn measure_series(
     scenario: &Scenario,
     series: &str,
     technique: &str,
-    i: usize,
-    t: f64,
-    frame_ms: f64,
-    image: RgbImage,
-    previous: Option<&RgbImage>,
+    frames: Vec<TimedFrame>,
     references: &References,
-    counters: Counters,
-) -> Result<(FrameRecord, RgbImage), BenchError> {
-    let reference = references.frame(i);
-    let metrics = compare_images(reference, &image, &scenario.metrics)?;
-    let flicker = match previous {
-        Some(p) => Some(
-            flicker(
-                &[p.clone(), image.clone()],
-                &[references.frame(i - 1).clone(), reference.clone()],
-            )?
-            .mean,
-        ),
-        None => None,
-    };
-    Ok((
-        FrameRecord {
+    keep_frames: bool,
+) -> Result<(Vec<FrameRecord>, Vec<RgbImage>), BenchError> {
+    let mut records = Vec::with_capacity(frames.len());
+    for (i, f) in frames.iter().enumerate() {
+        let reference = references.frame(i);
+        let metrics = compare_images(reference, &f.image, &scenario.metrics)?;
+        let flicker = match i {
+            0 => None,
+            _ => Some(
+                flicker(
+                    &[frames[i - 1].image.clone(), f.image.clone()],
+                    &[references.frame(i - 1).clone(), reference.clone()],
+                )?
+                .mean,
+            ),
+        };
+        records.push(FrameRecord {
             series: series.to_owned(),
             technique: technique.to_owned(),
             frame: i,
-            time_s: t,
-            frame_ms,
+            time_s: f.time_s,
+            frame_ms: f.frame_ms,
             metrics,
             flicker,
-            counters,
-        },
-        image,
-    ))
+            counters: f.counters.clone(),
+        });
+    }
+    let kept = if keep_frames {
+        frames.into_iter().map(|f| f.image).collect()
+    } else {
+        Vec::new()
+    };
+    Ok((records, kept))
 }
 
 /// The progressive reference path tracer given `frame_ms[i]` of wall-clock time at
@@ -521,9 +524,7 @@ fn run_equal_time(
     let mut tracer = ReferenceRenderer::new(settings);
     let mut world = World::new(scene.clone());
     let mut replay = Replay::new(scenario);
-    let mut records = Vec::with_capacity(times.len());
-    let mut previous: Option<RgbImage> = None;
-    let mut kept = Vec::new();
+    let mut frames = Vec::with_capacity(times.len());
     progress.begin(&series, times.len() as u64);
     for (i, &t) in times.iter().enumerate() {
         let start = Instant::now();
@@ -544,32 +545,29 @@ fn run_equal_time(
                 break;
             }
         }
+        let image = tracer.images().full;
         let ms = start.elapsed().as_secs_f64() * 1e3;
         let mut counters = Counters::for_technique("equal_time");
         counters.set("spp", f64::from(tracer.samples()));
         counters.set("spp_added", f64::from(tracer.samples() - before));
         counters.set("budget_ms", frame_ms[i]);
-        let (record, image) = measure_frame(
-            scenario,
-            &series,
-            "reference",
-            i,
-            t,
-            ms,
-            tracer.images().full,
-            previous.as_ref(),
-            references,
+        frames.push(TimedFrame {
+            time_s: t,
+            frame_ms: ms,
+            image,
             counters,
-        )?;
-        records.push(record);
-        if keep_frames {
-            kept.push(image.clone());
-        }
-        previous = Some(image);
+        });
         progress.set(i as u64 + 1);
     }
     progress.end();
-    Ok((records, kept))
+    measure_series(
+        scenario,
+        &series,
+        "reference",
+        frames,
+        references,
+        keep_frames,
+    )
 }
 
 /// Per-series summaries: median frame time, mean/max of each metric, flicker, latency
