@@ -314,9 +314,10 @@ fn markdown(
          frame. Flicker: frame-to-frame luminance change beyond the reference's own change. \
          {}\n\n{}\n",
         if scenario.reference.equal_time {
-            "`reference (equal time to X)` is the progressive reference path tracer given, \
-             at every frame, the wall-clock time technique X took for that frame (at least \
-             one sample per pixel), accumulating while the scene does not change."
+            "`reference (equal time to X)` is the progressive reference path tracer given the \
+             same cumulative wall-clock time as technique X, frame by frame (whole samples per \
+             pixel; between passes it shows its last image), accumulating while the scene \
+             does not change."
         } else {
             ""
         },

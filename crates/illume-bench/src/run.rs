@@ -499,10 +499,14 @@ fn measure_series(
     Ok((records, kept))
 }
 
-/// The progressive reference path tracer given `frame_ms[i]` of wall-clock time at
-/// frame `i` (whole samples per pixel, at least one; the time actually spent is the
-/// record's `frame_ms`), accumulating while the frame's converged reference key (the
-/// scene state) stays the same.
+/// The progressive reference path tracer at equal cost: frame `i` adds `frame_ms[i]`
+/// of wall-clock credit, and the tracer runs whole passes (one sample per pixel each)
+/// while the remaining credit covers at least half a pass (the last pass predicts the
+/// next), so its total time tracks the technique's total to within half a pass. Frames
+/// the credit does not cover show the last image, as an interactive path tracer would;
+/// the first frame always gets one pass (a debt repaid by later frames). Accumulation
+/// restarts, at the next pass, when the frame's converged-reference key (the scene
+/// state) changes; until that pass the stale image stays on screen.
 #[expect(
     clippy::too_many_arguments,
     reason = "the run's shared inputs; bundling them would only rename them"
@@ -524,33 +528,41 @@ fn run_equal_time(
     let mut tracer = ReferenceRenderer::new(settings);
     let mut world = World::new(scene.clone());
     let mut replay = Replay::new(scenario);
-    let mut frames = Vec::with_capacity(times.len());
+    let mut frames: Vec<TimedFrame> = Vec::with_capacity(times.len());
+    let mut credit_ms = 0.0;
+    let mut pass_ms = 0.0;
+    let mut stale = false;
     progress.begin(&series, times.len() as u64);
     for (i, &t) in times.iter().enumerate() {
         let start = Instant::now();
+        credit_ms += frame_ms[i];
         replay.apply_due(&mut world, t)?;
         world.set_time(t);
-        if i > 0 && keys[i].hash != keys[i - 1].hash {
-            tracer.reset();
-        }
-        let before = tracer.samples();
-        // One sample per pixel at a time; stop when one more would end farther from the
-        // budget than stopping now (the last pass's time predicts the next one's), so
-        // the time spent matches the budget to half a pass on average, never below 1 spp.
-        loop {
+        stale |= i > 0 && keys[i].hash != keys[i - 1].hash;
+        let mut passes = 0u32;
+        while i == 0 && passes == 0
+            || credit_ms - start.elapsed().as_secs_f64() * 1e3 >= 0.5 * pass_ms
+        {
+            if stale {
+                tracer.reset();
+                stale = false;
+            }
             let pass = Instant::now();
             tracer.add_samples(&world, 1);
-            let pass_ms = pass.elapsed().as_secs_f64() * 1e3;
-            if start.elapsed().as_secs_f64() * 1e3 + 0.5 * pass_ms >= frame_ms[i] {
-                break;
-            }
+            pass_ms = pass.elapsed().as_secs_f64() * 1e3;
+            passes += 1;
         }
-        let image = tracer.images().full;
+        let image = match frames.last() {
+            Some(previous) if passes == 0 => previous.image.clone(),
+            _ => tracer.images().full,
+        };
         let ms = start.elapsed().as_secs_f64() * 1e3;
+        credit_ms -= ms;
         let mut counters = Counters::for_technique("equal_time");
         counters.set("spp", f64::from(tracer.samples()));
-        counters.set("spp_added", f64::from(tracer.samples() - before));
+        counters.set("spp_added", f64::from(passes));
         counters.set("budget_ms", frame_ms[i]);
+        counters.set("credit_ms", credit_ms);
         frames.push(TimedFrame {
             time_s: t,
             frame_ms: ms,

@@ -129,7 +129,22 @@ fn tiny_scenario_runs_end_to_end_and_reuses_its_references() {
         table.column("reference.spp").is_some(),
         "technique counters in the CSV"
     );
-    assert!(table.column("equal_time.spp").is_some());
+    // Equal time: the first frame always gets a pass; every frame shows at least 1 spp.
+    let equal_rows: Vec<_> = first.records.iter().filter(|r| r.series == equal).collect();
+    assert!(equal_rows[0].counters.get("equal_time.spp_added").unwrap() >= 1.0);
+    for r in &equal_rows {
+        assert!(r.counters.get("equal_time.spp").unwrap() >= 1.0, "{r:?}");
+        let budget = r.counters.get("equal_time.budget_ms").unwrap();
+        let technique = first
+            .records
+            .iter()
+            .find(|t| t.series == "reference" && t.frame == r.frame);
+        assert_eq!(
+            budget,
+            technique.unwrap().frame_ms,
+            "budget = the technique's frame time"
+        );
+    }
     let times: Vec<f64> = table
         .column("time_s")
         .unwrap()
