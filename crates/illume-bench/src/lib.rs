@@ -12,9 +12,9 @@
 //!    time passes them ([`Replay`]); each frame is timed and measured against its
 //!    converged reference (RMSE, relMSE, FLIP by default), with flicker against the
 //!    previous frame and the technique's counters;
-//! 3. with `equal_time`, the **progressive reference path tracer** gets, frame by frame,
-//!    the wall-clock time the technique took, and is measured the same way: the
-//!    technique against brute force at equal cost;
+//! 3. with `equal_time`, the **progressive reference path tracer** gets the same
+//!    cumulative wall-clock time as the technique, frame by frame, and is measured the
+//!    same way: the technique against brute force at equal cost;
 //! 4. [`write_report`] writes `report.md`, `results.csv` and SVG plots (error vs time,
 //!    fps per frame, latency after each event).
 //!

@@ -326,7 +326,7 @@ fn markdown(
     let _ = write!(
         md,
         "## Latency after events\n\nFrames and seconds from the event until {} stays below \
-         {} until the last frame; `never` if it does not.\n\n{}\n",
+         {} up to the next event (or the last frame); `never` if it does not.\n\n{}\n",
         scenario.error_metric,
         scenario.latency_threshold,
         latency_table(outcome).to_markdown()

@@ -124,7 +124,9 @@ pub struct SeriesSummary {
     pub metrics: Vec<(Metric, f64, f64)>,
     /// `(mean, max)` flicker over consecutive frame pairs (`None` with one frame).
     pub flicker: Option<(f64, f64)>,
-    /// Latency after each of [`BenchOutcome::events`], in the same order.
+    /// Latency after each of [`BenchOutcome::events`], in the same order: until the
+    /// error stays below the threshold up to the next event on a later frame (or the
+    /// last frame).
     pub latencies: Vec<Latency>,
 }
 
@@ -624,7 +626,21 @@ fn summarize(
                 .collect();
             let latencies = events
                 .iter()
-                .map(|e| latency_after_event(&errors, times, e.frame, scenario.latency_threshold))
+                .map(|e| {
+                    // Settling is judged up to the next event that shows on a later frame.
+                    let end = events
+                        .iter()
+                        .map(|o| o.frame)
+                        .filter(|&f| f > e.frame)
+                        .min()
+                        .unwrap_or(errors.len());
+                    latency_after_event(
+                        &errors[..end],
+                        &times[..end],
+                        e.frame,
+                        scenario.latency_threshold,
+                    )
+                })
                 .collect::<Result<Vec<_>, _>>()?;
             Ok(SeriesSummary {
                 series: name.to_owned(),
@@ -674,6 +690,46 @@ fn save_frame(dir: &Path, i: usize, image: &RgbImage) -> Result<(), BenchError> 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn latency_is_judged_up_to_the_next_event() {
+        let scenario = Scenario {
+            metrics: vec![Metric::Flip],
+            ..Scenario::default()
+        };
+        let errors = [0.5, 0.05, 0.05, 0.5, 0.3, 0.05];
+        let times: Vec<f64> = (0..errors.len()).map(|i| i as f64 * 0.5).collect();
+        let records: Vec<FrameRecord> = errors
+            .iter()
+            .enumerate()
+            .map(|(i, &e)| FrameRecord {
+                series: "s".into(),
+                technique: "reference".into(),
+                frame: i,
+                time_s: times[i],
+                frame_ms: 10.0 + i as f64,
+                metrics: vec![(Metric::Flip, e)],
+                flicker: (i > 0).then_some(0.01),
+                counters: Counters::new(),
+            })
+            .collect();
+        let event = |frame: usize| Event {
+            name: format!("e{frame}"),
+            at_s: times[frame],
+            frame,
+        };
+        let s = summarize(&scenario, &records, &times, &[event(0), event(3)]).unwrap();
+        // Window [0, 3): 0.5, 0.05, 0.05 settles at frame 1 (the later rise belongs to
+        // the second event). Window [3, 6): 0.5, 0.3, 0.05 settles at frame 5.
+        assert_eq!(s[0].latencies[0].frames, Some(1));
+        assert_eq!(s[0].latencies[1].frames, Some(2));
+        assert_eq!(s[0].latencies[1].seconds, Some(1.0));
+        assert_eq!(s[0].median_frame_ms, 12.5);
+        let (metric, mean, max) = s[0].metrics[0];
+        assert_eq!((metric, max), (Metric::Flip, 0.5));
+        assert!((mean - 1.45 / 6.0).abs() < 1e-12, "{mean}");
+        assert_eq!(s[0].flicker, Some((0.01, 0.01)));
+    }
 
     #[test]
     fn median_of_odd_and_even_counts() {
