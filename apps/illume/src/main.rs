@@ -5,11 +5,13 @@
 //! * `illume compare A B` — image metrics between two images or two frame folders;
 //! * `illume animate SCENE` — an animation: numbered frames, a preview, a per-frame CSV;
 //! * `illume demo` — photon streaming on `builtin:cornell-spot` in real time.
+//! * `illume bench SCENARIO.toml` — run a benchmark scenario and write its report.
 //!
 //! SCENE is a file (`.gltf`, `.glb`, `.obj`, `.ply`) or `builtin:NAME`
 //! (`builtin:cornell-spot`, `builtin:cube-in-box`, `builtin:furnace`).
 
 mod animate;
+mod bench;
 mod compare;
 mod info;
 mod progress;
@@ -39,6 +41,8 @@ enum Command {
     Demo(animate::DemoArgs),
     /// Compare two images (EXR/PNG) or two folders of frames with image metrics.
     Compare(compare::CompareArgs),
+    /// Run a benchmark scenario: techniques vs the converged reference, report and plots.
+    Bench(bench::BenchArgs),
 }
 
 fn main() {
@@ -49,6 +53,7 @@ fn main() {
         Command::Compare(a) => compare::run(a),
         Command::Animate(a) => animate::run(a),
         Command::Demo(a) => animate::demo(a),
+        Command::Bench(a) => bench::run_bench(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

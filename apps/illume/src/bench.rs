@@ -1,0 +1,99 @@
+//! `illume bench`: runs a scenario file and writes its report (see `docs/bench.md`).
+
+use crate::progress;
+use anyhow::{Context, Result};
+use clap::Args;
+use illume_bench::{Progress, RunOptions, Scenario, run, write_report};
+use indicatif::ProgressBar;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `illume bench`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// The scenario file (.toml), e.g. scenarios/moving_sphere.toml.
+    pub scenario: PathBuf,
+    /// Report folder [default: out/bench/<scenario name>].
+    #[arg(long, short)]
+    pub output: Option<PathBuf>,
+    /// Converged-reference cache folder.
+    #[arg(long, default_value = "out/cache")]
+    pub cache: PathBuf,
+    /// Also write every frame of every series as PNG under OUTPUT/frames/.
+    #[arg(long)]
+    pub save_frames: bool,
+}
+
+/// indicatif bars for the harness's progress reports.
+#[derive(Default)]
+struct Bars {
+    bar: Option<ProgressBar>,
+}
+
+impl Progress for Bars {
+    fn begin(&mut self, what: &str, total: u64) {
+        self.end();
+        self.bar = Some(progress::bar(total, what));
+    }
+
+    fn set(&mut self, done: u64) {
+        if let Some(b) = &self.bar {
+            b.set_position(done);
+        }
+    }
+
+    fn end(&mut self) {
+        if let Some(b) = self.bar.take() {
+            b.finish_and_clear();
+        }
+    }
+
+    fn message(&mut self, text: &str) {
+        match &self.bar {
+            Some(b) => b.println(text),
+            None => eprintln!("{text}"),
+        }
+    }
+}
+
+/// Runs `illume bench`.
+pub fn run_bench(a: BenchArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let scenario = Scenario::load(&a.scenario)?;
+    let mut options = RunOptions::for_scenario(&scenario);
+    if let Some(o) = a.output {
+        options.output_dir = o;
+    }
+    options.cache_dir = a.cache;
+    options.save_frames = a.save_frames;
+    let command: Vec<String> = std::env::args().collect();
+    options
+        .notes
+        .push(format!("Command: `{}`", command.join(" ")));
+    let mut bars = Bars::default();
+    let outcome = run(&scenario, &options, &mut bars)
+        .with_context(|| format!("running {}", a.scenario.display()))?;
+    bars.end();
+    let files = write_report(&scenario, &outcome, &options)?;
+    for s in &outcome.summaries {
+        let metrics: Vec<String> = s
+            .metrics
+            .iter()
+            .map(|(m, mean, _)| format!("{m} {mean:.4}"))
+            .collect();
+        eprintln!(
+            "{:<40} median {:8.2} ms/frame  mean {}",
+            s.series,
+            s.median_frame_ms,
+            metrics.join(", ")
+        );
+    }
+    eprintln!(
+        "wrote {} and {} ({} plots) in {:.1} s",
+        files.report_md.display(),
+        files.results_csv.display(),
+        files.plots.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

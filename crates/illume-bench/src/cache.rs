@@ -1,0 +1,181 @@
+//! The converged-reference cache: one EXR per distinct scene state, named by a hash of
+//! everything the image depends on, so a second run (or another scenario with the same
+//! scene, state and settings) reuses it instead of path tracing again.
+//!
+//! The key text holds the illume version, the scene's identity (built-in name, or file
+//! path, size and modification time), the scene *state* the frame shows — every
+//! instance's, light's and the camera's world transform, every light's emission and
+//! every material — and the reference settings (size, spp, seed, roulette depth). The
+//! state is what the frame time and the scripted edits applied so far produce, so two
+//! frames of a static scene share one reference, and a changed setting changes the key.
+//! The key text is stored beside the image (`HASH.key.txt`) for inspection.
+
+use crate::error::BenchError;
+use illume_core::image::RgbImage;
+use illume_reference::ReferenceSettings;
+use illume_scene::Scene;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// What a converged reference image depends on, as text and its 64-bit hash.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CacheKey {
+    /// The canonical description (one `name value` line per item).
+    pub text: String,
+    /// FNV-1a 64 of `text`.
+    pub hash: u64,
+}
+
+impl CacheKey {
+    /// The key of the converged reference of `scene` in its current state, rendered with
+    /// `settings`; `scene_identity` names the scene's content (see
+    /// [`Scenario::scene_identity`](crate::Scenario::scene_identity)).
+    pub fn new(scene_identity: &str, scene: &Scene, settings: &ReferenceSettings) -> Self {
+        let mut text = String::new();
+        let _ = writeln!(text, "illume {}", env!("CARGO_PKG_VERSION"));
+        let _ = writeln!(text, "scene {scene_identity}");
+        let s = settings;
+        let _ = writeln!(
+            text,
+            "reference width {} height {} spp {} seed {} rr_start_depth {} max_depth {}",
+            s.width, s.height, s.spp, s.seed, s.rr_start_depth, s.max_depth
+        );
+        // Debug output of f32 is the shortest round-trip form: exact.
+        for inst in &scene.instances {
+            let _ = writeln!(
+                text,
+                "instance {:?} mask {} {:?}",
+                inst.name, inst.mask, inst.world_from_object
+            );
+        }
+        for light in &scene.lights {
+            let _ = writeln!(
+                text,
+                "light {:?} {:?} {:?}",
+                light.name, light.kind, light.world_from_light
+            );
+        }
+        let _ = writeln!(
+            text,
+            "camera yfov_rad {:?} {:?}",
+            scene.camera.yfov_rad, scene.camera.world_from_camera
+        );
+        for m in &scene.materials {
+            let _ = writeln!(text, "material {m:?}");
+        }
+        let hash = fnv1a64(text.as_bytes());
+        Self { text, hash }
+    }
+
+    /// The hash as 16 hex digits (the cache file's stem).
+    pub fn hex(&self) -> String {
+        format!("{:016x}", self.hash)
+    }
+}
+
+/// FNV-1a, 64 bits: stable across runs, platforms and Rust versions (unlike
+/// `std::hash`'s default hasher).
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// A folder of converged references, `HASH.exr` (32-bit float, lossless) with
+/// `HASH.key.txt` beside it; counts hits and renders.
+#[derive(Clone, Debug)]
+pub struct ReferenceCache {
+    dir: PathBuf,
+    /// Images read from the cache.
+    pub hits: usize,
+    /// Images rendered (and stored).
+    pub renders: usize,
+}
+
+impl ReferenceCache {
+    /// A cache in `dir` (created when the first image is stored).
+    pub fn new(dir: impl Into<PathBuf>) -> Self {
+        Self {
+            dir: dir.into(),
+            hits: 0,
+            renders: 0,
+        }
+    }
+
+    /// The cache folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Where the image of `key` is (or would be) stored.
+    pub fn path(&self, key: &CacheKey) -> PathBuf {
+        self.dir.join(format!("{}.exr", key.hex()))
+    }
+
+    /// True when the image of `key` is stored and its key text matches (a hash
+    /// collision or a foreign file is treated as a miss).
+    pub fn contains(&self, key: &CacheKey) -> bool {
+        let key_file = self.dir.join(format!("{}.key.txt", key.hex()));
+        self.path(key).is_file()
+            && std::fs::read_to_string(key_file).is_ok_and(|text| text == key.text)
+    }
+
+    /// The stored image of `key`, or `render()`'s result, stored for next time.
+    pub fn get_or_render(
+        &mut self,
+        key: &CacheKey,
+        render: impl FnOnce() -> RgbImage,
+    ) -> Result<RgbImage, BenchError> {
+        let path = self.path(key);
+        if self.contains(key) {
+            self.hits += 1;
+            return Ok(RgbImage::read(&path)?);
+        }
+        let image = render();
+        std::fs::create_dir_all(&self.dir).map_err(|e| BenchError::io(&self.dir, e))?;
+        // Image first, key last: a key file present means a complete image.
+        image.write(&path, &Default::default())?;
+        let key_file = self.dir.join(format!("{}.key.txt", key.hex()));
+        std::fs::write(&key_file, &key.text).map_err(|e| BenchError::io(&key_file, e))?;
+        self.renders += 1;
+        Ok(image)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fnv1a64_matches_published_vectors() {
+        assert_eq!(fnv1a64(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a64(b"a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fnv1a64(b"foobar"), 0x8594_4171_f739_67e8);
+    }
+
+    #[test]
+    fn key_follows_state_and_settings_not_identity_of_objects() {
+        let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+        let settings = ReferenceSettings::default();
+        let a = CacheKey::new("builtin:cornell-spot", &scene, &settings);
+        assert_eq!(
+            a,
+            CacheKey::new("builtin:cornell-spot", &scene.clone(), &settings)
+        );
+        let more_spp = ReferenceSettings {
+            spp: settings.spp + 1,
+            ..settings.clone()
+        };
+        assert_ne!(
+            a.hash,
+            CacheKey::new("builtin:cornell-spot", &scene, &more_spp).hash
+        );
+        let mut moved = scene.clone();
+        moved.set_time(1.0); // the default animation moves the sphere and the light
+        assert_ne!(
+            a.hash,
+            CacheKey::new("builtin:cornell-spot", &moved, &settings).hash
+        );
+        assert_ne!(a.hash, CacheKey::new("other", &scene, &settings).hash);
+    }
+}

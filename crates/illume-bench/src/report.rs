@@ -1,0 +1,349 @@
+//! The report of a run: `results.csv` (one row per series per frame), `report.md`
+//! (summary tables, the plots, the scenario and the machine) and SVG plots drawn with
+//! illume-metrics' plotting functions.
+
+use crate::error::BenchError;
+use crate::run::{BenchOutcome, FrameRecord, RunOptions};
+use crate::scenario::Scenario;
+use illume_metrics::report::{Bar, Cell, Series, Table, plot_bars, plot_lines, write_csv};
+use illume_metrics::{Counters, Metric};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// The files [`write_report`] wrote.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReportFiles {
+    /// `report.md`.
+    pub report_md: PathBuf,
+    /// `results.csv`.
+    pub results_csv: PathBuf,
+    /// The SVG plots.
+    pub plots: Vec<PathBuf>,
+}
+
+/// The per-frame table of `results.csv`: `series, technique, frame, time_s, frame_ms,
+/// fps`, one column per metric, `flicker`, then every counter (union over the series;
+/// empty where a series has no such counter).
+pub fn results_table(scenario: &Scenario, records: &[FrameRecord]) -> Table {
+    let counter_rows: Vec<(String, Counters)> = records
+        .iter()
+        .map(|r| (String::new(), r.counters.clone()))
+        .collect();
+    let counters = Counters::to_table("", &counter_rows);
+    let mut columns: Vec<String> = ["series", "technique", "frame", "time_s", "frame_ms", "fps"]
+        .map(String::from)
+        .to_vec();
+    columns.extend(scenario.metrics.iter().map(|m| m.name().to_owned()));
+    columns.push("flicker".into());
+    columns.extend(counters.columns.iter().skip(1).cloned());
+    let rows = records
+        .iter()
+        .zip(&counters.rows)
+        .map(|(r, c)| {
+            let mut row = vec![
+                Cell::Text(r.series.clone()),
+                Cell::Text(r.technique.clone()),
+                Cell::Number(r.frame as f64),
+                Cell::Number(r.time_s),
+                Cell::Number(r.frame_ms),
+                Cell::Number(1000.0 / r.frame_ms),
+            ];
+            row.extend(
+                scenario
+                    .metrics
+                    .iter()
+                    .map(|&m| r.metric(m).map_or(Cell::Empty, Cell::Number)),
+            );
+            row.push(r.flicker.map_or(Cell::Empty, Cell::Number));
+            row.extend(c.iter().skip(1).cloned());
+            row
+        })
+        .collect();
+    Table { columns, rows }
+}
+
+/// One row per series: frames, median frame time and fps, mean and max of each metric,
+/// mean and max flicker.
+pub fn summary_table(scenario: &Scenario, outcome: &BenchOutcome) -> Table {
+    let mut columns: Vec<String> = ["series", "frames", "median frame [ms]", "median fps"]
+        .map(String::from)
+        .to_vec();
+    for m in &scenario.metrics {
+        columns.push(format!("{m} mean"));
+        columns.push(format!("{m} max"));
+    }
+    columns.push("flicker mean".into());
+    columns.push("flicker max".into());
+    let rows = outcome
+        .summaries
+        .iter()
+        .map(|s| {
+            let frames = outcome
+                .records
+                .iter()
+                .filter(|r| r.series == s.series)
+                .count();
+            let mut row = vec![
+                Cell::Text(s.series.clone()),
+                Cell::Text(frames.to_string()),
+                Cell::Number(s.median_frame_ms),
+                Cell::Number(1000.0 / s.median_frame_ms),
+            ];
+            for &(_, mean, max) in &s.metrics {
+                row.push(Cell::Number(mean));
+                row.push(Cell::Number(max));
+            }
+            match s.flicker {
+                Some((mean, max)) => row.extend([Cell::Number(mean), Cell::Number(max)]),
+                None => row.extend([Cell::Empty, Cell::Empty]),
+            }
+            row
+        })
+        .collect();
+    Table { columns, rows }
+}
+
+/// One row per series per event: when it happened and how long the error took to stay
+/// below the threshold (`never` if it did not by the last frame).
+pub fn latency_table(outcome: &BenchOutcome) -> Table {
+    let mut t = Table::new(&[
+        "series",
+        "event",
+        "at [s]",
+        "frame",
+        "latency [frames]",
+        "latency [s]",
+    ]);
+    for s in &outcome.summaries {
+        for (e, l) in outcome.events.iter().zip(&s.latencies) {
+            let never = || Cell::Text("never".into());
+            t.push(vec![
+                Cell::Text(s.series.clone()),
+                Cell::Text(e.name.clone()),
+                Cell::Number(e.at_s),
+                Cell::Text(e.frame.to_string()),
+                l.frames.map_or_else(never, |f| Cell::Text(f.to_string())),
+                l.seconds.map_or_else(never, Cell::Number),
+            ]);
+        }
+    }
+    t
+}
+
+/// The CPU model (from `lscpu`, else `/proc/cpuinfo`) and the thread count.
+pub fn machine_info() -> String {
+    let from_lscpu = std::process::Command::new("lscpu")
+        .output()
+        .ok()
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .and_then(|text| {
+            text.lines()
+                .find_map(|l| l.strip_prefix("Model name:").map(|m| m.trim().to_owned()))
+        });
+    let model = from_lscpu
+        .or_else(|| {
+            std::fs::read_to_string("/proc/cpuinfo")
+                .ok()
+                .and_then(|text| {
+                    text.lines().find_map(|l| {
+                        l.strip_prefix("model name")
+                            .and_then(|r| r.split_once(':'))
+                            .map(|(_, m)| m.trim().to_owned())
+                    })
+                })
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{model}, {threads} threads available")
+}
+
+/// The series' values of `metric` against time.
+fn metric_series(outcome: &BenchOutcome, metric: Metric) -> Vec<Series> {
+    outcome
+        .summaries
+        .iter()
+        .map(|s| Series {
+            name: s.series.clone(),
+            points: outcome
+                .records
+                .iter()
+                .filter(|r| r.series == s.series)
+                .map(|r| (r.time_s, r.metric(metric).unwrap_or(f64::NAN)))
+                .collect(),
+        })
+        .collect()
+}
+
+/// Writes `results.csv`, `report.md` and the plots into `options.output_dir`:
+/// `error_vs_time.svg` (the error metric), `error_vs_time_METRIC.svg` (each other
+/// metric), `fps.svg` (the techniques' frames per second per frame; the equal-time
+/// series match them by construction and are left out) and `latency_K.svg` for event
+/// `K` (one bar per series; a series that never settles has no bar).
+pub fn write_report(
+    scenario: &Scenario,
+    outcome: &BenchOutcome,
+    options: &RunOptions,
+) -> Result<ReportFiles, BenchError> {
+    let dir = &options.output_dir;
+    std::fs::create_dir_all(dir).map_err(|e| BenchError::io(dir, e))?;
+    let results_csv = dir.join("results.csv");
+    write_csv(&results_csv, &results_table(scenario, &outcome.records))?;
+
+    let mut plots = Vec::new();
+    let mut plot_md = String::new();
+    let error = scenario.error_metric;
+    let path = dir.join("error_vs_time.svg");
+    plot_lines(
+        &path,
+        &format!("{error} vs time (against the converged reference)"),
+        "time [s]",
+        error.name(),
+        &metric_series(outcome, error),
+    )?;
+    let _ = write!(
+        plot_md,
+        "### {error} vs time\n\n![{error} vs time](error_vs_time.svg)\n\n"
+    );
+    plots.push(path);
+    for &m in scenario.metrics.iter().filter(|&&m| m != error) {
+        let name = format!("error_vs_time_{}.svg", m.name());
+        let path = dir.join(&name);
+        plot_lines(
+            &path,
+            &format!("{m} vs time"),
+            "time [s]",
+            m.name(),
+            &metric_series(outcome, m),
+        )?;
+        let _ = write!(plot_md, "### {m} vs time\n\n![{m} vs time]({name})\n\n");
+        plots.push(path);
+    }
+    let fps: Vec<Series> = scenario
+        .techniques
+        .iter()
+        .map(|t| {
+            let ms: Vec<f64> = outcome
+                .records
+                .iter()
+                .filter(|r| r.series == t.label())
+                .map(|r| r.frame_ms)
+                .collect();
+            Series::fps_from_frame_times_ms(t.label(), &ms)
+        })
+        .collect();
+    let path = dir.join("fps.svg");
+    plot_lines(&path, "frames per second", "frame", "fps", &fps)?;
+    let _ = write!(
+        plot_md,
+        "### Frames per second\n\n![fps per frame](fps.svg)\n\n"
+    );
+    plots.push(path);
+    let _ = write!(plot_md, "### Latency after each event\n\n");
+    for (k, event) in outcome.events.iter().enumerate() {
+        let bars: Vec<Bar> = outcome
+            .summaries
+            .iter()
+            .map(|s| Bar {
+                label: s.series.clone(),
+                value: s.latencies[k].seconds.unwrap_or(f64::NAN),
+            })
+            .collect();
+        let name = format!("latency_{k}.svg");
+        let path = dir.join(&name);
+        let title = format!("latency after \"{}\" (frame {})", event.name, event.frame);
+        plot_bars(&path, &title, "latency [s]", &bars)?;
+        let _ = write!(plot_md, "![{title}]({name})\n\n");
+        plots.push(path);
+    }
+
+    let report_md = dir.join("report.md");
+    let md = markdown(scenario, outcome, options, &plot_md);
+    std::fs::write(&report_md, md).map_err(|e| BenchError::io(&report_md, e))?;
+    Ok(ReportFiles {
+        report_md,
+        results_csv,
+        plots,
+    })
+}
+
+fn markdown(
+    scenario: &Scenario,
+    outcome: &BenchOutcome,
+    options: &RunOptions,
+    plots: &str,
+) -> String {
+    let mut md = format!("# {}\n\n", scenario.name);
+    if !scenario.description.is_empty() {
+        let _ = writeln!(md, "{}\n", scenario.description);
+    }
+    for note in &options.notes {
+        let _ = writeln!(md, "{note}  ");
+    }
+    let times = &outcome.times_s;
+    let span = match (times.first(), times.last()) {
+        (Some(a), Some(b)) => format!("{} frames, {a} s to {b} s", times.len()),
+        _ => "no frames".into(),
+    };
+    let _ = writeln!(
+        md,
+        "Scene `{}`{}, {}×{} pixels, {span}.  ",
+        scenario.scene,
+        scenario
+            .animation
+            .as_ref()
+            .map_or(String::new(), |a| format!(", animation `{a}`")),
+        scenario.width,
+        scenario.height
+    );
+    let _ = writeln!(
+        md,
+        "Converged reference: path tracer, {} spp, seed {}; {} distinct, {} from the cache, \
+         {} rendered (cache `{}`).  ",
+        scenario.reference.spp,
+        scenario.reference.seed,
+        outcome.cache_hits + outcome.cache_renders,
+        outcome.cache_hits,
+        outcome.cache_renders,
+        options.cache_dir.display()
+    );
+    let _ = writeln!(md, "Machine: {}.\n", machine_info());
+    let _ = write!(
+        md,
+        "## Summary\n\nEvery metric is measured per frame against the converged reference \
+         (lower is better except PSNR and SSIM). Frame time is wall clock for the whole \
+         frame. Flicker: frame-to-frame luminance change beyond the reference's own change. \
+         {}\n\n{}\n",
+        if scenario.reference.equal_time {
+            "`reference (equal time to X)` is the progressive reference path tracer given the \
+             same cumulative wall-clock time as technique X, frame by frame (whole samples per \
+             pixel; between passes it shows its last image), accumulating while the scene \
+             does not change."
+        } else {
+            ""
+        },
+        summary_table(scenario, outcome).to_markdown()
+    );
+    let _ = write!(
+        md,
+        "## Latency after events\n\nFrames and seconds from the event until {} stays below \
+         {} up to the next event (or the last frame); `never` if it does not.\n\n{}\n",
+        scenario.error_metric,
+        scenario.latency_threshold,
+        latency_table(outcome).to_markdown()
+    );
+    let _ = write!(md, "## Plots\n\n{plots}");
+    let _ = write!(
+        md,
+        "## Per-frame results\n\n`results.csv`: one row per series per frame ({} rows): \
+         time, frame time, each metric, flicker against the previous frame, and every \
+         counter the technique reports.\n\n",
+        outcome.records.len()
+    );
+    let _ = write!(
+        md,
+        "## Scenario\n\n`{}`\n\n```toml\n{}\n```\n",
+        scenario.file.display(),
+        scenario.text.trim_end()
+    );
+    md
+}

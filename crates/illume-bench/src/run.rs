@@ -1,0 +1,744 @@
+//! Running a scenario: converged references (cached), each technique frame by frame,
+//! the equal-time path tracer, then the per-frame and per-series measurements.
+
+use crate::cache::{CacheKey, ReferenceCache};
+use crate::error::BenchError;
+use crate::replay::Replay;
+use crate::scenario::Scenario;
+use illume_core::image::{RgbImage, ToneMap};
+use illume_engine::Engine;
+use illume_metrics::{Counters, Latency, Metric, compare_images, flicker, latency_after_event};
+use illume_reference::{ReferenceRenderer, ReferenceSettings};
+use illume_scene::Scene;
+use illume_transport::World;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Progress of long work, shown by the caller (the CLI draws bars); [`Silent`] shows
+/// nothing.
+pub trait Progress {
+    /// Work of `total` units called `what` starts.
+    fn begin(&mut self, what: &str, total: u64);
+    /// `done` of the units are finished.
+    fn set(&mut self, done: u64);
+    /// The work is over.
+    fn end(&mut self);
+    /// A line of information (cache use, warnings).
+    fn message(&mut self, text: &str);
+}
+
+/// Shows no progress.
+pub struct Silent;
+
+impl Progress for Silent {
+    fn begin(&mut self, _what: &str, _total: u64) {}
+    fn set(&mut self, _done: u64) {}
+    fn end(&mut self) {}
+    fn message(&mut self, _text: &str) {}
+}
+
+/// Where a run writes and what extra it keeps.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// The report folder (`report.md`, `results.csv`, plots).
+    pub output_dir: PathBuf,
+    /// The converged-reference cache folder.
+    pub cache_dir: PathBuf,
+    /// Also write every frame of every series and of the reference as PNG under
+    /// `output_dir/frames/SERIES/NNNN.png`.
+    pub save_frames: bool,
+    /// Lines added under the report's title (e.g. the command line).
+    pub notes: Vec<String>,
+}
+
+impl RunOptions {
+    /// The defaults for `scenario`: `out/bench/<name>/` and `out/cache/`.
+    pub fn for_scenario(scenario: &Scenario) -> Self {
+        Self {
+            output_dir: Path::new("out/bench").join(file_safe(&scenario.name)),
+            cache_dir: PathBuf::from("out/cache"),
+            save_frames: false,
+            notes: Vec::new(),
+        }
+    }
+}
+
+/// Seed offset of the equal-time path tracer, so its samples are independent of the
+/// converged reference's (same seed would correlate the two and understate the error).
+pub const EQUAL_TIME_SEED_OFFSET: u64 = 0x9e37_79b9_7f4a_7c15;
+
+/// One frame of one series, measured against the converged reference.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameRecord {
+    /// The series: a technique's label, or `reference (equal time to LABEL)`.
+    pub series: String,
+    /// The technique name (`reference` for the equal-time path tracer).
+    pub technique: String,
+    /// Frame index.
+    pub frame: usize,
+    /// Scene time [s].
+    pub time_s: f64,
+    /// Wall-clock time of the frame [ms]: edits, time step, the technique's update and
+    /// advance, and rendering (equal-time series: the path tracer's time).
+    pub frame_ms: f64,
+    /// Each scenario metric against the converged reference.
+    pub metrics: Vec<(Metric, f64)>,
+    /// Flicker between this frame and the previous one (`None` on frame 0).
+    pub flicker: Option<f64>,
+    /// Technique counters after the frame, plus `engine.*` stage timings [ms].
+    pub counters: Counters,
+}
+
+impl FrameRecord {
+    /// The value of `metric`, if measured.
+    pub fn metric(&self, metric: Metric) -> Option<f64> {
+        self.metrics
+            .iter()
+            .find(|(m, _)| *m == metric)
+            .map(|&(_, v)| v)
+    }
+}
+
+/// A moment after which the error is expected to rise and then settle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Event {
+    /// `start`, `animation end`, or the edit's label.
+    pub name: String,
+    /// When it happens [s].
+    pub at_s: f64,
+    /// The first frame that shows it.
+    pub frame: usize,
+}
+
+/// Everything measured for one series.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SeriesSummary {
+    /// The series name.
+    pub series: String,
+    /// The technique name.
+    pub technique: String,
+    /// Median frame time [ms].
+    pub median_frame_ms: f64,
+    /// `(metric, mean, max)` over the frames.
+    pub metrics: Vec<(Metric, f64, f64)>,
+    /// `(mean, max)` flicker over consecutive frame pairs (`None` with one frame).
+    pub flicker: Option<(f64, f64)>,
+    /// Latency after each of [`BenchOutcome::events`], in the same order: until the
+    /// error stays below the threshold up to the next event on a later frame (or the
+    /// last frame).
+    pub latencies: Vec<Latency>,
+}
+
+/// The result of [`run`].
+#[derive(Clone, Debug)]
+pub struct BenchOutcome {
+    /// The frame times [s].
+    pub times_s: Vec<f64>,
+    /// The events latency is measured after.
+    pub events: Vec<Event>,
+    /// One record per series per frame, series by series.
+    pub records: Vec<FrameRecord>,
+    /// One summary per series, in run order.
+    pub summaries: Vec<SeriesSummary>,
+    /// Converged references read from the cache.
+    pub cache_hits: usize,
+    /// Converged references rendered (and stored in the cache).
+    pub cache_renders: usize,
+    /// The cache key of each frame's converged reference.
+    pub reference_keys: Vec<CacheKey>,
+}
+
+/// The converged reference settings of `scenario`.
+pub fn reference_settings(scenario: &Scenario) -> ReferenceSettings {
+    ReferenceSettings {
+        width: scenario.width,
+        height: scenario.height,
+        spp: scenario.reference.spp,
+        seed: scenario.reference.seed,
+        rr_start_depth: scenario.reference.rr_start_depth,
+        ..ReferenceSettings::default()
+    }
+}
+
+/// Runs `scenario`: renders or reuses the converged references, runs each technique
+/// (and, with `equal_time`, the path tracer at each technique's frame times), and
+/// measures every frame. Writes only the cache and, with `save_frames`, the frames;
+/// [`crate::write_report`] writes the report.
+pub fn run(
+    scenario: &Scenario,
+    options: &RunOptions,
+    progress: &mut dyn Progress,
+) -> Result<BenchOutcome, BenchError> {
+    let times = scenario.frame_times();
+    let scene = scenario.load_scene()?;
+    for w in &scene.warnings {
+        progress.message(&format!("warning: {w}"));
+    }
+    let identity = scenario.scene_identity()?;
+    let settings = reference_settings(scenario);
+    let keys = reference_keys(scenario, &scene, &identity, &settings, &times)?;
+    let mut cache = ReferenceCache::new(&options.cache_dir);
+    let references = converged_references(
+        scenario, &scene, &times, &keys, &settings, &mut cache, progress,
+    )?;
+    progress.message(&format!(
+        "converged references: {} distinct, {} from the cache, {} rendered ({})",
+        references.unique,
+        cache.hits,
+        cache.renders,
+        cache.dir().display()
+    ));
+    let frames_dir = options.output_dir.join("frames");
+    if options.save_frames {
+        for (i, r) in references.per_frame().enumerate() {
+            save_frame(&frames_dir.join("reference"), i, r)?;
+        }
+    }
+    let events = events(scenario, &scene, &times, progress);
+
+    let mut records = Vec::new();
+    for k in 0..scenario.techniques.len() {
+        let label = scenario.techniques[k].label().to_owned();
+        let (technique_records, images) = run_technique(
+            scenario,
+            k,
+            &scene,
+            &times,
+            &references,
+            options.save_frames,
+            progress,
+        )?;
+        let frame_ms: Vec<f64> = technique_records.iter().map(|r| r.frame_ms).collect();
+        for (i, img) in images.iter().enumerate() {
+            save_frame(&frames_dir.join(file_safe(&label)), i, img)?;
+        }
+        records.extend(technique_records);
+        if scenario.reference.equal_time {
+            let (equal, images) = run_equal_time(
+                scenario,
+                &label,
+                &scene,
+                &times,
+                &keys,
+                &references,
+                &frame_ms,
+                options.save_frames,
+                progress,
+            )?;
+            let series = equal_time_series(&label);
+            for (i, img) in images.iter().enumerate() {
+                save_frame(&frames_dir.join(file_safe(&series)), i, img)?;
+            }
+            records.extend(equal);
+        }
+    }
+    let summaries = summarize(scenario, &records, &times, &events)?;
+    Ok(BenchOutcome {
+        times_s: times,
+        events,
+        records,
+        summaries,
+        cache_hits: cache.hits,
+        cache_renders: cache.renders,
+        reference_keys: keys,
+    })
+}
+
+/// The series name of the equal-time path tracer matched to technique `label`.
+pub fn equal_time_series(label: &str) -> String {
+    format!("reference (equal time to {label})")
+}
+
+/// The cache key of each frame: the scene replayed through the scenario's edits and
+/// times exactly as the techniques will see it.
+fn reference_keys(
+    scenario: &Scenario,
+    scene: &Scene,
+    identity: &str,
+    settings: &ReferenceSettings,
+    times: &[f64],
+) -> Result<Vec<CacheKey>, BenchError> {
+    let mut state = scene.clone();
+    let mut replay = Replay::new(scenario);
+    let mut keys = Vec::with_capacity(times.len());
+    for &t in times {
+        replay.apply_due(&mut state, t)?;
+        state.set_time(t);
+        keys.push(CacheKey::new(identity, &state, settings));
+    }
+    Ok(keys)
+}
+
+/// The converged references: distinct images and which one each frame uses.
+struct References {
+    images: Vec<RgbImage>,
+    frame_image: Vec<usize>,
+    unique: usize,
+}
+
+impl References {
+    fn frame(&self, i: usize) -> &RgbImage {
+        &self.images[self.frame_image[i]]
+    }
+
+    fn per_frame(&self) -> impl Iterator<Item = &RgbImage> {
+        self.frame_image.iter().map(|&i| &self.images[i])
+    }
+}
+
+fn converged_references(
+    scenario: &Scenario,
+    scene: &Scene,
+    times: &[f64],
+    keys: &[CacheKey],
+    settings: &ReferenceSettings,
+    cache: &mut ReferenceCache,
+    progress: &mut dyn Progress,
+) -> Result<References, BenchError> {
+    let mut unique: HashMap<u64, usize> = HashMap::new();
+    let mut to_render = 0u64;
+    for k in keys {
+        if !unique.contains_key(&k.hash) {
+            unique.insert(k.hash, unique.len());
+            if !cache.contains(k) {
+                to_render += 1;
+            }
+        }
+    }
+    let spp = settings.spp;
+    if to_render > 0 {
+        progress.begin("converged reference", to_render * u64::from(spp));
+    }
+    let mut images: Vec<Option<RgbImage>> = vec![None; unique.len()];
+    let mut world = World::new(scene.clone());
+    let mut replay = Replay::new(scenario);
+    let mut rendered = 0u64;
+    for (key, &t) in keys.iter().zip(times) {
+        replay.apply_due(&mut world, t)?;
+        world.set_time(t);
+        let slot = unique[&key.hash];
+        if images[slot].is_some() {
+            continue;
+        }
+        let image = cache.get_or_render(key, || {
+            let mut r = ReferenceRenderer::new(settings.clone());
+            // Chunks keep the bar moving; the image does not depend on the chunking.
+            let chunk = (spp / 16).max(1);
+            while r.samples() < spp {
+                r.add_samples(&world, chunk.min(spp - r.samples()));
+                progress.set(rendered * u64::from(spp) + u64::from(r.samples()));
+            }
+            rendered += 1;
+            r.images().full
+        })?;
+        images[slot] = Some(image);
+    }
+    if to_render > 0 {
+        progress.end();
+    }
+    let frame_image = keys.iter().map(|k| unique[&k.hash]).collect();
+    Ok(References {
+        images: images
+            .into_iter()
+            .map(|i| i.expect("every slot filled"))
+            .collect(),
+        frame_image,
+        unique: unique.len(),
+    })
+}
+
+/// The events: `start` (frame 0), `animation end` when the animation ends inside the run,
+/// and each scripted edit that falls inside the run.
+fn events(
+    scenario: &Scenario,
+    scene: &Scene,
+    times: &[f64],
+    progress: &mut dyn Progress,
+) -> Vec<Event> {
+    let first_frame_at = |t: f64| times.iter().position(|&ft| ft >= t);
+    let mut events = vec![Event {
+        name: if scenario.animation.is_some() {
+            "start (animation starts)".into()
+        } else {
+            "start".into()
+        },
+        at_s: times[0],
+        frame: 0,
+    }];
+    if scenario.animation.is_some() {
+        let end = scene.animation_duration();
+        if let Some(frame) = first_frame_at(end).filter(|&f| f > 0) {
+            events.push(Event {
+                name: "animation end".into(),
+                at_s: end,
+                frame,
+            });
+        }
+    }
+    for index in scenario.edit_order() {
+        let at_s = scenario.edits[index].at_s;
+        match first_frame_at(at_s) {
+            Some(frame) => events.push(Event {
+                name: scenario.edit_label(index),
+                at_s,
+                frame,
+            }),
+            None => progress.message(&format!(
+                "warning: {}: edit[{index}] at {at_s} s is after the last frame; never applied",
+                scenario.file.display()
+            )),
+        }
+    }
+    events
+}
+
+/// One timed frame before measurement.
+struct TimedFrame {
+    time_s: f64,
+    frame_ms: f64,
+    image: RgbImage,
+    counters: Counters,
+}
+
+/// Runs technique entry `k` over the frames and measures them; returns its records and,
+/// with `keep_frames`, its frames. The frames are measured after the timed loop, so a
+/// technique with a background thread (photon streaming) gets no untimed work time
+/// between frames.
+fn run_technique(
+    scenario: &Scenario,
+    k: usize,
+    scene: &Scene,
+    times: &[f64],
+    references: &References,
+    keep_frames: bool,
+    progress: &mut dyn Progress,
+) -> Result<(Vec<FrameRecord>, Vec<RgbImage>), BenchError> {
+    let spec = &scenario.techniques[k];
+    let config = scenario.technique_config(k)?;
+    let mut engine = Engine::new(scene.clone(), &config).map_err(|e| BenchError::Technique {
+        path: scenario.file.clone(),
+        index: k,
+        name: spec.name.clone(),
+        message: e.to_string(),
+    })?;
+    engine.set_budget(scenario.technique_budget(k, &config));
+    let mut replay = Replay::new(scenario);
+    let mut frames = Vec::with_capacity(times.len());
+    progress.begin(spec.label(), times.len() as u64);
+    for (i, &t) in times.iter().enumerate() {
+        let start = Instant::now();
+        replay.apply_due(&mut engine, t)?;
+        let out = engine.step(t);
+        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        let mut counters = Counters::new();
+        for (name, value) in &out.stats {
+            counters.set(name, *value);
+        }
+        counters.set("engine.update_ms", out.update_ms);
+        counters.set("engine.advance_ms", out.advance_ms);
+        counters.set("engine.render_ms", out.frame.timings.total_ms);
+        frames.push(TimedFrame {
+            time_s: t,
+            frame_ms,
+            image: out.frame.full,
+            counters,
+        });
+        progress.set(i as u64 + 1);
+    }
+    progress.end();
+    // Stop the technique (and any thread it runs) before measuring.
+    drop(engine);
+    measure_series(
+        scenario,
+        spec.label(),
+        &spec.name,
+        frames,
+        references,
+        keep_frames,
+    )
+}
+
+/// Measures each frame against its converged reference and the previous frame (flicker).
+fn measure_series(
+    scenario: &Scenario,
+    series: &str,
+    technique: &str,
+    frames: Vec<TimedFrame>,
+    references: &References,
+    keep_frames: bool,
+) -> Result<(Vec<FrameRecord>, Vec<RgbImage>), BenchError> {
+    let mut records = Vec::with_capacity(frames.len());
+    for (i, f) in frames.iter().enumerate() {
+        let reference = references.frame(i);
+        let metrics = compare_images(reference, &f.image, &scenario.metrics)?;
+        let flicker = match i {
+            0 => None,
+            _ => Some(
+                flicker(
+                    &[frames[i - 1].image.clone(), f.image.clone()],
+                    &[references.frame(i - 1).clone(), reference.clone()],
+                )?
+                .mean,
+            ),
+        };
+        records.push(FrameRecord {
+            series: series.to_owned(),
+            technique: technique.to_owned(),
+            frame: i,
+            time_s: f.time_s,
+            frame_ms: f.frame_ms,
+            metrics,
+            flicker,
+            counters: f.counters.clone(),
+        });
+    }
+    let kept = if keep_frames {
+        frames.into_iter().map(|f| f.image).collect()
+    } else {
+        Vec::new()
+    };
+    Ok((records, kept))
+}
+
+/// The progressive reference path tracer at equal cost: frame `i` adds `frame_ms[i]`
+/// of wall-clock credit, and the tracer runs whole passes (one sample per pixel each)
+/// while the remaining credit covers at least half a pass (the last pass predicts the
+/// next), so its total time tracks the technique's total to within half a pass. Frames
+/// the credit does not cover show the last image, as an interactive path tracer would;
+/// the first frame always gets one pass (a debt repaid by later frames). Accumulation
+/// restarts, at the next pass, when the frame's converged-reference key (the scene
+/// state) changes; until that pass the stale image stays on screen.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the run's shared inputs; bundling them would only rename them"
+)]
+fn run_equal_time(
+    scenario: &Scenario,
+    label: &str,
+    scene: &Scene,
+    times: &[f64],
+    keys: &[CacheKey],
+    references: &References,
+    frame_ms: &[f64],
+    keep_frames: bool,
+    progress: &mut dyn Progress,
+) -> Result<(Vec<FrameRecord>, Vec<RgbImage>), BenchError> {
+    let series = equal_time_series(label);
+    let mut settings = reference_settings(scenario);
+    settings.seed = settings.seed.wrapping_add(EQUAL_TIME_SEED_OFFSET);
+    let mut tracer = ReferenceRenderer::new(settings);
+    let mut world = World::new(scene.clone());
+    let mut replay = Replay::new(scenario);
+    let mut frames: Vec<TimedFrame> = Vec::with_capacity(times.len());
+    let mut credit_ms = 0.0;
+    let mut pass_ms = 0.0;
+    let mut stale = false;
+    progress.begin(&series, times.len() as u64);
+    for (i, &t) in times.iter().enumerate() {
+        let start = Instant::now();
+        credit_ms += frame_ms[i];
+        replay.apply_due(&mut world, t)?;
+        world.set_time(t);
+        stale |= i > 0 && keys[i].hash != keys[i - 1].hash;
+        let mut passes = 0u32;
+        while i == 0 && passes == 0
+            || credit_ms - start.elapsed().as_secs_f64() * 1e3 >= 0.5 * pass_ms
+        {
+            if stale {
+                tracer.reset();
+                stale = false;
+            }
+            let pass = Instant::now();
+            tracer.add_samples(&world, 1);
+            pass_ms = pass.elapsed().as_secs_f64() * 1e3;
+            passes += 1;
+        }
+        let image = match frames.last() {
+            Some(previous) if passes == 0 => previous.image.clone(),
+            _ => tracer.images().full,
+        };
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        credit_ms -= ms;
+        let mut counters = Counters::for_technique("equal_time");
+        counters.set("spp", f64::from(tracer.samples()));
+        counters.set("spp_added", f64::from(passes));
+        counters.set("budget_ms", frame_ms[i]);
+        counters.set("credit_ms", credit_ms);
+        frames.push(TimedFrame {
+            time_s: t,
+            frame_ms: ms,
+            image,
+            counters,
+        });
+        progress.set(i as u64 + 1);
+    }
+    progress.end();
+    measure_series(
+        scenario,
+        &series,
+        "reference",
+        frames,
+        references,
+        keep_frames,
+    )
+}
+
+/// Per-series summaries: median frame time, mean/max of each metric, flicker, latency
+/// after each event.
+fn summarize(
+    scenario: &Scenario,
+    records: &[FrameRecord],
+    times: &[f64],
+    events: &[Event],
+) -> Result<Vec<SeriesSummary>, BenchError> {
+    let mut names: Vec<&str> = Vec::new();
+    for r in records {
+        if !names.contains(&r.series.as_str()) {
+            names.push(&r.series);
+        }
+    }
+    names
+        .into_iter()
+        .map(|name| {
+            let rs: Vec<&FrameRecord> = records.iter().filter(|r| r.series == name).collect();
+            let n = rs.len() as f64;
+            let metrics = scenario
+                .metrics
+                .iter()
+                .map(|&m| {
+                    let values: Vec<f64> = rs.iter().filter_map(|r| r.metric(m)).collect();
+                    let mean = values.iter().sum::<f64>() / n;
+                    let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    (m, mean, max)
+                })
+                .collect();
+            let pairs: Vec<f64> = rs.iter().filter_map(|r| r.flicker).collect();
+            let flicker = (!pairs.is_empty()).then(|| {
+                (
+                    pairs.iter().sum::<f64>() / pairs.len() as f64,
+                    pairs.iter().copied().fold(0.0, f64::max),
+                )
+            });
+            let errors: Vec<f64> = rs
+                .iter()
+                .map(|r| r.metric(scenario.error_metric).unwrap_or(f64::NAN))
+                .collect();
+            let latencies = events
+                .iter()
+                .map(|e| {
+                    // Settling is judged up to the next event that shows on a later frame.
+                    let end = events
+                        .iter()
+                        .map(|o| o.frame)
+                        .filter(|&f| f > e.frame)
+                        .min()
+                        .unwrap_or(errors.len());
+                    latency_after_event(
+                        &errors[..end],
+                        &times[..end],
+                        e.frame,
+                        scenario.latency_threshold,
+                    )
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok(SeriesSummary {
+                series: name.to_owned(),
+                technique: rs[0].technique.clone(),
+                median_frame_ms: median(rs.iter().map(|r| r.frame_ms).collect()),
+                metrics,
+                flicker,
+                latencies,
+            })
+        })
+        .collect()
+}
+
+/// The median (mean of the middle two for an even count); NaN when empty.
+pub fn median(mut values: Vec<f64>) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
+}
+
+/// `text` with every character outside `[A-Za-z0-9._-]` replaced by `_`.
+pub fn file_safe(text: &str) -> String {
+    text.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+fn save_frame(dir: &Path, i: usize, image: &RgbImage) -> Result<(), BenchError> {
+    std::fs::create_dir_all(dir).map_err(|e| BenchError::io(dir, e))?;
+    image.write(&dir.join(format!("{i:04}.png")), &ToneMap::default())?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn latency_is_judged_up_to_the_next_event() {
+        let scenario = Scenario {
+            metrics: vec![Metric::Flip],
+            ..Scenario::default()
+        };
+        let errors = [0.5, 0.05, 0.05, 0.5, 0.3, 0.05];
+        let times: Vec<f64> = (0..errors.len()).map(|i| i as f64 * 0.5).collect();
+        let records: Vec<FrameRecord> = errors
+            .iter()
+            .enumerate()
+            .map(|(i, &e)| FrameRecord {
+                series: "s".into(),
+                technique: "reference".into(),
+                frame: i,
+                time_s: times[i],
+                frame_ms: 10.0 + i as f64,
+                metrics: vec![(Metric::Flip, e)],
+                flicker: (i > 0).then_some(0.01),
+                counters: Counters::new(),
+            })
+            .collect();
+        let event = |frame: usize| Event {
+            name: format!("e{frame}"),
+            at_s: times[frame],
+            frame,
+        };
+        let s = summarize(&scenario, &records, &times, &[event(0), event(3)]).unwrap();
+        // Window [0, 3): 0.5, 0.05, 0.05 settles at frame 1 (the later rise belongs to
+        // the second event). Window [3, 6): 0.5, 0.3, 0.05 settles at frame 5.
+        assert_eq!(s[0].latencies[0].frames, Some(1));
+        assert_eq!(s[0].latencies[1].frames, Some(2));
+        assert_eq!(s[0].latencies[1].seconds, Some(1.0));
+        assert_eq!(s[0].median_frame_ms, 12.5);
+        let (metric, mean, max) = s[0].metrics[0];
+        assert_eq!((metric, max), (Metric::Flip, 0.5));
+        assert!((mean - 1.45 / 6.0).abs() < 1e-12, "{mean}");
+        assert_eq!(s[0].flicker, Some((0.01, 0.01)));
+    }
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert!(median(Vec::new()).is_nan());
+        assert_eq!(
+            file_safe("reference (equal time to a/b)"),
+            "reference__equal_time_to_a_b_"
+        );
+    }
+}

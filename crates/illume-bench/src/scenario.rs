@@ -1,0 +1,661 @@
+//! The scenario file: one TOML file names a scene, an animation or scripted edits, the
+//! techniques with their settings and budgets, the frames, the converged reference and
+//! the metrics. Unknown keys are errors that name the file and the key.
+//!
+//! ```toml
+//! name = "cornell_spot_moving_sphere"
+//! scene = "builtin:cornell-spot"
+//! animation = "move_sphere"
+//! width = 320
+//! height = 240
+//! duration_s = 2.5
+//! fps = 8
+//!
+//! [reference]
+//! spp = 256
+//! equal_time = true
+//!
+//! [[technique]]
+//! name = "reference"
+//! samples = 1
+//!
+//! [[edit]]
+//! at_s = 1.0
+//! instance = "tall_box"
+//! translation = [0.4, 0.6, -0.5]
+//! ```
+
+use crate::error::BenchError;
+use illume_core::{Affine3A, Quat, Rgb, Vec3};
+use illume_engine::{Config, TechniqueKind};
+use illume_metrics::Metric;
+use illume_scene::{Edit, InstanceId, LightId, MaterialId, Scene};
+use illume_transport::Budget;
+use std::path::{Path, PathBuf};
+
+/// A benchmark scenario (one `.toml` file). Every field but `scene` and `[[technique]]`
+/// has a default.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Scenario {
+    /// The report's title and the default output folder `out/bench/<name>/`. Default: the
+    /// scenario file's stem.
+    pub name: String,
+    /// One line printed under the report's title. Default empty.
+    pub description: String,
+    /// The scene: `builtin:NAME` or a scene file (`.gltf`, `.glb`, `.obj`, `.ply`).
+    /// A relative path is resolved against the scenario file's folder; `${VAR}` is
+    /// replaced by the environment variable `VAR` (e.g. `${ILLUME_SCENES}/cornell_box/…`
+    /// with `ILLUME_SCENES=/work/shared/scenes`). Required.
+    pub scene: String,
+    /// The scene animation to play (e.g. `move_sphere`). Default: none — the scene stays
+    /// as loaded, even if the file has animations.
+    pub animation: Option<String>,
+    /// Image width [pixels]. Default 320.
+    pub width: u32,
+    /// Image height [pixels]. Default 240.
+    pub height: u32,
+    /// Time of the first frame [s] with `duration_s` + `fps`. Default 0.
+    pub start_s: f64,
+    /// Length of the sequence [s]: frames at `start_s + i / fps` for
+    /// `i = 0 .. round(duration_s × fps)`. Use with `fps`, or give `times_s` instead.
+    /// Default: none.
+    pub duration_s: Option<f64>,
+    /// Frame rate of the sequence [frames/s]. Default: none.
+    pub fps: Option<f64>,
+    /// Explicit frame times [s], finite, ≥ 0 and strictly increasing. Alternative to
+    /// `duration_s` + `fps`. Default: none.
+    pub times_s: Option<Vec<f64>>,
+    /// Image metrics measured on every frame against the converged reference
+    /// (`rmse`, `relmse`, `psnr`, `ssim`, `flip`, `hdr-flip`). Default
+    /// `["rmse", "relmse", "flip"]`.
+    pub metrics: Vec<Metric>,
+    /// The metric plotted against time and used for latency; added to `metrics` if
+    /// missing. Must be one where lower is better. Default `flip`.
+    pub error_metric: Metric,
+    /// Latency threshold in units of `error_metric`: after an event, the latency is the
+    /// time until the error stays below this value to the end of the run. Default 0.1.
+    pub latency_threshold: f64,
+    /// Renderer settings shared by every technique: the `[render]` table of a
+    /// configuration file (e.g. `area_light_samples`, `seed`), without `width`/`height`
+    /// (set above). Default: the renderer's defaults.
+    pub render: Option<toml::Table>,
+    /// The converged reference and the equal-time comparison (`[reference]`).
+    pub reference: ReferenceSpec,
+    /// The techniques to run (`[[technique]]`, at least one), each on the same frames.
+    #[serde(rename = "technique")]
+    pub techniques: Vec<TechniqueSpec>,
+    /// Scripted edits (`[[edit]]`), applied when the frame time reaches them.
+    #[serde(rename = "edit")]
+    pub edits: Vec<EditSpec>,
+    /// The file this scenario was read from (empty for text parsed without a file).
+    #[serde(skip)]
+    pub file: PathBuf,
+    /// The scenario's TOML text, echoed in the report.
+    #[serde(skip)]
+    pub text: String,
+}
+
+impl Default for Scenario {
+    fn default() -> Self {
+        Self {
+            name: String::new(),
+            description: String::new(),
+            scene: String::new(),
+            animation: None,
+            width: 320,
+            height: 240,
+            start_s: 0.0,
+            duration_s: None,
+            fps: None,
+            times_s: None,
+            metrics: vec![Metric::Rmse, Metric::RelMse, Metric::Flip],
+            error_metric: Metric::Flip,
+            latency_threshold: 0.1,
+            render: None,
+            reference: ReferenceSpec::default(),
+            techniques: Vec::new(),
+            edits: Vec::new(),
+            file: PathBuf::new(),
+            text: String::new(),
+        }
+    }
+}
+
+/// The converged reference every frame is measured against, and the equal-time
+/// comparison (`[reference]`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReferenceSpec {
+    /// Samples per pixel of the converged reference of each distinct frame state. Noise
+    /// falls as 1/√spp; time grows linearly (cached, so paid once). Default 256.
+    pub spp: u32,
+    /// Seed of the converged reference. Default 0.
+    pub seed: u64,
+    /// Bounces before Russian roulette may end a path. Default 3.
+    pub rr_start_depth: u32,
+    /// Equal-time comparison: for each technique, also run the progressive reference path
+    /// tracer with the technique's measured wall-clock time per frame (accumulating while
+    /// the scene is unchanged) and measure it against the converged reference — the
+    /// technique against brute force at equal cost. Default true.
+    pub equal_time: bool,
+}
+
+impl Default for ReferenceSpec {
+    fn default() -> Self {
+        Self {
+            spp: 256,
+            seed: 0,
+            rr_start_depth: 3,
+            equal_time: true,
+        }
+    }
+}
+
+/// One technique to run (`[[technique]]`).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TechniqueSpec {
+    /// The technique's name (`reference`, `photon_stream`, …). Required.
+    pub name: String,
+    /// The series name in tables, CSV and plots; must be unique in the scenario.
+    /// Default: `name`.
+    pub label: Option<String>,
+    /// The technique's settings: the same keys as its table in a configuration file
+    /// (e.g. `[technique.settings]` → the `[photon_stream]` table). Default: the
+    /// technique's defaults.
+    pub settings: Option<toml::Table>,
+    /// Wall-clock budget of the technique's `advance` per frame [ms]. Default: none
+    /// (the technique's default budget).
+    pub budget_ms: Option<f64>,
+    /// Photons per frame (photon techniques). Default: none.
+    pub photons: Option<u64>,
+    /// Samples per pixel per frame (path tracing). Default: the technique's setting
+    /// (`reference`: `spp_per_frame`).
+    pub samples: Option<u32>,
+}
+
+impl TechniqueSpec {
+    /// The series name: `label`, or `name`.
+    pub fn label(&self) -> &str {
+        self.label.as_deref().unwrap_or(&self.name)
+    }
+}
+
+/// A scripted edit (`[[edit]]`): exactly one target (`instance`, `light` or `material`,
+/// by name) and the values to set. Items not given keep their current value.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EditSpec {
+    /// Scene time [s] of the edit: it is applied just before the first frame whose time
+    /// is ≥ `at_s`. Required, finite.
+    pub at_s: f64,
+    /// Name of the event in the latency table. Default `edit N (TARGET)`.
+    pub label: Option<String>,
+    /// The instance to place (by name).
+    pub instance: Option<String>,
+    /// The light to place (by name).
+    pub light: Option<String>,
+    /// The material to change (by name).
+    pub material: Option<String>,
+    /// New world translation of the instance or light [m]. Default: keep.
+    pub translation: Option<[f32; 3]>,
+    /// New world rotation of the instance or light [degrees], as angles about X, Y and Z
+    /// with `R = Rx · Ry · Rz`. Default: keep.
+    pub rotation_deg: Option<[f32; 3]>,
+    /// New diffuse albedo of the material (linear RGB, each in [0, 1]). Default: keep.
+    pub base_color: Option<[f32; 3]>,
+    /// New emitted radiance of the material [W/(m²·sr)]. Default: keep.
+    pub emission: Option<[f32; 3]>,
+}
+
+impl EditSpec {
+    /// The target as `kind "name"`, e.g. `instance "sphere"`.
+    pub fn target(&self) -> String {
+        match (&self.instance, &self.light, &self.material) {
+            (Some(n), _, _) => format!("instance \"{n}\""),
+            (_, Some(n), _) => format!("light \"{n}\""),
+            (_, _, Some(n)) => format!("material \"{n}\""),
+            _ => "nothing".into(),
+        }
+    }
+
+    /// The scene edit this entry makes on `scene` in its current state; unspecified
+    /// components keep the current value. Errors name the missing item.
+    pub fn resolve(&self, scene: &Scene) -> Result<Edit, String> {
+        let place = |current: &Affine3A| {
+            let (scale, rotation, translation) = current.to_scale_rotation_translation();
+            let translation = self.translation.map_or(translation, Vec3::from);
+            let rotation = self.rotation_deg.map_or(rotation, |[x, y, z]| {
+                Quat::from_rotation_x(x.to_radians())
+                    * Quat::from_rotation_y(y.to_radians())
+                    * Quat::from_rotation_z(z.to_radians())
+            });
+            Affine3A::from_scale_rotation_translation(scale, rotation, translation)
+        };
+        let missing = |kind: &str, name: &str, have: Vec<&str>| {
+            format!("no {kind} named \"{name}\" (have: {})", have.join(", "))
+        };
+        if let Some(name) = &self.instance {
+            let i = scene
+                .instances
+                .iter()
+                .position(|x| &x.name == name)
+                .ok_or_else(|| {
+                    missing(
+                        "instance",
+                        name,
+                        scene.instances.iter().map(|x| x.name.as_str()).collect(),
+                    )
+                })?;
+            return Ok(Edit::SetInstanceTransform {
+                instance: InstanceId(i as u32),
+                world_from_object: place(&scene.instances[i].world_from_object),
+            });
+        }
+        if let Some(name) = &self.light {
+            let i = scene
+                .lights
+                .iter()
+                .position(|x| &x.name == name)
+                .ok_or_else(|| {
+                    missing(
+                        "light",
+                        name,
+                        scene.lights.iter().map(|x| x.name.as_str()).collect(),
+                    )
+                })?;
+            return Ok(Edit::SetLightTransform {
+                light: LightId(i as u32),
+                world_from_light: place(&scene.lights[i].world_from_light),
+            });
+        }
+        if let Some(name) = &self.material {
+            let i = scene
+                .materials
+                .iter()
+                .position(|x| &x.name == name)
+                .ok_or_else(|| {
+                    missing(
+                        "material",
+                        name,
+                        scene.materials.iter().map(|x| x.name.as_str()).collect(),
+                    )
+                })?;
+            let mut value = scene.materials[i].clone();
+            if let Some(c) = self.base_color {
+                value.base_color = Rgb::from(c);
+            }
+            if let Some(e) = self.emission {
+                value.emission = Rgb::from(e);
+            }
+            return Ok(Edit::SetMaterial {
+                material: MaterialId(i as u32),
+                value,
+            });
+        }
+        Err("no target".into())
+    }
+
+    /// Checks the entry on its own (one target, values fit the target).
+    fn validate(&self) -> Result<(), String> {
+        if !self.at_s.is_finite() || self.at_s < 0.0 {
+            return Err(format!("at_s = {} must be finite and ≥ 0", self.at_s));
+        }
+        let targets = [&self.instance, &self.light, &self.material]
+            .iter()
+            .filter(|t| t.is_some())
+            .count();
+        if targets != 1 {
+            return Err(format!(
+                "needs exactly one of `instance`, `light`, `material` (has {targets})"
+            ));
+        }
+        let placing = self.translation.is_some() || self.rotation_deg.is_some();
+        let colouring = self.base_color.is_some() || self.emission.is_some();
+        let finite = |v: &Option<[f32; 3]>| v.is_none_or(|v| v.iter().all(|x| x.is_finite()));
+        if ![
+            self.translation,
+            self.rotation_deg,
+            self.base_color,
+            self.emission,
+        ]
+        .iter()
+        .all(finite)
+        {
+            return Err("a value is not finite".into());
+        }
+        if self.material.is_some() {
+            if placing {
+                return Err("a material takes `base_color`/`emission`, not a placement".into());
+            }
+            if !colouring {
+                return Err("sets nothing (give `base_color` or `emission`)".into());
+            }
+        } else {
+            if colouring {
+                return Err(
+                    "`base_color`/`emission` apply to a material, not an instance or light".into(),
+                );
+            }
+            if !placing {
+                return Err("sets nothing (give `translation` or `rotation_deg`)".into());
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Scenario {
+    /// Reads and checks a scenario file.
+    pub fn load(path: &Path) -> Result<Self, BenchError> {
+        let text = std::fs::read_to_string(path).map_err(|e| BenchError::io(path, e))?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses and checks scenario text; `path` names it in errors and anchors relative
+    /// scene paths.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, BenchError> {
+        let mut s: Scenario = toml::from_str(text).map_err(|e| BenchError::Parse {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        s.file = path.to_owned();
+        s.text = text.to_owned();
+        if s.name.is_empty() {
+            s.name = path
+                .file_stem()
+                .map_or_else(|| "scenario".into(), |n| n.to_string_lossy().into_owned());
+        }
+        if !s.metrics.contains(&s.error_metric) {
+            s.metrics.push(s.error_metric);
+        }
+        s.validate()?;
+        Ok(s)
+    }
+
+    fn invalid(&self, field: impl Into<String>, message: impl Into<String>) -> BenchError {
+        BenchError::Invalid {
+            path: self.file.clone(),
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    /// Checks every field's range and every technique's settings.
+    fn validate(&self) -> Result<(), BenchError> {
+        if self.scene.is_empty() {
+            return Err(self.invalid("scene", "required (builtin:NAME or a scene file)"));
+        }
+        if self.width == 0 || self.height == 0 {
+            return Err(self.invalid("width/height", "must be at least 1×1"));
+        }
+        if self.reference.spp == 0 {
+            return Err(self.invalid("reference.spp", "must be ≥ 1"));
+        }
+        if self.error_metric.higher_is_better() {
+            return Err(self.invalid(
+                "error_metric",
+                format!(
+                    "{} is higher-is-better; use an error metric",
+                    self.error_metric
+                ),
+            ));
+        }
+        if !(self.latency_threshold.is_finite() && self.latency_threshold > 0.0) {
+            return Err(self.invalid("latency_threshold", "must be finite and > 0"));
+        }
+        let render = self.render.as_ref();
+        if let Some(k) = ["width", "height"]
+            .iter()
+            .find(|k| render.is_some_and(|r| r.contains_key(**k)))
+        {
+            return Err(self.invalid(
+                format!("render.{k}"),
+                "set `width`/`height` at the top level of the scenario",
+            ));
+        }
+        self.check_times()?;
+        if self.techniques.is_empty() {
+            return Err(self.invalid("technique", "at least one [[technique]] entry is needed"));
+        }
+        let mut labels: Vec<&str> = Vec::new();
+        for (i, t) in self.techniques.iter().enumerate() {
+            if labels.contains(&t.label()) {
+                return Err(self.invalid(
+                    format!("technique[{i}].label"),
+                    format!("`{}` is used twice; give each entry a `label`", t.label()),
+                ));
+            }
+            labels.push(t.label());
+            self.technique_config(i)?;
+        }
+        for (i, e) in self.edits.iter().enumerate() {
+            e.validate().map_err(|message| BenchError::Edit {
+                path: self.file.clone(),
+                index: i,
+                message,
+            })?;
+        }
+        Ok(())
+    }
+
+    fn check_times(&self) -> Result<(), BenchError> {
+        match (&self.times_s, self.duration_s, self.fps) {
+            (Some(times), None, None) => {
+                if times.is_empty() {
+                    return Err(self.invalid("times_s", "is empty"));
+                }
+                if let Some(i) = times.iter().position(|t| !t.is_finite() || *t < 0.0) {
+                    return Err(self.invalid(
+                        "times_s",
+                        format!("entry {i} ({}) must be finite and ≥ 0", times[i]),
+                    ));
+                }
+                if let Some(i) = times.windows(2).position(|w| w[1] <= w[0]) {
+                    return Err(self.invalid(
+                        "times_s",
+                        format!(
+                            "must be strictly increasing (entry {} = {} follows {})",
+                            i + 1,
+                            times[i + 1],
+                            times[i]
+                        ),
+                    ));
+                }
+                Ok(())
+            }
+            (None, Some(duration), Some(fps)) => {
+                if !(fps.is_finite() && fps > 0.0) {
+                    return Err(self.invalid("fps", "must be finite and > 0"));
+                }
+                if !(duration.is_finite() && duration > 0.0) {
+                    return Err(self.invalid("duration_s", "must be finite and > 0"));
+                }
+                if !(self.start_s.is_finite() && self.start_s >= 0.0) {
+                    return Err(self.invalid("start_s", "must be finite and ≥ 0"));
+                }
+                if (duration * fps).round() < 1.0 {
+                    return Err(self.invalid("duration_s", "gives no frame at this fps"));
+                }
+                Ok(())
+            }
+            _ => Err(self.invalid(
+                "times_s/duration_s/fps",
+                "give either `times_s`, or both `duration_s` and `fps`",
+            )),
+        }
+    }
+
+    /// The frame times [s], in order.
+    pub fn frame_times(&self) -> Vec<f64> {
+        match (&self.times_s, self.duration_s, self.fps) {
+            (Some(times), _, _) => times.clone(),
+            (None, Some(duration), Some(fps)) => {
+                let n = (duration * fps).round() as usize;
+                (0..n).map(|i| self.start_s + i as f64 / fps).collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
+    /// The engine configuration of technique entry `index`: its settings table parsed as
+    /// the technique's table of a [`Config`], the scenario's `[render]` table and size.
+    /// An unknown name is an error naming the file, the entry and the valid names.
+    pub fn technique_config(&self, index: usize) -> Result<Config, BenchError> {
+        let spec = &self.techniques[index];
+        let error = |message: String| BenchError::Technique {
+            path: self.file.clone(),
+            index,
+            name: spec.name.clone(),
+            message,
+        };
+        let kind: TechniqueKind = spec.name.parse().map_err(error)?;
+        let mut table = toml::Table::new();
+        table.insert("technique".into(), toml::Value::String(spec.name.clone()));
+        let mut render = self.render.clone().unwrap_or_default();
+        render.insert("width".into(), toml::Value::Integer(self.width.into()));
+        render.insert("height".into(), toml::Value::Integer(self.height.into()));
+        table.insert("render".into(), toml::Value::Table(render));
+        if let Some(settings) = &spec.settings {
+            table.insert(spec.name.clone(), toml::Value::Table(settings.clone()));
+        }
+        let mut config: Config = toml::Value::Table(table)
+            .try_into()
+            .map_err(|e: toml::de::Error| error(format!("settings: {}", e.message())))?;
+        debug_assert_eq!(config.technique, kind);
+        config.reference.width = self.width;
+        config.reference.height = self.height;
+        Ok(config)
+    }
+
+    /// The per-frame budget of technique entry `index`: the entry's budget fields over
+    /// the technique's default budget.
+    pub fn technique_budget(&self, index: usize, config: &Config) -> Budget {
+        let spec = &self.techniques[index];
+        let default = config.budget();
+        Budget {
+            photons: spec.photons.or(default.photons),
+            samples: spec.samples.or(default.samples),
+            time_ms: spec.budget_ms.or(default.time_ms),
+        }
+    }
+
+    /// The scene path with `${VAR}` expanded and a relative file path resolved against
+    /// the scenario's folder; `builtin:NAME` unchanged.
+    pub fn scene_path(&self) -> Result<PathBuf, BenchError> {
+        let expanded = expand_env(&self.scene).map_err(|m| self.invalid("scene", m))?;
+        if expanded.starts_with("builtin:") {
+            return Ok(PathBuf::from(expanded));
+        }
+        let p = PathBuf::from(expanded);
+        Ok(if p.is_relative() {
+            self.file.parent().unwrap_or(Path::new("")).join(p)
+        } else {
+            p
+        })
+    }
+
+    /// Loads the scene, selects the animation (none: animations are switched off) and
+    /// sets the scene to the first frame's time.
+    pub fn load_scene(&self) -> Result<Scene, BenchError> {
+        let path = self.scene_path()?;
+        let scene_error = |message: String| BenchError::Scene {
+            path: self.file.clone(),
+            message,
+        };
+        let mut scene = illume_scene::load_scene(&path).map_err(|e| scene_error(e.to_string()))?;
+        match &self.animation {
+            Some(name) => scene.select_animation(name).map_err(scene_error)?,
+            None => scene.active_animation = None,
+        }
+        scene.set_time(self.frame_times().first().copied().unwrap_or(0.0));
+        Ok(scene)
+    }
+
+    /// What identifies the scene's content for the reference cache: `builtin:NAME` (with
+    /// the illume version, which the cache key holds anyway), or the file's absolute path,
+    /// size and modification time.
+    pub fn scene_identity(&self) -> Result<String, BenchError> {
+        let path = self.scene_path()?;
+        let text = path.to_string_lossy();
+        if text.starts_with("builtin:") {
+            return Ok(text.into_owned());
+        }
+        let meta = std::fs::metadata(&path).map_err(|e| BenchError::io(&path, e))?;
+        let modified = meta
+            .modified()
+            .ok()
+            .and_then(|m| m.duration_since(std::time::UNIX_EPOCH).ok())
+            .map_or(0, |d| d.as_nanos());
+        let absolute = std::fs::canonicalize(&path).unwrap_or(path);
+        Ok(format!(
+            "{} size {} modified {modified}",
+            absolute.display(),
+            meta.len()
+        ))
+    }
+
+    /// Indices of the edits in the order they apply (by `at_s`, then file order).
+    pub fn edit_order(&self) -> Vec<usize> {
+        let mut order: Vec<usize> = (0..self.edits.len()).collect();
+        order.sort_by(|&a, &b| self.edits[a].at_s.total_cmp(&self.edits[b].at_s));
+        order
+    }
+
+    /// The event name of edit `index`: its `label`, or `edit N (TARGET)`.
+    pub fn edit_label(&self, index: usize) -> String {
+        let e = &self.edits[index];
+        e.label
+            .clone()
+            .unwrap_or_else(|| format!("edit {index} ({})", e.target()))
+    }
+}
+
+/// Replaces each `${VAR}` by the environment variable `VAR`; an unset variable is an
+/// error naming it.
+fn expand_env(text: &str) -> Result<String, String> {
+    let mut out = String::new();
+    let mut rest = text;
+    while let Some(start) = rest.find("${") {
+        out.push_str(&rest[..start]);
+        let after = &rest[start + 2..];
+        let end = after
+            .find('}')
+            .ok_or_else(|| format!("unclosed `${{` in `{text}`"))?;
+        let var = &after[..end];
+        let value = std::env::var(var)
+            .map_err(|_| format!("environment variable {var} (used in `{text}`) is not set"))?;
+        out.push_str(&value);
+        rest = &after[end + 1..];
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn expand_env_replaces_and_names_missing_variables() {
+        // PATH is set in any test environment.
+        let path = std::env::var("PATH").unwrap();
+        assert_eq!(expand_env("${PATH}/x").unwrap(), format!("{path}/x"));
+        assert_eq!(expand_env("plain").unwrap(), "plain");
+        let e = expand_env("${ILLUME_SURELY_UNSET_VARIABLE}/a").unwrap_err();
+        assert!(e.contains("ILLUME_SURELY_UNSET_VARIABLE"), "{e}");
+        assert!(expand_env("${OPEN").is_err());
+    }
+
+    #[test]
+    fn frame_times_from_duration_and_fps() {
+        let s = Scenario {
+            start_s: 0.5,
+            duration_s: Some(1.0),
+            fps: Some(4.0),
+            ..Scenario::default()
+        };
+        assert_eq!(s.frame_times(), vec![0.5, 0.75, 1.0, 1.25]);
+    }
+}

@@ -1,0 +1,249 @@
+//! A tiny scenario end to end: converged references (and their cache), the reference
+//! technique with its equal-time path tracer, report files, and the CSV read back.
+
+use illume_bench::{RunOptions, Scenario, Silent, run, write_report};
+use illume_core::image::RgbImage;
+use illume_metrics::report::{Cell, read_csv};
+use illume_metrics::{Metric, compare_images};
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
+
+/// 16×12 pixels, 3 frames; the light moves (2 distinct states per animation step) and an
+/// edit moves the sphere at 0.5 s.
+const TINY: &str = r#"
+name = "tiny"
+scene = "builtin:cornell-spot"
+animation = "move_light"
+width = 16
+height = 12
+times_s = [0.0, 0.5, 1.0]
+metrics = ["rmse", "relmse", "flip"]
+
+[reference]
+spp = 16
+
+[[technique]]
+name = "reference"
+samples = 1
+
+[[edit]]
+at_s = 0.5
+instance = "sphere"
+translation = [0.2, 0.3, 0.0]
+"#;
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("illume-bench-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn mtimes(dir: &Path) -> Vec<(PathBuf, SystemTime)> {
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "exr"))
+        .map(|p| {
+            let t = std::fs::metadata(&p).unwrap().modified().unwrap();
+            (p, t)
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn tiny_scenario_runs_end_to_end_and_reuses_its_references() {
+    let root = temp_dir("e2e");
+    let scenario = Scenario::parse(TINY, &root.join("tiny.toml")).unwrap();
+    let options = RunOptions {
+        output_dir: root.join("report"),
+        cache_dir: root.join("cache"),
+        save_frames: true,
+        notes: vec!["test run".into()],
+    };
+
+    // First run: every distinct state is rendered (3 frames, 3 states: the light moves).
+    let first = run(&scenario, &options, &mut Silent).unwrap();
+    assert_eq!((first.cache_hits, first.cache_renders), (0, 3));
+    let files = write_report(&scenario, &first, &options).unwrap();
+    for f in [&files.report_md, &files.results_csv] {
+        assert!(f.is_file(), "{} missing", f.display());
+    }
+    for name in [
+        "error_vs_time.svg",
+        "error_vs_time_rmse.svg",
+        "fps.svg",
+        "latency_0.svg",
+        "latency_1.svg",
+    ] {
+        let p = options.output_dir.join(name);
+        let svg = std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(svg.contains("<svg"), "{name} is not an SVG");
+    }
+    assert_eq!(files.plots.len(), 6, "{:?}", files.plots);
+    assert!(
+        options
+            .output_dir
+            .join("frames/reference/0002.png")
+            .is_file()
+    );
+    assert!(
+        options
+            .output_dir
+            .join("frames/reference/0000.png")
+            .is_file()
+    );
+
+    // results.csv: one row per frame per series, finite metrics, and the technique
+    // (1 spp of indirect light per frame) measurably away from the converged reference.
+    let table = read_csv(&files.results_csv).unwrap();
+    let series = table.column("series").unwrap();
+    let equal = "reference (equal time to reference)";
+    for name in ["reference", equal] {
+        let n = series
+            .iter()
+            .filter(|c| **c == &Cell::Text(name.into()))
+            .count();
+        assert_eq!(n, 3, "{name}: one row per frame");
+    }
+    assert_eq!(table.rows.len(), 6);
+    for m in ["rmse", "relmse", "flip", "frame_ms", "time_s"] {
+        for (i, c) in table.column(m).unwrap().iter().enumerate() {
+            let v = c
+                .as_number()
+                .unwrap_or_else(|| panic!("{m} row {i}: {c:?}"));
+            assert!(v.is_finite(), "{m} row {i} = {v}");
+        }
+    }
+    let rmse = table.column("rmse").unwrap();
+    for (s, v) in series.iter().zip(&rmse) {
+        if **s == Cell::Text("reference".into()) {
+            assert!(
+                v.as_number().unwrap() > 1e-4,
+                "technique rmse {v:?} not above 0"
+            );
+        }
+    }
+    assert!(
+        table.column("reference.spp").is_some(),
+        "technique counters in the CSV"
+    );
+    // Equal time: the first frame always gets a pass; every frame shows at least 1 spp.
+    let equal_rows: Vec<_> = first.records.iter().filter(|r| r.series == equal).collect();
+    assert!(equal_rows[0].counters.get("equal_time.spp_added").unwrap() >= 1.0);
+    for r in &equal_rows {
+        assert!(r.counters.get("equal_time.spp").unwrap() >= 1.0, "{r:?}");
+        let budget = r.counters.get("equal_time.budget_ms").unwrap();
+        let technique = first
+            .records
+            .iter()
+            .find(|t| t.series == "reference" && t.frame == r.frame);
+        assert_eq!(
+            budget,
+            technique.unwrap().frame_ms,
+            "budget = the technique's frame time"
+        );
+    }
+    let times: Vec<f64> = table
+        .column("time_s")
+        .unwrap()
+        .iter()
+        .map(|c| c.as_number().unwrap())
+        .collect();
+    assert_eq!(&times[..3], &[0.0, 0.5, 1.0]);
+
+    // The converged reference against itself scores exactly zero: the technique's error
+    // above is the technique's, not the measurement's.
+    let cached = first
+        .reference_keys
+        .iter()
+        .map(|k| options.cache_dir.join(format!("{}.exr", k.hex())))
+        .collect::<Vec<_>>();
+    let r0 = RgbImage::read(&cached[0]).unwrap();
+    let self_error = compare_images(&r0, &r0, &[Metric::Rmse, Metric::Flip]).unwrap();
+    assert_eq!(self_error, vec![(Metric::Rmse, 0.0), (Metric::Flip, 0.0)]);
+    let technique_rmse0 = first.records[0].metric(Metric::Rmse).unwrap();
+    assert!(technique_rmse0 > self_error[0].1);
+
+    // report.md holds the summary, latency and scenario sections.
+    let md = std::fs::read_to_string(&files.report_md).unwrap();
+    for needle in [
+        "# tiny",
+        "## Summary",
+        "## Latency after events",
+        "edit 0 (instance \"sphere\")",
+        "start (animation starts)",
+        "error_vs_time.svg",
+        "```toml",
+        "test run",
+        "Machine:",
+    ] {
+        assert!(md.contains(needle), "report.md lacks `{needle}`:\n{md}");
+    }
+    assert_eq!(first.events.len(), 2, "{:?}", first.events);
+    assert_eq!(
+        first.events[1].frame, 1,
+        "the edit at 0.5 s shows from frame 1"
+    );
+
+    // Second run: all three references come from the cache, the files are untouched.
+    let before = mtimes(&options.cache_dir);
+    assert_eq!(before.len(), 3);
+    let second = run(&scenario, &options, &mut Silent).unwrap();
+    assert_eq!((second.cache_hits, second.cache_renders), (3, 0));
+    assert_eq!(
+        mtimes(&options.cache_dir),
+        before,
+        "cached EXRs were rewritten"
+    );
+    assert_eq!(second.reference_keys, first.reference_keys);
+
+    // A changed reference setting changes every key: rendered anew, old files kept.
+    let more = Scenario::parse(
+        &TINY.replace("spp = 16", "spp = 17"),
+        &root.join("tiny.toml"),
+    )
+    .unwrap();
+    let third = run(&more, &options, &mut Silent).unwrap();
+    assert_eq!((third.cache_hits, third.cache_renders), (0, 3));
+    for (a, b) in third.reference_keys.iter().zip(&first.reference_keys) {
+        assert_ne!(a.hash, b.hash);
+    }
+    assert_eq!(mtimes(&options.cache_dir).len(), 6);
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+#[test]
+fn static_scene_shares_one_reference_across_frames() {
+    let root = temp_dir("static");
+    let text = TINY
+        .replace("animation = \"move_light\"\n", "")
+        .replace(
+            "[[edit]]\nat_s = 0.5\ninstance = \"sphere\"\ntranslation = [0.2, 0.3, 0.0]\n",
+            "",
+        )
+        .replace(
+            "[reference]\nspp = 16",
+            "[reference]\nspp = 4\nequal_time = false",
+        );
+    let scenario = Scenario::parse(&text, &root.join("static.toml")).unwrap();
+    let options = RunOptions {
+        output_dir: root.join("report"),
+        cache_dir: root.join("cache"),
+        save_frames: false,
+        notes: Vec::new(),
+    };
+    let outcome = run(&scenario, &options, &mut Silent).unwrap();
+    assert_eq!((outcome.cache_hits, outcome.cache_renders), (0, 1));
+    assert_eq!(outcome.records.len(), 3, "no equal-time series");
+    // The reference technique accumulates while nothing changes: its spp counter grows.
+    let spp: Vec<f64> = outcome
+        .records
+        .iter()
+        .map(|r| r.counters.get("reference.spp").unwrap())
+        .collect();
+    assert_eq!(spp, vec![1.0, 2.0, 3.0]);
+    assert!(outcome.records.iter().skip(1).all(|r| r.flicker.is_some()));
+    std::fs::remove_dir_all(&root).unwrap();
+}

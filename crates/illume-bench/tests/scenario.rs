@@ -1,0 +1,234 @@
+//! Scenario parsing: defaults, located errors, frame times, technique names, edits.
+
+use illume_bench::{BenchError, Scenario};
+use illume_engine::TechniqueKind;
+use illume_metrics::Metric;
+use std::path::{Path, PathBuf};
+
+const MINIMAL: &str = r#"
+scene = "builtin:cornell-spot"
+times_s = [0.0, 0.5]
+[[technique]]
+name = "reference"
+"#;
+
+fn parse(text: &str) -> Result<Scenario, BenchError> {
+    Scenario::parse(text, Path::new("scenarios/test_case.toml"))
+}
+
+fn error(text: &str) -> String {
+    parse(text).expect_err("must be rejected").to_string()
+}
+
+#[test]
+fn minimal_scenario_gets_the_documented_defaults() {
+    let s = parse(MINIMAL).unwrap();
+    assert_eq!(s.name, "test_case", "name defaults to the file stem");
+    assert_eq!((s.width, s.height), (320, 240));
+    assert_eq!(s.metrics, vec![Metric::Rmse, Metric::RelMse, Metric::Flip]);
+    assert_eq!(s.error_metric, Metric::Flip);
+    assert_eq!(s.latency_threshold, 0.1);
+    assert_eq!(s.reference.spp, 256);
+    assert_eq!(s.reference.seed, 0);
+    assert!(s.reference.equal_time);
+    assert_eq!(s.animation, None);
+    assert!(s.edits.is_empty());
+    assert_eq!(s.frame_times(), vec![0.0, 0.5]);
+    assert_eq!(s.techniques[0].label(), "reference");
+    // The technique's table: defaults, scenario size.
+    let c = s.technique_config(0).unwrap();
+    assert_eq!(c.technique, TechniqueKind::Reference);
+    assert_eq!((c.render.width, c.render.height), (320, 240));
+    assert_eq!((c.reference.width, c.reference.height), (320, 240));
+    assert_eq!(c.reference.spp_per_frame, 4);
+}
+
+#[test]
+fn error_metric_is_added_to_the_metrics() {
+    let s = parse(&format!(
+        "metrics = [\"psnr\"]\nerror_metric = \"rmse\"\n{MINIMAL}"
+    ))
+    .unwrap();
+    assert_eq!(s.metrics, vec![Metric::Psnr, Metric::Rmse]);
+    let e = error(&format!("error_metric = \"ssim\"\n{MINIMAL}"));
+    assert!(e.contains("error_metric"), "{e}");
+}
+
+#[test]
+fn unknown_keys_name_the_file_and_the_key() {
+    let e = error(&format!("widht = 10\n{MINIMAL}"));
+    assert!(
+        e.contains("scenarios/test_case.toml") && e.contains("widht"),
+        "{e}"
+    );
+    let e = error(&format!("{MINIMAL}budget_msec = 3\n"));
+    assert!(
+        e.contains("test_case.toml") && e.contains("budget_msec"),
+        "{e}"
+    );
+    let e = error(&format!("{MINIMAL}[reference]\nspp = 4\nequal = true\n"));
+    assert!(e.contains("test_case.toml") && e.contains("equal"), "{e}");
+}
+
+#[test]
+fn technique_settings_go_through_the_technique_table() {
+    let s = parse(&format!(
+        "{MINIMAL}samples = 2\nsettings = {{ spp_per_frame = 7, seed = 3 }}\n"
+    ))
+    .unwrap();
+    let c = s.technique_config(0).unwrap();
+    assert_eq!((c.reference.spp_per_frame, c.reference.seed), (7, 3));
+    assert_eq!(s.technique_budget(0, &c).samples, Some(2));
+    let e = error(&format!("{MINIMAL}settings = {{ bogus_knob = 1 }}\n"));
+    assert!(
+        e.contains("test_case.toml") && e.contains("technique[0]") && e.contains("bogus_knob"),
+        "{e}"
+    );
+    let e = error(&format!("{MINIMAL}[render]\nwidth = 3\n"));
+    assert!(e.contains("render.width"), "{e}");
+}
+
+#[test]
+fn unknown_technique_names_file_entry_and_valid_names() {
+    let text = MINIMAL.replace("name = \"reference\"", "name = \"photon_streem\"");
+    let e = error(&text);
+    assert!(e.contains("scenarios/test_case.toml"), "{e}");
+    assert!(
+        e.contains("technique[0]") && e.contains("photon_streem"),
+        "{e}"
+    );
+    for k in TechniqueKind::ALL {
+        assert!(e.contains(k.name()), "valid name {} missing: {e}", k.name());
+    }
+}
+
+#[test]
+fn duplicate_labels_are_rejected() {
+    let e = error(&format!("{MINIMAL}[[technique]]\nname = \"reference\"\n"));
+    assert!(e.contains("technique[1].label"), "{e}");
+}
+
+#[test]
+fn bad_frame_times_are_rejected_with_the_field() {
+    let base = "scene = \"builtin:furnace\"\n[[technique]]\nname = \"reference\"\n";
+    for (times, needle) in [
+        ("times_s = [0.0, 0.5, 0.5]", "strictly increasing"),
+        ("times_s = [0.5, 0.25]", "strictly increasing"),
+        ("times_s = []", "empty"),
+        ("times_s = [-1.0]", "≥ 0"),
+        ("times_s = [0.0]\nfps = 10.0\nduration_s = 1.0", "either"),
+        ("duration_s = 1.0", "either"),
+        ("", "either"),
+        ("duration_s = 1.0\nfps = 0.0", "fps"),
+        ("duration_s = 0.01\nfps = 10.0", "no frame"),
+    ] {
+        let e = error(&format!("{times}\n{base}"));
+        assert!(
+            e.contains("test_case.toml") && e.contains(needle),
+            "`{times}`: {e}"
+        );
+    }
+    let s = parse(&format!(
+        "duration_s = 1.0\nfps = 4.0\nstart_s = 1.0\n{base}"
+    ))
+    .unwrap();
+    assert_eq!(s.frame_times(), vec![1.0, 1.25, 1.5, 1.75]);
+}
+
+#[test]
+fn edits_need_one_target_and_matching_values() {
+    let ok = parse(&format!(
+        "{MINIMAL}[[edit]]\nat_s = 0.5\ninstance = \"sphere\"\ntranslation = [0.0, 0.3, 0.0]\n\
+         [[edit]]\nat_s = 0.25\nmaterial = \"blue\"\nbase_color = [0.5, 0.5, 0.5]\n"
+    ))
+    .unwrap();
+    assert_eq!(
+        ok.edit_order(),
+        vec![1, 0],
+        "applied by time, not file order"
+    );
+    for (edit, needle) in [
+        (
+            "instance = \"a\"\nlight = \"b\"\ntranslation = [0.0, 0.0, 0.0]",
+            "exactly one",
+        ),
+        ("translation = [0.0, 0.0, 0.0]", "exactly one"),
+        (
+            "material = \"m\"\ntranslation = [0.0, 0.0, 0.0]",
+            "not a placement",
+        ),
+        (
+            "instance = \"a\"\nbase_color = [1.0, 1.0, 1.0]",
+            "apply to a material",
+        ),
+        ("instance = \"a\"", "sets nothing"),
+    ] {
+        let e = error(&format!("{MINIMAL}[[edit]]\nat_s = 1.0\n{edit}\n"));
+        assert!(e.contains("edit[0]") && e.contains(needle), "`{edit}`: {e}");
+    }
+}
+
+#[test]
+fn scene_paths_resolve_against_the_scenario_folder() {
+    let s = Scenario::parse(
+        &MINIMAL.replace("builtin:cornell-spot", "scenes/box.gltf"),
+        Path::new("/data/bench/s.toml"),
+    )
+    .unwrap();
+    assert_eq!(
+        s.scene_path().unwrap(),
+        PathBuf::from("/data/bench/scenes/box.gltf")
+    );
+    let s = Scenario::parse(
+        &MINIMAL.replace("builtin:cornell-spot", "${HOME}/box.gltf"),
+        Path::new("/data/bench/s.toml"),
+    )
+    .unwrap();
+    let home = std::env::var("HOME").unwrap();
+    assert_eq!(
+        s.scene_path().unwrap(),
+        PathBuf::from(format!("{home}/box.gltf"))
+    );
+    assert_eq!(
+        parse(MINIMAL).unwrap().scene_path().unwrap(),
+        PathBuf::from("builtin:cornell-spot")
+    );
+    // A missing file is an error naming the scenario and the scene file.
+    let s = Scenario::parse(
+        &MINIMAL.replace("builtin:cornell-spot", "missing.obj"),
+        Path::new("/nonexistent/s.toml"),
+    )
+    .unwrap();
+    let e = s.load_scene().unwrap_err().to_string();
+    assert!(
+        e.contains("/nonexistent/s.toml") && e.contains("missing.obj"),
+        "{e}"
+    );
+    // An unknown animation names the ones the scene has.
+    let s = parse(&format!("animation = \"spin\"\n{MINIMAL}")).unwrap();
+    let e = s.load_scene().unwrap_err().to_string();
+    assert!(e.contains("spin") && e.contains("move_sphere"), "{e}");
+}
+
+#[test]
+fn shipped_scenarios_parse() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
+    let have_photon_stream = "photon_stream".parse::<TechniqueKind>().is_ok();
+    for name in [
+        "cornell_spot_static.toml",
+        "moving_sphere.toml",
+        "moving_light.toml",
+    ] {
+        match Scenario::load(&dir.join(name)) {
+            Ok(s) => {
+                assert!(!s.frame_times().is_empty());
+                s.load_scene().unwrap();
+            }
+            // Until photon_stream joins TechniqueKind, the only acceptable failure is
+            // that entry; once it has joined, every shipped scenario must load.
+            Err(BenchError::Technique { name: t, .. })
+                if t == "photon_stream" && !have_photon_stream => {}
+            Err(e) => panic!("{name}: {e}"),
+        }
+    }
+}
