@@ -325,13 +325,22 @@ impl Tracer {
     ) -> Option<Hit> {
         let record = *self.record_of_instance.get(instance.index())?;
         let inst = self.instances.get(record as usize)?;
-        let local = object_ray(
-            inst,
-            &PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min),
-        );
+        // The object-space ray of `object_ray`, without the traversal's reciprocals.
+        let m = &inst.object_from_world;
+        let (origin, dir) = if inst.translation_only {
+            (
+                Vec3A::from(ray.origin) + m.translation,
+                Vec3A::from(ray.dir),
+            )
+        } else {
+            (
+                m.transform_point3a(ray.origin.into()),
+                m.transform_vector3a(ray.dir.into()),
+            )
+        };
         let local = Ray {
-            origin: local.origin.into(),
-            dir: local.dir.into(),
+            origin: origin.into(),
+            dir: dir.into(),
             t_min: ray.t_min,
             t_max: ray.t_max,
         };

@@ -381,11 +381,7 @@ impl ScreenTriangle {
     /// Calls `covered(x, y, 1/w)` for every pixel of `rows` whose centre is inside, row
     /// by row, left to right.
     #[inline]
-    fn rasterize(
-        &self,
-        rows: std::ops::Range<i32>,
-        mut covered: impl FnMut(i32, i32, f32),
-    ) {
+    fn rasterize(&self, rows: std::ops::Range<i32>, mut covered: impl FnMut(i32, i32, f32)) {
         let s = SUBPIXELS;
         let y_start = self.y0.max(rows.start);
         let y_end = self.y1.min(rows.end - 1);
@@ -393,10 +389,7 @@ impl ScreenTriangle {
         let sx = self.x0 as i64 * s + s / 2;
         for y in y_start..=y_end {
             let sy = y as i64 * s + s / 2;
-            let mut e = [0i64; 3];
-            for k in 0..3 {
-                e[k] = self.a[k] * sx + self.b[k] * sy + self.c[k];
-            }
+            let mut e = [0, 1, 2].map(|k| self.a[k] * sx + self.b[k] * sy + self.c[k]);
             let z_row = self.z0 + self.dzdy * (y - self.y0) as f32;
             let mut inside_seen = false;
             for x in self.x0..=self.x1 {
@@ -485,9 +478,9 @@ fn setup_triangle(
     {
         return;
     }
-    let inside_all = [p0, p1, p2].iter().all(|&p| {
-        p.z >= NEAR_W && p.x.abs() <= GUARD_BAND * p.z && p.y.abs() <= GUARD_BAND * p.z
-    });
+    let inside_all = [p0, p1, p2]
+        .iter()
+        .all(|&p| p.z >= NEAR_W && p.x.abs() <= GUARD_BAND * p.z && p.y.abs() <= GUARD_BAND * p.z);
     let mut polygon = Polygon::new([p0, p1, p2]);
     if !inside_all {
         // Distance to each plane, ≥ 0 inside.
@@ -667,10 +660,16 @@ mod tests {
                 p(16.5 + 9.0 * phi.cos(), 16.5 + 9.0 * phi.sin())
             })
             .collect();
-        let fan: Vec<[Vec3; 3]> = (0..8).map(|k| [centre, ring[k], ring[(k + 1) % 8]]).collect();
+        let fan: Vec<[Vec3; 3]> = (0..8)
+            .map(|k| [centre, ring[k], ring[(k + 1) % 8]])
+            .collect();
         let count = coverage(w, h, &fan);
         assert!(count.iter().all(|&n| n <= 1), "a pixel is covered twice");
-        assert_eq!(count[(16 * w + 16) as usize], 1, "the shared centre is covered once");
+        assert_eq!(
+            count[(16 * w + 16) as usize],
+            1,
+            "the shared centre is covered once"
+        );
         assert!(count.iter().filter(|&&n| n == 1).count() > 200);
     }
 
@@ -711,27 +710,36 @@ mod tests {
                 } else {
                     // Only samples within a hair of an edge may differ.
                     let wide = |s: f32| {
-                        [(-s, 0.0), (s, 0.0), (0.0, -s), (0.0, s)].iter().any(|&(dx, dy)| {
-                            let mut r2 = r;
-                            r2.dir.x += dx;
-                            r2.dir.y += dy;
-                            illume_accel::triangle::intersect_triangle(
-                                &r2,
-                                f32::INFINITY,
-                                tri[0],
-                                tri[1],
-                                tri[2],
-                            )
-                            .is_some()
-                                != hit
-                        })
+                        [(-s, 0.0), (s, 0.0), (0.0, -s), (0.0, s)]
+                            .iter()
+                            .any(|&(dx, dy)| {
+                                let mut r2 = r;
+                                r2.dir.x += dx;
+                                r2.dir.y += dy;
+                                illume_accel::triangle::intersect_triangle(
+                                    &r2,
+                                    f32::INFINITY,
+                                    tri[0],
+                                    tri[1],
+                                    tri[2],
+                                )
+                                .is_some()
+                                    != hit
+                            })
                     };
                     assert!(wide(0.01), "pixel ({x}, {y}): raster {n}, ray {hit}");
                 }
             }
         }
-        assert!(covered > 300, "the clipped triangle covers much of the image: {covered}");
-        assert!(agree as f32 >= 0.995 * (w * h) as f32, "{agree} of {}", w * h);
+        assert!(
+            covered > 300,
+            "the clipped triangle covers much of the image: {covered}"
+        );
+        assert!(
+            agree as f32 >= 0.995 * (w * h) as f32,
+            "{agree} of {}",
+            w * h
+        );
         // The same triangle wholly behind the camera covers nothing.
         let behind = tri.map(|p| Vec3::new(p.x, p.y, -p.z.abs() - 0.5));
         assert!(coverage(w, h, &[behind]).iter().all(|&n| n == 0));
@@ -766,7 +774,10 @@ mod tests {
         };
         for order in [[0, 1], [1, 0]] {
             let best = scene_free(order);
-            assert!(best.iter().all(|&(z, i)| i == 0 && (z - 1.0).abs() < 1e-5), "{order:?}");
+            assert!(
+                best.iter().all(|&(z, i)| i == 0 && (z - 1.0).abs() < 1e-5),
+                "{order:?}"
+            );
         }
     }
 

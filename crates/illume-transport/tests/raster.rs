@@ -49,7 +49,10 @@ fn compare(world: &World, width: u32, height: u32, what: &str) -> Agreement {
                     && r.hit.reflects == t.hit.reflects
                     && r.hit.t == t.hit.t
                     && r.to_camera == t.to_camera;
-                assert!(same, "{what} {width}x{height} pixel ({x}, {y}): same triangle, different surface:\nraster {r:?}\nrays   {t:?}");
+                assert!(
+                    same,
+                    "{what} {width}x{height} pixel ({x}, {y}): same triangle, different surface:\nraster {r:?}\nrays   {t:?}"
+                );
             }
         }
     }
