@@ -6,7 +6,7 @@
 //! CPU. The projection is exactly [`CameraRays`]'s: vertical field of view `yfov_rad`,
 //! aspect `width / height`, pixel (x, y) sampled at its centre (x + 0.5, y + 0.5), y = 0 at
 //! the top, camera looking down −Z. Every instance visible to
-//! [`MASK_DEFAULT`](illume_scene::MASK_DEFAULT) is drawn; back faces are not culled (a
+//! [`MASK_DEFAULT`] is drawn; back faces are not culled (a
 //! one-sided material still occludes, as it does for rays).
 //!
 //! # Pipeline
@@ -43,7 +43,7 @@ use glam::{Affine3A, DVec3, Vec2, Vec3};
 use illume_scene::{InstanceId, MASK_DEFAULT, Scene};
 use rayon::prelude::*;
 
-/// Nearest view depth drawn [m]: geometry closer to the camera plane than this is clipped
+/// Nearest view depth drawn \[m\]: geometry closer to the camera plane than this is clipped
 /// away (rays from the camera would still see it). A tenth of a millimetre.
 pub const NEAR_W: f64 = 1e-4;
 
@@ -67,7 +67,7 @@ const TRANSFORM_CHUNK: usize = 8192;
 /// What one pixel centre sees: the nearest triangle and its reciprocal view depth.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VisibilitySample {
-    /// `1/w` at the pixel centre (w = view depth [m]; larger is nearer); 0 when empty.
+    /// `1/w` at the pixel centre (w = view depth \[m\]; larger is nearer); 0 when empty.
     pub inverse_depth: f32,
     /// The instance, `u32::MAX` when the pixel sees nothing.
     pub instance: u32,
