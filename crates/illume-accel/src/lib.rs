@@ -91,7 +91,7 @@ mod wide;
 use crate::blas::Blas;
 use crate::build::{BuildParams, build_binary};
 use crate::wide::{Bvh4, Item, PreparedRay, StackEntry, traverse, with_stack};
-use illume_core::{Aabb, Affine3A, Mat3A, Ray, Vec2, Vec3A};
+use illume_core::{Aabb, Affine3A, Mat3A, Ray, Vec2, Vec3, Vec3A};
 use illume_scene::{InstanceId, Scene};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -198,6 +198,8 @@ pub struct Tracer {
     tlas: Bvh4,
     /// Instances in instance-level leaf order.
     instances: Vec<InstanceRecord>,
+    /// Position in `instances` of each scene instance (`u32::MAX`: not in the tracer).
+    record_of_instance: Vec<u32>,
     /// Sizes and timings.
     stats: TracerStats,
 }
@@ -219,6 +221,7 @@ impl Tracer {
                 nodes: Vec::new(),
             },
             instances: Vec::new(),
+            record_of_instance: Vec::new(),
             stats: TracerStats::default(),
         };
         tracer.update(scene);
@@ -265,6 +268,10 @@ impl Tracer {
         let boxes: Vec<Aabb> = records.iter().map(|r| r.world_bounds).collect();
         let bin = build_binary(&boxes, INSTANCE_PARAMS);
         self.instances = bin.order.iter().map(|&i| records[i as usize]).collect();
+        self.record_of_instance = vec![u32::MAX; scene.instances.len()];
+        for (k, r) in self.instances.iter().enumerate() {
+            self.record_of_instance[r.id.index()] = k as u32;
+        }
         let instances = &self.instances;
         self.tlas = Bvh4::from_binary(&bin, &|first, count| {
             instances[first as usize..(first + count) as usize]
@@ -298,6 +305,52 @@ impl Tracer {
     /// Closest hit along `ray` among instances whose mask intersects `mask`.
     pub fn intersect(&self, ray: &Ray, mask: u32) -> Option<Hit> {
         with_stack(|stack| self.intersect_with(ray, mask, stack))
+    }
+
+    /// The hit of `ray` with one triangle alone: triangle `triangle` of scene instance
+    /// `instance`, whose object-space corners (`Mesh::triangle`) are `object_corners`.
+    ///
+    /// Contract: the ray enters the instance's object space and meets the triangle with
+    /// exactly the arithmetic of [`Tracer::intersect`] (same object-space ray, the
+    /// Möller–Trumbore of [`triangle::intersect_triangle`]), so when the closest hit of
+    /// `ray` is this triangle, the two results are equal bit for bit. `None` when the ray
+    /// misses the triangle within `(ray.t_min, ray.t_max)` or the instance is not in the
+    /// tracer (unknown id, empty mesh, singular transform). Masks are not consulted.
+    pub fn intersect_instance_triangle(
+        &self,
+        ray: &Ray,
+        instance: InstanceId,
+        triangle: u32,
+        object_corners: [Vec3; 3],
+    ) -> Option<Hit> {
+        let record = *self.record_of_instance.get(instance.index())?;
+        let inst = self.instances.get(record as usize)?;
+        // The object-space ray of `object_ray`, without the traversal's reciprocals.
+        let m = &inst.object_from_world;
+        let (origin, dir) = if inst.translation_only {
+            (
+                Vec3A::from(ray.origin) + m.translation,
+                Vec3A::from(ray.dir),
+            )
+        } else {
+            (
+                m.transform_point3a(ray.origin.into()),
+                m.transform_vector3a(ray.dir.into()),
+            )
+        };
+        let local = Ray {
+            origin: origin.into(),
+            dir: dir.into(),
+            t_min: ray.t_min,
+            t_max: ray.t_max,
+        };
+        let [p0, p1, p2] = object_corners;
+        triangle::intersect_triangle(&local, ray.t_max, p0, p1, p2).map(|(t, barycentrics)| Hit {
+            t,
+            instance,
+            triangle,
+            barycentrics,
+        })
     }
 
     /// True when anything visible to `mask` lies on `ray` within `(t_min, t_max)`.

@@ -117,4 +117,24 @@ mod tests {
             .to_string();
         assert!(e.contains("b.toml") && e.contains("nope"), "{e}");
     }
+
+    #[test]
+    fn primary_visibility_is_a_snake_case_name() {
+        use illume_render::PrimaryVisibility;
+        let c = Config::parse(
+            "[render]\nprimary_visibility = \"rays\"\n",
+            Path::new("a.toml"),
+        )
+        .unwrap();
+        assert_eq!(c.render.primary_visibility, PrimaryVisibility::Rays);
+        let c = Config::parse("[render]\n", Path::new("a.toml")).unwrap();
+        assert_eq!(c.render.primary_visibility, PrimaryVisibility::Raster);
+        assert!(
+            Config::parse(
+                "[render]\nprimary_visibility = \"Raster\"\n",
+                Path::new("a.toml")
+            )
+            .is_err()
+        );
+    }
 }

@@ -30,7 +30,9 @@ pub struct GBuffer {
 
 impl GBuffer {
     /// Traces one primary ray per pixel through `offset` within the pixel (0.5, 0.5 =
-    /// centre), in parallel.
+    /// centre), in parallel. This is the reference for primary visibility;
+    /// [`GBuffer::rasterize`] gives the same hits far cheaper but only at the pixel centre
+    /// (offset 0.5, 0.5), so sub-pixel jitter needs this path.
     pub fn render(world: &World, width: u32, height: u32, offset: Vec2) -> Self {
         let cam = CameraRays::new(&world.scene.camera, width, height);
         let pixels = (0..width * height)

@@ -9,6 +9,7 @@
 //! * [`photon`] — the photon-path generator: a pure function of an addressable
 //!   [`SampleStream`](illume_core::sampling::SampleStream) (same index ⇒ same path).
 //! * [`gbuffer`] — the per-pixel primary-hit buffer a technique shades.
+//! * [`raster`] — the CPU visibility-buffer rasterizer behind [`GBuffer::rasterize`].
 //! * [`technique`] — the [`Technique`] trait every GI technique implements.
 //!
 //! Radiometric conventions follow `shared/DESIGN.md`: lights and pixels carry linear RGB
@@ -19,6 +20,7 @@ pub mod camera;
 pub mod gbuffer;
 pub mod lights;
 pub mod photon;
+pub mod raster;
 pub mod surface;
 pub mod technique;
 pub mod world;
@@ -26,6 +28,7 @@ pub mod world;
 pub use camera::CameraRays;
 pub use gbuffer::{GBuffer, GBufferPixel};
 pub use lights::{EmissionSample, LightSample, LightSet};
+pub use raster::VisibilityBuffer;
 pub use surface::SurfaceHit;
 pub use technique::{Budget, Technique, TechniqueStats};
 pub use world::{SharedWorld, World};
