@@ -360,32 +360,31 @@ impl Tracer {
 
     /// Closest hits for a batch of rays, in parallel (rayon, in chunks of rays).
     pub fn intersect_batch(&self, rays: &[Ray], mask: u32) -> Vec<Option<Hit>> {
-        let mut hits = vec![None; rays.len()];
-        hits.par_chunks_mut(BATCH_CHUNK)
-            .zip(rays.par_chunks(BATCH_CHUNK))
-            .for_each(|(hits, rays)| {
-                with_stack(|stack| {
-                    for (h, r) in hits.iter_mut().zip(rays) {
-                        *h = self.intersect_with(r, mask, stack);
-                    }
-                })
-            });
-        hits
+        self.batch(rays, |r, stack| self.intersect_with(r, mask, stack))
     }
 
     /// Occlusion for a batch of rays, in parallel (rayon, in chunks of rays).
     pub fn occluded_batch(&self, rays: &[Ray], mask: u32) -> Vec<bool> {
-        let mut hits = vec![false; rays.len()];
-        hits.par_chunks_mut(BATCH_CHUNK)
+        self.batch(rays, |r, stack| self.occluded_with(r, mask, stack))
+    }
+
+    /// Runs `query` over `rays` in parallel chunks, each chunk with one traversal stack.
+    fn batch<T: Send + Clone + Default>(
+        &self,
+        rays: &[Ray],
+        query: impl Fn(&Ray, &mut [StackEntry]) -> T + Sync,
+    ) -> Vec<T> {
+        let mut out = vec![T::default(); rays.len()];
+        out.par_chunks_mut(BATCH_CHUNK)
             .zip(rays.par_chunks(BATCH_CHUNK))
-            .for_each(|(hits, rays)| {
+            .for_each(|(out, rays)| {
                 with_stack(|stack| {
-                    for (h, r) in hits.iter_mut().zip(rays) {
-                        *h = self.occluded_with(r, mask, stack);
+                    for (o, r) in out.iter_mut().zip(rays) {
+                        *o = query(r, stack);
                     }
                 })
             });
-        hits
+        out
     }
 
     #[inline]

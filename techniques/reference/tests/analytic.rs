@@ -44,7 +44,9 @@ fn furnace_converges_to_le_over_one_minus_rho() {
     }
 }
 
-fn plane_with_point_light(intensity: Rgb, light_pos: Vec3, rho: f32) -> World {
+/// A diffuse plane (albedo `rho`, faces +y, 10 m square) seen from 3 m above, lit by one
+/// light of `kind` placed at `light_at`; optionally a 0.4 m square occluder 0.5 m up.
+fn plane_scene(kind: LightKind, light_at: Trs, rho: f32, occluder: bool) -> World {
     let mut b = SceneBuilder::new();
     let m = b.material(Material {
         base_color: Rgb::splat(rho),
@@ -53,8 +55,17 @@ fn plane_with_point_light(intensity: Rgb, light_pos: Vec3, rho: f32) -> World {
     });
     let mesh = b.mesh(quad(Vec3::ZERO, Vec3::Z * 5.0, Vec3::X * 5.0, m)); // faces +y
     b.placed("plane", mesh, Trs::IDENTITY, false);
-    let ln = b.node("light", None, Trs::from_translation(light_pos));
-    b.light("point", LightKind::Point { intensity }, ln);
+    if occluder {
+        let occ = b.mesh(quad(
+            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::Z * 0.2,
+            Vec3::X * 0.2,
+            m,
+        ));
+        b.placed("occluder", occ, Trs::IDENTITY, false);
+    }
+    let ln = b.node("light", None, light_at);
+    b.light("light", kind, ln);
     let cam = b.node(
         "camera",
         None,
@@ -73,7 +84,12 @@ fn point_light_over_plane_matches_inverse_square_law() {
     let intensity = Rgb::new(2.0, 1.0, 0.5);
     let light = Vec3::new(0.3, 1.0, -0.2);
     let rho = 0.6;
-    let world = plane_with_point_light(intensity, light, rho);
+    let world = plane_scene(
+        LightKind::Point { intensity },
+        Trs::from_translation(light),
+        rho,
+        false,
+    );
     // Renderer's direct light at pixel centres: exact up to float rounding.
     let g = GBuffer::render(&world, 32, 24, Vec2::splat(0.5));
     let direct = illume_render::direct_light(&world, &g, 1, 0);
@@ -151,38 +167,7 @@ fn same_seed_same_image_different_seed_different_image() {
 fn spot_and_directional_direct_light_match_analytic_values() {
     use illume_scene::spot_falloff;
     let rho = 0.5;
-    let build = |kind: LightKind, at: Trs, occluder: bool| {
-        let mut b = SceneBuilder::new();
-        let m = b.material(Material {
-            base_color: Rgb::splat(rho),
-            double_sided: false,
-            ..Default::default()
-        });
-        let mesh = b.mesh(quad(Vec3::ZERO, Vec3::Z * 5.0, Vec3::X * 5.0, m));
-        b.placed("plane", mesh, Trs::IDENTITY, false);
-        if occluder {
-            // A small horizontal square 0.5 m above the origin, facing up and down.
-            let occ = b.mesh(quad(
-                Vec3::new(0.0, 0.5, 0.0),
-                Vec3::Z * 0.2,
-                Vec3::X * 0.2,
-                m,
-            ));
-            b.placed("occluder", occ, Trs::IDENTITY, false);
-        }
-        let ln = b.node("light", None, at);
-        b.light("l", kind, ln);
-        let cam = b.node(
-            "camera",
-            None,
-            Trs {
-                rotation: illume_core::Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-                ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
-            },
-        );
-        b.camera("camera", 60f32.to_radians(), cam);
-        World::new(b.finish("test:plane"))
-    };
+    let build = |kind: LightKind, at: Trs, occluder: bool| plane_scene(kind, at, rho, occluder);
     // Spot 1.5 m up, tilted 20° about x, cones 15°/30°.
     let spot_at = Trs {
         rotation: illume_core::Quat::from_rotation_x(
