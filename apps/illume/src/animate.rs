@@ -6,7 +6,7 @@ use crate::render::load_scene;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use illume_core::image::{RgbImage, ToneMap, to_srgb8, write_exr};
-use illume_engine::{Config, Engine, TechniqueKind};
+use illume_engine::{Engine, TechniqueKind};
 use illume_photon_stream::StreamMode;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -17,9 +17,9 @@ use std::time::Instant;
 pub struct AnimateArgs {
     /// Scene file (.gltf, .glb, .obj, .ply) or builtin:NAME.
     pub scene: PathBuf,
-    /// Technique supplying indirect light.
-    #[arg(long, default_value = "photon_stream")]
-    pub technique: TechniqueKind,
+    /// Technique, image size and configuration file.
+    #[command(flatten)]
+    pub setup: crate::setup::SetupArgs,
     /// Animation to play (default: the scene's first).
     #[arg(long)]
     pub animation: Option<String>,
@@ -44,12 +44,6 @@ pub struct AnimateArgs {
     /// Number of VSLs (photon_stream's vsl_count).
     #[arg(long)]
     pub vsls: Option<u32>,
-    /// Image width [pixels].
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height [pixels].
-    #[arg(long)]
-    pub height: Option<u32>,
     /// Output folder: frame_NNNNN.png, frames.csv, preview.gif or preview.mp4.
     #[arg(long, short, default_value = "out/animate")]
     pub output: PathBuf,
@@ -59,9 +53,6 @@ pub struct AnimateArgs {
     /// Exposure for PNG and preview output [stops].
     #[arg(long, default_value_t = 0.0)]
     pub exposure: f32,
-    /// TOML configuration (technique settings tables); flags override it.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
 }
 
 /// Arguments of `illume demo`.
@@ -101,17 +92,7 @@ struct StoredFrame {
 
 /// Runs `illume animate`.
 pub fn run(a: AnimateArgs) -> Result<()> {
-    let mut config = match &a.config {
-        Some(p) => Config::load(p)?,
-        None => Config::default(),
-    };
-    config.technique = a.technique;
-    if let Some(w) = a.width {
-        config.render.width = w;
-    }
-    if let Some(h) = a.height {
-        config.render.height = h;
-    }
+    let mut config = a.setup.config()?;
     if let Some(n) = a.vsls {
         config.photon_stream.vsl_count = n;
     }
@@ -315,7 +296,12 @@ fn write_preview(dir: &Path, frames: &[StoredFrame], w: u32, h: u32, fps: f64) -
 pub fn demo(d: DemoArgs) -> Result<()> {
     run(AnimateArgs {
         scene: PathBuf::from("builtin:cornell-spot"),
-        technique: TechniqueKind::PhotonStream,
+        setup: crate::setup::SetupArgs {
+            technique: TechniqueKind::PhotonStream,
+            width: Some(d.width),
+            height: Some(d.height),
+            config: None,
+        },
         animation: Some("move".into()),
         duration: Some(d.duration),
         fps: 15.0,
@@ -323,11 +309,8 @@ pub fn demo(d: DemoArgs) -> Result<()> {
         photons_per_frame: None,
         ping_pong: true,
         vsls: Some(d.vsls),
-        width: Some(d.width),
-        height: Some(d.height),
         output: d.output,
         exr: false,
         exposure: 0.0,
-        config: None,
     })
 }

@@ -16,6 +16,7 @@ mod compare;
 mod info;
 mod progress;
 mod render;
+mod setup;
 
 use clap::{Parser, Subcommand};
 

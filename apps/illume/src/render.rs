@@ -4,7 +4,7 @@ use crate::progress;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use illume_core::image::{RgbImage, ToneMap};
-use illume_engine::{Config, Engine, TechniqueKind};
+use illume_engine::{Engine, TechniqueKind};
 use illume_reference::ReferenceRenderer;
 use illume_transport::World;
 use std::path::{Path, PathBuf};
@@ -15,10 +15,9 @@ use std::time::Instant;
 pub struct RenderArgs {
     /// Scene file (.gltf, .glb, .obj, .ply) or builtin:NAME.
     pub scene: PathBuf,
-    /// Technique supplying indirect light; `reference` renders everything with the
-    /// reference path tracer.
-    #[arg(long, default_value = "photon_stream")]
-    pub technique: TechniqueKind,
+    /// Technique, image size and configuration file.
+    #[command(flatten)]
+    pub setup: crate::setup::SetupArgs,
     /// Scene time [s] at which the active animation is evaluated.
     #[arg(long, default_value_t = 0.0)]
     pub time: f64,
@@ -28,12 +27,6 @@ pub struct RenderArgs {
     /// Samples per pixel (reference path tracer).
     #[arg(long)]
     pub spp: Option<u32>,
-    /// Image width [pixels].
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height [pixels].
-    #[arg(long)]
-    pub height: Option<u32>,
     /// Output image: .exr (linear radiance) or .png (tone-mapped sRGB).
     #[arg(long, short, default_value = "out/render.png")]
     pub output: PathBuf,
@@ -46,9 +39,6 @@ pub struct RenderArgs {
     /// Random seed.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// TOML configuration (technique settings tables); flags override it.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
 }
 
 /// Loads a scene given on the command line (file or builtin:NAME), selects its
@@ -98,17 +88,7 @@ fn write(img: &RgbImage, path: &Path, tone: &ToneMap) -> Result<()> {
 
 /// Runs `illume render`.
 pub fn run(a: RenderArgs) -> Result<()> {
-    let mut config = match &a.config {
-        Some(p) => Config::load(p)?,
-        None => Config::default(),
-    };
-    config.technique = a.technique;
-    if let Some(w) = a.width {
-        config.render.width = w;
-    }
-    if let Some(h) = a.height {
-        config.render.height = h;
-    }
+    let mut config = a.setup.config()?;
     if let Some(s) = a.spp {
         config.reference.spp = s;
     }
