@@ -294,14 +294,14 @@ mod tests {
     }
 
     #[test]
-    fn raster_and_ray_gbuffers_light_identically() {
+    fn raster_and_ray_gbuffers_light_alike() {
         let world = World::new(illume_scene::builtin::load("cornell-spot").expect("builtin"));
         let (w, h) = (200, 150);
         let raster = GBuffer::rasterize(&world, w, h);
         let rays = GBuffer::render(&world, w, h, Vec2::splat(0.5));
         let a = direct_light(&world, &raster, 4, 7);
         let b = direct_light(&world, &rays, 4, 7);
-        let mut same_surface = 0;
+        let (mut same_surface, mut differ) = (0, 0);
         for (i, (r, t)) in raster.pixels.iter().zip(&rays.pixels).enumerate() {
             let agree = match (r, t) {
                 (Some(r), Some(t)) => {
@@ -312,12 +312,21 @@ mod tests {
             };
             if agree {
                 same_surface += 1;
-                assert_eq!(a.pixels()[i], b.pixels()[i], "pixel {i}");
+                // Same surface up to f32 rounding of the hit point: the same light,
+                // except where that rounding flips a shadow ray at a shadow edge.
+                let (x, y) = (a.pixels()[i], b.pixels()[i]);
+                if (x - y).abs().max_element() > 1e-4 * (1.0 + y.max_element()) {
+                    differ += 1;
+                }
             }
         }
         assert!(
             same_surface as f64 >= 0.999 * (w * h) as f64,
             "{same_surface}"
+        );
+        assert!(
+            differ as f64 <= 1e-3 * (w * h) as f64,
+            "{differ} pixels differ"
         );
     }
 

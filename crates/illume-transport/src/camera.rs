@@ -43,8 +43,51 @@ impl CameraRays {
         Ray::new(self.origin, dir)
     }
 
+    /// The centre rays of image row `y`, generated incrementally along the row (the same
+    /// directions as [`CameraRays::ray`] with offset (0.5, 0.5) up to f32 rounding).
+    #[inline]
+    pub fn row(&self, y: u32) -> RowRays {
+        let ndc_y = 1.0 - ((y as f32 + 0.5) / self.height as f32) * 2.0;
+        let sx = 2.0 / self.width as f32 * self.tan_half_y * self.aspect;
+        let first = Vec3::new(
+            (1.0 / self.width as f32 - 1.0) * self.tan_half_y * self.aspect,
+            ndc_y * self.tan_half_y,
+            -1.0,
+        );
+        RowRays {
+            origin: self.origin,
+            first: self.world_from_camera.transform_vector3(first),
+            step: self
+                .world_from_camera
+                .transform_vector3(Vec3::new(sx, 0.0, 0.0)),
+        }
+    }
+
+    /// The camera position.
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
     /// Image size.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
+    }
+}
+
+/// Centre rays of one image row (see [`CameraRays::row`]).
+#[derive(Clone, Copy, Debug)]
+pub struct RowRays {
+    origin: Vec3,
+    /// Unnormalised direction through the centre of pixel 0.
+    first: Vec3,
+    /// Change of the unnormalised direction per pixel.
+    step: Vec3,
+}
+
+impl RowRays {
+    /// The unit-direction ray through the centre of pixel `x` of the row.
+    #[inline]
+    pub fn ray(&self, x: u32) -> Ray {
+        Ray::new(self.origin, (self.first + self.step * x as f32).normalize())
     }
 }

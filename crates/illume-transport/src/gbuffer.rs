@@ -2,9 +2,10 @@
 //! technique's indirect light shade.
 
 use crate::camera::CameraRays;
+use crate::raster::VisibilityBuffer;
 use crate::surface::SurfaceHit;
 use crate::world::World;
-use illume_core::{Vec2, Vec3};
+use illume_core::{Rgb, Vec2, Vec3};
 use rayon::prelude::*;
 
 /// What a pixel sees.
@@ -26,6 +27,8 @@ pub struct GBuffer {
     pub height: u32,
     /// One entry per pixel.
     pub pixels: Vec<Option<GBufferPixel>>,
+    /// The rasterizer's last visibility buffer, kept for its allocation.
+    pub(crate) visibility: VisibilityBuffer,
 }
 
 impl GBuffer {
@@ -52,11 +55,231 @@ impl GBuffer {
             width,
             height,
             pixels,
+            visibility: VisibilityBuffer::empty(),
+        }
+    }
+
+    /// A 0 × 0 G-buffer.
+    pub(crate) fn empty() -> Self {
+        Self {
+            width: 0,
+            height: 0,
+            pixels: Vec::new(),
+            visibility: VisibilityBuffer::empty(),
         }
     }
 
     /// The entry of pixel (x, y).
     pub fn get(&self, x: u32, y: u32) -> Option<&GBufferPixel> {
         self.pixels[(y * self.width + x) as usize].as_ref()
+    }
+}
+
+/// Rebuilds primary hits from a visibility buffer without the BVH: per-triangle data is
+/// set up once per run of pixels that see the same triangle (neighbouring pixels mostly
+/// do), so a pixel costs a ray–plane intersection, two dot products for barycentrics and
+/// the interpolation of its attributes.
+///
+/// The result matches [`SurfaceHit::new`] for the same ray and triangle up to f32
+/// rounding (≈ 1e-6 relative): the same formulas, but in world space with the triangle's
+/// vertices transformed once instead of the ray transformed per pixel. Pixels whose
+/// centre ray misses the rasterized triangle by more than [`PrimarySurfaces::EDGE_SLACK`]
+/// in barycentric terms (snapped edges, edge-on triangles) take a full BVH ray instead.
+pub(crate) struct PrimarySurfaces<'a> {
+    world: &'a World,
+    camera: CameraRays,
+    /// Inverse-transpose-like normal matrix of each instance (cofactor matrix with the
+    /// determinant's sign, as [`illume_core::transform_normal`]), computed once per frame.
+    normal_from_object: Vec<glam::Mat3A>,
+}
+
+/// The world-space data of one triangle, shared by the pixels that see it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TriangleSetup {
+    instance: u32,
+    triangle: u32,
+    p0: Vec3,
+    /// Unit front-face normal.
+    geometric_normal: Vec3,
+    /// `geometric_normal · p0`: the triangle's plane.
+    plane: f32,
+    /// Dual vectors: `b1 = (p − p0)·dual1`, `b2 = (p − p0)·dual2` for p on the plane.
+    dual1: Vec3,
+    dual2: Vec3,
+    /// World shading normals at the corners (not normalised), `None` without normals.
+    normals: Option<[Vec3; 3]>,
+    uvs: Option<[Vec2; 3]>,
+    material: illume_scene::MaterialId,
+    /// The camera sees the front face.
+    front_face: bool,
+    reflects: bool,
+    /// Albedo when untextured (the texture is sampled per pixel otherwise).
+    albedo: Rgb,
+    textured: bool,
+    emission: Rgb,
+    /// False for degenerate triangles (pixels then take a BVH ray).
+    usable: bool,
+}
+
+impl<'a> PrimarySurfaces<'a> {
+    /// Barycentric slack accepted before a pixel falls back to a BVH ray. Zero: a
+    /// centre the rasterizer gave to a triangle whose exact plane hit lies outside it
+    /// (snapping moves edges by ≤ 1/256 pixel) is decided by the BVH, as ray casting
+    /// would; such pixels are a few per thousand at most.
+    pub(crate) const EDGE_SLACK: f32 = 0.0;
+
+    pub(crate) fn new(world: &'a World, width: u32, height: u32) -> Self {
+        let normal_from_object = world
+            .scene
+            .instances
+            .iter()
+            .map(|inst| {
+                let m = &inst.world_from_object.matrix3;
+                let (c0, c1, c2) = (m.x_axis, m.y_axis, m.z_axis);
+                let det = c0.dot(c1.cross(c2));
+                glam::Mat3A::from_cols(c1.cross(c2), c2.cross(c0), c0.cross(c1)) * det.signum()
+            })
+            .collect();
+        Self {
+            world,
+            camera: CameraRays::new(&world.scene.camera, width, height),
+            normal_from_object,
+        }
+    }
+
+    /// The centre rays of image row `y`.
+    #[inline]
+    pub(crate) fn row(&self, y: u32) -> crate::camera::RowRays {
+        self.camera.row(y)
+    }
+
+    /// Sets up triangle `triangle` of `instance` as seen from the camera.
+    pub(crate) fn setup(&self, instance: u32, triangle: u32) -> TriangleSetup {
+        let origin = self.camera.origin();
+        let scene = &self.world.scene;
+        let inst = &scene.instances[instance as usize];
+        let mesh = &scene.meshes[inst.mesh.index()];
+        let t = triangle as usize;
+        let idx = mesh.indices[t].map(|i| i as usize);
+        let m = &inst.world_from_object;
+        let [p0, p1, p2] = idx.map(|i| m.transform_point3(mesh.positions[i]));
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let n = e1.cross(e2);
+        let nn = n.length_squared();
+        let usable = nn > 0.0 && nn.is_finite();
+        let geometric_normal = n.normalize_or(Vec3::Y);
+        let front_face = (p0 - origin).dot(geometric_normal) < 0.0;
+        let normal_matrix = self.normal_from_object[instance as usize];
+        let normals = (!mesh.normals.is_empty())
+            .then(|| idx.map(|i| normal_matrix.mul_vec3(mesh.normals[i])));
+        let uvs = (!mesh.uvs.is_empty()).then(|| idx.map(|i| mesh.uvs[i]));
+        let material = mesh.triangle_materials[t];
+        let mat = &scene.materials[material.index()];
+        let reflects = front_face || mat.double_sided;
+        let textured = reflects && mat.base_color_texture.is_some();
+        TriangleSetup {
+            instance,
+            triangle,
+            p0,
+            geometric_normal,
+            plane: geometric_normal.dot(p0),
+            dual1: e2.cross(n) / nn,
+            dual2: n.cross(e1) / nn,
+            normals,
+            uvs,
+            material,
+            front_face,
+            reflects,
+            albedo: if reflects { mat.base_color } else { Rgb::ZERO },
+            textured,
+            emission: if reflects { mat.emission } else { Rgb::ZERO },
+            usable,
+        }
+    }
+
+    /// The G-buffer entry of a pixel whose centre ray `ray` sees `tri` (per the
+    /// rasterizer), or a BVH ray's answer when the ray does not actually hit it.
+    #[inline]
+    pub(crate) fn pixel(
+        &self,
+        ray: &illume_core::Ray,
+        tri: &TriangleSetup,
+    ) -> Option<GBufferPixel> {
+        self.on_triangle(ray, tri).or_else(|| self.traced(ray))
+    }
+
+    /// The BVH's answer for `ray`.
+    pub(crate) fn traced(&self, ray: &illume_core::Ray) -> Option<GBufferPixel> {
+        self.world
+            .trace(ray, illume_scene::MASK_DEFAULT)
+            .map(|hit| GBufferPixel {
+                hit,
+                to_camera: -ray.dir,
+            })
+    }
+
+    #[inline]
+    fn on_triangle(&self, ray: &illume_core::Ray, tri: &TriangleSetup) -> Option<GBufferPixel> {
+        if !tri.usable {
+            return None;
+        }
+        let ng = tri.geometric_normal;
+        let cos = ng.dot(ray.dir);
+        let t = (tri.plane - ng.dot(ray.origin)) / cos;
+        if !(t > 0.0 && t.is_finite()) {
+            return None;
+        }
+        let position = ray.origin + ray.dir * t;
+        let d = position - tri.p0;
+        let (b1, b2) = (d.dot(tri.dual1), d.dot(tri.dual2));
+        let b0 = 1.0 - b1 - b2;
+        let slack = -Self::EDGE_SLACK;
+        if b0 < slack || b1 < slack || b2 < slack {
+            return None;
+        }
+        let mut shading_normal = match tri.normals {
+            Some([n0, n1, n2]) => {
+                let n = (n0 * b0 + n1 * b1 + n2 * b2).normalize_or_zero();
+                if n == Vec3::ZERO { ng } else { n }
+            }
+            None => ng,
+        };
+        if shading_normal.dot(ng) < 0.0 {
+            shading_normal = -shading_normal;
+        }
+        let uv = match tri.uvs {
+            Some([u0, u1, u2]) => u0 * b0 + u1 * b1 + u2 * b2,
+            None => Vec2::ZERO,
+        };
+        let albedo = if tri.textured {
+            self.world.scene.albedo(tri.material, uv)
+        } else {
+            tri.albedo
+        };
+        Some(GBufferPixel {
+            hit: SurfaceHit {
+                position,
+                geometric_normal: ng,
+                shading_normal,
+                uv,
+                instance: illume_scene::InstanceId(tri.instance),
+                triangle: tri.triangle,
+                material: tri.material,
+                albedo,
+                emission: tri.emission,
+                front_face: tri.front_face,
+                reflects: tri.reflects,
+                t,
+            },
+            to_camera: -ray.dir,
+        })
+    }
+}
+
+impl TriangleSetup {
+    /// True when this is the setup of `(instance, triangle)`.
+    #[inline]
+    pub(crate) fn is(&self, instance: u32, triangle: u32) -> bool {
+        self.instance == instance && self.triangle == triangle
     }
 }

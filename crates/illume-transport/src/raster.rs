@@ -3,7 +3,7 @@
 //! ray casting ([`GBuffer::render`]) builds, far cheaper.
 //!
 //! Photon streaming (Meneveaux & Bridault 2008) rasterizes its G-buffer; we do it on the
-//! CPU. The projection is exactly [`CameraRays`]'s: vertical field of view `yfov_rad`,
+//! CPU. The projection is exactly [`CameraRays`](crate::CameraRays)'s: vertical field of view `yfov_rad`,
 //! aspect `width / height`, pixel (x, y) sampled at its centre (x + 0.5, y + 0.5), y = 0 at
 //! the top, camera looking down −Z. Every instance visible to
 //! [`MASK_DEFAULT`] is drawn; back faces are not culled (a
@@ -36,10 +36,9 @@
 //! so workers write the final buffer directly, and 16 rows × 1280 pixels of state stays in
 //! L2.
 
-use crate::camera::CameraRays;
-use crate::gbuffer::{GBuffer, GBufferPixel};
+use crate::gbuffer::{GBuffer, PrimarySurfaces, TriangleSetup};
 use crate::world::World;
-use glam::{Affine3A, DVec3, Vec2, Vec3};
+use glam::{Affine3A, DVec3, Vec3};
 use illume_scene::{InstanceId, MASK_DEFAULT, Scene};
 use rayon::prelude::*;
 
@@ -116,6 +115,15 @@ impl VisibilityBuffer {
         buffer
     }
 
+    /// A 0 × 0 buffer.
+    pub(crate) fn empty() -> Self {
+        Self {
+            width: 0,
+            height: 0,
+            pixels: Vec::new(),
+        }
+    }
+
     /// [`VisibilityBuffer::render`] into this buffer's size, reusing its allocation.
     pub fn render_into(&mut self, scene: &Scene) {
         let (width, height) = (self.width, self.height);
@@ -163,19 +171,15 @@ impl GBuffer {
     /// with primary visibility from the [`VisibilityBuffer`] rasterizer instead of a BVH
     /// ray per pixel.
     ///
-    /// Each pixel casts its centre ray against only the triangle the rasterizer found
-    /// ([`Tracer::intersect_instance_triangle`](illume_accel::Tracer::intersect_instance_triangle),
-    /// the BVH's own arithmetic) and builds the [`SurfaceHit`](crate::SurfaceHit) from
-    /// that hit, so wherever the rasterizer and the BVH pick the same triangle the pixel is
-    /// bit-identical to ray casting. Where the ray misses the chosen triangle (an edge
-    /// moved by snapping, a tie), and on empty pixels next to covered ones (silhouettes
-    /// against the background), a full BVH ray decides.
+    /// Each pixel intersects its centre ray with the plane of the triangle the rasterizer
+    /// found, in world space, and interpolates that triangle's attributes (set up once per
+    /// run of pixels seeing the same triangle): the [`SurfaceHit`](crate::SurfaceHit)
+    /// [`GBuffer::render`] builds for the same triangle, up to f32 rounding. Where the ray
+    /// misses the chosen triangle (an edge moved by snapping, an edge-on triangle), and on
+    /// empty pixels next to covered ones (silhouettes against the background), a full BVH
+    /// ray decides.
     pub fn rasterize(world: &World, width: u32, height: u32) -> Self {
-        let mut g = Self {
-            width,
-            height,
-            pixels: Vec::new(),
-        };
+        let mut g = Self::empty();
         g.rasterize_into(world, width, height);
         g
     }
@@ -183,52 +187,53 @@ impl GBuffer {
     /// [`GBuffer::rasterize`] into this buffer, reusing its pixel allocation (a fresh
     /// 800×600 G-buffer is 48 MB whose first touch costs page faults every frame).
     pub fn rasterize_into(&mut self, world: &World, width: u32, height: u32) {
-        let vis = VisibilityBuffer::render(&world.scene, width, height);
-        let cam = CameraRays::new(&world.scene.camera, width, height);
-        let scene = &world.scene;
-        let centre = Vec2::splat(0.5);
+        let vis = &mut self.visibility;
+        vis.width = width;
+        vis.height = height;
+        vis.render_into(&world.scene);
         let n = (width * height) as usize;
         self.width = width;
         self.height = height;
-        self.pixels.clear();
-        (0..n)
-            .into_par_iter()
-            .with_min_len(64)
-            .map(|i| {
-                let (x, y) = (i as u32 % width, i as u32 / width);
-                let sample = vis.pixels[i];
-                let hit = match sample.visible() {
-                    Some((instance, triangle)) => {
-                        let ray = cam.ray(x, y, centre);
-                        let mesh = &scene.meshes[scene.instances[instance.index()].mesh.index()];
-                        world
-                            .tracer
-                            .intersect_instance_triangle(
-                                &ray,
-                                instance,
-                                triangle,
-                                mesh.triangle(triangle as usize),
-                            )
-                            .or_else(|| world.tracer.intersect(&ray, MASK_DEFAULT))
-                            .map(|hit| (ray, hit))
+        if self.pixels.len() != n {
+            self.pixels.clear();
+            self.pixels.resize(n, None);
+        }
+        if n == 0 {
+            return;
+        }
+        let surfaces = PrimarySurfaces::new(world, width, height);
+        let vis = &self.visibility;
+        let w = width as usize;
+        self.pixels
+            .par_chunks_mut(w * SURFACE_ROWS as usize)
+            .enumerate()
+            .for_each(|(chunk, out)| {
+                let mut current: Option<TriangleSetup> = None;
+                for (r, row) in out.chunks_mut(w).enumerate() {
+                    let y = chunk as u32 * SURFACE_ROWS + r as u32;
+                    let samples = &vis.pixels[y as usize * w..][..w];
+                    let rays = surfaces.row(y);
+                    for (x, (px, sample)) in row.iter_mut().zip(samples).enumerate() {
+                        let x = x as u32;
+                        *px = match sample.visible() {
+                            Some((instance, triangle)) => {
+                                if !current.as_ref().is_some_and(|t| t.is(instance.0, triangle)) {
+                                    current = Some(surfaces.setup(instance.0, triangle));
+                                }
+                                let tri = current.as_ref().expect("set up above");
+                                surfaces.pixel(&rays.ray(x), tri)
+                            }
+                            None if next_to_covered(vis, x, y) => surfaces.traced(&rays.ray(x)),
+                            None => None,
+                        };
                     }
-                    None if next_to_covered(&vis, x, y) => {
-                        let ray = cam.ray(x, y, centre);
-                        world
-                            .tracer
-                            .intersect(&ray, MASK_DEFAULT)
-                            .map(|hit| (ray, hit))
-                    }
-                    None => None,
-                };
-                hit.map(|(ray, hit)| GBufferPixel {
-                    hit: world.surface(&ray, &hit),
-                    to_camera: -ray.dir,
-                })
-            })
-            .collect_into_vec(&mut self.pixels);
+                }
+            });
     }
 }
+
+/// Image rows per parallel job when building surfaces from the visibility buffer.
+const SURFACE_ROWS: u32 = 4;
 
 /// True when a 4-neighbour of empty pixel (x, y) is covered.
 fn next_to_covered(vis: &VisibilityBuffer, x: u32, y: u32) -> bool {
@@ -259,7 +264,7 @@ impl Viewport {
         }
     }
 
-    /// The viewport of `scene`'s camera, with [`CameraRays`]'s projection.
+    /// The viewport of `scene`'s camera, with [`CameraRays`](crate::CameraRays)'s projection.
     fn for_camera(scene: &Scene, width: u32, height: u32) -> Self {
         let camera = &scene.camera;
         let tan_half_y = (camera.yfov_rad * 0.5).tan();

@@ -1,6 +1,7 @@
 //! The rasterized G-buffer agrees with the ray-cast one: same coverage, same
-//! (instance, triangle) on at least 99.9 % of pixels, and bit-identical surface data
-//! wherever the two pick the same triangle.
+//! (instance, triangle) on at least 99.9 % of pixels, and the same surface data up to
+//! f32 rounding wherever the two pick the same triangle (the rasterized G-buffer
+//! intersects the triangle's world-space plane, the rays its object-space BVH copy).
 
 use illume_core::{Affine3A, Quat, Vec2, Vec3};
 use illume_scene::{Edit, InstanceId, Scene};
@@ -14,6 +15,7 @@ struct Agreement {
     covered: usize,
     coverage_differs: usize,
     triangle_differs: usize,
+    albedo_differs: usize,
 }
 
 /// Compares `GBuffer::rasterize` with `GBuffer::render` at pixel centres; panics when a
@@ -38,24 +40,40 @@ fn compare(world: &World, width: u32, height: u32, what: &str) -> Agreement {
                     continue;
                 }
                 let (x, y) = (i as u32 % width, i as u32 / width);
-                let same = r.hit.position == t.hit.position
-                    && r.hit.geometric_normal == t.hit.geometric_normal
-                    && r.hit.shading_normal == t.hit.shading_normal
-                    && r.hit.uv == t.hit.uv
-                    && r.hit.albedo == t.hit.albedo
+                // Tolerances: f32 rounding of two different but exact formulas for
+                // the same point, relative to the distance (positions) or absolute
+                // for unit vectors; the flags and ids must agree exactly.
+                let scale = 1.0 + t.hit.t;
+                let close = |a: Vec3, b: Vec3, tol: f32| (a - b).abs().max_element() <= tol;
+                let same = close(r.hit.position, t.hit.position, 2e-5 * scale)
+                    && close(r.hit.geometric_normal, t.hit.geometric_normal, 1e-5)
+                    && close(r.hit.shading_normal, t.hit.shading_normal, 1e-4)
+                    && (r.hit.uv - t.hit.uv).abs().max_element()
+                        <= 1e-4 * (1.0 + t.hit.uv.abs().max_element())
                     && r.hit.emission == t.hit.emission
                     && r.hit.material == t.hit.material
                     && r.hit.front_face == t.hit.front_face
                     && r.hit.reflects == t.hit.reflects
-                    && r.hit.t == t.hit.t
-                    && r.to_camera == t.to_camera;
+                    && (r.hit.t - t.hit.t).abs() <= 2e-5 * scale
+                    && close(r.to_camera, t.to_camera, 1e-6);
                 assert!(
                     same,
                     "{what} {width}x{height} pixel ({x}, {y}): same triangle, different surface:\nraster {r:?}\nrays   {t:?}"
                 );
+                // Bilinear texture lookups magnify the uv rounding; a few pixels on
+                // sharp texture edges may differ more: count them, bounded below.
+                if !close(r.hit.albedo, t.hit.albedo, 1e-3) {
+                    a.albedo_differs += 1;
+                }
             }
         }
     }
+    assert!(
+        a.albedo_differs as f64 <= 1e-3 * a.covered.max(1) as f64,
+        "{what} {width}x{height}: albedo differs on {} of {} same-triangle pixels",
+        a.albedo_differs,
+        a.covered
+    );
     let bad = a.coverage_differs + a.triangle_differs;
     println!("{what} {width}x{height}: {a:?}");
     assert!(
