@@ -27,8 +27,59 @@ pub struct GBuffer {
     pub height: u32,
     /// One entry per pixel.
     pub pixels: Vec<Option<GBufferPixel>>,
+    /// Pixels the last [`GBuffer::rasterize_into`] kept from the frame before (their
+    /// surface could not have changed); 0 after [`GBuffer::render`].
+    pub reused_pixels: u64,
     /// The rasterizer's last visibility buffer, kept for its allocation.
     pub(crate) visibility: VisibilityBuffer,
+    /// What the pixels were built from, to tell which ones the next frame may keep.
+    pub(crate) built_from: BuildState,
+}
+
+/// The scene state a G-buffer was built from: camera, image size, every instance's
+/// transform and every material. Meshes and textures never change after loading.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct BuildState {
+    camera: Option<illume_scene::Camera>,
+    size: (u32, u32),
+    world_from_object: Vec<illume_core::Affine3A>,
+    materials: Vec<illume_scene::Material>,
+}
+
+impl BuildState {
+    /// The state of `world` for a `width × height` image.
+    pub(crate) fn of(world: &World, width: u32, height: u32) -> Self {
+        let scene = &world.scene;
+        Self {
+            camera: Some(scene.camera.clone()),
+            size: (width, height),
+            world_from_object: scene
+                .instances
+                .iter()
+                .map(|i| i.world_from_object)
+                .collect(),
+            materials: scene.materials.clone(),
+        }
+    }
+
+    /// For each instance of `next`, true when pixels seeing it may keep their surface
+    /// from a build at `self`: same camera, size and materials, and the instance has not
+    /// moved. Empty when nothing may be kept.
+    pub(crate) fn unchanged_instances(&self, next: &Self) -> Vec<bool> {
+        if self.camera.is_none()
+            || self.camera != next.camera
+            || self.size != next.size
+            || self.materials != next.materials
+            || self.world_from_object.len() != next.world_from_object.len()
+        {
+            return Vec::new();
+        }
+        self.world_from_object
+            .iter()
+            .zip(&next.world_from_object)
+            .map(|(a, b)| a == b)
+            .collect()
+    }
 }
 
 impl GBuffer {
@@ -55,7 +106,9 @@ impl GBuffer {
             width,
             height,
             pixels,
+            reused_pixels: 0,
             visibility: VisibilityBuffer::empty(),
+            built_from: BuildState::default(),
         }
     }
 
@@ -65,7 +118,9 @@ impl GBuffer {
             width: 0,
             height: 0,
             pixels: Vec::new(),
+            reused_pixels: 0,
             visibility: VisibilityBuffer::empty(),
+            built_from: BuildState::default(),
         }
     }
 
