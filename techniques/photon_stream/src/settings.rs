@@ -88,6 +88,16 @@ pub struct PhotonStreamSettings {
     /// Side of the square screen tiles VSLs are culled against [pixels]. Smaller:
     /// tighter culling, at a per-tile overhead. Default 16.
     pub tile_size: u32,
+    /// Shade one pixel in `shading_stride²` (a grid `shading_stride` pixels apart) and
+    /// interpolate the pixels between from the shaded ones on the same surface (normals
+    /// within ≈ 25°, points within `shading_stride` pixel footprints of the tangent
+    /// plane); a pixel with no such neighbour is shaded exactly, and albedo (textures)
+    /// is always applied per pixel. Indirect light is smooth, so 2 costs ≈ 1/4 of the VSL
+    /// evaluations for a sub-percent change (`BENCHMARKS.md`); 1 shades every pixel
+    /// (the paper's deferred shading). Higher strides blur small indirect features
+    /// (contact shadows under the visibility mode, the bright spot next to a strong VSL).
+    /// 1–8, default 2.
+    pub shading_stride: u32,
     /// VSL shadow rays (beyond the paper). Default [`VisibilityMode::Off`].
     pub visibility: VisibilityMode,
     /// Shadow rays per pixel in [`VisibilityMode::Stochastic`]. Higher: less noise, at a
@@ -121,6 +131,7 @@ impl Default for PhotonStreamSettings {
             on_change: ChangePolicy::AgeOut,
             epsilon: 1e-6,
             tile_size: 16,
+            shading_stride: 2,
             visibility: VisibilityMode::Off,
             visibility_rays: 8,
             max_bounces: 32,
@@ -150,12 +161,14 @@ impl PhotonStreamSettings {
         }
     }
 
-    /// Preset for stills: 200 VSLs, a large pool, stochastic VSL visibility.
+    /// Preset for stills: 200 VSLs, a large pool, stochastic VSL visibility, every
+    /// pixel shaded.
     pub fn quality() -> Self {
         Self {
             vsl_count: 200,
             pool_size: 1_000_000,
             visibility: VisibilityMode::Stochastic,
+            shading_stride: 1,
             ..Self::default()
         }
     }
@@ -211,6 +224,12 @@ impl PhotonStreamSettings {
         }
         if self.tile_size == 0 {
             return bad("tile_size", "must be at least 1".into());
+        }
+        if !(1..=8).contains(&self.shading_stride) {
+            return bad(
+                "shading_stride",
+                format!("{} is not in 1..=8", self.shading_stride),
+            );
         }
         if self.visibility == VisibilityMode::Stochastic && self.visibility_rays == 0 {
             return bad(

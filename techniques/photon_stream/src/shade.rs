@@ -79,6 +79,12 @@ pub struct ShadeStats {
     pub evaluations: u64,
     /// Shadow rays traced (visibility mode).
     pub shadow_rays: u64,
+    /// Pixels whose value was interpolated from shaded neighbours
+    /// ([`PhotonStreamSettings::shading_stride`] > 1).
+    pub interpolated: u64,
+    /// Pixels between the shaded ones that had no neighbour on the same surface and
+    /// were shaded exactly.
+    pub fallbacks: u64,
 }
 
 impl ShadeStats {
@@ -97,6 +103,8 @@ impl ShadeStats {
             vsls_kept: self.vsls_kept + o.vsls_kept,
             evaluations: self.evaluations + o.evaluations,
             shadow_rays: self.shadow_rays + o.shadow_rays,
+            interpolated: self.interpolated + o.interpolated,
+            fallbacks: self.fallbacks + o.fallbacks,
         }
     }
 }
@@ -280,6 +288,79 @@ pub fn shade(
     frame_seed: u64,
 ) -> (RgbImage, ShadeStats) {
     let (w, h) = (gbuffer.width, gbuffer.height);
+    let n = (w * h) as usize;
+    let stride = settings.shading_stride.max(1);
+    let shaded = |i: u32| (i % w).is_multiple_of(stride) && (i / w).is_multiple_of(stride);
+    // Σ_s Φ_s·G_s per pixel, without ρ/π (multiplied in at the end so that texture
+    // detail stays at full resolution whatever the stride).
+    let mut gathered = vec![Rgb::ZERO; n];
+    let mut stats = gather(
+        world,
+        gbuffer,
+        field,
+        settings,
+        frame_seed,
+        &shaded,
+        &mut gathered,
+    );
+    if stride > 1 {
+        let filled = interpolate(
+            gbuffer,
+            &gathered,
+            stride,
+            &shaded,
+            world.scene.camera.yfov_rad,
+        );
+        let mut missing = vec![false; n];
+        for (i, f) in filled.into_iter().enumerate() {
+            match f {
+                Fill::Interpolated(e) => {
+                    gathered[i] = e;
+                    stats.interpolated += 1;
+                }
+                Fill::Missing => {
+                    missing[i] = true;
+                    stats.fallbacks += 1;
+                }
+                Fill::Skip => {}
+            }
+        }
+        let rest = gather(
+            world,
+            gbuffer,
+            field,
+            settings,
+            frame_seed,
+            &|i: u32| missing[i as usize],
+            &mut gathered,
+        );
+        stats = stats.merge(ShadeStats { tiles: 0, ..rest });
+    }
+    let pixels = gbuffer
+        .pixels
+        .par_iter()
+        .zip(gathered.par_iter())
+        .with_min_len(1024)
+        .map(|(px, e)| {
+            px.as_ref()
+                .map_or(Rgb::ZERO, |p| p.hit.albedo * INV_PI * *e)
+        })
+        .collect();
+    let img = RgbImage::from_vec(w, h, pixels).expect("one value per pixel");
+    (img, stats)
+}
+
+/// Shades the pixels `include` selects, tile by tile, into `gathered` (Σ Φ·G).
+fn gather(
+    world: &World,
+    gbuffer: &GBuffer,
+    field: &VslField,
+    settings: &PhotonStreamSettings,
+    frame_seed: u64,
+    include: &(dyn Fn(u32) -> bool + Sync),
+    gathered: &mut [Rgb],
+) -> ShadeStats {
+    let (w, h) = (gbuffer.width, gbuffer.height);
     let t = settings.tile_size;
     let (tx, ty) = (w.div_ceil(t), h.div_ceil(t));
     let results: Vec<(Vec<(u32, Rgb)>, ShadeStats)> = (0..tx * ty)
@@ -295,21 +376,101 @@ pub fn shade(
                     settings,
                     frame_seed,
                     (x0, y0, (x0 + t).min(w), (y0 + t).min(h)),
+                    include,
                     tile,
                     kept,
                 )
             },
         )
         .collect();
-    let mut img = RgbImage::black(w, h);
     let mut stats = ShadeStats::default();
     for (px, s) in results {
         for (i, c) in px {
-            img.pixels_mut()[i as usize] = c;
+            gathered[i as usize] = c;
         }
         stats = stats.merge(s);
     }
-    (img, stats)
+    stats
+}
+
+/// What interpolation gave a pixel.
+enum Fill {
+    /// Not a pixel to interpolate (shaded already, empty, or not reflecting).
+    Skip,
+    /// Interpolated from neighbours on the same surface.
+    Interpolated(Rgb),
+    /// No shaded neighbour lies on the same surface: shade it exactly.
+    Missing,
+}
+
+/// Fills the pixels between the shaded grid (`stride` apart) from the up to four
+/// shaded pixels around each, weighted bilinearly, using only neighbours on the same
+/// surface: facing normals within ≈ 25° (cos ≥ 0.9) and the neighbour's point within
+/// `stride` pixel footprints of the pixel's tangent plane (depth discontinuities fail).
+fn interpolate(
+    gbuffer: &GBuffer,
+    gathered: &[Rgb],
+    stride: u32,
+    shaded: &(dyn Fn(u32) -> bool + Sync),
+    yfov_rad: f32,
+) -> Vec<Fill> {
+    let (w, h) = (gbuffer.width, gbuffer.height);
+    // World size of one pixel at unit distance (the camera's vertical field of view
+    // spread over the image height; a pixel is square).
+    let footprint = 2.0 * (yfov_rad * 0.5).tan() / h.max(1) as f32;
+    let usable = |px: &Option<illume_transport::GBufferPixel>| {
+        px.as_ref()
+            .filter(|p| p.hit.reflects && p.hit.albedo != Rgb::ZERO)
+            .copied()
+    };
+    (0..w * h)
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|i| {
+            if shaded(i) {
+                return Fill::Skip;
+            }
+            let Some(p) = usable(&gbuffer.pixels[i as usize]) else {
+                return Fill::Skip;
+            };
+            let (x, y) = (i % w, i / w);
+            let (xa, ya) = (x - x % stride, y - y % stride);
+            let n = p.hit.facing_normal();
+            let tol = stride as f32 * footprint * p.hit.t;
+            let (mut sum, mut weight) = (Rgb::ZERO, 0.0f32);
+            for (ax, ay) in [
+                (xa, ya),
+                (xa + stride, ya),
+                (xa, ya + stride),
+                (xa + stride, ya + stride),
+            ] {
+                if ax >= w || ay >= h {
+                    continue;
+                }
+                let j = ay * w + ax;
+                let Some(q) = usable(&gbuffer.pixels[j as usize]) else {
+                    continue;
+                };
+                if q.hit.facing_normal().dot(n) < 0.9
+                    || n.dot(q.hit.position - p.hit.position).abs() > tol
+                {
+                    continue;
+                }
+                // Bilinear weight, floored so that a pixel on a grid line still
+                // borrows from the far neighbours when its near ones are unusable.
+                let fx = 1.0 - (ax as f32 - x as f32).abs() / stride as f32;
+                let fy = 1.0 - (ay as f32 - y as f32).abs() / stride as f32;
+                let wgt = (fx * fy).max(1e-3);
+                sum += gathered[j as usize] * wgt;
+                weight += wgt;
+            }
+            if weight > 0.0 {
+                Fill::Interpolated(sum / weight)
+            } else {
+                Fill::Missing
+            }
+        })
+        .collect()
 }
 
 #[allow(
@@ -323,6 +484,7 @@ fn shade_tile(
     settings: &PhotonStreamSettings,
     frame_seed: u64,
     (x0, y0, x1, y1): (u32, u32, u32, u32),
+    include: &(dyn Fn(u32) -> bool + Sync),
     tile: &mut TilePixels,
     kept: &mut Vec<u32>,
 ) -> (Vec<(u32, Rgb)>, ShadeStats) {
@@ -339,6 +501,9 @@ fn shade_tile(
     for y in y0..y1 {
         for x in x0..x1 {
             let i = y * gbuffer.width + x;
+            if !include(i) {
+                continue;
+            }
             let Some(px) = &gbuffer.pixels[i as usize] else {
                 continue;
             };
@@ -366,11 +531,6 @@ fn shade_tile(
     stats.tiles = 1;
     stats.vsls_kept = kept.len() as u64;
     stats.evaluations = (kept.len() * m) as u64;
-    let albedo = |i: u32| {
-        gbuffer.pixels[i as usize]
-            .as_ref()
-            .map_or(Rgb::ZERO, |p| p.hit.albedo)
-    };
     let out: Vec<(u32, Rgb)> = match settings.visibility {
         VisibilityMode::Off => {
             for v in [&mut tp.r, &mut tp.g, &mut tp.b] {
@@ -400,12 +560,7 @@ fn shade_tile(
                 accumulate(&vsl, &pixels, r, g, b);
             }
             (0..m)
-                .map(|i| {
-                    (
-                        tp.index[i],
-                        albedo(tp.index[i]) * INV_PI * Rgb::new(tp.r[i], tp.g[i], tp.b[i]),
-                    )
-                })
+                .map(|i| (tp.index[i], Rgb::new(tp.r[i], tp.g[i], tp.b[i])))
                 .collect()
         }
         VisibilityMode::All | VisibilityMode::Stochastic => {
@@ -475,7 +630,7 @@ fn shade_tile(
                             }
                         }
                     }
-                    (idx, px.hit.albedo * INV_PI * sum)
+                    (idx, sum)
                 })
                 .collect()
         }
