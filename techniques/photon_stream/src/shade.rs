@@ -290,40 +290,30 @@ pub fn shade(
     let (w, h) = (gbuffer.width, gbuffer.height);
     let n = (w * h) as usize;
     let stride = settings.shading_stride.max(1);
-    let shaded = |i: u32| (i % w).is_multiple_of(stride) && (i / w).is_multiple_of(stride);
     // Σ_s Φ_s·G_s per pixel, without ρ/π (multiplied in at the end so that texture
     // detail stays at full resolution whatever the stride).
     let mut gathered = vec![Rgb::ZERO; n];
+    let grid = Include::Grid(stride);
     let mut stats = gather(
         world,
         gbuffer,
         field,
         settings,
         frame_seed,
-        &shaded,
+        &grid,
         &mut gathered,
     );
-    if stride > 1 {
-        let filled = interpolate(
-            gbuffer,
-            &gathered,
-            stride,
-            &shaded,
-            world.scene.camera.yfov_rad,
-        );
-        let mut missing = vec![false; n];
-        for (i, f) in filled.into_iter().enumerate() {
-            match f {
-                Fill::Interpolated(e) => {
-                    gathered[i] = e;
-                    stats.interpolated += 1;
-                }
-                Fill::Missing => {
-                    missing[i] = true;
-                    stats.fallbacks += 1;
-                }
-                Fill::Skip => {}
-            }
+    if stride == 1 {
+        return (radiance(gbuffer, &gathered), stats);
+    }
+    let (mut img, interpolated, missing) =
+        interpolate(gbuffer, &gathered, stride, world.scene.camera.yfov_rad);
+    stats.interpolated = interpolated;
+    stats.fallbacks = missing.len() as u64;
+    if !missing.is_empty() {
+        let mut mask = vec![false; n];
+        for &i in &missing {
+            mask[i as usize] = true;
         }
         let rest = gather(
             world,
@@ -331,11 +321,21 @@ pub fn shade(
             field,
             settings,
             frame_seed,
-            &|i: u32| missing[i as usize],
+            &Include::Mask(&mask),
             &mut gathered,
         );
         stats = stats.merge(ShadeStats { tiles: 0, ..rest });
+        for &i in &missing {
+            if let Some(p) = &gbuffer.pixels[i as usize] {
+                img.pixels_mut()[i as usize] = p.hit.albedo * INV_PI * gathered[i as usize];
+            }
+        }
     }
+    (img, stats)
+}
+
+/// Radiance ρ/π · Σ Φ·G of every pixel.
+fn radiance(gbuffer: &GBuffer, gathered: &[Rgb]) -> RgbImage {
     let pixels = gbuffer
         .pixels
         .par_iter()
@@ -346,8 +346,31 @@ pub fn shade(
                 .map_or(Rgb::ZERO, |p| p.hit.albedo * INV_PI * *e)
         })
         .collect();
-    let img = RgbImage::from_vec(w, h, pixels).expect("one value per pixel");
-    (img, stats)
+    RgbImage::from_vec(gbuffer.width, gbuffer.height, pixels).expect("one value per pixel")
+}
+
+/// True for G-buffer points that receive indirect light (reflecting, non-black).
+#[inline]
+fn shades(p: &illume_transport::GBufferPixel) -> bool {
+    p.hit.reflects && p.hit.albedo != Rgb::ZERO
+}
+
+/// Which pixels a shading pass evaluates.
+enum Include<'a> {
+    /// Pixels on the grid `stride` apart (every pixel for 1).
+    Grid(u32),
+    /// Pixels whose mask entry is set.
+    Mask(&'a [bool]),
+}
+
+impl Include<'_> {
+    #[inline]
+    fn contains(&self, x: u32, y: u32, i: u32) -> bool {
+        match *self {
+            Include::Grid(s) => x.is_multiple_of(s) && y.is_multiple_of(s),
+            Include::Mask(m) => m[i as usize],
+        }
+    }
 }
 
 /// Shades the pixels `include` selects, tile by tile, into `gathered` (Σ Φ·G).
@@ -357,7 +380,7 @@ fn gather(
     field: &VslField,
     settings: &PhotonStreamSettings,
     frame_seed: u64,
-    include: &(dyn Fn(u32) -> bool + Sync),
+    include: &Include,
     gathered: &mut [Rgb],
 ) -> ShadeStats {
     let (w, h) = (gbuffer.width, gbuffer.height);
@@ -393,84 +416,111 @@ fn gather(
     stats
 }
 
-/// What interpolation gave a pixel.
-enum Fill {
-    /// Not a pixel to interpolate (shaded already, empty, or not reflecting).
-    Skip,
-    /// Interpolated from neighbours on the same surface.
-    Interpolated(Rgb),
-    /// No shaded neighbour lies on the same surface: shade it exactly.
-    Missing,
+/// A shaded grid pixel as interpolation reads it.
+#[derive(Clone, Copy, Default)]
+struct Anchor {
+    position: Vec3,
+    normal: Vec3,
+    gathered: Rgb,
+    usable: bool,
 }
 
-/// Fills the pixels between the shaded grid (`stride` apart) from the up to four
-/// shaded pixels around each, weighted bilinearly, using only neighbours on the same
-/// surface: facing normals within ≈ 25° (cos ≥ 0.9) and the neighbour's point within
-/// `stride` pixel footprints of the pixel's tangent plane (depth discontinuities fail).
+/// Radiance of every pixel: grid pixels from `gathered`, the pixels between from the
+/// up to four grid pixels (`stride` apart) around each, weighted bilinearly, using only
+/// neighbours on the same surface: facing normals within ≈ 25° (cos ≥ 0.9) and the
+/// neighbour's point within `stride` pixel footprints of the pixel's tangent plane
+/// (depth discontinuities fail). Returns the image, how many pixels were interpolated,
+/// and the pixels no neighbour could fill (left black, to be shaded exactly).
 fn interpolate(
     gbuffer: &GBuffer,
     gathered: &[Rgb],
     stride: u32,
-    shaded: &(dyn Fn(u32) -> bool + Sync),
     yfov_rad: f32,
-) -> Vec<Fill> {
+) -> (RgbImage, u64, Vec<u32>) {
     let (w, h) = (gbuffer.width, gbuffer.height);
     // World size of one pixel at unit distance (the camera's vertical field of view
     // spread over the image height; a pixel is square).
     let footprint = 2.0 * (yfov_rad * 0.5).tan() / h.max(1) as f32;
-    let usable = |px: &Option<illume_transport::GBufferPixel>| {
-        px.as_ref()
-            .filter(|p| p.hit.reflects && p.hit.albedo != Rgb::ZERO)
-            .copied()
-    };
-    (0..w * h)
+    // The grid pixels, compact (a G-buffer entry is ~100 bytes; each is read by up to
+    // eight neighbours).
+    let (aw, ah) = (w.div_ceil(stride), h.div_ceil(stride));
+    let anchors: Vec<Anchor> = (0..aw * ah)
         .into_par_iter()
-        .with_min_len(1024)
-        .map(|i| {
-            if shaded(i) {
-                return Fill::Skip;
-            }
-            let Some(p) = usable(&gbuffer.pixels[i as usize]) else {
-                return Fill::Skip;
-            };
-            let (x, y) = (i % w, i / w);
-            let (xa, ya) = (x - x % stride, y - y % stride);
-            let n = p.hit.facing_normal();
-            let tol = stride as f32 * footprint * p.hit.t;
-            let (mut sum, mut weight) = (Rgb::ZERO, 0.0f32);
-            for (ax, ay) in [
-                (xa, ya),
-                (xa + stride, ya),
-                (xa, ya + stride),
-                (xa + stride, ya + stride),
-            ] {
-                if ax >= w || ay >= h {
-                    continue;
-                }
-                let j = ay * w + ax;
-                let Some(q) = usable(&gbuffer.pixels[j as usize]) else {
-                    continue;
-                };
-                if q.hit.facing_normal().dot(n) < 0.9
-                    || n.dot(q.hit.position - p.hit.position).abs() > tol
-                {
-                    continue;
-                }
-                // Bilinear weight, floored so that a pixel on a grid line still
-                // borrows from the far neighbours when its near ones are unusable.
-                let fx = 1.0 - (ax as f32 - x as f32).abs() / stride as f32;
-                let fy = 1.0 - (ay as f32 - y as f32).abs() / stride as f32;
-                let wgt = (fx * fy).max(1e-3);
-                sum += gathered[j as usize] * wgt;
-                weight += wgt;
-            }
-            if weight > 0.0 {
-                Fill::Interpolated(sum / weight)
-            } else {
-                Fill::Missing
+        .with_min_len(256)
+        .map(|k| {
+            let j = ((k / aw) * stride * w + (k % aw) * stride) as usize;
+            match gbuffer.pixels[j].as_ref().filter(|p| shades(p)) {
+                Some(p) => Anchor {
+                    position: p.hit.position,
+                    normal: p.hit.facing_normal(),
+                    gathered: gathered[j],
+                    usable: true,
+                },
+                None => Anchor::default(),
             }
         })
-        .collect()
+        .collect();
+    let mut img = RgbImage::black(w, h);
+    let rows: Vec<(u64, Vec<u32>)> = img
+        .pixels_mut()
+        .par_chunks_mut(w as usize)
+        .enumerate()
+        .map(|(y, row)| {
+            let y = y as u32;
+            let (mut interpolated, mut missing) = (0u64, Vec::new());
+            let (ay, fy) = (y / stride, (y % stride) as f32 / stride as f32);
+            let on_row = y.is_multiple_of(stride);
+            for (x, out) in row.iter_mut().enumerate() {
+                let x = x as u32;
+                let i = y * w + x;
+                let Some(p) = gbuffer.pixels[i as usize].as_ref().filter(|p| shades(p)) else {
+                    continue;
+                };
+                let f = p.hit.albedo * INV_PI;
+                if on_row && x.is_multiple_of(stride) {
+                    *out = f * gathered[i as usize];
+                    continue;
+                }
+                let (ax, fx) = (x / stride, (x % stride) as f32 / stride as f32);
+                let n = p.hit.facing_normal();
+                let tol = stride as f32 * footprint * p.hit.t;
+                let (mut sum, mut weight) = (Rgb::ZERO, 0.0f32);
+                for (dx, dy, wx, wy) in [
+                    (0, 0, 1.0 - fx, 1.0 - fy),
+                    (1, 0, fx, 1.0 - fy),
+                    (0, 1, 1.0 - fx, fy),
+                    (1, 1, fx, fy),
+                ] {
+                    let (qx, qy) = (ax + dx, ay + dy);
+                    if qx >= aw || qy >= ah {
+                        continue;
+                    }
+                    let q = &anchors[(qy * aw + qx) as usize];
+                    if !q.usable
+                        || q.normal.dot(n) < 0.9
+                        || n.dot(q.position - p.hit.position).abs() > tol
+                    {
+                        continue;
+                    }
+                    // Bilinear weight, floored so that a pixel on a grid line still
+                    // borrows from the far neighbours when its near ones are unusable.
+                    let wgt = (wx * wy).max(1e-3);
+                    sum += q.gathered * wgt;
+                    weight += wgt;
+                }
+                if weight > 0.0 {
+                    *out = f * (sum / weight);
+                    interpolated += 1;
+                } else {
+                    missing.push(i);
+                }
+            }
+            (interpolated, missing)
+        })
+        .collect();
+    let interpolated = rows.iter().map(|r| r.0).sum();
+    let missing = rows.into_iter().flat_map(|r| r.1).collect();
+    (img, interpolated, missing)
 }
 
 #[allow(
@@ -484,7 +534,7 @@ fn shade_tile(
     settings: &PhotonStreamSettings,
     frame_seed: u64,
     (x0, y0, x1, y1): (u32, u32, u32, u32),
-    include: &(dyn Fn(u32) -> bool + Sync),
+    include: &Include,
     tile: &mut TilePixels,
     kept: &mut Vec<u32>,
 ) -> (Vec<(u32, Rgb)>, ShadeStats) {
@@ -498,10 +548,17 @@ fn shade_tile(
     tp.index.clear();
     let mut bounds = Aabb::EMPTY;
     let mut max_albedo = 0.0f32;
-    for y in y0..y1 {
-        for x in x0..x1 {
+    // A grid pass visits only its rows and columns (the G-buffer is large: touching
+    // pixels it will not shade costs memory traffic).
+    let step = match include {
+        Include::Grid(s) => *s,
+        Include::Mask(_) => 1,
+    };
+    let first = |v: u32| v.next_multiple_of(step);
+    for y in (first(y0)..y1).step_by(step as usize) {
+        for x in (first(x0)..x1).step_by(step as usize) {
             let i = y * gbuffer.width + x;
-            if !include(i) {
+            if !include.contains(x, y, i) {
                 continue;
             }
             let Some(px) = &gbuffer.pixels[i as usize] else {
