@@ -23,6 +23,11 @@ use illume_transport::{SharedWorld, Technique, World};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+/// The allocator of the `illume` binary (see apps/illume/src/main.rs: per-frame images
+/// would otherwise page-fault every frame), so that frame rates here are the app's.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn scenes_dir() -> PathBuf {
     std::env::var_os("ILLUME_SCENES")
         .map(PathBuf::from)
