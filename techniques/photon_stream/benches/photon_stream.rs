@@ -3,9 +3,9 @@
 //! `cargo bench -p illume-photon-stream --bench photon_stream [-- SECTION...]` with
 //! SECTION among `fps`, `rate`, `latency`, `visibility` (default: all). Prints Markdown tables.
 //!
-//! * `fps` — frames per second of whole frames (G-buffer + direct light with one shadow
-//!   ray + VSL indirect) at 800×600 and 1280×1024 for 10/50/100/200 VSLs on the Cornell
-//!   box, Cornell dragon and Dabrovic Sponza (`../shared/scenes`, or `ILLUME_SCENES`),
+//! * `fps` — frames per second of whole frames (G-buffer + direct light + VSL indirect),
+//!   with a static camera and with the camera turning every frame, at 800×600 and
+//!   1280×1024 for 10/50/100/200 VSLs on the Cornell box, Cornell dragon and Dabrovic Sponza (`../shared/scenes`, or `ILLUME_SCENES`),
 //!   with the streaming thread running. As in the paper, each scene is lit by one spot
 //!   light (file emitters are switched off).
 //! * `rate` — photon impacts per second of the streaming thread (alone) against the
@@ -86,65 +86,85 @@ const SCENES: [(&str, &str); 3] = [
 
 fn fps_table() {
     println!("\n### Frames per second (whole frame, streaming thread running)\n");
-    println!("| scene | resolution | 10 VSLs | 50 VSLs | 100 VSLs | 200 VSLs |");
-    println!("|---|---|---|---|---|---|");
+    println!(
+        "`static`: fixed camera (the renderer keeps the G-buffer pixels of static geometry); `moving`: the camera turns every frame (every pixel rebuilt).\n"
+    );
+    println!("| scene | resolution | camera | 10 VSLs | 50 VSLs | 100 VSLs | 200 VSLs |");
+    println!("|---|---|---|---|---|---|---|");
     let mut shading = Vec::new();
     for (label, file) in SCENES {
         let world: SharedWorld = World::new(load(file)).shared();
+        let home = world.read().unwrap().scene.camera.world_from_camera;
         for (w, h) in [(800u32, 600u32), (1280, 1024)] {
-            let mut row = format!("| {label} | {w}×{h} |");
-            for n in [10u32, 50, 100, 200] {
-                let mut ps = PhotonStream::new(
-                    &world,
-                    PhotonStreamSettings {
-                        vsl_count: n,
+            for moving in [false, true] {
+                let view = if moving { "moving" } else { "static" };
+                let mut row = format!("| {label} | {w}×{h} | {view} |");
+                for n in [10u32, 50, 100, 200] {
+                    let mut ps = PhotonStream::new(
+                        &world,
+                        PhotonStreamSettings {
+                            vsl_count: n,
+                            ..Default::default()
+                        },
+                    )
+                    .expect("photon_stream");
+                    let renderer = Renderer::new(RenderSettings {
+                        width: w,
+                        height: h,
+                        area_light_samples: 1,
                         ..Default::default()
-                    },
-                )
-                .expect("photon_stream");
-                let renderer = Renderer::new(RenderSettings {
-                    width: w,
-                    height: h,
-                    area_light_samples: 1,
-                    ..Default::default()
-                });
-                {
-                    let guard = world.read().unwrap();
-                    ps.warm_up(&guard);
-                    let _ = renderer.render(&guard, &mut ps, 0);
+                    });
+                    {
+                        let guard = world.read().unwrap();
+                        ps.warm_up(&guard);
+                        let _ = renderer.render(&guard, &mut ps, 0);
+                    }
+                    let t0 = Instant::now();
+                    let (mut frames, mut indirect_ms, mut gbuffer_ms, mut direct_ms) =
+                        (0u32, 0.0, 0.0, 0.0);
+                    while frames < 3 || (t0.elapsed() < Duration::from_secs(2) && frames < 60) {
+                        if moving {
+                            // A small yaw that changes every frame: no pixel can be kept.
+                            let yaw = 0.02 * ((frames % 7) as f32 - 3.0).to_radians();
+                            let edit = Edit::SetCameraTransform {
+                                world_from_camera: home * Affine3A::from_rotation_y(yaw),
+                            };
+                            let changes = world.write().unwrap().apply_edit(&edit).expect("edit");
+                            ps.scene_changed(&world.read().unwrap(), &changes);
+                        }
+                        let guard = world.read().unwrap();
+                        let f = renderer.render(&guard, &mut ps, frames as u64 + 1);
+                        indirect_ms += f.timings.indirect_ms;
+                        gbuffer_ms += f.timings.gbuffer_ms;
+                        direct_ms += f.timings.direct_ms;
+                        frames += 1;
+                    }
+                    let fps = frames as f64 / t0.elapsed().as_secs_f64();
+                    let k = frames as f64;
+                    row += &format!(" {fps:.1} |");
+                    let tile = ps.last_shade().vsls_per_tile();
+                    let rate = ps.impacts_per_s();
+                    shading.push(format!(
+                        "| {label} | {w}×{h} | {view} | {n} | {:.1} | {:.1} | {:.1} | {tile:.1} | {:.0} |",
+                        gbuffer_ms / k,
+                        direct_ms / k,
+                        indirect_ms / k,
+                        rate
+                    ));
                 }
-                let t0 = Instant::now();
-                let (mut frames, mut indirect_ms, mut gbuffer_ms, mut direct_ms) =
-                    (0u32, 0.0, 0.0, 0.0);
-                while frames < 3 || (t0.elapsed() < Duration::from_secs(2) && frames < 30) {
-                    let guard = world.read().unwrap();
-                    let f = renderer.render(&guard, &mut ps, frames as u64 + 1);
-                    indirect_ms += f.timings.indirect_ms;
-                    gbuffer_ms += f.timings.gbuffer_ms;
-                    direct_ms += f.timings.direct_ms;
-                    frames += 1;
-                }
-                let fps = frames as f64 / t0.elapsed().as_secs_f64();
-                let k = frames as f64;
-                row += &format!(" {fps:.1} |");
-                let tile = ps.last_shade().vsls_per_tile();
-                let rate = ps.impacts_per_s();
-                shading.push(format!(
-                    "| {label} | {w}×{h} | {n} | {:.1} | {:.1} | {:.1} | {tile:.1} | {:.0} |",
-                    gbuffer_ms / k,
-                    direct_ms / k,
-                    indirect_ms / k,
-                    rate
-                ));
+                println!("{row}");
             }
-            println!("{row}");
+            let edit = Edit::SetCameraTransform {
+                world_from_camera: home,
+            };
+            world.write().unwrap().apply_edit(&edit).expect("edit");
         }
     }
     println!("\n### Frame breakdown [ms per frame]\n");
     println!(
-        "| scene | resolution | VSLs | G-buffer | direct | VSL indirect | VSLs/tile after culling | impacts/s while rendering |"
+        "| scene | resolution | camera | VSLs | G-buffer | direct | VSL indirect | VSLs/tile after culling | impacts/s while rendering |"
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|");
     for r in shading {
         println!("{r}");
     }
