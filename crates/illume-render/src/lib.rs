@@ -84,6 +84,9 @@ pub enum Shadows<'a> {
     Rays,
     /// Lookups in maps built for the same world ([`ShadowMaps::rebuild`]).
     Maps(&'a ShadowMaps),
+    /// No shadows from analytic lights (area lights still cast rays): wrong wherever
+    /// something occludes, for measuring what shadows cost and for debugging.
+    Off,
 }
 
 /// How primary hits are found (see [`RenderSettings::primary_visibility`]).
@@ -307,6 +310,7 @@ pub fn direct_at_with(
         }
         let map_visibility = match (shadows, analytic) {
             (Shadows::Maps(maps), Some(i)) => maps.visibility(i, hit, &s),
+            (Shadows::Off, Some(_)) => Some(1.0),
             _ => None,
         };
         let visibility = match map_visibility {

@@ -63,6 +63,10 @@ pub const SUBPIXELS: i64 = 256;
 /// Rows per strip, the unit of binning and of parallel rasterization.
 pub const STRIP_ROWS: u32 = 16;
 
+/// Bounding-box width \[pixels\] from which a triangle's rows are found by division rather
+/// than by stepping.
+const SPAN_MIN_WIDTH: i32 = 8;
+
 /// Triangles per parallel setup job.
 const SETUP_CHUNK: usize = 2048;
 
@@ -425,29 +429,107 @@ impl ScreenTriangle {
     /// (the attribute is `1/w` in perspective views), row by row, left to right.
     #[inline]
     fn rasterize(&self, rows: std::ops::Range<i32>, mut covered: impl FnMut(i32, i32, f32)) {
+        self.rasterize_runs(rows, |y, run, z_row| {
+            for x in run {
+                covered(x, y, z_row + self.dzdx * (x - self.x0) as f32);
+            }
+        });
+    }
+
+    /// Calls `run(y, xs, z_row)` for every row of `rows` with pixels inside: `xs` are
+    /// those pixels (a row of a triangle is one run) and the attribute at pixel x is
+    /// `z_row + dzdx · (x − x0)`.
+    #[inline]
+    fn rasterize_runs(
+        &self,
+        rows: std::ops::Range<i32>,
+        mut run: impl FnMut(i32, std::ops::RangeInclusive<i32>, f32),
+    ) {
         let s = SUBPIXELS;
         let y_start = self.y0.max(rows.start);
         let y_end = self.y1.min(rows.end - 1);
         let step = [self.a[0] * s, self.a[1] * s, self.a[2] * s];
         let sx = self.x0 as i64 * s + s / 2;
+        // Wide triangles get each row's run from its three edges solved for x instead of
+        // stepping from the bounding box's edge (shadow maps see walls and floors spanning
+        // the whole map); narrow ones step, which is cheaper than solving.
+        let wide = self.x1 - self.x0 >= SPAN_MIN_WIDTH;
         for y in y_start..=y_end {
             let sy = y as i64 * s + s / 2;
             let mut e = [0, 1, 2].map(|k| self.a[k] * sx + self.b[k] * sy + self.c[k]);
             let z_row = self.z0 + self.dzdy * (y - self.y0) as f32;
-            let mut inside_seen = false;
+            if wide {
+                if let Some(xs) = self.row_run(e, step) {
+                    run(y, xs, z_row);
+                }
+                continue;
+            }
+            let mut first = None;
+            let mut last = self.x1;
             for x in self.x0..=self.x1 {
                 if (e[0] | e[1] | e[2]) >= 0 {
-                    inside_seen = true;
-                    covered(x, y, z_row + self.dzdx * (x - self.x0) as f32);
-                } else if inside_seen {
-                    // A row of a triangle is one run of pixels.
+                    first.get_or_insert(x);
+                } else if first.is_some() {
+                    last = x - 1;
                     break;
                 }
                 e[0] += step[0];
                 e[1] += step[1];
                 e[2] += step[2];
             }
+            if let Some(first) = first {
+                run(y, first..=last, z_row);
+            }
         }
+    }
+
+    /// The pixels of one row inside all three edges, given the edge functions `e` at
+    /// pixel `x0` and their change per pixel `step`: edge k holds where
+    /// `e[k] + step[k]·i ≥ 0` (i = x − x0), a half-line whose end a float division
+    /// estimates and exact integer tests then settle.
+    #[inline]
+    fn row_run(&self, e: [i64; 3], step: [i64; 3]) -> Option<std::ops::RangeInclusive<i32>> {
+        let (mut lo, mut hi) = (0i64, (self.x1 - self.x0) as i64);
+        for k in 0..3 {
+            let (b, a) = (e[k], step[k]);
+            let inside = |i: i64| b + a * i >= 0;
+            // Where the boundary −b/a lies, within the current run.
+            let estimate = || (-(b as f64) / a as f64).clamp(lo as f64, hi as f64) as i64;
+            if a > 0 {
+                // Inside from some i on: find the smallest i in [lo, hi] inside.
+                if !inside(hi) {
+                    return None;
+                }
+                if !inside(lo) {
+                    let mut i = estimate();
+                    while !inside(i) {
+                        i += 1;
+                    }
+                    while inside(i - 1) {
+                        i -= 1;
+                    }
+                    lo = i;
+                }
+            } else if a < 0 {
+                // Inside up to some i: find the largest i in [lo, hi] inside.
+                if !inside(lo) {
+                    return None;
+                }
+                if !inside(hi) {
+                    let mut i = estimate();
+                    while !inside(i) {
+                        i -= 1;
+                    }
+                    while inside(i + 1) {
+                        i += 1;
+                    }
+                    hi = i;
+                }
+            } else if b < 0 {
+                return None;
+            }
+        }
+        Some(self.x0 + lo as i32..=self.x0 + hi as i32)
     }
 }
 
@@ -536,34 +618,15 @@ fn setup_triangle(
     let inside_all = [p0, p1, p2]
         .iter()
         .all(|&p| p.z >= NEAR_W && p.x.abs() <= GUARD_BAND * p.z && p.y.abs() <= GUARD_BAND * p.z);
-    let mut polygon = Polygon::new([p0, p1, p2]);
-    if !inside_all {
-        // Distance to each plane, ≥ 0 inside.
-        let planes: [fn(DVec4) -> f64; 5] = [
-            |p| p.z - NEAR_W,
-            |p| GUARD_BAND * p.z - p.x,
-            |p| GUARD_BAND * p.z + p.x,
-            |p| GUARD_BAND * p.z - p.y,
-            |p| GUARD_BAND * p.z + p.y,
-        ];
-        for plane in planes {
-            polygon = polygon.clipped(plane);
-            if polygon.len < 3 {
-                return;
-            }
-        }
-    }
     let snap = |p: DVec4| {
         let (x, y) = viewport.to_screen(p);
         let s = SUBPIXELS as f64;
-        (((x * s).round()) as i64, ((y * s).round()) as i64)
+        (
+            (((x * s).round()) as i64, ((y * s).round()) as i64),
+            p.w / p.z,
+        )
     };
-    let screen: Vec<((i64, i64), f64)> = polygon.points[..polygon.len]
-        .iter()
-        .map(|&p| (snap(p), p.w / p.z))
-        .collect();
-    for k in 1..screen.len() - 1 {
-        let (a, b, c) = (screen[0], screen[k], screen[k + 1]);
+    let mut emit = |a: ((i64, i64), f64), b: ((i64, i64), f64), c: ((i64, i64), f64)| {
         if let Some(t) = ScreenTriangle::new(
             [a.0, b.0, c.0],
             [a.1, b.1, c.1],
@@ -573,6 +636,31 @@ fn setup_triangle(
         ) {
             out.push(t);
         }
+    };
+    if inside_all {
+        // Most triangles: no clipping, no polygon (setup runs for every triangle of the
+        // scene, once per view).
+        emit(snap(p0), snap(p1), snap(p2));
+        return;
+    }
+    let mut polygon = Polygon::new([p0, p1, p2]);
+    // Distance to each plane, ≥ 0 inside.
+    let planes: [fn(DVec4) -> f64; 5] = [
+        |p| p.z - NEAR_W,
+        |p| GUARD_BAND * p.z - p.x,
+        |p| GUARD_BAND * p.z + p.x,
+        |p| GUARD_BAND * p.z - p.y,
+        |p| GUARD_BAND * p.z + p.y,
+    ];
+    for plane in planes {
+        polygon = polygon.clipped(plane);
+        if polygon.len < 3 {
+            return;
+        }
+    }
+    let first = snap(polygon.points[0]);
+    for k in 1..polygon.len - 1 {
+        emit(first, snap(polygon.points[k]), snap(polygon.points[k + 1]));
     }
 }
 
@@ -658,9 +746,18 @@ fn bin_by_strip(triangles: &[ScreenTriangle], strips: usize) -> StripBins {
     }
 }
 
+/// What a shadow map stores per texel, from the rasterizer's depth attribute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum StoredDepth {
+    /// Perspective views: the attribute is `1/w`; store `w`.
+    ViewDepth,
+    /// Orthographic views whose depth plane gives `−depth`; store `depth`.
+    NegatedAttribute,
+}
+
 /// Depth rendering for shadow maps: every default-mask instance of `scene` seen through
-/// `viewport` (any back face too, as shadow rays see them), keeping per texel the nearest
-/// depth attribute and storing `to_depth(attribute)`; texels that see nothing get
+/// `viewport` (back faces too, as shadow rays see them), keeping per texel the nearest
+/// depth attribute and storing it as `stored`; texels that see nothing get
 /// `f32::INFINITY`. `depth` is resized to the viewport (row-major, row 0 at the top) and
 /// its allocation reused. Same setup, binning and parallel strips as
 /// [`VisibilityBuffer::render`], so the same pixel-centre coverage rules hold.
@@ -668,10 +765,10 @@ pub(crate) fn rasterize_depth(
     scene: &Scene,
     viewport: &Viewport,
     depth: &mut Vec<f32>,
-    to_depth: impl Fn(f32) -> f32 + Sync,
+    stored: StoredDepth,
 ) {
     let (width, height) = (viewport.width, viewport.height);
-    depth.clear();
+    // Every texel is initialised by its strip below.
     depth.resize((width * height) as usize, f32::NEG_INFINITY);
     if width == 0 || height == 0 {
         return;
@@ -683,21 +780,37 @@ pub(crate) fn rasterize_depth(
         .par_chunks_mut((width * STRIP_ROWS) as usize)
         .enumerate()
         .for_each(|(strip, out)| {
+            out.fill(f32::NEG_INFINITY);
             let rows = strip as i32 * STRIP_ROWS as i32
                 ..((strip as i32 + 1) * STRIP_ROWS as i32).min(height as i32);
             for &t in bins.strip(strip) {
-                triangles[t as usize].rasterize(rows.clone(), |x, y, z| {
-                    let texel = &mut out[((y - rows.start) as u32 * width + x as u32) as usize];
-                    *texel = texel.max(z);
+                let tri = &triangles[t as usize];
+                tri.rasterize_runs(rows.clone(), |y, xs, z_row| {
+                    let row = (y - rows.start) as usize * width as usize;
+                    let (start, end) = (*xs.start() as usize, *xs.end() as usize);
+                    // A plain slice loop: the compiler vectorizes it.
+                    let z_start = z_row + tri.dzdx * (start as i32 - tri.x0) as f32;
+                    for (i, texel) in out[row + start..=row + end].iter_mut().enumerate() {
+                        *texel = texel.max(z_start + tri.dzdx * i as f32);
+                    }
                 });
             }
-            // Convert while the strip is still in cache.
-            for texel in out.iter_mut() {
-                *texel = if *texel == f32::NEG_INFINITY {
-                    f32::INFINITY
-                } else {
-                    to_depth(*texel)
-                };
+            // Convert while the strip is still in cache; −∞ (empty) becomes +∞ both ways.
+            match stored {
+                StoredDepth::ViewDepth => {
+                    for texel in out.iter_mut() {
+                        *texel = if *texel > 0.0 {
+                            1.0 / *texel
+                        } else {
+                            f32::INFINITY
+                        };
+                    }
+                }
+                StoredDepth::NegatedAttribute => {
+                    for texel in out.iter_mut() {
+                        *texel = -*texel;
+                    }
+                }
             }
         });
 }
@@ -884,6 +997,49 @@ mod tests {
                 "{order:?}"
             );
         }
+    }
+
+    #[test]
+    fn row_runs_cover_exactly_the_pixels_whose_centres_are_inside() {
+        // Random triangles, many wide enough for the divided runs: the pixels reported
+        // are exactly those where all three edge functions are ≥ 0.
+        let (w, h) = (96u32, 64u32);
+        let vp = viewport(w, h);
+        let mut rng = illume_core::sampling::Pcg32::new(3, 0);
+        let mut checked = 0;
+        for _ in 0..300 {
+            let mut p = || {
+                at_screen(
+                    illume_core::sampling::SampleStream::next_1d(&mut rng) * 140.0 - 20.0,
+                    illume_core::sampling::SampleStream::next_1d(&mut rng) * 100.0 - 20.0,
+                    w,
+                    h,
+                    1.0 + illume_core::sampling::SampleStream::next_1d(&mut rng),
+                )
+            };
+            let tri = [p(), p(), p()];
+            let mut screen = Vec::new();
+            setup_triangle(perspective(tri), &vp, 0, 0, &mut screen);
+            for t in &screen {
+                let mut got = Vec::new();
+                t.rasterize(0..h as i32, |x, y, _| got.push((x, y)));
+                let mut expected = Vec::new();
+                for y in t.y0..=t.y1 {
+                    for x in t.x0..=t.x1 {
+                        let (sx, sy) = (
+                            x as i64 * SUBPIXELS + SUBPIXELS / 2,
+                            y as i64 * SUBPIXELS + SUBPIXELS / 2,
+                        );
+                        if (0..3).all(|k| t.a[k] * sx + t.b[k] * sy + t.c[k] >= 0) {
+                            expected.push((x, y));
+                        }
+                    }
+                }
+                assert_eq!(got, expected);
+                checked += got.len();
+            }
+        }
+        assert!(checked > 10_000, "{checked}");
     }
 
     #[test]

@@ -35,7 +35,7 @@
 //! and occluders further than the bias from the receiver shadow exactly.
 
 use crate::lights::{Emitter, LightSample};
-use crate::raster::{Viewport, rasterize_depth};
+use crate::raster::{StoredDepth, Viewport, rasterize_depth};
 use crate::surface::SurfaceHit;
 use crate::world::World;
 use glam::{Affine3A, Mat3, Vec2, Vec3, Vec4};
@@ -186,7 +186,7 @@ enum Projection {
     },
 }
 
-/// Where a world point lands in a map.
+/// Where a (normal-offset) world point lands in a map.
 struct Projected {
     /// Continuous texel coordinates (texel i spans [i, i + 1)), y down.
     texel: Vec2,
@@ -199,7 +199,7 @@ struct Projected {
 impl Projection {
     /// The rasterizer's viewport for this projection and the conversion from its depth
     /// attribute to the stored depth.
-    fn viewport(&self, size: u32) -> (Viewport, fn(f32) -> f32) {
+    fn viewport(&self, size: u32) -> (Viewport, StoredDepth) {
         match *self {
             Self::Perspective {
                 view_from_world,
@@ -212,8 +212,7 @@ impl Projection {
                 )));
                 (
                     Viewport::perspective(size, size, clip_from_view * view_from_world),
-                    // The attribute is 1/w; we store w.
-                    |inverse_w| 1.0 / inverse_w,
+                    StoredDepth::ViewDepth,
                 )
             }
             Self::Orthographic {
@@ -241,15 +240,23 @@ impl Projection {
                         clip_from_view * view_from_world,
                         depth_plane,
                     ),
-                    |view_z| -view_z,
+                    StoredDepth::NegatedAttribute,
                 )
             }
         }
     }
 
-    /// Where `p` lands in a `size × size` map; `None` behind a perspective view.
+    /// Where `p`, pushed `offset_texels` texel footprints along unit `normal`, lands in a
+    /// `size × size` map; `None` behind a perspective view. One view transform: the
+    /// offset is added in view space.
     #[inline]
-    fn project(&self, p: Vec3, size: u32) -> Option<Projected> {
+    fn project_offset(
+        &self,
+        p: Vec3,
+        normal: Vec3,
+        offset_texels: f32,
+        size: u32,
+    ) -> Option<Projected> {
         let size = size as f32;
         let (ndc, depth, footprint) = match *self {
             Self::Perspective {
@@ -257,21 +264,27 @@ impl Projection {
                 tan_half,
             } => {
                 let v = view_from_world.transform_point3(p);
+                let footprint = 2.0 * tan_half * -v.z / size;
+                let v = v + view_from_world.transform_vector3(normal) * (offset_texels * footprint);
                 let w = -v.z;
-                if w <= 0.0 {
+                if w <= 0.0 || footprint <= 0.0 {
                     return None;
                 }
-                let ndc = Vec2::new(v.x, v.y) / (w * tan_half);
-                (ndc, w, 2.0 * tan_half * w / size)
+                (Vec2::new(v.x, v.y) / (w * tan_half), w, footprint)
             }
             Self::Orthographic {
                 view_from_world,
                 centre,
                 half_extent,
             } => {
-                let v = view_from_world.transform_point3(p);
-                let ndc = (Vec2::new(v.x, v.y) - centre) / half_extent;
-                (ndc, -v.z, 2.0 * half_extent.max_element() / size)
+                let footprint = 2.0 * half_extent.max_element() / size;
+                let v = view_from_world.transform_point3(p)
+                    + view_from_world.transform_vector3(normal) * (offset_texels * footprint);
+                (
+                    (Vec2::new(v.x, v.y) - centre) / half_extent,
+                    -v.z,
+                    footprint,
+                )
             }
         };
         Some(Projected {
@@ -293,24 +306,34 @@ struct DepthMap {
 
 impl DepthMap {
     /// Fraction of the filter footprint around `texel` whose stored depth is at least
-    /// `depth` (lit), with bilinear weights over `k × k` texels.
+    /// `depth` (lit), with bilinear weights over `k × k` texels (texels beyond the map's
+    /// edge repeat the edge).
     #[inline]
     fn filtered_visibility(&self, texel: Vec2, depth: f32, k: u32) -> f32 {
-        let size = self.size as i32;
-        let at = |x: i32, y: i32| {
-            let (x, y) = (x.clamp(0, size - 1), y.clamp(0, size - 1));
-            self.depth[(y * size + x) as usize]
+        let last = self.size as i32 - 1;
+        let size = self.size as usize;
+        let lit = |x: i32, y: i32| {
+            f32::from(u8::from(
+                self.depth[y as usize * size + x as usize] >= depth,
+            ))
         };
         if k <= 1 {
-            return f32::from(u8::from(
-                at(texel.x.floor() as i32, texel.y.floor() as i32) >= depth,
-            ));
+            let (x, y) = (floor(texel.x).clamp(0, last), floor(texel.y).clamp(0, last));
+            return lit(x, y);
         }
         // k − 1 bilinear taps one texel apart centred on `texel` share one fraction f, so
         // their summed weights over the k texels per axis are [1 − f, 1, …, 1, f]/(k − 1).
         let start = texel - 0.5 - (k as f32 - 2.0) * 0.5;
-        let base = start.floor();
-        let f = start - base;
+        let (bx, by) = (floor(start.x), floor(start.y));
+        let f = start - Vec2::new(bx as f32, by as f32);
+        if k == 2 {
+            // The default, bilinear: four texels, weights (1 − f, f) per axis.
+            let (x0, x1) = (bx.clamp(0, last), (bx + 1).clamp(0, last));
+            let (y0, y1) = (by.clamp(0, last), (by + 1).clamp(0, last));
+            let top = lit(x0, y0) * (1.0 - f.x) + lit(x1, y0) * f.x;
+            let bottom = lit(x0, y1) * (1.0 - f.x) + lit(x1, y1) * f.x;
+            return top * (1.0 - f.y) + bottom * f.y;
+        }
         let weight = |i: u32, f: f32| {
             if i == 0 {
                 1.0 - f
@@ -320,21 +343,25 @@ impl DepthMap {
                 1.0
             }
         };
-        let (bx, by) = (base.x as i32, base.y as i32);
-        let mut lit = 0.0;
+        let mut sum = 0.0;
         for j in 0..k {
-            let wy = weight(j, f.y);
+            let y = (by + j as i32).clamp(0, last);
             let mut row = 0.0;
             for i in 0..k {
-                if at(bx + i as i32, by + j as i32) >= depth {
-                    row += weight(i, f.x);
-                }
+                row += weight(i, f.x) * lit((bx + i as i32).clamp(0, last), y);
             }
-            lit += wy * row;
+            sum += weight(j, f.y) * row;
         }
         let norm = (k - 1) as f32;
-        lit / (norm * norm)
+        sum / (norm * norm)
     }
+}
+
+/// ⌊x⌋ as an integer without a libm call (x is a texel coordinate, far inside i32).
+#[inline]
+fn floor(x: f32) -> i32 {
+    let i = x as i32;
+    i - i32::from(x < i as f32)
 }
 
 /// Which maps shade one analytic light.
@@ -460,8 +487,8 @@ impl ShadowMaps {
             .for_each(|(map, (projection, size))| {
                 map.projection = projection;
                 map.size = size;
-                let (viewport, to_depth) = projection.viewport(size);
-                rasterize_depth(scene, &viewport, &mut map.depth, to_depth);
+                let (viewport, stored) = projection.viewport(size);
+                rasterize_depth(scene, &viewport, &mut map.depth, stored);
             });
         Ok(())
     }
@@ -509,11 +536,10 @@ impl ShadowMaps {
         let tan = ((1.0 - cos * cos).sqrt() / cos).min(MAX_SLOPE);
         // A point behind a perspective view cannot be lit by it (it is outside its cone
         // or face); treat it as lit and let the light's own falloff decide.
-        let Some(at) = map.projection.project(hit.position, map.size) else {
-            return Some(1.0);
-        };
-        let offset = hit.position + n * (s.normal_offset_texels * at.footprint);
-        let Some(at) = map.projection.project(offset, map.size) else {
+        let Some(at) =
+            map.projection
+                .project_offset(hit.position, n, s.normal_offset_texels, map.size)
+        else {
             return Some(1.0);
         };
         let bias = at.footprint * (s.depth_bias_texels + s.slope_bias_texels * tan);
