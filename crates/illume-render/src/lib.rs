@@ -55,10 +55,13 @@ pub struct RenderSettings {
     /// How analytic lights (point, spot, directional) find their shadows. `rays`
     /// (default): one BVH shadow ray per pixel and light — exact, the reference path
     /// tracer's tests compare against it. `maps`: a depth map per light (six for a point
-    /// light) rasterized every frame, then a filtered lookup per pixel — ≈ 3–10× cheaper
-    /// at 800×600 (`BENCHMARKS.md`), equal to rays except in a band about one texel
-    /// footprint wide along shadow edges and contacts (see `shadow_maps`). Area lights
-    /// always use rays.
+    /// light) rasterized every frame from all the scene's triangles, then a filtered
+    /// lookup per pixel — equal to rays except in a band about one texel footprint wide
+    /// along shadow edges, creases and contacts (see `shadow_maps`). Maps pay per
+    /// triangle and texel, rays per lit pixel: maps win when many pixels are lit and the
+    /// scene is small (cornell-spot at 800×600: ≈ 0.6× the time of rays, `BENCHMARKS.md`)
+    /// and lose when the lights reach few pixels of a large scene (Sponza: 4–7× slower).
+    /// Area lights always use rays.
     pub shadows: ShadowMode,
     /// Resolution, bias and filtering of the shadow maps (`[render.shadow_maps]`), used
     /// when `shadows = "maps"`. Out-of-range values are rejected by
@@ -416,6 +419,72 @@ mod tests {
             same_surface as f64 >= 0.999 * (w * h) as f64,
             "{same_surface}"
         );
+    }
+
+    #[test]
+    fn renderer_with_maps_shades_like_direct_light_with_fresh_maps() {
+        let mut world = World::new(illume_scene::builtin::load("cornell-spot").expect("builtin"));
+        let settings = RenderSettings {
+            width: 64,
+            height: 48,
+            shadows: ShadowMode::Maps,
+            ..Default::default()
+        };
+        let renderer = Renderer::new(settings.clone());
+        drop(renderer.render(&world, &mut Black, 0));
+        // The light and the sphere move: the renderer's maps must follow.
+        world.set_time(1.0);
+        let frame = renderer.render(&world, &mut Black, 1);
+        let maps = ShadowMaps::build(&world, &settings.shadow_maps).expect("valid");
+        let expected = direct_light_with(
+            &world,
+            &frame.gbuffer,
+            Shadows::Maps(&maps),
+            settings.area_light_samples,
+            mix64(settings.seed ^ 1u64.wrapping_mul(0x9e37)),
+        );
+        assert_eq!(frame.direct, expected);
+        assert!(frame.timings.shadow_maps_ms > 0.0);
+        // Invalid map settings are reported, and the renderer falls back to exact rays.
+        let bad = RenderSettings {
+            shadow_maps: ShadowMapSettings {
+                resolution: 0,
+                ..Default::default()
+            },
+            ..settings
+        };
+        assert!(matches!(
+            bad.validate(),
+            Err(ShadowMapError::OutOfRange {
+                field: "resolution",
+                ..
+            })
+        ));
+        let fallback = Renderer::new(bad).render(&world, &mut Black, 1);
+        let rays = direct_light(
+            &world,
+            &fallback.gbuffer,
+            16,
+            mix64(1u64.wrapping_mul(0x9e37)),
+        );
+        assert_eq!(fallback.direct, rays);
+    }
+
+    #[test]
+    fn shadows_default_to_exact_rays_and_parse_from_toml_names() {
+        assert_eq!(RenderSettings::default().shadows, ShadowMode::Rays);
+        let s: RenderSettings = toml_like("maps");
+        assert_eq!(s.shadows, ShadowMode::Maps);
+    }
+
+    /// Settings with `shadows` set through serde, as a config file would.
+    fn toml_like(mode: &str) -> RenderSettings {
+        let value = serde::de::value::StrDeserializer::<serde::de::value::Error>::new(mode);
+        let shadows = <ShadowMode as serde::Deserialize>::deserialize(value).expect("known name");
+        RenderSettings {
+            shadows,
+            ..Default::default()
+        }
     }
 
     #[test]

@@ -599,3 +599,130 @@ fn fit_orthographic(world: &World, direction: Vec3, size: u32, border: f32) -> O
         half_extent,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 16 × 16 map whose texels left of column 8 hold an occluder at depth 1.
+    fn half_shadowed() -> DepthMap {
+        let size = 16;
+        let depth = (0..size * size)
+            .map(|i| if i % size < 8 { 1.0 } else { f32::INFINITY })
+            .collect();
+        DepthMap {
+            projection: Projection::Perspective {
+                view_from_world: Affine3A::IDENTITY,
+                tan_half: 1.0,
+            },
+            size: size as u32,
+            depth,
+        }
+    }
+
+    #[test]
+    fn filters_weigh_texel_comparisons_bilinearly() {
+        let map = half_shadowed();
+        let at = |x: f32, k: u32| map.filtered_visibility(Vec2::new(x, 5.3), 2.0, k);
+        // Nearest texel: hard edge at x = 8.
+        assert_eq!((at(7.99, 1), at(8.0, 1)), (0.0, 1.0));
+        // Bilinear: texel centres are exact, the boundary between them is half lit.
+        assert_eq!((at(7.5, 2), at(8.5, 2)), (0.0, 1.0));
+        assert!((at(8.0, 2) - 0.5).abs() < 1e-6);
+        assert!((at(8.25, 2) - 0.75).abs() < 1e-6);
+        // 3 × 3: two bilinear taps a texel apart, so the ramp is twice as wide.
+        assert!((at(8.0, 3) - 0.5).abs() < 1e-6);
+        assert_eq!((at(7.0, 3), at(9.0, 3)), (0.0, 1.0));
+        assert!((at(8.5, 3) - 0.75).abs() < 1e-6);
+        // In front of the occluder everything is lit; beyond the map's edge the edge
+        // texel repeats.
+        assert_eq!(map.filtered_visibility(Vec2::new(3.0, 5.0), 0.5, 3), 1.0);
+        assert_eq!(map.filtered_visibility(Vec2::new(-4.0, 5.0), 2.0, 2), 0.0);
+        assert_eq!(map.filtered_visibility(Vec2::new(40.0, 5.0), 2.0, 2), 1.0);
+    }
+
+    #[test]
+    fn settings_out_of_range_are_rejected_by_name() {
+        assert_eq!(ShadowMapSettings::default().validate(), Ok(()));
+        for (settings, field) in [
+            (
+                ShadowMapSettings {
+                    resolution: 0,
+                    ..Default::default()
+                },
+                "resolution",
+            ),
+            (
+                ShadowMapSettings {
+                    cube_face_resolution: MAX_RESOLUTION + 1,
+                    ..Default::default()
+                },
+                "cube_face_resolution",
+            ),
+            (
+                ShadowMapSettings {
+                    slope_bias_texels: f32::NAN,
+                    ..Default::default()
+                },
+                "slope_bias_texels",
+            ),
+            (
+                ShadowMapSettings {
+                    pcf_texels: 0,
+                    ..Default::default()
+                },
+                "pcf_texels",
+            ),
+        ] {
+            match settings.validate() {
+                Err(ShadowMapError::OutOfRange { field: f, .. }) => assert_eq!(f, field),
+                other => panic!("{field}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn rebuilds_reuse_the_depth_allocations() {
+        let mut world = World::new(illume_scene::builtin::load("cornell-spot").expect("builtin"));
+        let settings = ShadowMapSettings {
+            resolution: 64,
+            ..Default::default()
+        };
+        let mut maps = ShadowMaps::build(&world, &settings).expect("valid");
+        assert_eq!(maps.map_count(), 1, "one spot light, one map");
+        let address = maps.maps[0].depth.as_ptr();
+        let before = maps.maps[0].depth.clone();
+        world.set_time(1.0); // the light moves
+        maps.rebuild(&world, &settings).expect("valid");
+        assert_eq!(maps.maps[0].depth.as_ptr(), address);
+        assert_ne!(maps.maps[0].depth, before, "the map follows the light");
+        assert_eq!(maps.memory_bytes(), 64 * 64 * 4);
+    }
+
+    #[test]
+    fn a_directional_map_stores_the_distance_along_the_light() {
+        // cornell-spot's geometry under a sun straight down: the floor (y = 0) is seen
+        // wherever the boxes and the sphere do not cover it, at depth centre.y − 0 below
+        // the plane through the scene centre; nothing is nearer than the ceiling.
+        let mut scene = illume_scene::builtin::load("cornell-spot").expect("builtin");
+        scene.lights[0].kind = illume_scene::LightKind::Directional {
+            irradiance: illume_core::Rgb::ONE,
+        };
+        // The spot's node points along −Z rotated about x; straight down instead.
+        scene.lights[0].world_from_light = Affine3A::from_rotation_x(-std::f32::consts::FRAC_PI_2);
+        let world = World::new(scene);
+        let maps = ShadowMaps::build(&world, &ShadowMapSettings::default()).expect("valid");
+        let centre_y = world.scene.bounds().center().y;
+        let map = &maps.maps[0];
+        let (lo, hi) = map
+            .depth
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), &d| {
+                (lo.min(d), hi.max(d))
+            });
+        // The open box seen from above: the ceiling's top at depth centre.y − 2 is
+        // nearest; the far end of the map is the border (nothing), stored as ∞.
+        assert!((lo - (centre_y - 2.0)).abs() < 1e-4, "nearest {lo}");
+        assert_eq!(hi, f32::INFINITY);
+    }
+}
