@@ -60,7 +60,7 @@ pub struct RenderSettings {
     /// along shadow edges, creases and contacts (see `shadow_maps`). Maps pay per
     /// triangle and texel, rays per lit pixel: maps win when many pixels are lit and the
     /// scene is small (cornell-spot at 800×600: ≈ 0.6× the time of rays, `BENCHMARKS.md`)
-    /// and lose when the lights reach few pixels of a large scene (Sponza: 4–7× slower).
+    /// and lose when the lights reach few pixels of a large scene (Sponza: 2–8× slower).
     /// Area lights always use rays.
     pub shadows: ShadowMode,
     /// Resolution, bias and filtering of the shadow maps (`[render.shadow_maps]`), used
@@ -204,7 +204,7 @@ impl Renderer {
         *self.previous.lock().unwrap_or_else(|e| e.into_inner()) = Some(Arc::clone(&gbuffer));
         let t1 = Instant::now();
         let mut maps = self.shadow_maps.lock().unwrap_or_else(|e| e.into_inner());
-        // Invalid map settings cannot come from a validated config; rays stay correct.
+        // Settings that `RenderSettings::validate` rejects fall back to exact rays.
         let shadows = match s.shadows {
             ShadowMode::Maps if maps.rebuild(world, &s.shadow_maps).is_ok() => Shadows::Maps(&maps),
             _ => Shadows::Rays,
