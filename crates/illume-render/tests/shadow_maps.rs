@@ -256,6 +256,15 @@ fn grazing_light_causes_no_acne() {
             },
         ),
         (
+            // Wider than 60°: mapped with a cube map, like a point light.
+            "wide spot",
+            LightKind::Spot {
+                intensity: Rgb::splat(5.0),
+                inner_cone_rad: 60f32.to_radians(),
+                outer_cone_rad: 75f32.to_radians(),
+            },
+        ),
+        (
             "point",
             LightKind::Point {
                 intensity: Rgb::splat(5.0),
