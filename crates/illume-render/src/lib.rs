@@ -2,9 +2,11 @@
 //! emission) → the technique's indirect light → an HDR image.
 //!
 //! Direct light is the renderer's job for every technique, as in all four papers: each
-//! analytic light (point, spot, directional) is evaluated exactly with one shadow ray;
-//! emissive triangles (area lights) are sampled [`RenderSettings::area_light_samples`]
-//! times per pixel, chosen by power. The G-buffer samples each pixel once at its centre,
+//! analytic light (point, spot, directional) is evaluated exactly, its visibility decided
+//! by one shadow ray or, with [`RenderSettings::shadows`] = `maps`, by a shadow map
+//! rebuilt each frame ([`illume_transport::shadow_map`]); emissive triangles (area lights)
+//! are sampled [`RenderSettings::area_light_samples`] times per pixel, chosen by power,
+//! each sample with a shadow ray. The G-buffer samples each pixel once at its centre,
 //! by rasterization or by rays ([`RenderSettings::primary_visibility`]).
 //!
 //! ```no_run
@@ -20,7 +22,9 @@
 use illume_core::image::RgbImage;
 use illume_core::sampling::{Pcg32, mix64};
 use illume_core::{INV_PI, Rgb, Vec2};
-use illume_transport::{GBuffer, GBufferPixel, Technique, World};
+use illume_transport::{
+    GBuffer, GBufferPixel, ShadowMapError, ShadowMapSettings, ShadowMaps, Technique, World,
+};
 use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -48,6 +52,44 @@ pub struct RenderSettings {
     /// debugging, or for scenes whose geometry comes within 0.1 mm of the camera plane
     /// (the rasterizer's near plane). Both sample pixel centres only.
     pub primary_visibility: PrimaryVisibility,
+    /// How analytic lights (point, spot, directional) find their shadows. `rays`
+    /// (default): one BVH shadow ray per pixel and light — exact, the reference path
+    /// tracer's tests compare against it. `maps`: a depth map per light (six for a point
+    /// light) rasterized every frame from all the scene's triangles, then a filtered
+    /// lookup per pixel — equal to rays except in a band about one texel footprint wide
+    /// along shadow edges, creases and contacts (see `shadow_maps`). Maps pay per
+    /// triangle and texel, rays per lit pixel: maps win when many pixels are lit and the
+    /// scene is small (cornell-spot at 800×600: ≈ 0.6× the time of rays, `BENCHMARKS.md`)
+    /// and lose when the lights reach few pixels of a large scene (Sponza: 2–8× slower).
+    /// Area lights always use rays.
+    pub shadows: ShadowMode,
+    /// Resolution, bias and filtering of the shadow maps (`[render.shadow_maps]`), used
+    /// when `shadows = "maps"`. Out-of-range values are rejected by
+    /// [`RenderSettings::validate`]; a renderer given them anyway falls back to rays.
+    pub shadow_maps: ShadowMapSettings,
+}
+
+/// How analytic lights' shadows are found (see [`RenderSettings::shadows`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ShadowMode {
+    /// One shadow ray per pixel and light (exact).
+    #[default]
+    Rays,
+    /// Shadow maps rebuilt each frame ([`ShadowMaps`]).
+    Maps,
+}
+
+/// Visibility of analytic lights for [`direct_light_with`] and [`direct_at_with`].
+#[derive(Clone, Copy, Debug)]
+pub enum Shadows<'a> {
+    /// Shadow rays through the world's tracer.
+    Rays,
+    /// Lookups in maps built for the same world ([`ShadowMaps::rebuild`]).
+    Maps(&'a ShadowMaps),
+    /// No shadows from analytic lights (area lights still cast rays): wrong wherever
+    /// something occludes, for measuring what shadows cost and for debugging.
+    Off,
 }
 
 /// How primary hits are found (see [`RenderSettings::primary_visibility`]).
@@ -69,7 +111,16 @@ impl Default for RenderSettings {
             area_light_samples: 16,
             seed: 0,
             primary_visibility: PrimaryVisibility::Raster,
+            shadows: ShadowMode::Rays,
+            shadow_maps: ShadowMapSettings::default(),
         }
+    }
+}
+
+impl RenderSettings {
+    /// Checks the settings whose ranges matter (the shadow maps').
+    pub fn validate(&self) -> Result<(), ShadowMapError> {
+        self.shadow_maps.validate()
     }
 }
 
@@ -78,8 +129,10 @@ impl Default for RenderSettings {
 pub struct FrameTimings {
     /// Primary visibility (the G-buffer).
     pub gbuffer_ms: f64,
-    /// Direct light and emission.
+    /// Direct light and emission, shadow maps included.
     pub direct_ms: f64,
+    /// Of `direct_ms`, rendering the shadow maps (0 with shadow rays).
+    pub shadow_maps_ms: f64,
     /// The technique's indirect light.
     pub indirect_ms: f64,
     /// The whole frame.
@@ -109,6 +162,8 @@ pub struct Renderer {
     /// The last frame's G-buffer, reused when no frame holds it any more (a G-buffer is
     /// ~100 bytes per pixel: reallocating 48 MB at 800×600 costs page faults every frame).
     previous: Mutex<Option<Arc<GBuffer>>>,
+    /// The shadow maps, re-rendered each frame into the same allocations.
+    shadow_maps: Mutex<ShadowMaps>,
 }
 
 impl Renderer {
@@ -117,6 +172,7 @@ impl Renderer {
         Self {
             settings,
             previous: Mutex::new(None),
+            shadow_maps: Mutex::new(ShadowMaps::default()),
         }
     }
 
@@ -147,12 +203,21 @@ impl Renderer {
         });
         *self.previous.lock().unwrap_or_else(|e| e.into_inner()) = Some(Arc::clone(&gbuffer));
         let t1 = Instant::now();
-        let direct = direct_light(
+        let mut maps = self.shadow_maps.lock().unwrap_or_else(|e| e.into_inner());
+        // Settings that `RenderSettings::validate` rejects fall back to exact rays.
+        let shadows = match s.shadows {
+            ShadowMode::Maps if maps.rebuild(world, &s.shadow_maps).is_ok() => Shadows::Maps(&maps),
+            _ => Shadows::Rays,
+        };
+        let t_maps = Instant::now();
+        let direct = direct_light_with(
             world,
             &gbuffer,
+            shadows,
             s.area_light_samples,
             mix64(s.seed ^ frame_index.wrapping_mul(0x9e37)),
         );
+        drop(maps);
         let t2 = Instant::now();
         let indirect = technique.indirect(world, &gbuffer);
         let t3 = Instant::now();
@@ -161,6 +226,7 @@ impl Renderer {
         let timings = FrameTimings {
             gbuffer_ms: ms(t0, t1),
             direct_ms: ms(t1, t2),
+            shadow_maps_ms: ms(t1, t_maps),
             indirect_ms: ms(t2, t3),
             total_ms: ms(t0, Instant::now()),
         };
@@ -174,10 +240,22 @@ impl Renderer {
     }
 }
 
-/// Emission plus direct light with shadows at every G-buffer pixel.
+/// Emission plus direct light with shadows at every G-buffer pixel, shadow rays for
+/// every light.
 pub fn direct_light(
     world: &World,
     gbuffer: &GBuffer,
+    area_light_samples: u32,
+    seed: u64,
+) -> RgbImage {
+    direct_light_with(world, gbuffer, Shadows::Rays, area_light_samples, seed)
+}
+
+/// [`direct_light`] with analytic lights' visibility from `shadows`.
+pub fn direct_light_with(
+    world: &World,
+    gbuffer: &GBuffer,
+    shadows: Shadows<'_>,
     area_light_samples: u32,
     seed: u64,
 ) -> RgbImage {
@@ -189,7 +267,7 @@ pub fn direct_light(
         .map(|(i, px)| match px {
             Some(px) => {
                 let mut rng = Pcg32::new(seed, i as u64);
-                px.hit.emission + direct_at(world, px, area_light_samples, &mut rng)
+                px.hit.emission + direct_at_with(world, px, shadows, area_light_samples, &mut rng)
             }
             None => Rgb::ZERO,
         })
@@ -197,10 +275,24 @@ pub fn direct_light(
     RgbImage::from_vec(gbuffer.width, gbuffer.height, pixels).expect("one value per pixel")
 }
 
-/// Reflected direct radiance towards the camera at one G-buffer pixel.
+/// Reflected direct radiance towards the camera at one G-buffer pixel, shadow rays for
+/// every light.
 pub fn direct_at(
     world: &World,
     px: &GBufferPixel,
+    area_light_samples: u32,
+    rng: &mut Pcg32,
+) -> Rgb {
+    direct_at_with(world, px, Shadows::Rays, area_light_samples, rng)
+}
+
+/// [`direct_at`] with analytic lights' visibility from `shadows` (a fraction in [0, 1]
+/// with maps). Surfaces facing away from a light, and points outside a spot cone, get
+/// nothing from it before any visibility test.
+pub fn direct_at_with(
+    world: &World,
+    px: &GBufferPixel,
+    shadows: Shadows<'_>,
     area_light_samples: u32,
     rng: &mut Pcg32,
 ) -> Rgb {
@@ -213,26 +305,34 @@ pub fn direct_at(
     let ng = hit.facing_geometric_normal();
     let lights = &world.lights;
     let mut sum = Rgb::ZERO;
-    let shade = |s: illume_transport::LightSample| -> Rgb {
+    // `analytic`: the analytic light the sample came from (a map may decide), or None.
+    let shade = |s: illume_transport::LightSample, analytic: Option<usize>| -> Rgb {
         let cos = n.dot(s.wi);
         if cos <= 0.0 || ng.dot(s.wi) <= 0.0 {
             return Rgb::ZERO;
         }
-        if !world.unoccluded(hit, &s) {
-            return Rgb::ZERO;
-        }
-        f * s.weight * cos
+        let map_visibility = match (shadows, analytic) {
+            (Shadows::Maps(maps), Some(i)) => maps.visibility(i, hit, &s),
+            (Shadows::Off, Some(_)) => Some(1.0),
+            _ => None,
+        };
+        let visibility = match map_visibility {
+            Some(v) => v,
+            None if world.unoccluded(hit, &s) => 1.0,
+            None => return Rgb::ZERO,
+        };
+        f * s.weight * (cos * visibility)
     };
     for i in lights.analytic_range() {
         if let Some((s, _)) = lights.incident_from(i, hit.position, Vec2::ZERO) {
-            sum += shade(s);
+            sum += shade(s, Some(i));
         }
     }
     if lights.has_area_lights() && area_light_samples > 0 {
         let mut area = Rgb::ZERO;
         for _ in 0..area_light_samples {
             if let Some(s) = lights.sample_area_incident(hit.position, rng) {
-                area += shade(s);
+                area += shade(s, None);
             }
         }
         sum += area / area_light_samples as f32;
@@ -328,6 +428,72 @@ mod tests {
             differ as f64 <= 1e-3 * (w * h) as f64,
             "{differ} pixels differ"
         );
+    }
+
+    #[test]
+    fn renderer_with_maps_shades_like_direct_light_with_fresh_maps() {
+        let mut world = World::new(illume_scene::builtin::load("cornell-spot").expect("builtin"));
+        let settings = RenderSettings {
+            width: 64,
+            height: 48,
+            shadows: ShadowMode::Maps,
+            ..Default::default()
+        };
+        let renderer = Renderer::new(settings.clone());
+        drop(renderer.render(&world, &mut Black, 0));
+        // The light and the sphere move: the renderer's maps must follow.
+        world.set_time(1.0);
+        let frame = renderer.render(&world, &mut Black, 1);
+        let maps = ShadowMaps::build(&world, &settings.shadow_maps).expect("valid");
+        let expected = direct_light_with(
+            &world,
+            &frame.gbuffer,
+            Shadows::Maps(&maps),
+            settings.area_light_samples,
+            mix64(settings.seed ^ 1u64.wrapping_mul(0x9e37)),
+        );
+        assert_eq!(frame.direct, expected);
+        assert!(frame.timings.shadow_maps_ms > 0.0);
+        // Invalid map settings are reported, and the renderer falls back to exact rays.
+        let bad = RenderSettings {
+            shadow_maps: ShadowMapSettings {
+                resolution: 0,
+                ..Default::default()
+            },
+            ..settings
+        };
+        assert!(matches!(
+            bad.validate(),
+            Err(ShadowMapError::OutOfRange {
+                field: "resolution",
+                ..
+            })
+        ));
+        let fallback = Renderer::new(bad).render(&world, &mut Black, 1);
+        let rays = direct_light(
+            &world,
+            &fallback.gbuffer,
+            16,
+            mix64(1u64.wrapping_mul(0x9e37)),
+        );
+        assert_eq!(fallback.direct, rays);
+    }
+
+    #[test]
+    fn shadows_default_to_exact_rays_and_parse_from_toml_names() {
+        assert_eq!(RenderSettings::default().shadows, ShadowMode::Rays);
+        let s: RenderSettings = toml_like("maps");
+        assert_eq!(s.shadows, ShadowMode::Maps);
+    }
+
+    /// Settings with `shadows` set through serde, as a config file would.
+    fn toml_like(mode: &str) -> RenderSettings {
+        let value = serde::de::value::StrDeserializer::<serde::de::value::Error>::new(mode);
+        let shadows = <ShadowMode as serde::Deserialize>::deserialize(value).expect("known name");
+        RenderSettings {
+            shadows,
+            ..Default::default()
+        }
     }
 
     #[test]

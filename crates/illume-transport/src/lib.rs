@@ -10,6 +10,8 @@
 //!   [`SampleStream`](illume_core::sampling::SampleStream) (same index ⇒ same path).
 //! * [`gbuffer`] — the per-pixel primary-hit buffer a technique shades.
 //! * [`raster`] — the CPU visibility-buffer rasterizer behind [`GBuffer::rasterize`].
+//! * [`shadow_map`] — per-light depth maps from the same rasterizer, looked up instead of
+//!   shadow rays for analytic lights.
 //! * [`technique`] — the [`Technique`] trait every GI technique implements.
 //!
 //! Radiometric conventions follow `shared/DESIGN.md`: lights and pixels carry linear RGB
@@ -21,6 +23,7 @@ pub mod gbuffer;
 pub mod lights;
 pub mod photon;
 pub mod raster;
+pub mod shadow_map;
 pub mod surface;
 pub mod technique;
 pub mod world;
@@ -29,6 +32,7 @@ pub use camera::CameraRays;
 pub use gbuffer::{GBuffer, GBufferPixel};
 pub use lights::{EmissionSample, LightSample, LightSet};
 pub use raster::VisibilityBuffer;
+pub use shadow_map::{ShadowMapError, ShadowMapSettings, ShadowMaps};
 pub use surface::SurfaceHit;
 pub use technique::{Budget, Technique, TechniqueStats};
 pub use world::{SharedWorld, World};

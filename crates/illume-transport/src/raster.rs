@@ -35,10 +35,15 @@
 //! Strips rather than square tiles: a strip is a contiguous run of the row-major output,
 //! so workers write the final buffer directly, and 16 rows × 1280 pixels of state stays in
 //! L2.
+//!
+//! The same setup, binning and strips render shadow-map depth from a light
+//! ([`crate::shadow_map`]): a viewport is any perspective projection (spot lights, cube
+//! faces) or an orthographic one (directional lights), whose depth attribute is `1/w` or,
+//! orthographically, a plane of world position.
 
 use crate::gbuffer::{BuildState, GBuffer, PrimarySurfaces, TriangleSetup};
 use crate::world::World;
-use glam::{Affine3A, DVec3, Vec3};
+use glam::{Affine3A, DVec4, Vec3, Vec4};
 use illume_scene::{InstanceId, MASK_DEFAULT, Scene};
 use rayon::prelude::*;
 
@@ -56,6 +61,10 @@ pub const SUBPIXELS: i64 = 256;
 
 /// Rows per strip, the unit of binning and of parallel rasterization.
 pub const STRIP_ROWS: u32 = 16;
+
+/// Bounding-box width \[pixels\] from which a triangle's rows are found by division rather
+/// than by stepping.
+const SPAN_MIN_WIDTH: i32 = 8;
 
 /// Triangles per parallel setup job.
 const SETUP_CHUNK: usize = 2048;
@@ -270,28 +279,58 @@ fn next_to_covered(vis: &VisibilityBuffer, x: u32, y: u32) -> bool {
         || (y + 1 < vis.height && covered(x, y + 1))
 }
 
-/// The image and the camera projection shared by every triangle of a frame.
-struct Viewport {
+/// The image and the projection shared by every triangle of a frame: the camera's, or a
+/// light's for shadow maps (perspective for spot lights and cube faces, orthographic for
+/// directional lights).
+pub(crate) struct Viewport {
     width: u32,
     height: u32,
     /// Maps world points to clip space `(x, y, w)`: `x/w`, `y/w` are NDC (−1..1 across
-    /// the image, +y up) and `w` is the view depth.
+    /// the image, +y up) and `w` is the view depth (1 everywhere for an orthographic view).
     clip_from_world: Affine3A,
+    /// The plane `z = depth_plane.xyz · p + depth_plane.w` whose ratio `z/w` is the depth
+    /// attribute the rasterizer interpolates and compares (larger is nearer). `(0, 0, 0, 1)`
+    /// for perspective views: the attribute is `1/w`. An orthographic view has `w = 1`, so
+    /// it needs the plane to carry its depth.
+    depth_plane: Vec4,
 }
 
 impl Viewport {
     /// A viewport whose clip space is world space (for tests that place clip points).
     #[cfg(test)]
     fn new(width: u32, height: u32) -> Self {
+        Self::perspective(width, height, Affine3A::IDENTITY)
+    }
+
+    /// A `width × height` perspective view: `clip_from_world` maps world points to
+    /// `(x, y, w)` with `w` the view depth; the attribute compared is `1/w`.
+    pub(crate) fn perspective(width: u32, height: u32, clip_from_world: Affine3A) -> Self {
         Self {
             width,
             height,
-            clip_from_world: Affine3A::IDENTITY,
+            clip_from_world,
+            depth_plane: Vec4::W,
+        }
+    }
+
+    /// A `width × height` orthographic view: `clip_from_world` maps world points to
+    /// `(x, y, 1)`, and the attribute compared is `depth_plane · (p, 1)` (larger is nearer).
+    pub(crate) fn orthographic(
+        width: u32,
+        height: u32,
+        clip_from_world: Affine3A,
+        depth_plane: Vec4,
+    ) -> Self {
+        Self {
+            width,
+            height,
+            clip_from_world,
+            depth_plane,
         }
     }
 
     /// The viewport of `scene`'s camera, with [`CameraRays`](crate::CameraRays)'s projection.
-    fn for_camera(scene: &Scene, width: u32, height: u32) -> Self {
+    pub(crate) fn for_camera(scene: &Scene, width: u32, height: u32) -> Self {
         let camera = &scene.camera;
         let tan_half_y = (camera.yfov_rad * 0.5).tan();
         let aspect = width as f32 / height.max(1) as f32;
@@ -300,16 +339,16 @@ impl Viewport {
             1.0 / tan_half_y,
             -1.0,
         )));
-        Self {
+        Self::perspective(
             width,
             height,
-            clip_from_world: clip_from_view * camera.world_from_camera.inverse(),
-        }
+            clip_from_view * camera.world_from_camera.inverse(),
+        )
     }
 
     /// Screen position in pixels (y down) of a clip-space point with `w > 0`.
     #[inline]
-    fn to_screen(&self, clip: DVec3) -> (f64, f64) {
+    fn to_screen(&self, clip: DVec4) -> (f64, f64) {
         let inv_w = 1.0 / clip.z;
         (
             (clip.x * inv_w + 1.0) * 0.5 * self.width as f64,
@@ -332,7 +371,8 @@ struct ScreenTriangle {
     x1: i32,
     y0: i32,
     y1: i32,
-    /// `1/w` at the centre of pixel (x0, y0) and its change per pixel in x and y.
+    /// The depth attribute (`1/w` in perspective views, see [`Viewport::depth_plane`]) at
+    /// the centre of pixel (x0, y0) and its change per pixel in x and y.
     z0: f32,
     dzdx: f32,
     dzdy: f32,
@@ -343,7 +383,8 @@ struct ScreenTriangle {
 
 impl ScreenTriangle {
     /// Sets up the triangle with snapped screen corners `(x, y)` (sub-pixel units) and
-    /// `1/w` values; `None` when it has no area or covers no pixel centre of the image.
+    /// depth attributes (`1/w` values in perspective views); `None` when it has no area or
+    /// covers no pixel centre of the image.
     fn new(
         corners: [(i64, i64); 3],
         inverse_depths: [f64; 3],
@@ -391,9 +432,9 @@ impl ScreenTriangle {
                 c[k] -= 1;
             }
         }
-        // Plane of 1/w through the snapped corners, in pixels.
+        // Plane of the depth attribute (1/w) through the snapped corners, in pixels.
         let sf = s as f64;
-        let q = |p: (i64, i64), z: f64| DVec3::new(p.0 as f64 / sf, p.1 as f64 / sf, z);
+        let q = |p: (i64, i64), z: f64| glam::DVec3::new(p.0 as f64 / sf, p.1 as f64 / sf, z);
         let (q0, q1, q2) = (q(p0, z0), q(p1, z1), q(p2, z2));
         let n = (q1 - q0).cross(q2 - q0);
         let (dzdx, dzdy) = (-n.x / n.z, -n.y / n.z);
@@ -415,40 +456,118 @@ impl ScreenTriangle {
         })
     }
 
-    /// Calls `covered(x, y, 1/w)` for every pixel of `rows` whose centre is inside, row
-    /// by row, left to right.
+    /// Calls `covered(x, y, attribute)` for every pixel of `rows` whose centre is inside
+    /// (the attribute is `1/w` in perspective views), row by row, left to right.
     #[inline]
     fn rasterize(&self, rows: std::ops::Range<i32>, mut covered: impl FnMut(i32, i32, f32)) {
+        self.rasterize_runs(rows, |y, run, z_row| {
+            for x in run {
+                covered(x, y, z_row + self.dzdx * (x - self.x0) as f32);
+            }
+        });
+    }
+
+    /// Calls `run(y, xs, z_row)` for every row of `rows` with pixels inside: `xs` are
+    /// those pixels (a row of a triangle is one run) and the attribute at pixel x is
+    /// `z_row + dzdx · (x − x0)`.
+    #[inline]
+    fn rasterize_runs(
+        &self,
+        rows: std::ops::Range<i32>,
+        mut run: impl FnMut(i32, std::ops::RangeInclusive<i32>, f32),
+    ) {
         let s = SUBPIXELS;
         let y_start = self.y0.max(rows.start);
         let y_end = self.y1.min(rows.end - 1);
         let step = [self.a[0] * s, self.a[1] * s, self.a[2] * s];
         let sx = self.x0 as i64 * s + s / 2;
+        // Wide triangles get each row's run from its three edges solved for x instead of
+        // stepping from the bounding box's edge (shadow maps see walls and floors spanning
+        // the whole map); narrow ones step, which is cheaper than solving.
+        let wide = self.x1 - self.x0 >= SPAN_MIN_WIDTH;
         for y in y_start..=y_end {
             let sy = y as i64 * s + s / 2;
             let mut e = [0, 1, 2].map(|k| self.a[k] * sx + self.b[k] * sy + self.c[k]);
             let z_row = self.z0 + self.dzdy * (y - self.y0) as f32;
-            let mut inside_seen = false;
+            if wide {
+                if let Some(xs) = self.row_run(e, step) {
+                    run(y, xs, z_row);
+                }
+                continue;
+            }
+            let mut first = None;
+            let mut last = self.x1;
             for x in self.x0..=self.x1 {
                 if (e[0] | e[1] | e[2]) >= 0 {
-                    inside_seen = true;
-                    covered(x, y, z_row + self.dzdx * (x - self.x0) as f32);
-                } else if inside_seen {
-                    // A row of a triangle is one run of pixels.
+                    first.get_or_insert(x);
+                } else if first.is_some() {
+                    last = x - 1;
                     break;
                 }
                 e[0] += step[0];
                 e[1] += step[1];
                 e[2] += step[2];
             }
+            if let Some(first) = first {
+                run(y, first..=last, z_row);
+            }
         }
+    }
+
+    /// The pixels of one row inside all three edges, given the edge functions `e` at
+    /// pixel `x0` and their change per pixel `step`: edge k holds where
+    /// `e[k] + step[k]·i ≥ 0` (i = x − x0), a half-line whose end a float division
+    /// estimates and exact integer tests then settle.
+    #[inline]
+    fn row_run(&self, e: [i64; 3], step: [i64; 3]) -> Option<std::ops::RangeInclusive<i32>> {
+        let (mut lo, mut hi) = (0i64, (self.x1 - self.x0) as i64);
+        for k in 0..3 {
+            let (b, a) = (e[k], step[k]);
+            let inside = |i: i64| b + a * i >= 0;
+            // Where the boundary −b/a lies, within the current run.
+            let estimate = || (-(b as f64) / a as f64).clamp(lo as f64, hi as f64) as i64;
+            if a > 0 {
+                // Inside from some i on: find the smallest i in [lo, hi] inside.
+                if !inside(hi) {
+                    return None;
+                }
+                if !inside(lo) {
+                    let mut i = estimate();
+                    while !inside(i) {
+                        i += 1;
+                    }
+                    while inside(i - 1) {
+                        i -= 1;
+                    }
+                    lo = i;
+                }
+            } else if a < 0 {
+                // Inside up to some i: find the largest i in [lo, hi] inside.
+                if !inside(lo) {
+                    return None;
+                }
+                if !inside(hi) {
+                    let mut i = estimate();
+                    while !inside(i) {
+                        i -= 1;
+                    }
+                    while inside(i + 1) {
+                        i += 1;
+                    }
+                    hi = i;
+                }
+            } else if b < 0 {
+                return None;
+            }
+        }
+        Some(self.x0 + lo as i32..=self.x0 + hi as i32)
     }
 }
 
 /// Clip-space corners of every triangle of `scene`'s default-mask instances, set up for
 /// rasterization, in scene order.
 fn setup_scene(scene: &Scene, viewport: &Viewport) -> Vec<ScreenTriangle> {
-    let instances: Vec<(usize, Vec<Vec3>)> = scene
+    let instances: Vec<(usize, Vec<Vec4>)> = scene
         .instances
         .iter()
         .enumerate()
@@ -456,7 +575,19 @@ fn setup_scene(scene: &Scene, viewport: &Viewport) -> Vec<ScreenTriangle> {
         .map(|(i, inst)| {
             let mesh = &scene.meshes[inst.mesh.index()];
             let clip_from_object = viewport.clip_from_world * inst.world_from_object;
-            let transform = |p: &Vec3| clip_from_object.transform_point3(*p);
+            // The depth plane in object space: n·(M p + t) + c = (Mᵀn)·p + (n·t + c).
+            let n = viewport.depth_plane.truncate();
+            let m = inst.world_from_object;
+            let object_plane = Vec4::from((
+                m.matrix3.transpose() * glam::Vec3A::from(n),
+                n.dot(m.translation.into()) + viewport.depth_plane.w,
+            ));
+            // Clip point (x, y, w) with the depth plane's value in the fourth component.
+            let transform = |p: &Vec3| {
+                clip_from_object
+                    .transform_point3(*p)
+                    .extend(object_plane.truncate().dot(*p) + object_plane.w)
+            };
             let clip = if mesh.positions.len() > TRANSFORM_CHUNK {
                 mesh.positions
                     .par_iter()
@@ -494,19 +625,19 @@ fn setup_scene(scene: &Scene, viewport: &Viewport) -> Vec<ScreenTriangle> {
     per_job.concat()
 }
 
-/// Clips clip-space triangle `clip` (points `(x, y, w)`) against the near plane and the
-/// guard band, snaps it, and appends its screen triangles (one, or a fan after clipping)
-/// to `out`.
+/// Clips clip-space triangle `clip` (points `(x, y, w, z)`, `z/w` the depth attribute)
+/// against the near plane and the guard band, snaps it, and appends its screen triangles
+/// (one, or a fan after clipping) to `out`.
 fn setup_triangle(
-    clip: [Vec3; 3],
+    clip: [Vec4; 3],
     viewport: &Viewport,
     instance: u32,
     triangle: u32,
     out: &mut Vec<ScreenTriangle>,
 ) {
-    let [p0, p1, p2] = clip.map(|p| DVec3::new(p.x as f64, p.y as f64, p.z as f64));
+    let [p0, p1, p2] = clip.map(|p| p.as_dvec4());
     // Entirely outside one plane of the view frustum (or behind the near plane): unseen.
-    let outside = |f: &dyn Fn(DVec3) -> bool| f(p0) && f(p1) && f(p2);
+    let outside = |f: &dyn Fn(DVec4) -> bool| f(p0) && f(p1) && f(p2);
     if outside(&|p| p.z < NEAR_W)
         || outside(&|p| p.x > p.z)
         || outside(&|p| p.x < -p.z)
@@ -518,34 +649,15 @@ fn setup_triangle(
     let inside_all = [p0, p1, p2]
         .iter()
         .all(|&p| p.z >= NEAR_W && p.x.abs() <= GUARD_BAND * p.z && p.y.abs() <= GUARD_BAND * p.z);
-    let mut polygon = Polygon::new([p0, p1, p2]);
-    if !inside_all {
-        // Distance to each plane, ≥ 0 inside.
-        let planes: [fn(DVec3) -> f64; 5] = [
-            |p| p.z - NEAR_W,
-            |p| GUARD_BAND * p.z - p.x,
-            |p| GUARD_BAND * p.z + p.x,
-            |p| GUARD_BAND * p.z - p.y,
-            |p| GUARD_BAND * p.z + p.y,
-        ];
-        for plane in planes {
-            polygon = polygon.clipped(plane);
-            if polygon.len < 3 {
-                return;
-            }
-        }
-    }
-    let snap = |p: DVec3| {
+    let snap = |p: DVec4| {
         let (x, y) = viewport.to_screen(p);
         let s = SUBPIXELS as f64;
-        (((x * s).round()) as i64, ((y * s).round()) as i64)
+        (
+            (((x * s).round()) as i64, ((y * s).round()) as i64),
+            p.w / p.z,
+        )
     };
-    let screen: Vec<((i64, i64), f64)> = polygon.points[..polygon.len]
-        .iter()
-        .map(|&p| (snap(p), 1.0 / p.z))
-        .collect();
-    for k in 1..screen.len() - 1 {
-        let (a, b, c) = (screen[0], screen[k], screen[k + 1]);
+    let mut emit = |a: ((i64, i64), f64), b: ((i64, i64), f64), c: ((i64, i64), f64)| {
         if let Some(t) = ScreenTriangle::new(
             [a.0, b.0, c.0],
             [a.1, b.1, c.1],
@@ -555,30 +667,56 @@ fn setup_triangle(
         ) {
             out.push(t);
         }
+    };
+    if inside_all {
+        // Most triangles: no clipping, no polygon (setup runs for every triangle of the
+        // scene, once per view).
+        emit(snap(p0), snap(p1), snap(p2));
+        return;
+    }
+    let mut polygon = Polygon::new([p0, p1, p2]);
+    // Distance to each plane, ≥ 0 inside.
+    let planes: [fn(DVec4) -> f64; 5] = [
+        |p| p.z - NEAR_W,
+        |p| GUARD_BAND * p.z - p.x,
+        |p| GUARD_BAND * p.z + p.x,
+        |p| GUARD_BAND * p.z - p.y,
+        |p| GUARD_BAND * p.z + p.y,
+    ];
+    for plane in planes {
+        polygon = polygon.clipped(plane);
+        if polygon.len < 3 {
+            return;
+        }
+    }
+    let first = snap(polygon.points[0]);
+    for k in 1..polygon.len - 1 {
+        emit(first, snap(polygon.points[k]), snap(polygon.points[k + 1]));
     }
 }
 
-/// A convex polygon of up to 8 clip-space points (a triangle clipped by five planes).
+/// A convex polygon of up to 8 clip-space points `(x, y, w, z)` (a triangle clipped by
+/// five planes).
 #[derive(Clone, Copy)]
 struct Polygon {
-    points: [DVec3; 8],
+    points: [DVec4; 8],
     len: usize,
 }
 
 impl Polygon {
-    fn new(triangle: [DVec3; 3]) -> Self {
-        let mut points = [DVec3::ZERO; 8];
+    fn new(triangle: [DVec4; 3]) -> Self {
+        let mut points = [DVec4::ZERO; 8];
         points[..3].copy_from_slice(&triangle);
         Self { points, len: 3 }
     }
 
     /// The part where `distance ≥ 0` (Sutherland–Hodgman against one plane).
-    fn clipped(&self, distance: fn(DVec3) -> f64) -> Self {
+    fn clipped(&self, distance: fn(DVec4) -> f64) -> Self {
         let mut out = Self {
-            points: [DVec3::ZERO; 8],
+            points: [DVec4::ZERO; 8],
             len: 0,
         };
-        let mut push = |p: DVec3| {
+        let mut push = |p: DVec4| {
             if out.len < out.points.len() {
                 out.points[out.len] = p;
                 out.len += 1;
@@ -639,6 +777,75 @@ fn bin_by_strip(triangles: &[ScreenTriangle], strips: usize) -> StripBins {
     }
 }
 
+/// What a shadow map stores per texel, from the rasterizer's depth attribute.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum StoredDepth {
+    /// Perspective views: the attribute is `1/w`; store `w`.
+    ViewDepth,
+    /// Orthographic views whose depth plane gives `−depth`; store `depth`.
+    NegatedAttribute,
+}
+
+/// Depth rendering for shadow maps: every default-mask instance of `scene` seen through
+/// `viewport` (back faces too, as shadow rays see them), keeping per texel the nearest
+/// depth attribute and storing it as `stored`; texels that see nothing get
+/// `f32::INFINITY`. `depth` is resized to the viewport (row-major, row 0 at the top) and
+/// its allocation reused. Same setup, binning and parallel strips as
+/// [`VisibilityBuffer::render`], so the same pixel-centre coverage rules hold.
+pub(crate) fn rasterize_depth(
+    scene: &Scene,
+    viewport: &Viewport,
+    depth: &mut Vec<f32>,
+    stored: StoredDepth,
+) {
+    let (width, height) = (viewport.width, viewport.height);
+    // Every texel is initialised by its strip below.
+    depth.resize((width * height) as usize, f32::NEG_INFINITY);
+    if width == 0 || height == 0 {
+        return;
+    }
+    let triangles = setup_scene(scene, viewport);
+    let strips = height.div_ceil(STRIP_ROWS) as usize;
+    let bins = bin_by_strip(&triangles, strips);
+    depth
+        .par_chunks_mut((width * STRIP_ROWS) as usize)
+        .enumerate()
+        .for_each(|(strip, out)| {
+            out.fill(f32::NEG_INFINITY);
+            let rows = strip as i32 * STRIP_ROWS as i32
+                ..((strip as i32 + 1) * STRIP_ROWS as i32).min(height as i32);
+            for &t in bins.strip(strip) {
+                let tri = &triangles[t as usize];
+                tri.rasterize_runs(rows.clone(), |y, xs, z_row| {
+                    let row = (y - rows.start) as usize * width as usize;
+                    let (start, end) = (*xs.start() as usize, *xs.end() as usize);
+                    // A plain slice loop: the compiler vectorizes it.
+                    let z_start = z_row + tri.dzdx * (start as i32 - tri.x0) as f32;
+                    for (i, texel) in out[row + start..=row + end].iter_mut().enumerate() {
+                        *texel = texel.max(z_start + tri.dzdx * i as f32);
+                    }
+                });
+            }
+            // Convert while the strip is still in cache; −∞ (empty) becomes +∞ both ways.
+            match stored {
+                StoredDepth::ViewDepth => {
+                    for texel in out.iter_mut() {
+                        *texel = if *texel > 0.0 {
+                            1.0 / *texel
+                        } else {
+                            f32::INFINITY
+                        };
+                    }
+                }
+                StoredDepth::NegatedAttribute => {
+                    for texel in out.iter_mut() {
+                        *texel = -*texel;
+                    }
+                }
+            }
+        });
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -648,12 +855,17 @@ mod tests {
         Viewport::new(width, height)
     }
 
+    /// Clip points `(x, y, w)` of a perspective view with their depth numerator 1.
+    fn perspective(triangle: [Vec3; 3]) -> [Vec4; 3] {
+        triangle.map(|p| p.extend(1.0))
+    }
+
     /// How often each pixel is covered by `triangles` (clip space), via the real setup.
     fn coverage(width: u32, height: u32, triangles: &[[Vec3; 3]]) -> Vec<u32> {
         let vp = viewport(width, height);
         let mut screen = Vec::new();
         for (i, t) in triangles.iter().enumerate() {
-            setup_triangle(*t, &vp, 0, i as u32, &mut screen);
+            setup_triangle(perspective(*t), &vp, 0, i as u32, &mut screen);
         }
         let mut count = vec![0u32; (width * height) as usize];
         for t in &screen {
@@ -796,7 +1008,7 @@ mod tests {
             let tris = [near, far];
             let mut screen = Vec::new();
             for i in order {
-                setup_triangle(tris[i], &vp, i as u32, 0, &mut screen);
+                setup_triangle(perspective(tris[i]), &vp, i as u32, 0, &mut screen);
             }
             let mut best = vec![(0.0f32, u32::MAX); (w * h) as usize];
             for t in &screen {
@@ -819,6 +1031,49 @@ mod tests {
     }
 
     #[test]
+    fn row_runs_cover_exactly_the_pixels_whose_centres_are_inside() {
+        // Random triangles, many wide enough for the divided runs: the pixels reported
+        // are exactly those where all three edge functions are ≥ 0.
+        let (w, h) = (96u32, 64u32);
+        let vp = viewport(w, h);
+        let mut rng = illume_core::sampling::Pcg32::new(3, 0);
+        let mut checked = 0;
+        for _ in 0..300 {
+            let mut p = || {
+                at_screen(
+                    illume_core::sampling::SampleStream::next_1d(&mut rng) * 140.0 - 20.0,
+                    illume_core::sampling::SampleStream::next_1d(&mut rng) * 100.0 - 20.0,
+                    w,
+                    h,
+                    1.0 + illume_core::sampling::SampleStream::next_1d(&mut rng),
+                )
+            };
+            let tri = [p(), p(), p()];
+            let mut screen = Vec::new();
+            setup_triangle(perspective(tri), &vp, 0, 0, &mut screen);
+            for t in &screen {
+                let mut got = Vec::new();
+                t.rasterize(0..h as i32, |x, y, _| got.push((x, y)));
+                let mut expected = Vec::new();
+                for y in t.y0..=t.y1 {
+                    for x in t.x0..=t.x1 {
+                        let (sx, sy) = (
+                            x as i64 * SUBPIXELS + SUBPIXELS / 2,
+                            y as i64 * SUBPIXELS + SUBPIXELS / 2,
+                        );
+                        if (0..3).all(|k| t.a[k] * sx + t.b[k] * sy + t.c[k] >= 0) {
+                            expected.push((x, y));
+                        }
+                    }
+                }
+                assert_eq!(got, expected);
+                checked += got.len();
+            }
+        }
+        assert!(checked > 10_000, "{checked}");
+    }
+
+    #[test]
     fn clipping_keeps_convex_polygons_small() {
         // A triangle crossing every plane at once still yields a valid fan.
         let tri = [
@@ -827,7 +1082,7 @@ mod tests {
             Vec3::new(0.0, 80.0, 4.0),
         ];
         let mut out = Vec::new();
-        setup_triangle(tri, &viewport(40, 30), 0, 0, &mut out);
+        setup_triangle(perspective(tri), &viewport(40, 30), 0, 0, &mut out);
         assert!(!out.is_empty() && out.len() <= 6);
     }
 }

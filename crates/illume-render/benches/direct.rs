@@ -1,0 +1,127 @@
+//! Direct light per frame, shadow rays against shadow maps:
+//! `cargo bench -p illume-render --bench direct`.
+//!
+//! Per scene at 800×600 on a G-buffer rasterized once: `rays` is [`direct_light`] (one
+//! BVH shadow ray per pixel and analytic light), `maps` is a whole frame's worth of
+//! shadow maps — [`ShadowMaps::rebuild`] into last frame's allocations (lights and
+//! objects move every frame) plus [`direct_light_with`] — and `maps build` is the
+//! rebuild alone; `unshadowed` ([`Shadows::Off`]) is the same light with no visibility
+//! test, the part of the cost both modes share. Scenes: `cornell-spot` (its spot light) and Sponza with a spot light
+//! under the roof aimed down (as in the photon-streaming bench), then with a point light
+//! and a sun in its place.
+
+#![expect(
+    missing_docs,
+    reason = "criterion_group! generates an undocumented public function"
+)]
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use illume_core::{Affine3A, Quat, Rgb, Vec3};
+use illume_render::{Shadows, direct_light, direct_light_with};
+use illume_scene::{Light, LightKind, Node, Scene, Trs};
+use illume_transport::{GBuffer, ShadowMapSettings, ShadowMaps, World};
+use std::path::Path;
+use std::time::Duration;
+
+const SIZE: (u32, u32) = (800, 600);
+
+/// `scene` with its lights replaced by one `kind` light near the top of its bounds,
+/// pointing down, and no emissive surfaces (direct light is the analytic light alone).
+fn with_light(mut scene: Scene, kind: LightKind) -> Scene {
+    for m in &mut scene.materials {
+        m.emission = Rgb::ZERO;
+    }
+    scene.lights.clear();
+    let b = scene.bounds();
+    let (c, e) = (b.center(), b.extent());
+    let node = illume_scene::NodeId(scene.nodes.len() as u32);
+    scene.nodes.push(Node {
+        name: "bench_light".into(),
+        parent: None,
+        local: Trs {
+            translation: Vec3::new(c.x, b.max.y - 0.05 * e.y, c.z),
+            // Down, and 20° off vertical so the sun's shadows are not all hidden.
+            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2 + 0.35),
+            scale: Vec3::ONE,
+        },
+        world_from_node: Affine3A::IDENTITY,
+    });
+    scene.lights.push(Light {
+        name: "bench_light".into(),
+        kind,
+        node,
+        world_from_light: Affine3A::IDENTITY,
+    });
+    scene.update_world_transforms();
+    scene
+}
+
+fn scenes() -> Vec<(String, World)> {
+    let mut scenes = vec![(
+        "cornell-spot".to_string(),
+        World::new(illume_scene::builtin::load("cornell-spot").expect("builtin")),
+    )];
+    let path = Path::new("/work/shared/scenes/dabrovic_sponza/sponza.obj");
+    match illume_scene::load_scene(path) {
+        Ok(sponza) => {
+            let e = sponza.bounds().extent();
+            let intensity = Rgb::splat(10.0 * (e.y / 2.0).powi(2));
+            for (name, kind) in [
+                (
+                    "spot",
+                    LightKind::Spot {
+                        intensity,
+                        inner_cone_rad: 30f32.to_radians(),
+                        outer_cone_rad: 45f32.to_radians(),
+                    },
+                ),
+                ("point", LightKind::Point { intensity }),
+                (
+                    "sun",
+                    LightKind::Directional {
+                        irradiance: Rgb::splat(3.0),
+                    },
+                ),
+            ] {
+                scenes.push((
+                    format!("sponza {name}"),
+                    World::new(with_light(sponza.clone(), kind)),
+                ));
+            }
+        }
+        Err(e) => println!("sponza skipped: {e}"),
+    }
+    scenes
+}
+
+fn direct(c: &mut Criterion) {
+    let mut g = c.benchmark_group("direct");
+    g.sample_size(10);
+    g.warm_up_time(Duration::from_millis(500));
+    g.measurement_time(Duration::from_secs(3));
+    let (w, h) = SIZE;
+    let settings = ShadowMapSettings::default();
+    for (name, world) in scenes() {
+        let gbuffer = GBuffer::rasterize(&world, w, h);
+        g.bench_function(format!("{name} {w}x{h} unshadowed"), |b| {
+            b.iter(|| direct_light_with(&world, &gbuffer, Shadows::Off, 1, 0))
+        });
+        g.bench_function(format!("{name} {w}x{h} rays"), |b| {
+            b.iter(|| direct_light(&world, &gbuffer, 1, 0))
+        });
+        let mut maps = ShadowMaps::build(&world, &settings).expect("valid settings");
+        g.bench_function(format!("{name} {w}x{h} maps"), |b| {
+            b.iter(|| {
+                maps.rebuild(&world, &settings).expect("valid settings");
+                direct_light_with(&world, &gbuffer, Shadows::Maps(&maps), 1, 0)
+            })
+        });
+        g.bench_function(format!("{name} {w}x{h} maps build"), |b| {
+            b.iter(|| maps.rebuild(&world, &settings).expect("valid settings"))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, direct);
+criterion_main!(benches);

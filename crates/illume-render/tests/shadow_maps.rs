@@ -1,0 +1,298 @@
+//! Shadow maps against exact shadow rays: the same direct light except along shadow edges
+//! and creases, exact analytic values away from them, and no acne on lit surfaces.
+
+use illume_core::image::RgbImage;
+use illume_core::{PI, Quat, Rgb, Vec2, Vec3, channel_mean};
+use illume_render::{Shadows, direct_light, direct_light_with};
+use illume_scene::builtin::{SceneBuilder, quad};
+use illume_scene::{LightKind, Material, Trs};
+use illume_transport::{GBuffer, ShadowMapSettings, ShadowMaps, World};
+
+/// Direct light of `world` at `w × h` with rays and with default shadow maps.
+fn rays_and_maps(world: &World, w: u32, h: u32) -> (GBuffer, RgbImage, RgbImage) {
+    let g = GBuffer::rasterize(world, w, h);
+    let rays = direct_light(world, &g, 1, 0);
+    let maps = ShadowMaps::build(world, &ShadowMapSettings::default()).expect("valid settings");
+    let mapped = direct_light_with(world, &g, Shadows::Maps(&maps), 1, 0);
+    (g, rays, mapped)
+}
+
+/// Pixels within `radius` of a pixel whose shadow-ray visibility of light 0 differs (the
+/// shadow edges as rays see them), or within one pixel of a crease (a neighbour whose
+/// geometric normal turns by more than 25°: a corner, a box edge, where the filter reads
+/// the other surface).
+fn edges(world: &World, g: &GBuffer, radius: i32) -> Vec<bool> {
+    let (w, h) = (g.width as i32, g.height as i32);
+    let lit: Vec<Option<bool>> = g
+        .pixels
+        .iter()
+        .map(|px| {
+            let hit = &px.as_ref()?.hit;
+            let (s, _) = world.lights.incident_from(0, hit.position, Vec2::ZERO)?;
+            Some(world.unoccluded(hit, &s))
+        })
+        .collect();
+    let normal = |i: usize| g.pixels[i].as_ref().map(|p| p.hit.geometric_normal);
+    let mut edge = vec![false; lit.len()];
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            for dy in -radius..=radius {
+                for dx in -radius..=radius {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                        continue;
+                    }
+                    let j = (ny * w + nx) as usize;
+                    let shadow_edge = lit[i].is_some() && lit[j].is_some() && lit[i] != lit[j];
+                    let crease = dx.abs() <= 1
+                        && dy.abs() <= 1
+                        && match (normal(i), normal(j)) {
+                            (Some(a), Some(b)) => a.dot(b).abs() < 25f32.to_radians().cos(),
+                            _ => false,
+                        };
+                    edge[i] |= shadow_edge || crease;
+                }
+            }
+        }
+    }
+    edge
+}
+
+/// Cornell box with its spot light: maps and rays give the same image except on a thin
+/// band along shadow edges. Bound: a 1024² map over the 70° cone has a texel footprint of
+/// ≈ 3 mm at 2 m, and the filtered band (PCF 2 texels + 1 texel normal offset) is a few
+/// footprints, well under one 200×150 pixel (≈ 13 mm on the back wall): each shadow-edge
+/// crossing can change at most about one pixel. The shadow outlines (tall box, sphere)
+/// are a few hundred pixels long, so ≤ 1 % of pixels may differ by > 5 %, and every such
+/// pixel must lie on a ray shadow edge or a crease.
+#[test]
+fn cornell_spot_maps_match_rays_except_at_shadow_edges() {
+    let world = World::new(illume_scene::builtin::load("cornell-spot").expect("builtin"));
+    let (w, h) = (200, 150);
+    let (g, rays, maps) = rays_and_maps(&world, w, h);
+    let (mr, mm) = (rays.mean(), maps.mean());
+    for c in 0..3 {
+        assert!(
+            (mr[c] - mm[c]).abs() <= 0.01 * mr[c],
+            "channel {c}: mean with rays {} vs maps {}",
+            mr[c],
+            mm[c]
+        );
+    }
+    let edge = edges(&world, &g, 2);
+    let n = (w * h) as usize;
+    let mut differ = 0;
+    for (i, &on_edge) in edge.iter().enumerate() {
+        let (a, b) = (
+            channel_mean(rays.pixels()[i]),
+            channel_mean(maps.pixels()[i]),
+        );
+        if (a - b).abs() > 0.05 * a.max(b) {
+            differ += 1;
+            assert!(
+                on_edge,
+                "pixel ({}, {}) differs away from shadow edges: rays {a}, maps {b}",
+                i % w as usize,
+                i / w as usize
+            );
+        }
+    }
+    assert!(
+        differ as f64 <= 0.01 * n as f64,
+        "{differ} of {n} pixels differ by more than 5 %"
+    );
+    // The spot lights a good part of the image and its shadows are in view: the
+    // comparison is not vacuous.
+    let lit = rays.pixels().iter().filter(|p| p.x > 0.0).count();
+    let shadow_edges = edge.iter().filter(|&&e| e).count();
+    assert!(
+        lit > n / 4 && shadow_edges > 500,
+        "{lit} lit, {shadow_edges} edges"
+    );
+}
+
+/// A diffuse plane (albedo `RHO`, faces +y, 10 m square) seen from 3 m above, with an
+/// optional 0.4 m square occluder 0.5 m up (`analytic.rs` in the reference tests).
+const RHO: f32 = 0.6;
+
+fn plane_scene(kind: LightKind, light_at: Trs, occluder: bool) -> World {
+    let mut b = SceneBuilder::new();
+    let m = b.material(Material {
+        base_color: Rgb::splat(RHO),
+        double_sided: false,
+        ..Default::default()
+    });
+    let mesh = b.mesh(quad(Vec3::ZERO, Vec3::Z * 5.0, Vec3::X * 5.0, m));
+    b.placed("plane", mesh, Trs::IDENTITY, false);
+    if occluder {
+        let occ = b.mesh(quad(
+            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::Z * 0.2,
+            Vec3::X * 0.2,
+            m,
+        ));
+        b.placed("occluder", occ, Trs::IDENTITY, false);
+    }
+    let ln = b.node("light", None, light_at);
+    b.light("light", kind, ln);
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+            ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
+        },
+    );
+    b.camera("camera", 60f32.to_radians(), cam);
+    World::new(b.finish("test:plane"))
+}
+
+/// Checks every plane pixel of `world` (light 0 over the plane with the occluder) against
+/// `expected(p) = (value, crossing)`: `crossing` is where the path from `p` towards the
+/// light meets the occluder's plane y = 0.5. Pixels whose crossing lies within `margin`
+/// of the occluder's outline are the penumbra band and skipped; the others must be 0 in
+/// shadow and within 1e-3 relative of `value` when lit.
+fn check_plane_with_occluder(world: &World, expected: impl Fn(Vec3) -> (Rgb, Vec3), margin: f32) {
+    let (w, h) = (160, 120);
+    let (g, rays, maps) = rays_and_maps(world, w, h);
+    let (mut lit, mut shadowed) = (0, 0);
+    for (i, px) in g.pixels.iter().enumerate() {
+        let hit = &px.as_ref().expect("the plane fills the view").hit;
+        if hit.instance.0 == 1 {
+            continue; // the occluder itself
+        }
+        let (value, q) = expected(hit.position);
+        let outside = q.x.abs().max(q.z.abs()) - 0.2;
+        if outside.abs() < margin {
+            continue;
+        }
+        let got = maps.pixels()[i];
+        if outside < 0.0 {
+            assert_eq!(got, Rgb::ZERO, "pixel {i} at {} is in shadow", hit.position);
+            assert_eq!(rays.pixels()[i], Rgb::ZERO);
+            shadowed += 1;
+        } else {
+            assert!(
+                ((got - value).abs() / value).max_element() < 1e-3,
+                "pixel {i} at {}: {got} vs {value}",
+                hit.position
+            );
+            lit += 1;
+        }
+    }
+    // The occluder hides part of its shadow from the camera above it.
+    assert!(
+        shadowed > 50 && lit > 1000,
+        "{shadowed} shadowed, {lit} lit"
+    );
+}
+
+/// A point light (cube map) over the plane and occluder: exact inverse-square values where
+/// lit, exactly 0 in the umbra.
+#[test]
+fn point_light_map_gives_analytic_light_and_exact_shadow() {
+    let intensity = Rgb::new(2.0, 1.0, 0.5);
+    let light = Vec3::new(0.3, 1.0, -0.2);
+    let world = plane_scene(
+        LightKind::Point { intensity },
+        Trs::from_translation(light),
+        true,
+    );
+    // Cube face 512 texels over 90°: the footprint at the occluder (0.5 m away) is 2 mm;
+    // the penumbra band is a few footprints, so 1 cm in the occluder plane is outside it.
+    check_plane_with_occluder(
+        &world,
+        |p| {
+            let d = light - p;
+            let value = intensity * (RHO / PI) * d.normalize().y / d.length_squared();
+            (value, p + d * ((0.5 - p.y) / d.y))
+        },
+        0.01,
+    );
+}
+
+/// A directional light (orthographic map over the scene's bounds) 30° off vertical.
+#[test]
+fn directional_light_map_gives_analytic_light_and_exact_shadow() {
+    let e = Rgb::new(2.0, 1.5, 1.0);
+    let world = plane_scene(
+        LightKind::Directional { irradiance: e },
+        Trs {
+            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2 + 30f32.to_radians()),
+            ..Trs::IDENTITY
+        },
+        true,
+    );
+    let to_sun = -world.scene.lights[0].direction();
+    // The map spans the 10 m plane at 1024 texels: ≈ 1 cm footprint, so a 4 cm margin
+    // covers the filtered band.
+    check_plane_with_occluder(
+        &world,
+        |p| {
+            let value = e * (RHO / PI) * to_sun.y;
+            (value, p + to_sun * ((0.5 - p.y) / to_sun.y))
+        },
+        0.04,
+    );
+}
+
+/// No acne: a bare plane lit at ≈ 70° from its normal by each kind of light is lit
+/// everywhere with maps as with rays (< 0.1 % of pixels darker by more than 0.1 %).
+#[test]
+fn grazing_light_causes_no_acne() {
+    // Light 1 m up and 2.75 m to +z, aimed at the origin: 70° from the plane's normal.
+    let at = Trs {
+        rotation: Quat::from_rotation_x(-20f32.to_radians()),
+        ..Trs::from_translation(Vec3::new(0.0, 1.0, 2.75))
+    };
+    let cases = [
+        (
+            "spot",
+            LightKind::Spot {
+                intensity: Rgb::splat(5.0),
+                inner_cone_rad: 20f32.to_radians(),
+                outer_cone_rad: 30f32.to_radians(),
+            },
+        ),
+        (
+            // Wider than 60°: mapped with a cube map, like a point light.
+            "wide spot",
+            LightKind::Spot {
+                intensity: Rgb::splat(5.0),
+                inner_cone_rad: 60f32.to_radians(),
+                outer_cone_rad: 75f32.to_radians(),
+            },
+        ),
+        (
+            "point",
+            LightKind::Point {
+                intensity: Rgb::splat(5.0),
+            },
+        ),
+        (
+            "directional",
+            LightKind::Directional {
+                irradiance: Rgb::splat(2.0),
+            },
+        ),
+    ];
+    for (name, kind) in cases {
+        let world = plane_scene(kind, at, false);
+        let (w, h) = (200, 150);
+        let (_, rays, maps) = rays_and_maps(&world, w, h);
+        let lit = rays.pixels().iter().filter(|p| p.x > 0.0).count();
+        let dark = rays
+            .pixels()
+            .iter()
+            .zip(maps.pixels())
+            .filter(|(r, m)| m.x < r.x * (1.0 - 1e-3))
+            .count();
+        println!("{name}: {dark} of {lit} lit pixels darker with maps");
+        assert!(lit > 5000, "{name}: only {lit} lit pixels");
+        assert!(
+            (dark as f64) < 1e-3 * (w * h) as f64,
+            "{name}: {dark} of {lit} lit pixels are darker with maps (acne)"
+        );
+    }
+}
