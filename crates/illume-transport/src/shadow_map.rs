@@ -170,7 +170,7 @@ impl ShadowMapSettings {
 }
 
 /// How a map projects world points.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Projection {
     /// Looking down −Z of `view_from_world`; the map covers `|x/w|, |y/w| ≤ tan_half`.
     Perspective {
@@ -386,13 +386,19 @@ const CUBE_AXES: [Vec3; 6] = [
 ];
 
 /// The shadow maps of every analytic light of a world, rebuilt each frame into the same
-/// allocations.
+/// allocations — except the maps whose view and geometry did not change since the last
+/// build (a static light in a static scene costs nothing after its first frame).
 #[derive(Clone, Debug, Default)]
 pub struct ShadowMaps {
     settings: ShadowMapSettings,
     /// Per analytic light, in [`LightSet::analytic_range`](crate::LightSet::analytic_range) order.
     lights: Vec<LightMaps>,
     maps: Vec<DepthMap>,
+    /// Every instance's transform and mask at the last build (what the depths depend on
+    /// besides each map's projection; meshes never change).
+    geometry: Vec<(Affine3A, u32)>,
+    /// Maps rendered by the last build (the others were kept).
+    rendered: usize,
 }
 
 impl ShadowMaps {
@@ -481,16 +487,38 @@ impl ShadowMaps {
             });
         }
         let scene = &world.scene;
-        self.maps
+        let geometry: Vec<(Affine3A, u32)> = scene
+            .instances
+            .iter()
+            .map(|i| (i.world_from_object, i.mask))
+            .collect();
+        let same_geometry = geometry == self.geometry;
+        self.geometry = geometry;
+        self.rendered = self
+            .maps
             .par_iter_mut()
             .zip(plan)
-            .for_each(|(map, (projection, size))| {
+            .map(|(map, (projection, size))| {
+                if same_geometry
+                    && map.size == size
+                    && map.projection == projection
+                    && !map.depth.is_empty()
+                {
+                    return 0;
+                }
                 map.projection = projection;
                 map.size = size;
                 let (viewport, stored) = projection.viewport(size);
                 rasterize_depth(scene, &viewport, &mut map.depth, stored);
-            });
+                1
+            })
+            .sum();
         Ok(())
+    }
+
+    /// Maps the last [`ShadowMaps::rebuild`] rendered; the others were unchanged and kept.
+    pub fn rendered_last_build(&self) -> usize {
+        self.rendered
     }
 
     /// The settings the maps were built with.
@@ -697,6 +725,40 @@ mod tests {
         assert_eq!(maps.maps[0].depth.as_ptr(), address);
         assert_ne!(maps.maps[0].depth, before, "the map follows the light");
         assert_eq!(maps.memory_bytes(), 64 * 64 * 4);
+    }
+
+    #[test]
+    fn unchanged_maps_are_kept_and_changed_ones_rerendered() {
+        let mut world = World::new(illume_scene::builtin::load("cornell-spot").expect("builtin"));
+        let settings = ShadowMapSettings {
+            resolution: 64,
+            ..Default::default()
+        };
+        let mut maps = ShadowMaps::build(&world, &settings).expect("valid");
+        assert_eq!(maps.rendered_last_build(), 1);
+        maps.rebuild(&world, &settings).expect("valid");
+        assert_eq!(maps.rendered_last_build(), 0, "nothing moved: the map is kept");
+        // An instance moves (the light does not): the map is re-rendered and equals a
+        // fresh one.
+        let moved = world
+            .apply_edit(&illume_scene::Edit::SetInstanceTransform {
+                instance: illume_scene::InstanceId(2),
+                world_from_object: Affine3A::from_translation(Vec3::new(0.1, 0.0, 0.05))
+                    * world.scene.instances[2].world_from_object,
+            })
+            .expect("edit");
+        assert!(!moved.is_empty());
+        maps.rebuild(&world, &settings).expect("valid");
+        assert_eq!(maps.rendered_last_build(), 1, "geometry moved");
+        let fresh = ShadowMaps::build(&world, &settings).expect("valid");
+        assert_eq!(maps.maps[0].depth, fresh.maps[0].depth);
+        // A bias change alone keeps the depths (bias applies at lookup).
+        let biased = ShadowMapSettings {
+            depth_bias_texels: 2.0,
+            ..settings
+        };
+        maps.rebuild(&world, &biased).expect("valid");
+        assert_eq!(maps.rendered_last_build(), 0);
     }
 
     #[test]
