@@ -64,10 +64,16 @@ impl Config {
 
     /// Parses configuration text; `path` names it in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
-        toml::from_str(text).map_err(|e| ConfigError::Parse {
+        let config: Self = toml::from_str(text).map_err(|e| ConfigError::Parse {
             path: path.into(),
             message: e.to_string(),
-        })
+        })?;
+        // Values in range for serde but not for the renderer (shadow-map resolution…).
+        config.render.validate().map_err(|e| ConfigError::Parse {
+            path: path.into(),
+            message: format!("[render] {e}"),
+        })?;
+        Ok(config)
     }
 
     /// The per-frame budget the configured technique gets by default.
@@ -136,5 +142,26 @@ mod tests {
             )
             .is_err()
         );
+    }
+
+    #[test]
+    fn shadow_settings_parse_and_out_of_range_values_name_the_key() {
+        use illume_render::ShadowMode;
+        let c = Config::parse(
+            "[render]\nshadows = \"maps\"\n[render.shadow_maps]\nresolution = 512\n",
+            Path::new("s.toml"),
+        )
+        .unwrap();
+        assert_eq!(
+            (c.render.shadows, c.render.shadow_maps.resolution),
+            (ShadowMode::Maps, 512)
+        );
+        let e = Config::parse(
+            "[render.shadow_maps]\nresolution = 0\n",
+            Path::new("cfg/s.toml"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("cfg/s.toml") && e.contains("resolution"), "{e}");
     }
 }

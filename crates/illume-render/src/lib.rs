@@ -52,10 +52,13 @@ pub struct RenderSettings {
     /// debugging, or for scenes whose geometry comes within 0.1 mm of the camera plane
     /// (the rasterizer's near plane). Both sample pixel centres only.
     pub primary_visibility: PrimaryVisibility,
-    /// How analytic lights (point, spot, directional) find their shadows. `rays`
-    /// (default): one BVH shadow ray per pixel and light — exact, the reference path
-    /// tracer's tests compare against it. `maps`: a depth map per light (six for a point
-    /// light) rasterized every frame from all the scene's triangles, then a filtered
+    /// How analytic lights (point, spot, directional) find their shadows. `auto`
+    /// (default): `maps` for interactive techniques ([`Technique::interactive`]:
+    /// `photon_stream`, as its paper), `rays` for the others (the reference). `rays`: one
+    /// BVH shadow ray per pixel and light — exact, the reference path tracer's tests
+    /// compare against it. `maps`: a depth map per light (six for a point light)
+    /// rasterized from all the scene's triangles whenever the light or any object moved
+    /// (kept otherwise), then a filtered
     /// lookup per pixel — equal to rays except in a band about one texel footprint wide
     /// along shadow edges, creases and contacts (see `shadow_maps`). Maps pay per
     /// triangle and texel, rays per lit pixel: maps win when many pixels are lit and the
@@ -73,8 +76,10 @@ pub struct RenderSettings {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ShadowMode {
-    /// One shadow ray per pixel and light (exact).
+    /// `Maps` for interactive techniques, `Rays` otherwise.
     #[default]
+    Auto,
+    /// One shadow ray per pixel and light (exact).
     Rays,
     /// Shadow maps rebuilt each frame ([`ShadowMaps`]).
     Maps,
@@ -111,7 +116,7 @@ impl Default for RenderSettings {
             area_light_samples: 16,
             seed: 0,
             primary_visibility: PrimaryVisibility::Raster,
-            shadows: ShadowMode::Rays,
+            shadows: ShadowMode::Auto,
             shadow_maps: ShadowMapSettings::default(),
         }
     }
@@ -205,9 +210,15 @@ impl Renderer {
         let t1 = Instant::now();
         let mut maps = self.shadow_maps.lock().unwrap_or_else(|e| e.into_inner());
         // Settings that `RenderSettings::validate` rejects fall back to exact rays.
-        let shadows = match s.shadows {
-            ShadowMode::Maps if maps.rebuild(world, &s.shadow_maps).is_ok() => Shadows::Maps(&maps),
-            _ => Shadows::Rays,
+        let use_maps = match s.shadows {
+            ShadowMode::Auto => technique.interactive(),
+            ShadowMode::Maps => true,
+            ShadowMode::Rays => false,
+        };
+        let shadows = if use_maps && maps.rebuild(world, &s.shadow_maps).is_ok() {
+            Shadows::Maps(&maps)
+        } else {
+            Shadows::Rays
         };
         let t_maps = Instant::now();
         let direct = direct_light_with(
@@ -480,8 +491,8 @@ mod tests {
     }
 
     #[test]
-    fn shadows_default_to_exact_rays_and_parse_from_toml_names() {
-        assert_eq!(RenderSettings::default().shadows, ShadowMode::Rays);
+    fn shadows_default_to_auto_and_parse_from_toml_names() {
+        assert_eq!(RenderSettings::default().shadows, ShadowMode::Auto);
         let s: RenderSettings = toml_like("maps");
         assert_eq!(s.shadows, ShadowMode::Maps);
     }

@@ -737,7 +737,11 @@ mod tests {
         let mut maps = ShadowMaps::build(&world, &settings).expect("valid");
         assert_eq!(maps.rendered_last_build(), 1);
         maps.rebuild(&world, &settings).expect("valid");
-        assert_eq!(maps.rendered_last_build(), 0, "nothing moved: the map is kept");
+        assert_eq!(
+            maps.rendered_last_build(),
+            0,
+            "nothing moved: the map is kept"
+        );
         // An instance moves (the light does not): the map is re-rendered and equals a
         // fresh one.
         let moved = world

@@ -48,4 +48,11 @@ pub trait Technique: Send {
 
     /// Drops all accumulated state, as if just constructed.
     fn reset(&mut self);
+
+    /// True for techniques meant for interactive frame rates: the renderer's automatic
+    /// choices then favour speed over exactness (shadow maps instead of shadow rays).
+    /// Default false.
+    fn interactive(&self) -> bool {
+        false
+    }
 }

@@ -290,6 +290,11 @@ impl Technique for PhotonStream {
         ]
     }
 
+    /// Photon streaming is the interactive technique (the paper renders with shadow maps).
+    fn interactive(&self) -> bool {
+        true
+    }
+
     fn reset(&mut self) {
         self.shared.flush();
         self.warmed_up = false;
