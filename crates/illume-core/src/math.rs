@@ -160,6 +160,18 @@ impl Aabb {
         (self.min + self.max) * 0.5
     }
 
+    /// The eight corners; corner `i` takes `max` on axis k where bit k of `i` is set.
+    #[inline]
+    pub fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|i| {
+            Vec3::select(
+                glam::BVec3::new(i & 1 != 0, i & 2 != 0, i & 4 != 0),
+                self.max,
+                self.min,
+            )
+        })
+    }
+
     /// Surface area (zero for an empty box).
     #[inline]
     pub fn surface_area(&self) -> f32 {
@@ -268,6 +280,22 @@ pub fn transform_normal(world_from_object: &Affine3A, n: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn box_corners_are_the_eight_min_max_combinations() {
+        let b = Aabb {
+            min: Vec3::new(-1.0, 2.0, 3.0),
+            max: Vec3::new(4.0, 5.0, 6.0),
+        };
+        let c = b.corners();
+        assert_eq!(c[0], b.min);
+        assert_eq!(c[7], b.max);
+        assert_eq!(c[1], Vec3::new(4.0, 2.0, 3.0));
+        assert_eq!(c[6], Vec3::new(-1.0, 5.0, 6.0));
+        for (i, p) in c.iter().enumerate() {
+            assert!(c[..i].iter().all(|q| q != p), "corner {i} repeated");
+        }
+    }
 
     #[test]
     fn frame_is_orthonormal_for_many_normals() {

@@ -4,8 +4,7 @@
 use illume_core::image::RgbImage;
 use illume_core::{PI, Quat, Rgb, Vec2, Vec3, channel_mean};
 use illume_render::{Shadows, direct_light, direct_light_with};
-use illume_scene::builtin::{SceneBuilder, quad};
-use illume_scene::{LightKind, Material, Trs};
+use illume_scene::{LightKind, Trs};
 use illume_transport::{GBuffer, ShadowMapSettings, ShadowMaps, World};
 
 /// Direct light of `world` at `w × h` with rays and with default shadow maps.
@@ -117,35 +116,9 @@ fn cornell_spot_maps_match_rays_except_at_shadow_edges() {
 const RHO: f32 = 0.6;
 
 fn plane_scene(kind: LightKind, light_at: Trs, occluder: bool) -> World {
-    let mut b = SceneBuilder::new();
-    let m = b.material(Material {
-        base_color: Rgb::splat(RHO),
-        double_sided: false,
-        ..Default::default()
-    });
-    let mesh = b.mesh(quad(Vec3::ZERO, Vec3::Z * 5.0, Vec3::X * 5.0, m));
-    b.placed("plane", mesh, Trs::IDENTITY, false);
-    if occluder {
-        let occ = b.mesh(quad(
-            Vec3::new(0.0, 0.5, 0.0),
-            Vec3::Z * 0.2,
-            Vec3::X * 0.2,
-            m,
-        ));
-        b.placed("occluder", occ, Trs::IDENTITY, false);
-    }
-    let ln = b.node("light", None, light_at);
-    b.light("light", kind, ln);
-    let cam = b.node(
-        "camera",
-        None,
-        Trs {
-            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-            ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
-        },
-    );
-    b.camera("camera", 60f32.to_radians(), cam);
-    World::new(b.finish("test:plane"))
+    World::new(illume_scene::builtin::lit_plane(
+        kind, light_at, RHO, occluder,
+    ))
 }
 
 /// Checks every plane pixel of `world` (light 0 over the plane with the occluder) against

@@ -258,6 +258,43 @@ fn lambert(name: &str, rgb: [f32; 3], double_sided: bool) -> Material {
     }
 }
 
+/// A diffuse plane (albedo `rho`, one-sided, faces +y, 10 m square, centred at the
+/// origin) seen from 3 m above through a 60° camera looking down, lit by one light of
+/// `kind` placed at `light_at`; with `occluder`, a 0.4 m square of the same material
+/// 0.5 m above the centre. The scene of the analytic direct-light tests (inverse-square
+/// law, cosine falloff, exact shadows).
+pub fn lit_plane(kind: LightKind, light_at: Trs, rho: f32, occluder: bool) -> Scene {
+    let mut b = SceneBuilder::new();
+    let m = b.material(Material {
+        base_color: Rgb::splat(rho),
+        double_sided: false,
+        ..Default::default()
+    });
+    let mesh = b.mesh(quad(Vec3::ZERO, Vec3::Z * 5.0, Vec3::X * 5.0, m)); // faces +y
+    b.placed("plane", mesh, Trs::IDENTITY, false);
+    if occluder {
+        let occ = b.mesh(quad(
+            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::Z * 0.2,
+            Vec3::X * 0.2,
+            m,
+        ));
+        b.placed("occluder", occ, Trs::IDENTITY, false);
+    }
+    let ln = b.node("light", None, light_at);
+    b.light("light", kind, ln);
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+            ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
+        },
+    );
+    b.camera("camera", 60f32.to_radians(), cam);
+    b.finish("builtin:lit-plane")
+}
+
 /// The furnace: closed sphere (radius 1, inner faces), albedo `rho`, emission `le`.
 pub fn furnace(rho: f32, le: Rgb) -> Scene {
     let mut b = SceneBuilder::new();

@@ -595,24 +595,7 @@ fn fit_orthographic(world: &World, direction: Vec3, size: u32, border: f32) -> O
     }
     let view_from_world = look_to(bounds.center(), direction);
     let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
-    for k in 0..8 {
-        let corner = Vec3::new(
-            if k & 1 == 0 {
-                bounds.min.x
-            } else {
-                bounds.max.x
-            },
-            if k & 2 == 0 {
-                bounds.min.y
-            } else {
-                bounds.max.y
-            },
-            if k & 4 == 0 {
-                bounds.min.z
-            } else {
-                bounds.max.z
-            },
-        );
+    for corner in bounds.corners() {
         let v = view_from_world.transform_point3(corner);
         lo = lo.min(Vec2::new(v.x, v.y));
         hi = hi.max(Vec2::new(v.x, v.y));

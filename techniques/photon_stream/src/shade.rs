@@ -228,25 +228,7 @@ pub fn cull(
     out: &mut Vec<u32>,
 ) {
     out.clear();
-    let corners: [Vec3; 8] = std::array::from_fn(|i| {
-        Vec3::new(
-            if i & 1 == 0 {
-                bounds.min.x
-            } else {
-                bounds.max.x
-            },
-            if i & 2 == 0 {
-                bounds.min.y
-            } else {
-                bounds.max.y
-            },
-            if i & 4 == 0 {
-                bounds.min.z
-            } else {
-                bounds.max.z
-            },
-        )
-    });
+    let corners = bounds.corners();
     for s in 0..field.len() {
         let (pf, pb) = (
             field.front_w[s].max_element(),

@@ -2,8 +2,7 @@
 
 use illume_core::{Rgb, Vec2, Vec3};
 use illume_reference::{ReferenceRenderer, ReferenceSettings};
-use illume_scene::builtin::{SceneBuilder, quad};
-use illume_scene::{LightKind, Material, Trs};
+use illume_scene::{LightKind, Trs};
 use illume_transport::{GBuffer, World};
 
 /// Furnace: a closed sphere with albedo ρ and uniform emission Le has radiance
@@ -47,35 +46,9 @@ fn furnace_converges_to_le_over_one_minus_rho() {
 /// A diffuse plane (albedo `rho`, faces +y, 10 m square) seen from 3 m above, lit by one
 /// light of `kind` placed at `light_at`; optionally a 0.4 m square occluder 0.5 m up.
 fn plane_scene(kind: LightKind, light_at: Trs, rho: f32, occluder: bool) -> World {
-    let mut b = SceneBuilder::new();
-    let m = b.material(Material {
-        base_color: Rgb::splat(rho),
-        double_sided: false,
-        ..Default::default()
-    });
-    let mesh = b.mesh(quad(Vec3::ZERO, Vec3::Z * 5.0, Vec3::X * 5.0, m)); // faces +y
-    b.placed("plane", mesh, Trs::IDENTITY, false);
-    if occluder {
-        let occ = b.mesh(quad(
-            Vec3::new(0.0, 0.5, 0.0),
-            Vec3::Z * 0.2,
-            Vec3::X * 0.2,
-            m,
-        ));
-        b.placed("occluder", occ, Trs::IDENTITY, false);
-    }
-    let ln = b.node("light", None, light_at);
-    b.light("light", kind, ln);
-    let cam = b.node(
-        "camera",
-        None,
-        Trs {
-            rotation: illume_core::Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-            ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
-        },
-    );
-    b.camera("camera", 60f32.to_radians(), cam);
-    World::new(b.finish("test:plane"))
+    World::new(illume_scene::builtin::lit_plane(
+        kind, light_at, rho, occluder,
+    ))
 }
 
 /// A point light over a diffuse plane: reflected radiance ρ/π · I·cosθ/r².
