@@ -2,10 +2,11 @@
 //! `cargo bench -p illume-render --bench direct`.
 //!
 //! Per scene at 800×600 on a G-buffer rasterized once: `rays` is [`direct_light`] (one
-//! BVH shadow ray per pixel and analytic light), `maps` is a whole frame's worth of
-//! shadow maps — [`ShadowMaps::rebuild`] into last frame's allocations (lights and
-//! objects move every frame) plus [`direct_light_with`] — and `maps build` is the
-//! rebuild alone; `unshadowed` ([`Shadows::Off`]) is the same light with no visibility
+//! BVH shadow ray per pixel and analytic light), `maps moving light` is a whole frame's
+//! worth of shadow maps when the light moves every frame — the edit, [`ShadowMaps::rebuild`]
+//! into last frame's allocations, then [`direct_light_with`] — and `maps build` that
+//! rebuild alone; `maps static light` is a frame whose light and objects did not move
+//! (the maps are kept, only the lookups cost); `unshadowed` ([`Shadows::Off`]) is the same light with no visibility
 //! test, the part of the cost both modes share. Scenes: `cornell-spot` (its spot light) and Sponza with a spot light
 //! under the roof aimed down (as in the photon-streaming bench), then with a point light
 //! and a sun in its place.
@@ -18,7 +19,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use illume_core::{Affine3A, Quat, Rgb, Vec3};
 use illume_render::{Shadows, direct_light, direct_light_with};
-use illume_scene::{Light, LightKind, Node, Scene, Trs};
+use illume_scene::{Edit, Light, LightId, LightKind, Node, Scene, Trs};
 use illume_transport::{GBuffer, ShadowMapSettings, ShadowMaps, World};
 use std::path::Path;
 use std::time::Duration;
@@ -110,14 +111,40 @@ fn direct(c: &mut Criterion) {
             b.iter(|| direct_light(&world, &gbuffer, 1, 0))
         });
         let mut maps = ShadowMaps::build(&world, &settings).expect("valid settings");
-        g.bench_function(format!("{name} {w}x{h} maps"), |b| {
+        g.bench_function(format!("{name} {w}x{h} maps static light"), |b| {
             b.iter(|| {
                 maps.rebuild(&world, &settings).expect("valid settings");
                 direct_light_with(&world, &gbuffer, Shadows::Maps(&maps), 1, 0)
             })
         });
+        // The light turns by ±0.01° every frame: every map is re-rendered, the G-buffer
+        // (camera and objects unchanged) stays valid.
+        let mut world = world;
+        let home = world.scene.lights[0].world_from_light;
+        let mut frame = 0u32;
+        let mut nudge = move |world: &mut World| {
+            frame += 1;
+            let angle = if frame % 2 == 0 { 1.7e-4 } else { -1.7e-4 };
+            world
+                .apply_edit(&Edit::SetLightTransform {
+                    light: LightId(0),
+                    world_from_light: home * Affine3A::from_rotation_x(angle),
+                })
+                .expect("edit");
+        };
+        g.bench_function(format!("{name} {w}x{h} maps moving light"), |b| {
+            b.iter(|| {
+                nudge(&mut world);
+                maps.rebuild(&world, &settings).expect("valid settings");
+                assert_eq!(maps.rendered_last_build(), maps.map_count());
+                direct_light_with(&world, &gbuffer, Shadows::Maps(&maps), 1, 0)
+            })
+        });
         g.bench_function(format!("{name} {w}x{h} maps build"), |b| {
-            b.iter(|| maps.rebuild(&world, &settings).expect("valid settings"))
+            b.iter(|| {
+                nudge(&mut world);
+                maps.rebuild(&world, &settings).expect("valid settings")
+            })
         });
     }
     g.finish();
