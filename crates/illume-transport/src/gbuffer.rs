@@ -37,12 +37,13 @@ pub struct GBuffer {
 }
 
 /// The scene state a G-buffer was built from: camera, image size, every instance's
-/// transform and every material. Meshes and textures never change after loading.
+/// transform and mask, and every material. Meshes and textures never change after
+/// loading.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct BuildState {
     camera: Option<illume_scene::Camera>,
     size: (u32, u32),
-    world_from_object: Vec<illume_core::Affine3A>,
+    instances: Vec<(illume_core::Affine3A, u32)>,
     materials: Vec<illume_scene::Material>,
 }
 
@@ -53,10 +54,10 @@ impl BuildState {
         Self {
             camera: Some(scene.camera.clone()),
             size: (width, height),
-            world_from_object: scene
+            instances: scene
                 .instances
                 .iter()
-                .map(|i| i.world_from_object)
+                .map(|i| (i.world_from_object, i.mask))
                 .collect(),
             materials: scene.materials.clone(),
         }
@@ -64,19 +65,19 @@ impl BuildState {
 
     /// For each instance of `next`, true when pixels seeing it may keep their surface
     /// from a build at `self`: same camera, size and materials, and the instance has not
-    /// moved. Empty when nothing may be kept.
+    /// moved nor changed its mask. Empty when nothing may be kept.
     pub(crate) fn unchanged_instances(&self, next: &Self) -> Vec<bool> {
         if self.camera.is_none()
             || self.camera != next.camera
             || self.size != next.size
             || self.materials != next.materials
-            || self.world_from_object.len() != next.world_from_object.len()
+            || self.instances.len() != next.instances.len()
         {
             return Vec::new();
         }
-        self.world_from_object
+        self.instances
             .iter()
-            .zip(&next.world_from_object)
+            .zip(&next.instances)
             .map(|(a, b)| a == b)
             .collect()
     }

@@ -201,11 +201,20 @@ impl GBuffer {
     /// [`GBuffer::reused_pixels`]). The result is bit-identical to a fresh build; only
     /// the pixels of moving objects (where they are and where they were) cost anything.
     pub fn rasterize_into(&mut self, world: &World, width: u32, height: u32) {
+        let n = (width * height) as usize;
+        let next = BuildState::of(world, width, height);
+        let unchanged = self.built_from.unchanged_instances(&next);
+        let nothing_moved = !unchanged.is_empty() && unchanged.iter().all(|&u| u);
+        self.built_from = next;
+        if nothing_moved && self.pixels.len() == n {
+            // Same camera, size, materials and instances: the same G-buffer.
+            self.reused_pixels = n as u64;
+            return;
+        }
         let vis = &mut self.visibility;
         vis.width = width;
         vis.height = height;
         vis.render_into(&world.scene);
-        let n = (width * height) as usize;
         self.width = width;
         self.height = height;
         if self.pixels.len() != n {
@@ -215,10 +224,6 @@ impl GBuffer {
         if n == 0 {
             return;
         }
-        let next = BuildState::of(world, width, height);
-        let unchanged = self.built_from.unchanged_instances(&next);
-        let nothing_moved = !unchanged.is_empty() && unchanged.iter().all(|&u| u);
-        self.built_from = next;
         let surfaces = PrimarySurfaces::new(world, width, height);
         let vis = &self.visibility;
         let w = width as usize;
@@ -252,8 +257,6 @@ impl GBuffer {
                                 let tri = current.as_ref().expect("set up above");
                                 *px = surfaces.pixel(&rays.ray(x), tri);
                             }
-                            // An empty pixel's BVH ray can only change if something moved.
-                            None if nothing_moved => reused += 1,
                             None if next_to_covered(vis, x, y) => {
                                 *px = surfaces.traced(&rays.ray(x))
                             }

@@ -213,11 +213,10 @@ fn incremental_rebuild_equals_fresh_build() {
         })
     };
     g.rasterize_into(&world, w, h);
-    // All but the few edge pixels where the BVH overruled the rasterizer.
-    assert!(
-        g.reused_pixels as f64 >= 0.999 * (w * h) as f64,
-        "a static frame reuses its pixels: {}",
-        g.reused_pixels
+    assert_eq!(
+        g.reused_pixels,
+        (w * h) as u64,
+        "nothing changed: the whole G-buffer is kept"
     );
     for k in 1..=6 {
         world.set_time(k as f64 * 0.25); // the sphere and the light move
