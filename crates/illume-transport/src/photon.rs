@@ -8,7 +8,7 @@
 //! their old energy.
 
 use crate::bsdf::lambert_sample;
-use crate::surface::SurfaceHit;
+use crate::surface::PhotonHit;
 use crate::world::World;
 use illume_core::sampling::SampleStream;
 use illume_core::{Ray, Rgb, Vec3, channel_mean};
@@ -35,8 +35,8 @@ impl Default for PhotonPathSettings {
 /// One photon impact on a surface's reflecting side.
 #[derive(Clone, Copy, Debug)]
 pub struct PhotonImpact {
-    /// The surface hit (position, normals, albedo, instance, triangle).
-    pub hit: SurfaceHit,
+    /// The surface hit (positions, normals, albedo, instance, triangle).
+    pub hit: PhotonHit,
     /// Unit direction the photon travelled in.
     pub incoming: Vec3,
     /// Flux arriving with the photon [W] (per photon out of one; divide by the batch's
@@ -77,7 +77,7 @@ pub fn trace_photon(
         let Some(h) = world.tracer.intersect(&ray, settings.mask) else {
             break;
         };
-        let hit = world.surface(&ray, &h);
+        let hit = world.photon_hit(&ray, &h);
         if !hit.reflects {
             break;
         }
