@@ -19,7 +19,7 @@
 //! are measured in world space at construction time.
 
 use illume_core::sampling::{AliasTable, Pcg32, SampleStream, uniform_triangle};
-use illume_core::{Aabb, Vec3, transform_normal};
+use illume_core::{Aabb, Vec3, Vec4, transform_normal};
 use illume_scene::{InstanceId, Scene};
 
 /// One virtual surface light (§0.4.1): a surface element attached to an object.
@@ -358,6 +358,10 @@ pub fn remove_closest(points: &[Vec3], objects: &[u32], target: usize) -> Remova
 /// position in it (those whose distance to the cell is at most the smallest distance,
 /// over all points, to the cell's farthest corner). Outside the box, or with too many
 /// points for the grid, a k-d tree answers.
+///
+/// Cells are small (about [`CELLS_PER_POINT`] per point), so a cell lists a handful of
+/// points, stored four to a [`CandidateChunk`] and measured four at once; this lookup
+/// runs once per photon impact.
 #[derive(Clone, Debug, Default)]
 pub struct NearestIndex {
     kd: KdTree,
@@ -369,12 +373,33 @@ struct CandidateGrid {
     bounds: Aabb,
     res: [u32; 3],
     inv_cell: Vec3,
+    /// Chunks of cell `c` are `chunks[offsets[c]..offsets[c + 1]]`.
     offsets: Vec<u32>,
-    candidates: Vec<(Vec3, u32)>,
+    chunks: Vec<CandidateChunk>,
+}
+
+/// Up to four candidate points as structure of arrays (one 64-byte line); unused lanes
+/// lie at infinity with id `u32::MAX`, so they never win.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct CandidateChunk {
+    x: [f32; 4],
+    y: [f32; 4],
+    z: [f32; 4],
+    /// Point ids as `f32` bit patterns (moved through lane selects untouched).
+    id_bits: [f32; 4],
 }
 
 /// Largest point count that gets a grid (its build costs cells × points).
 const GRID_MAX_POINTS: usize = 4096;
+
+/// Grid cells per indexed point. Higher: fewer candidates per cell (faster queries) at
+/// the cost of memory and build time (cells × points distance tests). With 100 VSLs,
+/// 8 cells a point left ~10 candidates a cell and 64 about 3 (on the benchmark scenes).
+const CELLS_PER_POINT: usize = 64;
+
+/// Bound on cells × points of a grid build (a few tens of milliseconds).
+const GRID_BUILD_BUDGET: usize = 1 << 25;
 
 impl NearestIndex {
     /// Index over `(point, id)` pairs for queries mostly inside `bounds`.
@@ -387,7 +412,8 @@ impl NearestIndex {
         }
     }
 
-    /// The id of the point nearest to `q` and its squared distance.
+    /// The id of the point nearest to `q` and its squared distance; of equally near
+    /// points, the lowest id.
     #[inline]
     pub fn nearest(&self, q: Vec3) -> Option<(u32, f32)> {
         if let Some(g) = &self.grid
@@ -397,13 +423,28 @@ impl NearestIndex {
                 .as_uvec3()
                 .min(illume_core::UVec3::from(g.res) - 1);
             let cell = ((c.z * g.res[1] + c.y) * g.res[0] + c.x) as usize;
-            let mut best = (u32::MAX, f32::INFINITY);
-            for &(p, id) in &g.candidates[g.offsets[cell] as usize..g.offsets[cell + 1] as usize] {
-                let d = p.distance_squared(q);
-                if d < best.1 || (d == best.1 && id < best.0) {
-                    best = (id, d);
-                }
+            let chunks = &g.chunks[g.offsets[cell] as usize..g.offsets[cell + 1] as usize];
+            let (qx, qy, qz) = (Vec4::splat(q.x), Vec4::splat(q.y), Vec4::splat(q.z));
+            let mut best_d = Vec4::INFINITY;
+            let mut best_id = Vec4::splat(f32::from_bits(u32::MAX));
+            // Each lane sees its candidates in increasing id order, so a strict `<`
+            // keeps the lowest id of a tie within a lane; lanes are merged below.
+            for ch in chunks {
+                let dx = Vec4::from_array(ch.x) - qx;
+                let dy = Vec4::from_array(ch.y) - qy;
+                let dz = Vec4::from_array(ch.z) - qz;
+                // Same operations, in the same order, as `Vec3::distance_squared`.
+                let d = dx * dx + dy * dy + dz * dz;
+                let closer = d.cmplt(best_d);
+                best_d = Vec4::select(closer, d, best_d);
+                best_id = Vec4::select(closer, Vec4::from_array(ch.id_bits), best_id);
             }
+            // Lexicographic (distance, id) minimum of the lanes without branches: squared
+            // distances are non-negative, so their bit patterns order like the values.
+            let (d, id) = (best_d.to_array(), best_id.to_array());
+            let key = |l: usize| (u64::from(d[l].to_bits()) << 32) | u64::from(id[l].to_bits());
+            let k = key(0).min(key(1)).min(key(2).min(key(3)));
+            let best = (k as u32, f32::from_bits((k >> 32) as u32));
             return Some(best);
         }
         self.kd.nearest(q)
@@ -416,7 +457,9 @@ impl CandidateGrid {
         let pad = 1e-4 * (1.0 + e.max_element());
         let bounds = Aabb::new(bounds.min - pad, bounds.max + pad);
         let e = bounds.extent();
-        let cells_wanted = (8 * items.len()).clamp(64, 32_768) as f32;
+        let cells_wanted = (CELLS_PER_POINT * items.len())
+            .min(GRID_BUILD_BUDGET / items.len())
+            .clamp(64, 1 << 18) as f32;
         let cell = (e.x * e.y * e.z / cells_wanted)
             .cbrt()
             .max(e.max_element() / 64.0);
@@ -426,8 +469,11 @@ impl CandidateGrid {
             e.y / res[1] as f32,
             e.z / res[2] as f32,
         );
+        let mut items = items.to_vec();
+        items.sort_by_key(|&(_, id)| id); // lanes rely on increasing ids
         let mut offsets = vec![0u32];
-        let mut candidates = Vec::new();
+        let mut chunks = Vec::new();
+        let mut cell_items = Vec::new();
         for z in 0..res[2] {
             for y in 0..res[1] {
                 for x in 0..res[0] {
@@ -441,8 +487,22 @@ impl CandidateGrid {
                         .fold(f32::INFINITY, f32::min);
                     // A relative margin covers rounding in the distances.
                     let bound = bound * (1.0 + 1e-5) + 1e-12;
-                    candidates.extend(items.iter().filter(|(p, _)| near2(*p) <= bound).copied());
-                    offsets.push(candidates.len() as u32);
+                    cell_items.clear();
+                    cell_items.extend(items.iter().filter(|(p, _)| near2(*p) <= bound));
+                    chunks.extend(cell_items.chunks(4).map(|four| {
+                        let mut ch = CandidateChunk {
+                            x: [f32::INFINITY; 4],
+                            y: [f32::INFINITY; 4],
+                            z: [f32::INFINITY; 4],
+                            id_bits: [f32::from_bits(u32::MAX); 4],
+                        };
+                        for (lane, (p, id)) in four.iter().enumerate() {
+                            (ch.x[lane], ch.y[lane], ch.z[lane]) = (p.x, p.y, p.z);
+                            ch.id_bits[lane] = f32::from_bits(*id);
+                        }
+                        ch
+                    }));
+                    offsets.push(chunks.len() as u32);
                 }
             }
         }
@@ -451,7 +511,7 @@ impl CandidateGrid {
             res,
             inv_cell: Vec3::ONE / size,
             offsets,
-            candidates,
+            chunks,
         }
     }
 }
