@@ -97,7 +97,11 @@ impl<'a> Emitter<'a> {
         for seq in first..first + count {
             let mut rng = Pcg32::new(self.seed, seq);
             let stats = trace_photon(world, &mut rng, &self.path, |imp| {
-                let Some(vsl) = self.vsls.nearest(imp.hit.instance, imp.hit.position_object) else {
+                let Some(vsl) = self.vsls.nearest_on(
+                    imp.hit.instance,
+                    imp.hit.triangle,
+                    imp.hit.position_object,
+                ) else {
                     return;
                 };
                 let side = u32::from(!imp.hit.front_face);

@@ -43,6 +43,52 @@ pub struct VslSet {
     /// `first[i]..first[i + 1]` are the VSLs of instance `i`.
     first: Vec<u32>,
     trees: Vec<NearestIndex>,
+    /// Per instance, per triangle of its mesh: the VSL nearest to every point of the
+    /// triangle, or [`NO_OWNER`] when the triangle straddles a Voronoi boundary (empty
+    /// for sets built without a scene).
+    triangle_owner: Vec<Vec<u32>>,
+}
+
+/// No single VSL is nearest to the whole triangle.
+const NO_OWNER: u32 = u32::MAX;
+
+/// For each triangle of `mesh`, the id among `points` nearest to all of its points, if
+/// one is. Whether point o or v is nearer to x is the sign of an affine function of x,
+/// `|x − o|² − |x − v|²`, so over a triangle it is smallest at a corner: a triangle
+/// whose three corners have the same nearest point v, each with a margin over its
+/// second nearest, lies inside v's Voronoi cell. The margin (relative to the mesh's
+/// coordinate magnitude) keeps rounding in the per-impact distances from ever choosing
+/// another point inside such a triangle, so the answer equals [`NearestIndex::nearest`].
+fn triangle_owners(mesh: &illume_scene::Mesh, points: &[(Vec3, u32)]) -> Vec<u32> {
+    if points.is_empty() {
+        return Vec::new();
+    }
+    let b = mesh.bounds();
+    let magnitude = b.min.abs().max(b.max.abs()).max_element();
+    let margin = 1e-4 * magnitude * magnitude;
+    let owner_of_vertex: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|&x| {
+            let (mut d1, mut n1, mut d2) = (f32::INFINITY, NO_OWNER, f32::INFINITY);
+            for &(p, id) in points {
+                let d = p.distance_squared(x);
+                if d < d1 {
+                    (d2, d1, n1) = (d1, d, id);
+                } else if d < d2 {
+                    d2 = d;
+                }
+            }
+            if d2 - d1 > margin { n1 } else { NO_OWNER }
+        })
+        .collect();
+    mesh.indices
+        .iter()
+        .map(|tri| {
+            let [a, b, c] = tri.map(|i| owner_of_vertex[i as usize]);
+            if a == b && b == c { a } else { NO_OWNER }
+        })
+        .collect()
 }
 
 /// Inputs of placement.
@@ -185,6 +231,17 @@ impl VslSet {
                 )
             })
             .collect();
+        let triangle_owner: Vec<Vec<u32>> = (0..scene.instances.len())
+            .map(|i| {
+                let r = first[i] as usize..first[i + 1] as usize;
+                let points: Vec<(Vec3, u32)> = vsls[r.clone()]
+                    .iter()
+                    .zip(r)
+                    .map(|(v, g)| (v.position_object, g as u32))
+                    .collect();
+                triangle_owners(&scene.meshes[scene.instances[i].mesh.index()], &points)
+            })
+            .collect();
         // A_s: the object's area split by nearest-VSL assignment of uniform samples.
         for (i, inst) in scene.instances.iter().enumerate() {
             let (lo, hi) = (first[i] as usize, first[i + 1] as usize);
@@ -207,7 +264,12 @@ impl VslSet {
                     (object_area[i] * (*c).max(1) as f64 / samples as f64) as f32;
             }
         }
-        Self { vsls, first, trees }
+        Self {
+            vsls,
+            first,
+            trees,
+            triangle_owner,
+        }
     }
 
     /// A set from explicit VSLs (tests, tools); `instance_count` instances.
@@ -234,7 +296,12 @@ impl VslSet {
                 )
             })
             .collect();
-        Self { vsls, first, trees }
+        Self {
+            vsls,
+            first,
+            trees,
+            triangle_owner: Vec::new(),
+        }
     }
 
     /// The VSLs, grouped by instance.
@@ -266,6 +333,27 @@ impl VslSet {
             .get(instance.index())?
             .nearest(position_object)
             .map(|(g, _)| g)
+    }
+
+    /// [`VslSet::nearest`] for a point of triangle `triangle` of `instance`'s mesh: the
+    /// same answer, found without a search when one VSL is nearest to the whole
+    /// triangle (most triangles of finely tessellated objects; this runs per impact).
+    #[inline]
+    pub fn nearest_on(
+        &self,
+        instance: InstanceId,
+        triangle: u32,
+        position_object: Vec3,
+    ) -> Option<u32> {
+        if let Some(&owner) = self
+            .triangle_owner
+            .get(instance.index())
+            .and_then(|t| t.get(triangle as usize))
+            && owner != NO_OWNER
+        {
+            return Some(owner);
+        }
+        self.nearest(instance, position_object)
     }
 
     /// World positions and unit normals of every VSL for the scene's current transforms.
@@ -658,5 +746,39 @@ mod tests {
             assert_eq!(d, best, "query {q}");
             assert_eq!(pts[id as usize].0.distance_squared(q), best);
         }
+    }
+
+    #[test]
+    fn whole_triangle_owners_give_the_nearest_vsl() {
+        let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+        let set = VslSet::place(
+            &scene,
+            &PlacementSettings {
+                vsl_count: 60,
+                oversampling: 0.1,
+                triangle_scale: 0.9,
+                seed: 5,
+            },
+        );
+        let mut rng = Pcg32::new(6, 7);
+        let mut owned = 0;
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let id = InstanceId(i as u32);
+            let mesh = &scene.meshes[inst.mesh.index()];
+            for t in 0..mesh.triangle_count() {
+                owned += usize::from(set.triangle_owner[i][t] != NO_OWNER);
+                let [a, b, c] = mesh.triangle(t);
+                for _ in 0..200 {
+                    let u = uniform_triangle(rng.next_2d());
+                    let p = a * (1.0 - u.x - u.y) + b * u.x + c * u.y;
+                    assert_eq!(
+                        set.nearest_on(id, t as u32, p),
+                        set.nearest(id, p),
+                        "instance {i} triangle {t}"
+                    );
+                }
+            }
+        }
+        assert!(owned > 0, "some triangle lies inside one VSL's cell");
     }
 }
