@@ -60,6 +60,9 @@ pub struct PhotonPathStats {
 /// scaled by ρ/p, so photons keep near-equal power). Calls `on_impact` for every impact
 /// on a reflecting side (front face, or either face of a double-sided material); an
 /// impact on the back of a one-sided surface absorbs the photon unreported.
+/// `on_impact` runs while the path holds this thread's traversal stack
+/// ([`Tracer::scoped`](illume_accel::Tracer::scoped)): rays it traces itself work but
+/// each allocates a stack.
 pub fn trace_photon(
     world: &World,
     sampler: &mut impl SampleStream,
@@ -72,35 +75,37 @@ pub fn trace_photon(
     };
     let mut ray: Ray = emission.ray;
     let mut flux = emission.flux;
-    for bounce in 0..=settings.max_bounces {
-        stats.rays += 1;
-        let Some(h) = world.tracer.intersect(&ray, settings.mask) else {
-            break;
-        };
-        let hit = world.photon_hit(&ray, &h);
-        if !hit.reflects {
-            break;
+    // One traversal stack for the whole path.
+    world.tracer.scoped(|tracer| {
+        for bounce in 0..=settings.max_bounces {
+            stats.rays += 1;
+            let Some(hit) = world.trace_photon_hit(tracer, &ray, settings.mask) else {
+                break;
+            };
+            if !hit.reflects {
+                break;
+            }
+            stats.impacts += 1;
+            on_impact(&PhotonImpact {
+                hit,
+                incoming: ray.dir,
+                flux,
+                bounce,
+            });
+            let u_rr = sampler.next_1d();
+            let u_dir = sampler.next_2d();
+            let p = channel_mean(hit.albedo).min(1.0);
+            if p <= 0.0 || u_rr >= p {
+                break;
+            }
+            let s = lambert_sample(hit.albedo, hit.facing_normal(), u_dir);
+            if s.wi.dot(hit.facing_geometric_normal()) <= 0.0 {
+                break; // below the geometric surface: shading-normal artefact, absorbed
+            }
+            flux *= s.weight / p;
+            ray = Ray::new(hit.spawn_origin(s.wi), s.wi);
         }
-        stats.impacts += 1;
-        on_impact(&PhotonImpact {
-            hit,
-            incoming: ray.dir,
-            flux,
-            bounce,
-        });
-        let u_rr = sampler.next_1d();
-        let u_dir = sampler.next_2d();
-        let p = channel_mean(hit.albedo).min(1.0);
-        if p <= 0.0 || u_rr >= p {
-            break;
-        }
-        let s = lambert_sample(hit.albedo, hit.facing_normal(), u_dir);
-        if s.wi.dot(hit.facing_geometric_normal()) <= 0.0 {
-            break; // below the geometric surface: shading-normal artefact, absorbed
-        }
-        flux *= s.weight / p;
-        ray = Ray::new(hit.spawn_origin(s.wi), s.wi);
-    }
+    });
     stats
 }
 

@@ -1,6 +1,6 @@
 //! What a ray hit, in world space.
 
-use illume_accel::Hit;
+use illume_accel::{Hit, HitGeometry};
 use illume_core::{
     Affine3A, Mat3A, Ray, Rgb, Vec2, Vec3, Vec3A, offset_ray_origin, transform_normal,
 };
@@ -152,28 +152,40 @@ pub struct PhotonHit {
 }
 
 impl PhotonHit {
-    /// Builds the photon's view of `hit` of `ray`; it agrees with [`SurfaceHit::new`] to
-    /// rounding (positions and normals are interpolated in object space, then
-    /// transformed once) and exactly in albedo, sidedness, instance and triangle.
+    /// Builds the photon's view of `hit` of `ray`, whose triangle's object-space
+    /// `geometry` the tracer gave ([`Tracer::intersect_geometry`]) or
+    /// [`mesh_hit_geometry`] computes. It agrees with [`SurfaceHit::new`] to rounding
+    /// (positions and normals are taken in object space, then transformed once) and
+    /// exactly in albedo, sidedness, instance and triangle.
+    ///
+    /// [`Tracer::intersect_geometry`]: illume_accel::Tracer::intersect_geometry
     #[inline]
-    pub fn new(scene: &Scene, tables: &HitTables, ray: &Ray, hit: &Hit) -> Self {
+    pub fn new(
+        scene: &Scene,
+        tables: &HitTables,
+        ray: &Ray,
+        hit: &Hit,
+        geometry: &HitGeometry,
+    ) -> Self {
         let inst = &scene.instances[hit.instance.index()];
         let frame = tables.frame(hit.instance, &inst.world_from_object);
         let mesh = &scene.meshes[inst.mesh.index()];
         let t = hit.triangle as usize;
-        let [i0, i1, i2] = mesh.indices[t].map(|i| i as usize);
         let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
         let b0 = 1.0 - b1 - b2;
-        let (p0, p1, p2) = (mesh.positions[i0], mesh.positions[i1], mesh.positions[i2]);
-        let position_object = p0 * b0 + p1 * b1 + p2 * b2;
-        let normal_object = (p1 - p0).cross(p2 - p0);
+        let position_object = geometry.position_object;
+        let normal_object = geometry.normal_object;
         let position = frame.world_from_object.transform_point3(position_object);
         // (M·a)×(M·b) = cof(M)·(a×b): the world cross product without moving the corners.
         let geometric_normal = frame.normal(normal_object).normalize_or(Vec3::Y);
         let front_face = ray.dir.dot(geometric_normal) < 0.0;
+        // Vertex indices only when attributes need them: with the tracer's geometry, a
+        // mesh without normals and texture coordinates is never read here.
+        let corners = || mesh.indices[t].map(|i| i as usize);
         let mut shading_normal = if mesh.normals.is_empty() {
             geometric_normal
         } else {
+            let [i0, i1, i2] = corners();
             let n = mesh.normals[i0] * b0 + mesh.normals[i1] * b1 + mesh.normals[i2] * b2;
             // Shading normals keep their outward sense under mirroring transforms.
             let n = (frame.normal(n) * frame.det_sign).normalize_or_zero();
@@ -192,6 +204,7 @@ impl PhotonHit {
                 let uv = if mesh.uvs.is_empty() {
                     Vec2::ZERO
                 } else {
+                    let [i0, i1, i2] = corners();
                     mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2
                 };
                 mat.base_color * tables.sample(scene, texture, uv)
@@ -234,6 +247,19 @@ impl PhotonHit {
     #[inline]
     pub fn spawn_origin(&self, dir: Vec3) -> Vec3 {
         offset_ray_origin(self.position, self.geometric_normal, dir)
+    }
+}
+
+/// [`HitGeometry`] of `hit` computed from the scene's mesh (when no tracer query gave
+/// it): the corners interpolated with the hit's barycentrics, and their cross product.
+pub fn mesh_hit_geometry(scene: &Scene, hit: &Hit) -> HitGeometry {
+    let inst = &scene.instances[hit.instance.index()];
+    let mesh = &scene.meshes[inst.mesh.index()];
+    let [p0, p1, p2] = mesh.triangle(hit.triangle as usize);
+    let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
+    HitGeometry {
+        position_object: p0 * (1.0 - b1 - b2) + p1 * b1 + p2 * b2,
+        normal_object: (p1 - p0).cross(p2 - p0),
     }
 }
 
@@ -487,6 +513,19 @@ mod tests {
                 continue;
             };
             let (s, p) = (world.surface(&ray, &h), world.photon_hit(&ray, &h));
+            // The tracer's copy of the triangle gives the same record, to rounding.
+            let traced = world
+                .tracer
+                .scoped(|t| world.trace_photon_hit(t, &ray, illume_scene::MASK_DEFAULT))
+                .expect("same ray, same hit");
+            assert_eq!((traced.instance, traced.triangle), (p.instance, p.triangle));
+            assert_eq!((traced.front_face, traced.albedo), (p.front_face, p.albedo));
+            assert!(
+                (traced.position - p.position).abs().max_element()
+                    < 1e-5 * (1.0 + p.position.abs().max_element())
+            );
+            assert!((traced.geometric_normal - p.geometric_normal).length() < 1e-4);
+            assert!((traced.shading_normal - p.shading_normal).length() < 1e-4);
             let scale = 1e-5 * (1.0 + s.position.abs().max_element());
             assert!((s.position - p.position).abs().max_element() < scale);
             let m = &world.scene.instances[h.instance.index()].world_from_object;

@@ -1,8 +1,8 @@
 //! A scene with its tracer and light set, updated together.
 
 use crate::lights::{LightSample, LightSet};
-use crate::surface::{HitTables, PhotonHit, SurfaceHit};
-use illume_accel::{Hit, Tracer};
+use crate::surface::{HitTables, PhotonHit, SurfaceHit, mesh_hit_geometry};
+use illume_accel::{Hit, ScopedTracer, Tracer};
 use illume_core::Ray;
 use illume_scene::change::EditError;
 use illume_scene::{Edit, Scene, SceneChange};
@@ -86,9 +86,30 @@ impl World {
 
     /// The photon's view of a hit (see [`PhotonHit`]): what [`World::surface`] gives,
     /// less what photons never read, at a fraction of the cost.
-    #[inline]
     pub fn photon_hit(&self, ray: &Ray, hit: &Hit) -> PhotonHit {
-        PhotonHit::new(&self.scene, &self.hit_tables, ray, hit)
+        let geometry = mesh_hit_geometry(&self.scene, hit);
+        PhotonHit::new(&self.scene, &self.hit_tables, ray, hit, &geometry)
+    }
+
+    /// Closest hit of `ray` among instances visible to `mask`, as a [`PhotonHit`], traced
+    /// with `tracer` (this world's tracer, [`Tracer::scoped`]). The hit point and normal
+    /// come from the tracer's copy of the triangle, still in cache, so the next photon
+    /// ray does not wait on the mesh's arrays.
+    #[inline]
+    pub fn trace_photon_hit(
+        &self,
+        tracer: &mut ScopedTracer<'_>,
+        ray: &Ray,
+        mask: u32,
+    ) -> Option<PhotonHit> {
+        let (hit, geometry) = tracer.intersect_geometry(ray, mask)?;
+        Some(PhotonHit::new(
+            &self.scene,
+            &self.hit_tables,
+            ray,
+            &hit,
+            &geometry,
+        ))
     }
 
     /// True when nothing visible to the default mask lies between `hit` and the light
