@@ -7,11 +7,10 @@
 //! the thread count or order — selective photon tracing re-traces paths to subtract
 //! their old energy.
 
-use crate::bsdf::lambert_sample;
 use crate::surface::PhotonHit;
 use crate::world::World;
-use illume_core::sampling::SampleStream;
-use illume_core::{Ray, Rgb, Vec3, channel_mean};
+use illume_core::sampling::{SampleStream, cosine_hemisphere};
+use illume_core::{Frame, Ray, Rgb, Vec2, Vec3, channel_mean};
 
 /// Settings of photon paths.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -98,15 +97,25 @@ pub fn trace_photon(
             if p <= 0.0 || u_rr >= p {
                 break;
             }
-            let s = lambert_sample(hit.albedo, hit.facing_normal(), u_dir);
-            if s.wi.dot(hit.facing_geometric_normal()) <= 0.0 {
+            let wi = diffuse_direction(hit.facing_normal(), u_dir);
+            if wi.dot(hit.facing_geometric_normal()) <= 0.0 {
                 break; // below the geometric surface: shading-normal artefact, absorbed
             }
-            flux *= s.weight / p;
-            ray = Ray::new(hit.spawn_origin(s.wi), s.wi);
+            // Lambertian reflection sampled by cosine: the path weight f·cosθ/pdf is ρ.
+            flux *= hit.albedo / p;
+            ray = Ray::new(hit.spawn_origin(wi), wi);
         }
     });
     stats
+}
+
+/// The direction of [`lambert_sample`](crate::bsdf::lambert_sample) about the unit
+/// `normal` for `u`, without renormalising: the frame is orthonormal and the local
+/// direction unit, so the result is unit to rounding, and a photon path is one long
+/// chain of dependent arithmetic where a square root and a division per bounce show.
+#[inline]
+fn diffuse_direction(normal: Vec3, u: Vec2) -> Vec3 {
+    Frame::from_normal(normal).to_world(cosine_hemisphere(u))
 }
 
 #[cfg(test)]
