@@ -29,6 +29,6 @@ pub use camera::CameraRays;
 pub use gbuffer::{GBuffer, GBufferPixel};
 pub use lights::{EmissionSample, LightSample, LightSet};
 pub use raster::VisibilityBuffer;
-pub use surface::{HitTables, InstanceFrame, PhotonHit, SurfaceHit, mesh_hit_geometry};
+pub use surface::SurfaceHit;
 pub use technique::{Budget, Technique, TechniqueStats};
 pub use world::{SharedWorld, World};

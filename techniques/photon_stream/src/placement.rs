@@ -447,8 +447,8 @@ pub fn remove_closest(points: &[Vec3], objects: &[u32], target: usize) -> Remova
 /// over all points, to the cell's farthest corner). Outside the box, or with too many
 /// points for the grid, a k-d tree answers.
 ///
-/// Cells are small (about [`CELLS_PER_POINT`] per point), so a cell lists a handful of
-/// points, stored four to a [`CandidateChunk`] and measured four at once; this lookup
+/// Cells are small (about `CELLS_PER_POINT` per point), so a cell lists a handful of
+/// points, stored four to a `CandidateChunk` and measured four at once; this lookup
 /// runs once per photon impact.
 #[derive(Clone, Debug, Default)]
 pub struct NearestIndex {
