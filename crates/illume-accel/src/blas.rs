@@ -157,17 +157,30 @@ impl Blas {
         self.bvh.memory_bytes() + self.packets.len() * std::mem::size_of::<TrianglePacket>()
     }
 
-    /// Closest hit `(t, triangle index, barycentrics)` with `t < t_max`.
+    /// Object-space hit point and unnormalised front normal of lane `lane` of packet
+    /// `packet` at barycentrics `b`: `v0 + b1·e1 + b2·e2` and `e1 × e2`.
+    #[inline]
+    pub fn geometry(&self, packet: u32, lane: u32, b: Vec2) -> (Vec3, Vec3) {
+        let c = &self.packets[packet as usize].coords;
+        let l = lane as usize;
+        let v0 = Vec3::new(c[0][l], c[1][l], c[2][l]);
+        let e1 = Vec3::new(c[3][l], c[4][l], c[5][l]);
+        let e2 = Vec3::new(c[6][l], c[7][l], c[8][l]);
+        (v0 + e1 * b.x + e2 * b.y, e1.cross(e2))
+    }
+
+    /// Closest hit `(t, triangle index, barycentrics, packet index, lane)` with
+    /// `t < t_max`.
     #[inline]
     pub fn intersect(
         &self,
         ray: &PreparedRay,
         t_max: f32,
         stack: &mut [StackEntry],
-    ) -> Option<(f32, u32, Vec2)> {
+    ) -> Option<(f32, u32, Vec2, u32, u32)> {
         let mut best = None;
         traverse::<false>(&self.bvh, ray, t_max, u32::MAX, stack, |range, t_max, _| {
-            for packet in &self.packets[range] {
+            for (k, packet) in self.packets[range.clone()].iter().enumerate() {
                 let (t, b1, b2, mut bits) = packet.intersect(ray, *t_max);
                 if bits != 0 {
                     let t = t.to_array();
@@ -185,6 +198,8 @@ impl Blas {
                         t[lane],
                         packet.index[lane],
                         Vec2::new(b1.to_array()[lane], b2.to_array()[lane]),
+                        (range.start + k) as u32,
+                        lane as u32,
                     ));
                 }
             }

@@ -109,6 +109,39 @@ pub struct Hit {
     pub barycentrics: Vec2,
 }
 
+/// Object-space geometry of a hit triangle, read from the tracer's own copy of the
+/// triangle (in cache right after the query, unlike the mesh's arrays).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HitGeometry {
+    /// The hit point in the instance's object space, `v0 + b1·(v1 − v0) + b2·(v2 − v0)`
+    /// (equal to the mesh's corners interpolated with [`Hit::barycentrics`], to
+    /// rounding).
+    pub position_object: Vec3,
+    /// `(v1 − v0) × (v2 − v0)` in object space: the front face's normal, unnormalised.
+    pub normal_object: Vec3,
+}
+
+/// A [`Tracer`] with a traversal stack held for a run of queries on one thread (see
+/// [`Tracer::scoped`]).
+pub struct ScopedTracer<'a> {
+    tracer: &'a Tracer,
+    stack: &'a mut [StackEntry],
+}
+
+impl ScopedTracer<'_> {
+    /// [`Tracer::intersect`].
+    #[inline]
+    pub fn intersect(&mut self, ray: &Ray, mask: u32) -> Option<Hit> {
+        self.tracer.intersect_with(ray, mask, self.stack)
+    }
+
+    /// [`Tracer::intersect_geometry`].
+    #[inline]
+    pub fn intersect_geometry(&mut self, ray: &Ray, mask: u32) -> Option<(Hit, HitGeometry)> {
+        self.tracer.geometry_of(ray, mask, self.stack)
+    }
+}
+
 /// Size and cost of a [`Tracer`]'s structures.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct TracerStats {
@@ -307,6 +340,43 @@ impl Tracer {
         with_stack(|stack| self.intersect_with(ray, mask, stack))
     }
 
+    /// [`Tracer::intersect`] with the hit triangle's object-space geometry.
+    pub fn intersect_geometry(&self, ray: &Ray, mask: u32) -> Option<(Hit, HitGeometry)> {
+        self.scoped(|tracer| tracer.intersect_geometry(ray, mask))
+    }
+
+    /// Runs `f` with this tracer and this thread's traversal stack held for all of its
+    /// queries (a photon path's rays), instead of looking the stack up per query.
+    /// Queries through the tracer itself inside `f` still work, each with a stack of its
+    /// own (allocated: keep them out of hot loops).
+    pub fn scoped<R>(&self, f: impl FnOnce(&mut ScopedTracer<'_>) -> R) -> R {
+        with_stack(|stack| {
+            f(&mut ScopedTracer {
+                tracer: self,
+                stack,
+            })
+        })
+    }
+
+    #[inline]
+    fn geometry_of(
+        &self,
+        ray: &Ray,
+        mask: u32,
+        stack: &mut [StackEntry],
+    ) -> Option<(Hit, HitGeometry)> {
+        let (hit, mesh, packet, lane) = self.closest(ray, mask, stack)?;
+        let (position_object, normal_object) =
+            self.blases[mesh as usize].geometry(packet, lane, hit.barycentrics);
+        Some((
+            hit,
+            HitGeometry {
+                position_object,
+                normal_object,
+            },
+        ))
+    }
+
     /// The hit of `ray` with one triangle alone: triangle `triangle` of scene instance
     /// `instance`, whose object-space corners (`Mesh::triangle`) are `object_corners`.
     ///
@@ -389,6 +459,17 @@ impl Tracer {
 
     #[inline]
     fn intersect_with(&self, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> Option<Hit> {
+        self.closest(ray, mask, stack).map(|c| c.0)
+    }
+
+    /// Closest hit with where its triangle is stored: `(hit, mesh, packet, lane)`.
+    #[inline(always)]
+    fn closest(
+        &self,
+        ray: &Ray,
+        mask: u32,
+        stack: &mut [StackEntry],
+    ) -> Option<(Hit, u32, u32, u32)> {
         let world_ray = PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min);
         let mut best = None;
         traverse::<true>(
@@ -403,16 +484,21 @@ impl Tracer {
                         continue;
                     }
                     let local = object_ray(inst, &world_ray);
-                    if let Some((t, triangle, barycentrics)) =
+                    if let Some((t, triangle, barycentrics, packet, lane)) =
                         self.blases[inst.mesh as usize].intersect(&local, *t_max, free)
                     {
                         *t_max = t;
-                        best = Some(Hit {
-                            t,
-                            instance: inst.id,
-                            triangle,
-                            barycentrics,
-                        });
+                        best = Some((
+                            Hit {
+                                t,
+                                instance: inst.id,
+                                triangle,
+                                barycentrics,
+                            },
+                            inst.mesh,
+                            packet,
+                            lane,
+                        ));
                     }
                 }
                 false

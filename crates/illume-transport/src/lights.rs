@@ -107,6 +107,10 @@ pub struct LightSet {
     total_power: Rgb,
     analytic_count: usize,
     area_table: Option<AliasTable>,
+    /// Per emitter, the frame emission directions are sampled in (spot axis, light
+    /// direction, triangle front normal; unused for points), built once rather than per
+    /// photon.
+    emission_frames: Vec<Frame>,
 }
 
 impl LightSet {
@@ -194,7 +198,19 @@ impl LightSet {
                 .map(|p| channel_mean(*p))
                 .collect::<Vec<_>>(),
         );
+        let emission_frames = emitters
+            .iter()
+            .map(|e| {
+                Frame::from_normal(match e {
+                    Emitter::Point { .. } => Vec3::Z,
+                    Emitter::Spot { axis, .. } => *axis,
+                    Emitter::Directional { direction, .. } => *direction,
+                    Emitter::Triangle { normal, .. } => *normal,
+                })
+            })
+            .collect();
         Self {
+            emission_frames,
             emitters,
             powers,
             table,
@@ -415,18 +431,17 @@ impl LightSet {
             Emitter::Point { position, .. } => Ray::new(*position, uniform_sphere(u_dir)),
             Emitter::Spot {
                 position,
-                axis,
                 cos_inner,
                 cos_outer,
                 ..
             } => Ray::new(
                 *position,
-                Frame::from_normal(*axis)
+                self.emission_frames[i]
                     .to_world(sample_spot_direction(u_dir, *cos_inner, *cos_outer)),
             ),
             Emitter::Directional { direction, .. } => {
                 let d = concentric_disk(u_pos) * self.scene_radius;
-                let f = Frame::from_normal(*direction);
+                let f = self.emission_frames[i];
                 let origin = self.scene_center - *direction * (2.0 * self.scene_radius)
                     + f.s * d.x
                     + f.t * d.y;
@@ -442,6 +457,7 @@ impl LightSet {
                 let q = corners[0] * (1.0 - b.x - b.y) + corners[1] * b.x + corners[2] * b.y;
                 let mut u = u_dir;
                 let mut n = *normal;
+                let mut frame = self.emission_frames[i];
                 if *double_sided {
                     // Pick a side with probability 1/2, reusing the first number.
                     if u.x < 0.5 {
@@ -449,11 +465,10 @@ impl LightSet {
                     } else {
                         u.x = (u.x - 0.5) * 2.0;
                         n = -n;
+                        frame = Frame::from_normal(n);
                     }
                 }
-                let dir = Frame::from_normal(n)
-                    .to_world(cosine_hemisphere(u))
-                    .normalize();
+                let dir = frame.to_world(cosine_hemisphere(u)).normalize();
                 Ray::new(offset_ray_origin(q, n, dir), dir)
             }
         };

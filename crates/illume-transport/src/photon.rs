@@ -7,11 +7,10 @@
 //! the thread count or order — selective photon tracing re-traces paths to subtract
 //! their old energy.
 
-use crate::bsdf::lambert_sample;
-use crate::surface::SurfaceHit;
+use crate::surface::PhotonHit;
 use crate::world::World;
-use illume_core::sampling::SampleStream;
-use illume_core::{Ray, Rgb, Vec3, channel_mean};
+use illume_core::sampling::{SampleStream, cosine_hemisphere};
+use illume_core::{Frame, Ray, Rgb, Vec2, Vec3, channel_mean};
 
 /// Settings of photon paths.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,8 +34,8 @@ impl Default for PhotonPathSettings {
 /// One photon impact on a surface's reflecting side.
 #[derive(Clone, Copy, Debug)]
 pub struct PhotonImpact {
-    /// The surface hit (position, normals, albedo, instance, triangle).
-    pub hit: SurfaceHit,
+    /// The surface hit (positions, normals, albedo, instance, triangle).
+    pub hit: PhotonHit,
     /// Unit direction the photon travelled in.
     pub incoming: Vec3,
     /// Flux arriving with the photon [W] (per photon out of one; divide by the batch's
@@ -60,6 +59,9 @@ pub struct PhotonPathStats {
 /// scaled by ρ/p, so photons keep near-equal power). Calls `on_impact` for every impact
 /// on a reflecting side (front face, or either face of a double-sided material); an
 /// impact on the back of a one-sided surface absorbs the photon unreported.
+/// `on_impact` runs while the path holds this thread's traversal stack
+/// ([`Tracer::scoped`](illume_accel::Tracer::scoped)): rays it traces itself work but
+/// each allocates a stack.
 pub fn trace_photon(
     world: &World,
     sampler: &mut impl SampleStream,
@@ -72,36 +74,48 @@ pub fn trace_photon(
     };
     let mut ray: Ray = emission.ray;
     let mut flux = emission.flux;
-    for bounce in 0..=settings.max_bounces {
-        stats.rays += 1;
-        let Some(h) = world.tracer.intersect(&ray, settings.mask) else {
-            break;
-        };
-        let hit = world.surface(&ray, &h);
-        if !hit.reflects {
-            break;
+    // One traversal stack for the whole path.
+    world.tracer.scoped(|tracer| {
+        for bounce in 0..=settings.max_bounces {
+            stats.rays += 1;
+            let Some(hit) = world.trace_photon_hit(tracer, &ray, settings.mask) else {
+                break;
+            };
+            if !hit.reflects {
+                break;
+            }
+            stats.impacts += 1;
+            on_impact(&PhotonImpact {
+                hit,
+                incoming: ray.dir,
+                flux,
+                bounce,
+            });
+            let u_rr = sampler.next_1d();
+            let u_dir = sampler.next_2d();
+            let p = channel_mean(hit.albedo).min(1.0);
+            if p <= 0.0 || u_rr >= p {
+                break;
+            }
+            let wi = diffuse_direction(hit.facing_normal(), u_dir);
+            if wi.dot(hit.facing_geometric_normal()) <= 0.0 {
+                break; // below the geometric surface: shading-normal artefact, absorbed
+            }
+            // Lambertian reflection sampled by cosine: the path weight f·cosθ/pdf is ρ.
+            flux *= hit.albedo / p;
+            ray = Ray::new(hit.spawn_origin(wi), wi);
         }
-        stats.impacts += 1;
-        on_impact(&PhotonImpact {
-            hit,
-            incoming: ray.dir,
-            flux,
-            bounce,
-        });
-        let u_rr = sampler.next_1d();
-        let u_dir = sampler.next_2d();
-        let p = channel_mean(hit.albedo).min(1.0);
-        if p <= 0.0 || u_rr >= p {
-            break;
-        }
-        let s = lambert_sample(hit.albedo, hit.facing_normal(), u_dir);
-        if s.wi.dot(hit.facing_geometric_normal()) <= 0.0 {
-            break; // below the geometric surface: shading-normal artefact, absorbed
-        }
-        flux *= s.weight / p;
-        ray = Ray::new(hit.spawn_origin(s.wi), s.wi);
-    }
+    });
     stats
+}
+
+/// The direction of [`lambert_sample`](crate::bsdf::lambert_sample) about the unit
+/// `normal` for `u`, without renormalising: the frame is orthonormal and the local
+/// direction unit, so the result is unit to rounding, and a photon path is one long
+/// chain of dependent arithmetic where a square root and a division per bounce show.
+#[inline]
+fn diffuse_direction(normal: Vec3, u: Vec2) -> Vec3 {
+    Frame::from_normal(normal).to_world(cosine_hemisphere(u))
 }
 
 #[cfg(test)]

@@ -1,8 +1,11 @@
 //! What a ray hit, in world space.
 
-use illume_accel::Hit;
-use illume_core::{Ray, Rgb, Vec2, Vec3, offset_ray_origin, transform_normal};
-use illume_scene::{InstanceId, MaterialId, Scene};
+use illume_accel::{Hit, HitGeometry};
+use illume_core::{
+    Affine3A, Mat3A, Ray, Rgb, Vec2, Vec3, Vec3A, offset_ray_origin, transform_normal,
+};
+use illume_scene::{InstanceId, MaterialId, Scene, Texture, TextureId, WrapMode};
+use rayon::prelude::*;
 
 /// A ray's hit point with everything shading needs.
 #[derive(Clone, Copy, Debug)]
@@ -115,5 +118,431 @@ impl SurfaceHit {
     #[inline]
     pub fn spawn_origin(&self, dir: Vec3) -> Vec3 {
         offset_ray_origin(self.position, self.geometric_normal, dir)
+    }
+}
+
+/// What photon tracing needs of a hit, and no more: a [`SurfaceHit`] without the
+/// emission, texture coordinates, material and distance, plus the object-space position
+/// (photon techniques bin impacts per object). Built by [`World::photon_hit`] from
+/// tables derived once per scene update ([`HitTables`]), it costs a fraction of a
+/// [`SurfaceHit`] — photon tracing builds one per impact.
+///
+/// [`World::photon_hit`]: crate::World::photon_hit
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonHit {
+    /// World position.
+    pub position: Vec3,
+    /// Position in the instance's object space.
+    pub position_object: Vec3,
+    /// Unit geometric normal of the triangle's front face (counter-clockwise winding).
+    pub geometric_normal: Vec3,
+    /// Unit shading normal (interpolated), flipped to the geometric normal's side.
+    pub shading_normal: Vec3,
+    /// Diffuse albedo ρ at the hit (texture × factor); zero where `reflects` is false.
+    pub albedo: Rgb,
+    /// Instance hit.
+    pub instance: InstanceId,
+    /// Triangle within the instance's mesh.
+    pub triangle: u32,
+    /// True when the ray arrived on the front face.
+    pub front_face: bool,
+    /// True when the surface reflects light arriving on this side (front face, or a
+    /// double-sided material).
+    pub reflects: bool,
+}
+
+impl PhotonHit {
+    /// Builds the photon's view of `hit` of `ray`, whose triangle's object-space
+    /// `geometry` the tracer gave ([`Tracer::intersect_geometry`]) or
+    /// [`mesh_hit_geometry`] computes. It agrees with [`SurfaceHit::new`] to rounding
+    /// (positions and normals are taken in object space, then transformed once) and
+    /// exactly in albedo, sidedness, instance and triangle.
+    ///
+    /// [`Tracer::intersect_geometry`]: illume_accel::Tracer::intersect_geometry
+    #[inline]
+    pub fn new(
+        scene: &Scene,
+        tables: &HitTables,
+        ray: &Ray,
+        hit: &Hit,
+        geometry: &HitGeometry,
+    ) -> Self {
+        let inst = &scene.instances[hit.instance.index()];
+        let frame = tables.frame(hit.instance, &inst.world_from_object);
+        let mesh = &scene.meshes[inst.mesh.index()];
+        let t = hit.triangle as usize;
+        let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
+        let b0 = 1.0 - b1 - b2;
+        let position_object = geometry.position_object;
+        let normal_object = geometry.normal_object;
+        let position = frame.world_from_object.transform_point3(position_object);
+        // (M·a)×(M·b) = cof(M)·(a×b): the world cross product without moving the corners.
+        let geometric_normal = frame.normal(normal_object).normalize_or(Vec3::Y);
+        let front_face = ray.dir.dot(geometric_normal) < 0.0;
+        // Vertex indices only when attributes need them: with the tracer's geometry, a
+        // mesh without normals and texture coordinates is never read here.
+        let corners = || mesh.indices[t].map(|i| i as usize);
+        let mut shading_normal = if mesh.normals.is_empty() {
+            geometric_normal
+        } else {
+            let [i0, i1, i2] = corners();
+            let n = mesh.normals[i0] * b0 + mesh.normals[i1] * b1 + mesh.normals[i2] * b2;
+            // Shading normals keep their outward sense under mirroring transforms.
+            let n = (frame.normal(n) * frame.det_sign).normalize_or_zero();
+            if n == Vec3::ZERO { geometric_normal } else { n }
+        };
+        if shading_normal.dot(geometric_normal) < 0.0 {
+            shading_normal = -shading_normal;
+        }
+        let material = mesh.triangle_materials[t];
+        let mat = &scene.materials[material.index()];
+        let reflects = front_face || mat.double_sided;
+        let albedo = match (reflects, mat.base_color_texture) {
+            (false, _) => Rgb::ZERO,
+            (true, None) => mat.base_color,
+            (true, Some(texture)) => {
+                let uv = if mesh.uvs.is_empty() {
+                    Vec2::ZERO
+                } else {
+                    let [i0, i1, i2] = corners();
+                    mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2
+                };
+                mat.base_color * tables.sample(scene, texture, uv)
+            }
+        };
+        Self {
+            position,
+            position_object,
+            geometric_normal,
+            shading_normal,
+            albedo,
+            instance: hit.instance,
+            triangle: hit.triangle,
+            front_face,
+            reflects,
+        }
+    }
+
+    /// The normal on the side the ray arrived from (see [`SurfaceHit::facing_normal`]).
+    #[inline]
+    pub fn facing_normal(&self) -> Vec3 {
+        if self.front_face {
+            self.shading_normal
+        } else {
+            -self.shading_normal
+        }
+    }
+
+    /// The geometric normal on the side the ray arrived from.
+    #[inline]
+    pub fn facing_geometric_normal(&self) -> Vec3 {
+        if self.front_face {
+            self.geometric_normal
+        } else {
+            -self.geometric_normal
+        }
+    }
+
+    /// A ray origin just off the surface on the side `dir` leaves towards.
+    #[inline]
+    pub fn spawn_origin(&self, dir: Vec3) -> Vec3 {
+        offset_ray_origin(self.position, self.geometric_normal, dir)
+    }
+}
+
+/// [`HitGeometry`] of `hit` computed from the scene's mesh (when no tracer query gave
+/// it): the corners interpolated with the hit's barycentrics, and their cross product.
+pub fn mesh_hit_geometry(scene: &Scene, hit: &Hit) -> HitGeometry {
+    let inst = &scene.instances[hit.instance.index()];
+    let mesh = &scene.meshes[inst.mesh.index()];
+    let [p0, p1, p2] = mesh.triangle(hit.triangle as usize);
+    let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
+    HitGeometry {
+        position_object: p0 * (1.0 - b1 - b2) + p1 * b1 + p2 * b2,
+        normal_object: (p1 - p0).cross(p2 - p0),
+    }
+}
+
+/// An instance's transforms for hit records: its `world_from_object` and the cofactor
+/// matrix that carries object-space normals (cross products) to world space.
+#[derive(Clone, Copy, Debug)]
+pub struct InstanceFrame {
+    /// Object to world.
+    pub world_from_object: Affine3A,
+    /// cof(M) = det(M)·M⁻ᵀ of the linear part M: `cof(M)·(a×b) = (M·a)×(M·b)`.
+    pub normal_from_object: Mat3A,
+    /// Sign of det(M): 1, or −1 for a mirroring transform.
+    pub det_sign: f32,
+    /// True when M is the identity (normals need no transform).
+    pub linear_identity: bool,
+}
+
+impl InstanceFrame {
+    /// The frame of `world_from_object`.
+    pub fn new(world_from_object: &Affine3A) -> Self {
+        let m = &world_from_object.matrix3;
+        let (c0, c1, c2) = (m.x_axis, m.y_axis, m.z_axis);
+        let normal_from_object = Mat3A::from_cols(c1.cross(c2), c2.cross(c0), c0.cross(c1));
+        Self {
+            world_from_object: *world_from_object,
+            normal_from_object,
+            det_sign: c0.dot(c1.cross(c2)).signum(),
+            linear_identity: *m == Mat3A::IDENTITY,
+        }
+    }
+
+    /// `cof(M)·n` (unnormalised).
+    #[inline]
+    pub fn normal(&self, n: Vec3) -> Vec3 {
+        if self.linear_identity {
+            n
+        } else {
+            (self.normal_from_object * Vec3A::from(n)).into()
+        }
+    }
+}
+
+/// Tables derived from a scene that make [`PhotonHit`]s cheap: each instance's
+/// [`InstanceFrame`] (no cofactor matrix per hit), and each base-colour texture packed
+/// as one 8-bit index per channel into its 256 decoded sRGB values (a quarter of the
+/// memory of `f32` texels, so far fewer cache misses for scattered photon lookups)
+/// whenever that reproduces every texel exactly — always for textures decoded from
+/// 8-bit images; other textures are sampled as they are.
+#[derive(Clone, Debug, Default)]
+pub struct HitTables {
+    frames: Vec<InstanceFrame>,
+    textures: Vec<Option<PackedTexture>>,
+}
+
+/// A texture as packed sRGB-8 indices `[r, g, b, 0]` into [`SRGB8_LUT`].
+#[derive(Clone, Debug)]
+struct PackedTexture {
+    width: u32,
+    height: u32,
+    texels: Vec<[u8; 4]>,
+    wrap_u: WrapMode,
+    wrap_v: WrapMode,
+}
+
+/// The 256 linear values of 8-bit sRGB codes, computed as the image loaders compute them.
+static SRGB8_LUT: std::sync::LazyLock<[f32; 256]> = std::sync::LazyLock::new(|| {
+    std::array::from_fn(|i| illume_core::image::srgb_decode(i as f32 / 255.0))
+});
+
+impl HitTables {
+    /// Tables for `scene` at its current time.
+    pub fn new(scene: &Scene) -> Self {
+        let mut tables = Self::default();
+        tables.update(scene);
+        tables
+    }
+
+    /// Brings the instance frames up to date with the scene's transforms and packs
+    /// textures added since the last call (textures never change in place).
+    pub fn update(&mut self, scene: &Scene) {
+        self.frames.clear();
+        self.frames.extend(
+            scene
+                .instances
+                .iter()
+                .map(|i| InstanceFrame::new(&i.world_from_object)),
+        );
+        let known = self.textures.len().min(scene.textures.len());
+        self.textures.truncate(known);
+        self.textures
+            .extend(scene.textures[known..].iter().map(PackedTexture::new));
+    }
+
+    /// The frame of `instance` (whose transform is `world_from_object`); computed on the
+    /// spot for an instance the tables do not know. Contract: the tables were updated
+    /// after the scene's last transform change ([`World`](crate::World) does this).
+    #[inline]
+    pub fn frame(&self, instance: InstanceId, world_from_object: &Affine3A) -> InstanceFrame {
+        match self.frames.get(instance.index()) {
+            Some(f) => *f,
+            None => InstanceFrame::new(world_from_object),
+        }
+    }
+
+    /// Bilinear lookup of scene texture `texture` at `uv`, equal bit for bit to
+    /// [`Texture::sample`](illume_scene::Texture::sample).
+    #[inline]
+    pub fn sample(&self, scene: &Scene, texture: TextureId, uv: Vec2) -> Rgb {
+        match self.textures.get(texture.index()) {
+            Some(Some(packed)) => packed.sample(uv),
+            _ => scene.textures[texture.index()].sample(uv),
+        }
+    }
+}
+
+impl PackedTexture {
+    /// Packs `texture` when every channel of every texel is one of [`SRGB8_LUT`].
+    fn new(texture: &Texture) -> Option<Self> {
+        let lut = &*SRGB8_LUT;
+        let code = |v: f32| -> Option<u8> {
+            let k = lut.partition_point(|&x| x < v);
+            (k < 256 && lut[k].to_bits() == v.to_bits()).then_some(k as u8)
+        };
+        let texels: Option<Vec<[u8; 4]>> = texture
+            .texels
+            .par_iter()
+            .map(|t| Some([code(t.x)?, code(t.y)?, code(t.z)?, 0]))
+            .collect();
+        Some(Self {
+            width: texture.width,
+            height: texture.height,
+            texels: texels.filter(|t| !t.is_empty())?,
+            wrap_u: texture.wrap_u,
+            wrap_v: texture.wrap_v,
+        })
+    }
+
+    /// [`Texture::sample`]'s arithmetic on the decoded texels.
+    #[inline]
+    fn sample(&self, uv: Vec2) -> Rgb {
+        let lut = &*SRGB8_LUT;
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = uv.y * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (ix, iy) = (x0 as i64, y0 as i64);
+        let (cx0, cx1) = (
+            wrap(ix, self.width, self.wrap_u),
+            wrap(ix + 1, self.width, self.wrap_u),
+        );
+        let (r0, r1) = (
+            wrap(iy, self.height, self.wrap_v) * self.width as usize,
+            wrap(iy + 1, self.height, self.wrap_v) * self.width as usize,
+        );
+        let t = |i: usize| {
+            let [r, g, b, _] = self.texels[i];
+            Rgb::new(lut[r as usize], lut[g as usize], lut[b as usize])
+        };
+        let top = t(r0 + cx0) * (1.0 - fx) + t(r0 + cx1) * fx;
+        let bottom = t(r1 + cx0) * (1.0 - fx) + t(r1 + cx1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+}
+
+/// Texel index `i` wrapped into `0..n` as [`Texture::sample`] wraps it, without the
+/// integer division when `i` is already inside.
+#[inline]
+fn wrap(i: i64, n: u32, mode: WrapMode) -> usize {
+    let n = n as i64;
+    if (0..n).contains(&i) {
+        return i as usize;
+    }
+    let r = match mode {
+        WrapMode::Repeat => i.rem_euclid(n),
+        WrapMode::Clamp => i.clamp(0, n - 1),
+        WrapMode::Mirror => {
+            let m = i.rem_euclid(2 * n);
+            if m < n { m } else { 2 * n - 1 - m }
+        }
+    };
+    r as usize
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::World;
+    use illume_core::sampling::{Pcg32, SampleStream, uniform_sphere};
+    use illume_core::{Quat, Vec3};
+
+    #[test]
+    fn packed_textures_sample_bit_for_bit_like_their_source() {
+        let lut = &*SRGB8_LUT;
+        let mut rng = Pcg32::new(1, 2);
+        for (wrap_u, wrap_v) in [
+            (WrapMode::Repeat, WrapMode::Repeat),
+            (WrapMode::Clamp, WrapMode::Mirror),
+            (WrapMode::Mirror, WrapMode::Clamp),
+        ] {
+            let (width, height) = (7u32, 5u32);
+            let mut code = || lut[(rng.next_1d() * 256.0) as usize % 256];
+            let texture = Texture {
+                name: "t".into(),
+                width,
+                height,
+                texels: (0..width * height)
+                    .map(|_| Rgb::new(code(), code(), code()))
+                    .collect(),
+                wrap_u,
+                wrap_v,
+            };
+            let packed = PackedTexture::new(&texture).expect("8-bit sRGB texels pack");
+            for _ in 0..5000 {
+                let uv = Vec2::new(rng.next_1d() * 6.0 - 3.0, rng.next_1d() * 6.0 - 3.0);
+                let (a, b) = (packed.sample(uv), texture.sample(uv));
+                assert_eq!(
+                    a.to_array().map(f32::to_bits),
+                    b.to_array().map(f32::to_bits)
+                );
+            }
+        }
+        // A texel that is no 8-bit sRGB value keeps the texture unpacked.
+        let odd = Texture {
+            name: "odd".into(),
+            width: 1,
+            height: 1,
+            texels: vec![Rgb::splat(0.123_456_7)],
+            wrap_u: WrapMode::Repeat,
+            wrap_v: WrapMode::Repeat,
+        };
+        assert!(PackedTexture::new(&odd).is_none());
+    }
+
+    #[test]
+    fn photon_hits_agree_with_surface_hits_under_rotation_scale_and_mirroring() {
+        let mut scene = illume_scene::builtin::load("cornell-spot").unwrap();
+        let inst = &mut scene.instances[2];
+        inst.world_from_object = Affine3A::from_scale_rotation_translation(
+            Vec3::new(-1.3, 0.7, 1.1),
+            Quat::from_rotation_y(0.6) * Quat::from_rotation_x(0.3),
+            Vec3::new(0.1, 0.2, -0.1),
+        ) * inst.world_from_object;
+        let world = World::new(scene);
+        let b = world.scene.bounds();
+        let mut rng = Pcg32::new(3, 4);
+        let mut checked = 0;
+        for _ in 0..20_000 {
+            let u = Vec3::new(rng.next_1d(), rng.next_1d(), rng.next_1d());
+            let ray = Ray::new(b.min + u * b.extent(), uniform_sphere(rng.next_2d()));
+            let Some(h) = world.tracer.intersect(&ray, illume_scene::MASK_DEFAULT) else {
+                continue;
+            };
+            let (s, p) = (world.surface(&ray, &h), world.photon_hit(&ray, &h));
+            // The tracer's copy of the triangle gives the same record, to rounding.
+            let traced = world
+                .tracer
+                .scoped(|t| world.trace_photon_hit(t, &ray, illume_scene::MASK_DEFAULT))
+                .expect("same ray, same hit");
+            assert_eq!((traced.instance, traced.triangle), (p.instance, p.triangle));
+            assert_eq!((traced.front_face, traced.albedo), (p.front_face, p.albedo));
+            assert!(
+                (traced.position - p.position).abs().max_element()
+                    < 1e-5 * (1.0 + p.position.abs().max_element())
+            );
+            assert!((traced.geometric_normal - p.geometric_normal).length() < 1e-4);
+            assert!((traced.shading_normal - p.shading_normal).length() < 1e-4);
+            let scale = 1e-5 * (1.0 + s.position.abs().max_element());
+            assert!((s.position - p.position).abs().max_element() < scale);
+            let m = &world.scene.instances[h.instance.index()].world_from_object;
+            let back = m.transform_point3(p.position_object);
+            assert!((back - p.position).abs().max_element() < scale);
+            for (a, b) in [
+                (s.geometric_normal, p.geometric_normal),
+                (s.shading_normal, p.shading_normal),
+            ] {
+                assert!((a - b).length() < 1e-4, "{a} vs {b}");
+            }
+            assert_eq!(s.front_face, p.front_face);
+            assert_eq!(s.reflects, p.reflects);
+            assert_eq!(s.albedo, p.albedo);
+            assert_eq!((s.instance, s.triangle), (p.instance, p.triangle));
+            checked += 1;
+        }
+        assert!(checked > 10_000);
     }
 }

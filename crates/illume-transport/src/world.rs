@@ -1,8 +1,8 @@
 //! A scene with its tracer and light set, updated together.
 
 use crate::lights::{LightSample, LightSet};
-use crate::surface::SurfaceHit;
-use illume_accel::{Hit, Tracer};
+use crate::surface::{HitTables, PhotonHit, SurfaceHit, mesh_hit_geometry};
+use illume_accel::{Hit, ScopedTracer, Tracer};
 use illume_core::Ray;
 use illume_scene::change::EditError;
 use illume_scene::{Edit, Scene, SceneChange};
@@ -21,6 +21,8 @@ pub struct World {
     pub tracer: Tracer,
     /// Every emitter of `scene`, with power-proportional selection.
     pub lights: LightSet,
+    /// Instance frames and packed textures for [`World::photon_hit`].
+    hit_tables: HitTables,
 }
 
 impl World {
@@ -28,10 +30,12 @@ impl World {
     pub fn new(scene: Scene) -> Self {
         let tracer = Tracer::new(&scene);
         let lights = LightSet::new(&scene);
+        let hit_tables = HitTables::new(&scene);
         Self {
             scene,
             tracer,
             lights,
+            hit_tables,
         }
     }
 
@@ -64,6 +68,7 @@ impl World {
         }
         if !changes.is_empty() {
             self.lights = LightSet::new(&self.scene);
+            self.hit_tables.update(&self.scene);
         }
     }
 
@@ -77,6 +82,34 @@ impl World {
     /// Surface description of a hit.
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> SurfaceHit {
         SurfaceHit::new(&self.scene, ray, hit)
+    }
+
+    /// The photon's view of a hit (see [`PhotonHit`]): what [`World::surface`] gives,
+    /// less what photons never read, at a fraction of the cost.
+    pub fn photon_hit(&self, ray: &Ray, hit: &Hit) -> PhotonHit {
+        let geometry = mesh_hit_geometry(&self.scene, hit);
+        PhotonHit::new(&self.scene, &self.hit_tables, ray, hit, &geometry)
+    }
+
+    /// Closest hit of `ray` among instances visible to `mask`, as a [`PhotonHit`], traced
+    /// with `tracer` (this world's tracer, [`Tracer::scoped`]). The hit point and normal
+    /// come from the tracer's copy of the triangle, still in cache, so the next photon
+    /// ray does not wait on the mesh's arrays.
+    #[inline]
+    pub fn trace_photon_hit(
+        &self,
+        tracer: &mut ScopedTracer<'_>,
+        ray: &Ray,
+        mask: u32,
+    ) -> Option<PhotonHit> {
+        let (hit, geometry) = tracer.intersect_geometry(ray, mask)?;
+        Some(PhotonHit::new(
+            &self.scene,
+            &self.hit_tables,
+            ray,
+            &hit,
+            &geometry,
+        ))
     }
 
     /// True when nothing visible to the default mask lies between `hit` and the light

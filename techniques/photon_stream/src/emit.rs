@@ -13,7 +13,6 @@
 
 use crate::placement::VslSet;
 use crate::pool::{PoolImpact, to_quanta};
-use illume_core::Affine3A;
 use illume_core::sampling::{Pcg32, mix64};
 use illume_transport::World;
 use illume_transport::photon::{PhotonPathSettings, trace_photon};
@@ -59,8 +58,6 @@ impl PhotonBatch {
 pub struct Emitter<'a> {
     /// The VSLs impacts are assigned to.
     pub vsls: &'a VslSet,
-    /// `object_from_world` of every instance (inverse of its current transform).
-    pub object_from_world: Vec<Affine3A>,
     /// 1 / (watts per quantum).
     pub inv_quantum: f64,
     /// Path settings (bounce limit, mask).
@@ -70,23 +67,17 @@ pub struct Emitter<'a> {
 }
 
 impl<'a> Emitter<'a> {
-    /// An emitter for `world`'s current instance transforms.
+    /// An emitter for photons traced in `_world` (hits carry their object-space
+    /// positions, so nothing of the world's current transforms needs deriving here).
     pub fn new(
-        world: &World,
+        _world: &World,
         vsls: &'a VslSet,
         inv_quantum: f64,
         max_bounces: u32,
         seed: u64,
     ) -> Self {
-        let object_from_world = world
-            .scene
-            .instances
-            .iter()
-            .map(|i| i.world_from_object.inverse())
-            .collect();
         Self {
             vsls,
-            object_from_world,
             inv_quantum,
             path: PhotonPathSettings {
                 max_bounces,
@@ -106,10 +97,11 @@ impl<'a> Emitter<'a> {
         for seq in first..first + count {
             let mut rng = Pcg32::new(self.seed, seq);
             let stats = trace_photon(world, &mut rng, &self.path, |imp| {
-                let inst = imp.hit.instance;
-                let p_object =
-                    self.object_from_world[inst.index()].transform_point3(imp.hit.position);
-                let Some(vsl) = self.vsls.nearest(inst, p_object) else {
+                let Some(vsl) = self.vsls.nearest_on(
+                    imp.hit.instance,
+                    imp.hit.triangle,
+                    imp.hit.position_object,
+                ) else {
                     return;
                 };
                 let side = u32::from(!imp.hit.front_face);

@@ -19,7 +19,7 @@
 //! are measured in world space at construction time.
 
 use illume_core::sampling::{AliasTable, Pcg32, SampleStream, uniform_triangle};
-use illume_core::{Aabb, Vec3, transform_normal};
+use illume_core::{Aabb, Vec3, Vec4, transform_normal};
 use illume_scene::{InstanceId, Scene};
 
 /// One virtual surface light (§0.4.1): a surface element attached to an object.
@@ -43,6 +43,52 @@ pub struct VslSet {
     /// `first[i]..first[i + 1]` are the VSLs of instance `i`.
     first: Vec<u32>,
     trees: Vec<NearestIndex>,
+    /// Per instance, per triangle of its mesh: the VSL nearest to every point of the
+    /// triangle, or [`NO_OWNER`] when the triangle straddles a Voronoi boundary (empty
+    /// for sets built without a scene).
+    triangle_owner: Vec<Vec<u32>>,
+}
+
+/// No single VSL is nearest to the whole triangle.
+const NO_OWNER: u32 = u32::MAX;
+
+/// For each triangle of `mesh`, the id among `points` nearest to all of its points, if
+/// one is. Whether point o or v is nearer to x is the sign of an affine function of x,
+/// `|x − o|² − |x − v|²`, so over a triangle it is smallest at a corner: a triangle
+/// whose three corners have the same nearest point v, each with a margin over its
+/// second nearest, lies inside v's Voronoi cell. The margin (relative to the mesh's
+/// coordinate magnitude) keeps rounding in the per-impact distances from ever choosing
+/// another point inside such a triangle, so the answer equals [`NearestIndex::nearest`].
+fn triangle_owners(mesh: &illume_scene::Mesh, points: &[(Vec3, u32)]) -> Vec<u32> {
+    if points.is_empty() {
+        return Vec::new();
+    }
+    let b = mesh.bounds();
+    let magnitude = b.min.abs().max(b.max.abs()).max_element();
+    let margin = 1e-4 * magnitude * magnitude;
+    let owner_of_vertex: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|&x| {
+            let (mut d1, mut n1, mut d2) = (f32::INFINITY, NO_OWNER, f32::INFINITY);
+            for &(p, id) in points {
+                let d = p.distance_squared(x);
+                if d < d1 {
+                    (d2, d1, n1) = (d1, d, id);
+                } else if d < d2 {
+                    d2 = d;
+                }
+            }
+            if d2 - d1 > margin { n1 } else { NO_OWNER }
+        })
+        .collect();
+    mesh.indices
+        .iter()
+        .map(|tri| {
+            let [a, b, c] = tri.map(|i| owner_of_vertex[i as usize]);
+            if a == b && b == c { a } else { NO_OWNER }
+        })
+        .collect()
 }
 
 /// Inputs of placement.
@@ -185,6 +231,17 @@ impl VslSet {
                 )
             })
             .collect();
+        let triangle_owner: Vec<Vec<u32>> = (0..scene.instances.len())
+            .map(|i| {
+                let r = first[i] as usize..first[i + 1] as usize;
+                let points: Vec<(Vec3, u32)> = vsls[r.clone()]
+                    .iter()
+                    .zip(r)
+                    .map(|(v, g)| (v.position_object, g as u32))
+                    .collect();
+                triangle_owners(&scene.meshes[scene.instances[i].mesh.index()], &points)
+            })
+            .collect();
         // A_s: the object's area split by nearest-VSL assignment of uniform samples.
         for (i, inst) in scene.instances.iter().enumerate() {
             let (lo, hi) = (first[i] as usize, first[i + 1] as usize);
@@ -207,7 +264,12 @@ impl VslSet {
                     (object_area[i] * (*c).max(1) as f64 / samples as f64) as f32;
             }
         }
-        Self { vsls, first, trees }
+        Self {
+            vsls,
+            first,
+            trees,
+            triangle_owner,
+        }
     }
 
     /// A set from explicit VSLs (tests, tools); `instance_count` instances.
@@ -234,7 +296,12 @@ impl VslSet {
                 )
             })
             .collect();
-        Self { vsls, first, trees }
+        Self {
+            vsls,
+            first,
+            trees,
+            triangle_owner: Vec::new(),
+        }
     }
 
     /// The VSLs, grouped by instance.
@@ -266,6 +333,27 @@ impl VslSet {
             .get(instance.index())?
             .nearest(position_object)
             .map(|(g, _)| g)
+    }
+
+    /// [`VslSet::nearest`] for a point of triangle `triangle` of `instance`'s mesh: the
+    /// same answer, found without a search when one VSL is nearest to the whole
+    /// triangle (most triangles of finely tessellated objects; this runs per impact).
+    #[inline]
+    pub fn nearest_on(
+        &self,
+        instance: InstanceId,
+        triangle: u32,
+        position_object: Vec3,
+    ) -> Option<u32> {
+        if let Some(&owner) = self
+            .triangle_owner
+            .get(instance.index())
+            .and_then(|t| t.get(triangle as usize))
+            && owner != NO_OWNER
+        {
+            return Some(owner);
+        }
+        self.nearest(instance, position_object)
     }
 
     /// World positions and unit normals of every VSL for the scene's current transforms.
@@ -358,6 +446,10 @@ pub fn remove_closest(points: &[Vec3], objects: &[u32], target: usize) -> Remova
 /// position in it (those whose distance to the cell is at most the smallest distance,
 /// over all points, to the cell's farthest corner). Outside the box, or with too many
 /// points for the grid, a k-d tree answers.
+///
+/// Cells are small (about `CELLS_PER_POINT` per point), so a cell lists a handful of
+/// points, stored four to a `CandidateChunk` and measured four at once; this lookup
+/// runs once per photon impact.
 #[derive(Clone, Debug, Default)]
 pub struct NearestIndex {
     kd: KdTree,
@@ -369,12 +461,33 @@ struct CandidateGrid {
     bounds: Aabb,
     res: [u32; 3],
     inv_cell: Vec3,
+    /// Chunks of cell `c` are `chunks[offsets[c]..offsets[c + 1]]`.
     offsets: Vec<u32>,
-    candidates: Vec<(Vec3, u32)>,
+    chunks: Vec<CandidateChunk>,
+}
+
+/// Up to four candidate points as structure of arrays (one 64-byte line); unused lanes
+/// lie at infinity with id `u32::MAX`, so they never win.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct CandidateChunk {
+    x: [f32; 4],
+    y: [f32; 4],
+    z: [f32; 4],
+    /// Point ids as `f32` bit patterns (moved through lane selects untouched).
+    id_bits: [f32; 4],
 }
 
 /// Largest point count that gets a grid (its build costs cells × points).
 const GRID_MAX_POINTS: usize = 4096;
+
+/// Grid cells per indexed point. Higher: fewer candidates per cell (faster queries) at
+/// the cost of memory and build time (cells × points distance tests). With 100 VSLs,
+/// 8 cells a point left ~10 candidates a cell and 64 about 3 (on the benchmark scenes).
+const CELLS_PER_POINT: usize = 64;
+
+/// Bound on cells × points of a grid build (a few tens of milliseconds).
+const GRID_BUILD_BUDGET: usize = 1 << 25;
 
 impl NearestIndex {
     /// Index over `(point, id)` pairs for queries mostly inside `bounds`.
@@ -387,7 +500,8 @@ impl NearestIndex {
         }
     }
 
-    /// The id of the point nearest to `q` and its squared distance.
+    /// The id of the point nearest to `q` and its squared distance; of equally near
+    /// points, the lowest id.
     #[inline]
     pub fn nearest(&self, q: Vec3) -> Option<(u32, f32)> {
         if let Some(g) = &self.grid
@@ -397,13 +511,28 @@ impl NearestIndex {
                 .as_uvec3()
                 .min(illume_core::UVec3::from(g.res) - 1);
             let cell = ((c.z * g.res[1] + c.y) * g.res[0] + c.x) as usize;
-            let mut best = (u32::MAX, f32::INFINITY);
-            for &(p, id) in &g.candidates[g.offsets[cell] as usize..g.offsets[cell + 1] as usize] {
-                let d = p.distance_squared(q);
-                if d < best.1 || (d == best.1 && id < best.0) {
-                    best = (id, d);
-                }
+            let chunks = &g.chunks[g.offsets[cell] as usize..g.offsets[cell + 1] as usize];
+            let (qx, qy, qz) = (Vec4::splat(q.x), Vec4::splat(q.y), Vec4::splat(q.z));
+            let mut best_d = Vec4::INFINITY;
+            let mut best_id = Vec4::splat(f32::from_bits(u32::MAX));
+            // Each lane sees its candidates in increasing id order, so a strict `<`
+            // keeps the lowest id of a tie within a lane; lanes are merged below.
+            for ch in chunks {
+                let dx = Vec4::from_array(ch.x) - qx;
+                let dy = Vec4::from_array(ch.y) - qy;
+                let dz = Vec4::from_array(ch.z) - qz;
+                // Same operations, in the same order, as `Vec3::distance_squared`.
+                let d = dx * dx + dy * dy + dz * dz;
+                let closer = d.cmplt(best_d);
+                best_d = Vec4::select(closer, d, best_d);
+                best_id = Vec4::select(closer, Vec4::from_array(ch.id_bits), best_id);
             }
+            // Lexicographic (distance, id) minimum of the lanes without branches: squared
+            // distances are non-negative, so their bit patterns order like the values.
+            let (d, id) = (best_d.to_array(), best_id.to_array());
+            let key = |l: usize| (u64::from(d[l].to_bits()) << 32) | u64::from(id[l].to_bits());
+            let k = key(0).min(key(1)).min(key(2).min(key(3)));
+            let best = (k as u32, f32::from_bits((k >> 32) as u32));
             return Some(best);
         }
         self.kd.nearest(q)
@@ -416,7 +545,9 @@ impl CandidateGrid {
         let pad = 1e-4 * (1.0 + e.max_element());
         let bounds = Aabb::new(bounds.min - pad, bounds.max + pad);
         let e = bounds.extent();
-        let cells_wanted = (8 * items.len()).clamp(64, 32_768) as f32;
+        let cells_wanted = (CELLS_PER_POINT * items.len())
+            .min(GRID_BUILD_BUDGET / items.len())
+            .clamp(64, 1 << 18) as f32;
         let cell = (e.x * e.y * e.z / cells_wanted)
             .cbrt()
             .max(e.max_element() / 64.0);
@@ -426,8 +557,11 @@ impl CandidateGrid {
             e.y / res[1] as f32,
             e.z / res[2] as f32,
         );
+        let mut items = items.to_vec();
+        items.sort_by_key(|&(_, id)| id); // lanes rely on increasing ids
         let mut offsets = vec![0u32];
-        let mut candidates = Vec::new();
+        let mut chunks = Vec::new();
+        let mut cell_items = Vec::new();
         for z in 0..res[2] {
             for y in 0..res[1] {
                 for x in 0..res[0] {
@@ -441,8 +575,22 @@ impl CandidateGrid {
                         .fold(f32::INFINITY, f32::min);
                     // A relative margin covers rounding in the distances.
                     let bound = bound * (1.0 + 1e-5) + 1e-12;
-                    candidates.extend(items.iter().filter(|(p, _)| near2(*p) <= bound).copied());
-                    offsets.push(candidates.len() as u32);
+                    cell_items.clear();
+                    cell_items.extend(items.iter().filter(|(p, _)| near2(*p) <= bound));
+                    chunks.extend(cell_items.chunks(4).map(|four| {
+                        let mut ch = CandidateChunk {
+                            x: [f32::INFINITY; 4],
+                            y: [f32::INFINITY; 4],
+                            z: [f32::INFINITY; 4],
+                            id_bits: [f32::from_bits(u32::MAX); 4],
+                        };
+                        for (lane, (p, id)) in four.iter().enumerate() {
+                            (ch.x[lane], ch.y[lane], ch.z[lane]) = (p.x, p.y, p.z);
+                            ch.id_bits[lane] = f32::from_bits(*id);
+                        }
+                        ch
+                    }));
+                    offsets.push(chunks.len() as u32);
                 }
             }
         }
@@ -451,7 +599,7 @@ impl CandidateGrid {
             res,
             inv_cell: Vec3::ONE / size,
             offsets,
-            candidates,
+            chunks,
         }
     }
 }
@@ -598,5 +746,39 @@ mod tests {
             assert_eq!(d, best, "query {q}");
             assert_eq!(pts[id as usize].0.distance_squared(q), best);
         }
+    }
+
+    #[test]
+    fn whole_triangle_owners_give_the_nearest_vsl() {
+        let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+        let set = VslSet::place(
+            &scene,
+            &PlacementSettings {
+                vsl_count: 60,
+                oversampling: 0.1,
+                triangle_scale: 0.9,
+                seed: 5,
+            },
+        );
+        let mut rng = Pcg32::new(6, 7);
+        let mut owned = 0;
+        for (i, inst) in scene.instances.iter().enumerate() {
+            let id = InstanceId(i as u32);
+            let mesh = &scene.meshes[inst.mesh.index()];
+            for t in 0..mesh.triangle_count() {
+                owned += usize::from(set.triangle_owner[i][t] != NO_OWNER);
+                let [a, b, c] = mesh.triangle(t);
+                for _ in 0..200 {
+                    let u = uniform_triangle(rng.next_2d());
+                    let p = a * (1.0 - u.x - u.y) + b * u.x + c * u.y;
+                    assert_eq!(
+                        set.nearest_on(id, t as u32, p),
+                        set.nearest(id, p),
+                        "instance {i} triangle {t}"
+                    );
+                }
+            }
+        }
+        assert!(owned > 0, "some triangle lies inside one VSL's cell");
     }
 }
