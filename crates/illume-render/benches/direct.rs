@@ -124,7 +124,11 @@ fn direct(c: &mut Criterion) {
         let mut frame = 0u32;
         let mut nudge = move |world: &mut World| {
             frame += 1;
-            let angle = if frame % 2 == 0 { 1.7e-4 } else { -1.7e-4 };
+            let angle = if frame.is_multiple_of(2) {
+                1.7e-4
+            } else {
+                -1.7e-4
+            };
             world
                 .apply_edit(&Edit::SetLightTransform {
                     light: LightId(0),
