@@ -110,6 +110,7 @@ impl Engine {
         &mut self,
         edit: &Edit,
     ) -> Result<Vec<SceneChange>, illume_scene::change::EditError> {
+        self.technique.before_world_write();
         let changes = write_world(&self.world).apply_edit(edit)?;
         let world = read_world(&self.world);
         self.technique.scene_changed(&world, &changes);
@@ -120,6 +121,7 @@ impl Engine {
     /// technique within its budget, render, collect counters.
     pub fn step(&mut self, t: f64) -> StepOutput {
         let t0 = Instant::now();
+        self.technique.before_world_write();
         let changes = write_world(&self.world).set_time(t);
         let world = read_world(&self.world);
         if !changes.is_empty() {

@@ -49,6 +49,11 @@ pub trait Technique: Send {
     /// Drops all accumulated state, as if just constructed.
     fn reset(&mut self);
 
+    /// The frame loop is about to take the shared world's write lock (a time step or an
+    /// edit). Techniques whose threads read the world should let go of it promptly, so
+    /// the frame loop does not wait for their work in progress. Default: nothing.
+    fn before_world_write(&self) {}
+
     /// True for techniques meant for interactive frame rates: the renderer's automatic
     /// choices then favour speed over exactness (shadow maps instead of shadow rays).
     /// Default false.

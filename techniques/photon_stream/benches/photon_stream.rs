@@ -129,6 +129,7 @@ fn fps_table() {
                             let edit = Edit::SetCameraTransform {
                                 world_from_camera: home * Affine3A::from_rotation_y(yaw),
                             };
+                            ps.before_world_write();
                             let changes = world.write().unwrap().apply_edit(&edit).expect("edit");
                             ps.scene_changed(&world.read().unwrap(), &changes);
                         }

@@ -89,12 +89,27 @@ impl<'a> Emitter<'a> {
 
     /// Traces photons `first..first + count` sequentially.
     pub fn trace(&self, world: &World, first: u64, count: u64) -> PhotonBatch {
+        self.trace_until(world, first, count, || false)
+    }
+
+    /// [`Emitter::trace`], stopping early (after a whole photon) once `stop` returns
+    /// true; the batch holds the photons traced so far, `first..first + photons()`.
+    pub fn trace_until(
+        &self,
+        world: &World,
+        first: u64,
+        count: u64,
+        stop: impl Fn() -> bool,
+    ) -> PhotonBatch {
         let mut batch = PhotonBatch {
             impacts: Vec::with_capacity(count as usize * 3),
             ends: Vec::with_capacity(count as usize),
             rays: 0,
         };
         for seq in first..first + count {
+            if stop() {
+                break;
+            }
             let mut rng = Pcg32::new(self.seed, seq);
             let stats = trace_photon(world, &mut rng, &self.path, |imp| {
                 let Some(vsl) = self.vsls.nearest_on(

@@ -290,6 +290,12 @@ impl Technique for PhotonStream {
         ]
     }
 
+    /// The streaming thread ends its batch at the next photon (see
+    /// [`SharedPool::want_world`](crate::stream::SharedPool::want_world)).
+    fn before_world_write(&self) {
+        self.shared.want_world();
+    }
+
     /// Photon streaming is the interactive technique (the paper renders with shadow maps).
     fn interactive(&self) -> bool {
         true

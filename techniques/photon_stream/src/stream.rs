@@ -55,6 +55,9 @@ pub struct SharedPool {
     paused: Mutex<bool>,
     wake: Condvar,
     stop: AtomicBool,
+    /// Counts the frame loop's announcements that it is about to take the world's write
+    /// lock: a batch during which it changes ends after the current photon.
+    world_requests: AtomicU64,
     next_seq: AtomicU64,
     start: Instant,
 }
@@ -76,6 +79,7 @@ impl SharedPool {
             paused: Mutex::new(paused),
             wake: Condvar::new(),
             stop: AtomicBool::new(false),
+            world_requests: AtomicU64::new(0),
             next_seq: AtomicU64::new(0),
             start: Instant::now(),
         }
@@ -164,6 +168,14 @@ impl SharedPool {
         *self.paused.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    /// The frame loop is about to write the world: the simulation thread stops its
+    /// batch after the photon in flight (a path, microseconds) instead of finishing it,
+    /// so the writer waits for one photon rather than a batch — or, when the thread was
+    /// preempted mid-batch on a busy machine, for its time slice (milliseconds, measured).
+    pub fn want_world(&self) {
+        self.world_requests.fetch_add(1, Ordering::AcqRel);
+    }
+
     /// Asks the simulation thread to end.
     pub fn request_stop(&self) {
         self.stop.store(true, Ordering::Release);
@@ -214,8 +226,16 @@ pub fn spawn(
                         config.seed,
                     );
                     let first = shared.reserve(config.batch_photons);
-                    (emitter.trace(&w, first, config.batch_photons), epoch)
+                    let requests = shared.world_requests.load(Ordering::Acquire);
+                    let wanted = || shared.world_requests.load(Ordering::Acquire) != requests;
+                    (
+                        emitter.trace_until(&w, first, config.batch_photons, wanted),
+                        epoch,
+                    )
                 };
+                // Read lock released. A writer waiting for it goes first (std's RwLock
+                // lets no new reader in ahead of a waiting writer); photon indices
+                // reserved but not traced are simply skipped.
                 shared.apply(&batch, epoch);
             }
         })
