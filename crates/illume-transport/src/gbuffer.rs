@@ -308,7 +308,7 @@ impl<'a> PrimarySurfaces<'a> {
             None => Vec2::ZERO,
         };
         let albedo = if tri.textured {
-            self.world.scene.albedo(tri.material, uv)
+            self.world.albedo(tri.material, uv)
         } else {
             tri.albedo
         };

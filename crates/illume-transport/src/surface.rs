@@ -403,9 +403,9 @@ impl PackedTexture {
         let lut = &*SRGB8_LUT;
         let x = uv.x * self.width as f32 - 0.5;
         let y = uv.y * self.height as f32 - 0.5;
-        let (x0, y0) = (x.floor(), y.floor());
+        let (ix, iy) = (floor_i64(x), floor_i64(y));
+        let (x0, y0) = (ix as f32, iy as f32);
         let (fx, fy) = (x - x0, y - y0);
-        let (ix, iy) = (x0 as i64, y0 as i64);
         let (cx0, cx1) = (
             wrap(ix, self.width, self.wrap_u),
             wrap(ix + 1, self.width, self.wrap_u),
@@ -422,6 +422,15 @@ impl PackedTexture {
         let bottom = t(r1 + cx0) * (1.0 - fx) + t(r1 + cx1) * fx;
         top * (1.0 - fy) + bottom * fy
     }
+}
+
+/// `x.floor() as i64` without the libm call (x86-64's baseline has no SSE4.1 `roundss`):
+/// exact for every f32 — above 2²³ in magnitude an f32 is already an integer — and 0
+/// for NaN, as the cast gives.
+#[inline]
+fn floor_i64(x: f32) -> i64 {
+    let i = x as i64;
+    if (i as f32) > x { i.saturating_sub(1) } else { i }
 }
 
 /// Texel index `i` wrapped into `0..n` as [`Texture::sample`] wraps it, without the
@@ -449,6 +458,20 @@ mod tests {
     use crate::World;
     use illume_core::sampling::{Pcg32, SampleStream, uniform_sphere};
     use illume_core::{Quat, Vec3};
+
+    #[test]
+    fn floor_i64_is_floor_then_cast() {
+        let specials = [
+            0.0f32, -0.0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5, 8388607.5, -8388607.5, 1e10,
+            -1e10, 1e30, -1e30, f32::MAX, f32::MIN, f32::INFINITY, f32::NEG_INFINITY,
+            f32::NAN, f32::EPSILON, -f32::EPSILON, f32::MIN_POSITIVE,
+        ];
+        let mut rng = Pcg32::new(3, 4);
+        let random = (0..100_000).map(|_| (rng.next_1d() - 0.5) * 4096.0);
+        for x in specials.into_iter().chain(random) {
+            assert_eq!(floor_i64(x), x.floor() as i64, "x = {x}");
+        }
+    }
 
     #[test]
     fn packed_textures_sample_bit_for_bit_like_their_source() {

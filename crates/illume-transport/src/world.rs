@@ -84,6 +84,21 @@ impl World {
         SurfaceHit::new(&self.scene, ray, hit)
     }
 
+    /// Diffuse albedo of `material` at texture coordinates `uv`: equal bit for bit to
+    /// [`Scene::albedo`], through the packed copies of the textures (fewer cache misses).
+    #[inline]
+    pub fn albedo(
+        &self,
+        material: illume_scene::MaterialId,
+        uv: illume_core::Vec2,
+    ) -> illume_core::Rgb {
+        let m = &self.scene.materials[material.index()];
+        match m.base_color_texture {
+            Some(t) => m.base_color * self.hit_tables.sample(&self.scene, t, uv),
+            None => m.base_color,
+        }
+    }
+
     /// The photon's view of a hit (see [`PhotonHit`]): what [`World::surface`] gives,
     /// less what photons never read, at a fraction of the cost.
     pub fn photon_hit(&self, ray: &Ray, hit: &Hit) -> PhotonHit {

@@ -24,5 +24,8 @@ fn a_batch_stopped_early_is_a_prefix_of_the_full_batch() {
     assert_eq!(a, b, "the same 40 paths");
     assert!(cut.rays > 0 && cut.rays < full.rays);
     let never = emitter.trace_until(&w, 1000, 100, || false);
-    assert_eq!(never.paths().collect::<Vec<_>>(), full.paths().collect::<Vec<_>>());
+    assert_eq!(
+        never.paths().collect::<Vec<_>>(),
+        full.paths().collect::<Vec<_>>()
+    );
 }
