@@ -117,8 +117,9 @@ fn direct(c: &mut Criterion) {
                 direct_light_with(&world, &gbuffer, Shadows::Maps(&maps), 1, 0)
             })
         });
-        // The light turns by ±0.01° every frame: every map is re-rendered, the G-buffer
-        // (camera and objects unchanged) stays valid.
+        // The light turns by ±0.01° and moves by ±0.2 mm every frame: every map (spot,
+        // cube, sun) is re-rendered; the G-buffer (camera and objects unchanged) stays
+        // valid.
         let mut world = world;
         let home = world.scene.lights[0].world_from_light;
         let mut frame = 0u32;
@@ -132,7 +133,11 @@ fn direct(c: &mut Criterion) {
             world
                 .apply_edit(&Edit::SetLightTransform {
                     light: LightId(0),
-                    world_from_light: home * Affine3A::from_rotation_x(angle),
+                    world_from_light: home
+                        * Affine3A::from_rotation_translation(
+                            Quat::from_rotation_x(angle),
+                            Vec3::splat(angle),
+                        ),
                 })
                 .expect("edit");
         };

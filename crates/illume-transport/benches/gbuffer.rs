@@ -2,8 +2,10 @@
 //! `cargo bench -p illume-transport --bench gbuffer`.
 //!
 //! `rays` is [`GBuffer::render`] (one BVH ray per pixel), `raster` is
-//! [`GBuffer::rasterize`] (visibility buffer, then one exact triangle test per pixel),
-//! `raster reused` is [`GBuffer::rasterize_into`] into last frame's allocation, and
+//! [`GBuffer::rasterize`] into a fresh allocation (visibility buffer, then each pixel's
+//! surface from its triangle), `raster moving camera` is [`GBuffer::rasterize_into`] last
+//! frame's buffer with the camera turned since (every pixel rebuilt, allocation reused),
+//! `raster static` the same with nothing changed (the whole buffer kept), and
 //! `visibility` is the rasterizer alone ([`VisibilityBuffer::render`]).
 
 #![expect(
@@ -12,7 +14,8 @@
 )]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use illume_core::Vec2;
+use illume_core::{Affine3A, Vec2};
+use illume_scene::Edit;
 use illume_transport::{GBuffer, VisibilityBuffer, World};
 use std::path::Path;
 use std::time::Duration;
@@ -46,8 +49,29 @@ fn gbuffer(c: &mut Criterion) {
                 b.iter(|| GBuffer::rasterize(&world, w, h))
             });
             let mut reused = GBuffer::rasterize(&world, w, h);
-            g.bench_function(format!("{name} {w}x{h} raster reused"), |b| {
+            g.bench_function(format!("{name} {w}x{h} raster static"), |b| {
                 b.iter(|| reused.rasterize_into(&world, w, h))
+            });
+            // Turn the camera by ±0.05° every frame: no pixel can be kept.
+            let mut moving = World::new(world.scene.clone());
+            let home = moving.scene.camera.world_from_camera;
+            let mut frame = 0u32;
+            g.bench_function(format!("{name} {w}x{h} raster moving camera"), |b| {
+                b.iter(|| {
+                    frame += 1;
+                    let yaw = if frame.is_multiple_of(2) {
+                        8.7e-4
+                    } else {
+                        -8.7e-4
+                    };
+                    moving
+                        .apply_edit(&Edit::SetCameraTransform {
+                            world_from_camera: home * Affine3A::from_rotation_y(yaw),
+                        })
+                        .expect("edit");
+                    reused.rasterize_into(&moving, w, h);
+                    assert_eq!(reused.reused_pixels, 0);
+                })
             });
             g.bench_function(format!("{name} {w}x{h} visibility"), |b| {
                 b.iter(|| VisibilityBuffer::render(&world.scene, w, h))
