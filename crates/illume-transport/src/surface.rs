@@ -430,7 +430,11 @@ impl PackedTexture {
 #[inline]
 fn floor_i64(x: f32) -> i64 {
     let i = x as i64;
-    if (i as f32) > x { i.saturating_sub(1) } else { i }
+    if (i as f32) > x {
+        i.saturating_sub(1)
+    } else {
+        i
+    }
 }
 
 /// Texel index `i` wrapped into `0..n` as [`Texture::sample`] wraps it, without the
@@ -462,9 +466,28 @@ mod tests {
     #[test]
     fn floor_i64_is_floor_then_cast() {
         let specials = [
-            0.0f32, -0.0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5, 8388607.5, -8388607.5, 1e10,
-            -1e10, 1e30, -1e30, f32::MAX, f32::MIN, f32::INFINITY, f32::NEG_INFINITY,
-            f32::NAN, f32::EPSILON, -f32::EPSILON, f32::MIN_POSITIVE,
+            0.0f32,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            1.5,
+            -1.5,
+            8388607.5,
+            -8388607.5,
+            1e10,
+            -1e10,
+            1e30,
+            -1e30,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            f32::EPSILON,
+            -f32::EPSILON,
+            f32::MIN_POSITIVE,
         ];
         let mut rng = Pcg32::new(3, 4);
         let random = (0..100_000).map(|_| (rng.next_1d() - 0.5) * 4096.0);
