@@ -10,6 +10,11 @@
 //! SCENE is a file (`.gltf`, `.glb`, `.obj`, `.ply`) or `builtin:NAME`
 //! (`builtin:cornell-spot`, `builtin:cube-in-box`, `builtin:furnace`).
 
+// The doc comments of the clap argument structs are the `--help` text: units in brackets
+// there (`[pixels]`) are for people, not intra-doc links, and escaping them would show the
+// backslashes in the help.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+
 mod animate;
 mod bench;
 mod compare;

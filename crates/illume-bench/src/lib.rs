@@ -3,10 +3,10 @@
 //! user can run.
 //!
 //! A [`Scenario`] names a scene, an animation or scripted edits, the techniques with
-//! their settings and budgets, the frames and the converged reference. [`run`] replays it:
+//! their settings and budgets, the frames and the converged reference. [`run()`] replays it:
 //!
 //! 1. the **converged reference** of every distinct frame state is rendered with the
-//!    reference path tracer, or read from the [cache](cache) (key: scene, state and
+//!    reference path tracer, or read from the [cache] (key: scene, state and
 //!    settings);
 //! 2. each **technique** runs through the frames in the engine, edits applied as frame
 //!    time passes them ([`Replay`]); each frame is timed and measured against its

@@ -77,16 +77,16 @@ pub struct FrameRecord {
     pub technique: String,
     /// Frame index.
     pub frame: usize,
-    /// Scene time [s].
+    /// Scene time \[s\].
     pub time_s: f64,
-    /// Wall-clock time of the frame [ms]: edits, time step, the technique's update and
+    /// Wall-clock time of the frame \[ms\]: edits, time step, the technique's update and
     /// advance, and rendering (equal-time series: the path tracer's time).
     pub frame_ms: f64,
     /// Each scenario metric against the converged reference.
     pub metrics: Vec<(Metric, f64)>,
     /// Flicker between this frame and the previous one (`None` on frame 0).
     pub flicker: Option<f64>,
-    /// Technique counters after the frame, plus `engine.*` stage timings [ms].
+    /// Technique counters after the frame, plus `engine.*` stage timings \[ms\].
     pub counters: Counters,
 }
 
@@ -105,7 +105,7 @@ impl FrameRecord {
 pub struct Event {
     /// `start`, `animation end`, or the edit's label.
     pub name: String,
-    /// When it happens [s].
+    /// When it happens \[s\].
     pub at_s: f64,
     /// The first frame that shows it.
     pub frame: usize,
@@ -118,7 +118,7 @@ pub struct SeriesSummary {
     pub series: String,
     /// The technique name.
     pub technique: String,
-    /// Median frame time [ms].
+    /// Median frame time \[ms\].
     pub median_frame_ms: f64,
     /// `(metric, mean, max)` over the frames.
     pub metrics: Vec<(Metric, f64, f64)>,
@@ -133,7 +133,7 @@ pub struct SeriesSummary {
 /// The result of [`run`].
 #[derive(Clone, Debug)]
 pub struct BenchOutcome {
-    /// The frame times [s].
+    /// The frame times \[s\].
     pub times_s: Vec<f64>,
     /// The events latency is measured after.
     pub events: Vec<Event>,

@@ -51,19 +51,19 @@ pub struct Scenario {
     /// The scene animation to play (e.g. `move_sphere`). Default: none — the scene stays
     /// as loaded, even if the file has animations.
     pub animation: Option<String>,
-    /// Image width [pixels]. Default 320.
+    /// Image width \[pixels\]. Default 320.
     pub width: u32,
-    /// Image height [pixels]. Default 240.
+    /// Image height \[pixels\]. Default 240.
     pub height: u32,
-    /// Time of the first frame [s] with `duration_s` + `fps`. Default 0.
+    /// Time of the first frame \[s\] with `duration_s` + `fps`. Default 0.
     pub start_s: f64,
-    /// Length of the sequence [s]: frames at `start_s + i / fps` for
+    /// Length of the sequence \[s\]: frames at `start_s + i / fps` for
     /// `i = 0 .. round(duration_s × fps)`. Use with `fps`, or give `times_s` instead.
     /// Default: none.
     pub duration_s: Option<f64>,
     /// Frame rate of the sequence [frames/s]. Default: none.
     pub fps: Option<f64>,
-    /// Explicit frame times [s], finite, ≥ 0 and strictly increasing. Alternative to
+    /// Explicit frame times \[s\], finite, ≥ 0 and strictly increasing. Alternative to
     /// `duration_s` + `fps`. Default: none.
     pub times_s: Option<Vec<f64>>,
     /// Image metrics measured on every frame against the converged reference
@@ -165,7 +165,7 @@ pub struct TechniqueSpec {
     /// (e.g. `[technique.settings]` → the `[photon_stream]` table). Default: the
     /// technique's defaults.
     pub settings: Option<toml::Table>,
-    /// Wall-clock budget of the technique's `advance` per frame [ms]. Default: none
+    /// Wall-clock budget of the technique's `advance` per frame \[ms\]. Default: none
     /// (the technique's default budget).
     pub budget_ms: Option<f64>,
     /// Photons per frame (photon techniques). Default: none.
@@ -187,7 +187,7 @@ impl TechniqueSpec {
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct EditSpec {
-    /// Scene time [s] of the edit: it is applied just before the first frame whose time
+    /// Scene time \[s\] of the edit: it is applied just before the first frame whose time
     /// is ≥ `at_s`. Required, finite.
     pub at_s: f64,
     /// Name of the event in the latency table. Default `edit N (TARGET)`.
@@ -198,9 +198,9 @@ pub struct EditSpec {
     pub light: Option<String>,
     /// The material to change (by name).
     pub material: Option<String>,
-    /// New world translation of the instance or light [m]. Default: keep.
+    /// New world translation of the instance or light \[m\]. Default: keep.
     pub translation: Option<[f32; 3]>,
-    /// New world rotation of the instance or light [degrees], as angles about X, Y and Z
+    /// New world rotation of the instance or light \[degrees\], as angles about X, Y and Z
     /// with `R = Rx · Ry · Rz`. Default: keep.
     pub rotation_deg: Option<[f32; 3]>,
     /// New diffuse albedo of the material (linear RGB, each in [0, 1]). Default: keep.
@@ -487,7 +487,7 @@ impl Scenario {
         }
     }
 
-    /// The frame times [s], in order.
+    /// The frame times \[s\], in order.
     pub fn frame_times(&self) -> Vec<f64> {
         match (&self.times_s, self.duration_s, self.fps) {
             (Some(times), _, _) => times.clone(),

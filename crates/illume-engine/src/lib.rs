@@ -37,9 +37,9 @@ pub struct StepOutput {
     pub changes: Vec<SceneChange>,
     /// The technique's counters after the frame.
     pub stats: TechniqueStats,
-    /// Time spent updating the world and the technique [ms].
+    /// Time spent updating the world and the technique \[ms\].
     pub update_ms: f64,
-    /// Time spent in the technique's `advance` [ms].
+    /// Time spent in the technique's `advance` \[ms\].
     pub advance_ms: f64,
 }
 
@@ -117,7 +117,7 @@ impl Engine {
         Ok(changes)
     }
 
-    /// One frame at scene time `t` [s]: advance time, propagate changes, advance the
+    /// One frame at scene time `t` \[s\]: advance time, propagate changes, advance the
     /// technique within its budget, render, collect counters.
     pub fn step(&mut self, t: f64) -> StepOutput {
         let t0 = Instant::now();

@@ -33,9 +33,9 @@ use std::time::Instant;
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RenderSettings {
-    /// Image width [pixels]. Default 640.
+    /// Image width \[pixels\]. Default 640.
     pub width: u32,
-    /// Image height [pixels]. Default 480.
+    /// Image height \[pixels\]. Default 480.
     pub height: u32,
     /// Shadow-ray samples per pixel for area lights (emissive triangles). Higher: less
     /// noise in area-light direct light, at a cost linear in the count. Analytic lights
@@ -129,7 +129,7 @@ impl RenderSettings {
     }
 }
 
-/// Wall-clock time of a frame's stages [ms].
+/// Wall-clock time of a frame's stages \[ms\].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameTimings {
     /// Primary visibility (the G-buffer).

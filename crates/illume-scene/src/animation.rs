@@ -10,7 +10,7 @@ use illume_core::{Affine3A, Quat, Vec3, Vec4};
 /// `T · R · S` as in glTF.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Trs {
-    /// Translation [m].
+    /// Translation \[m\].
     pub translation: Vec3,
     /// Unit rotation quaternion.
     pub rotation: Quat,
@@ -76,7 +76,7 @@ pub enum Interpolation {
 /// (in-tangent, value, out-tangent) in that order, as in glTF.
 #[derive(Clone, Debug, PartialEq)]
 pub enum ChannelValues {
-    /// Translations [m].
+    /// Translations \[m\].
     Translation(Vec<Vec3>),
     /// Rotations as quaternions `(x, y, z, w)`.
     Rotation(Vec<Vec4>),
@@ -89,7 +89,7 @@ pub enum ChannelValues {
 pub struct Channel {
     /// The node it drives.
     pub node: NodeId,
-    /// Key times [s], strictly increasing.
+    /// Key times \[s\], strictly increasing.
     pub times: Vec<f32>,
     /// Key values (see [`ChannelValues`]).
     pub values: ChannelValues,
@@ -107,7 +107,7 @@ pub struct Animation {
 }
 
 impl Animation {
-    /// Time of the last key over all channels [s].
+    /// Time of the last key over all channels \[s\].
     pub fn duration(&self) -> f64 {
         self.channels
             .iter()

@@ -3,7 +3,7 @@
 //!
 //! * `furnace` — a closed sphere of radius 1 m, albedo 0.5, uniform emission 1 W/(m²·sr)
 //!   on its inner face, camera at the centre. Every pixel converges to Le/(1 − ρ) = 2.
-//! * `cornell-spot` — the Cornell box (x∈[−1,1], y∈[0,2], z∈[−1,1], open at +z) with a
+//! * `cornell-spot` — the Cornell box (x∈[−1,1], y∈\[0,2\], z∈[−1,1], open at +z) with a
 //!   rotated tall box and a sphere, lit by a spot light near the ceiling. Animation `move`
 //!   (0–2 s): the sphere rolls across the floor while the spot light slides along the
 //!   ceiling (the photon-streaming paper's Figure 11); `move_sphere` and `move_light`

@@ -156,7 +156,7 @@ impl Scene {
         changes
     }
 
-    /// Evaluates the active animation at time `t` [s] and returns what changed since the
+    /// Evaluates the active animation at time `t` \[s\] and returns what changed since the
     /// scene's previous state. Nodes not driven by the animation keep their transforms.
     pub fn set_time(&mut self, t: f64) -> Vec<SceneChange> {
         self.time = t;

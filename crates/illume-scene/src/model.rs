@@ -270,9 +270,9 @@ pub enum LightKind {
     Spot {
         /// Radiant intensity on the axis [W/sr].
         intensity: Rgb,
-        /// Inner cone half-angle [rad]: full intensity inside.
+        /// Inner cone half-angle \[rad\]: full intensity inside.
         inner_cone_rad: f32,
-        /// Outer cone half-angle [rad]: zero outside.
+        /// Outer cone half-angle \[rad\]: zero outside.
         outer_cone_rad: f32,
     },
     /// Distant light shining down the light's local −Z; `irradiance` [W/m²] on a surface
@@ -309,7 +309,7 @@ impl Light {
             .normalize_or(-Vec3::Y)
     }
 
-    /// Radiant power Φ [W] per channel. Directional lights need the radius of the
+    /// Radiant power Φ \[W\] per channel. Directional lights need the radius of the
     /// scene's bounding sphere (their power is the irradiance through its disk).
     pub fn power(&self, scene_radius: f32) -> Rgb {
         match self.kind {
@@ -345,7 +345,7 @@ pub fn spot_solid_angle(inner_cone_rad: f32, outer_cone_rad: f32) -> f32 {
 pub struct Camera {
     /// Name from the file.
     pub name: String,
-    /// Vertical field of view [rad] (glTF `yfov`); the aspect comes from the output size.
+    /// Vertical field of view \[rad\] (glTF `yfov`); the aspect comes from the output size.
     pub yfov_rad: f32,
     /// The node that places it.
     pub node: NodeId,
@@ -412,7 +412,7 @@ pub struct Scene {
     pub animations: Vec<Animation>,
     /// Index of the animation [`Scene::set_time`] plays, if any.
     pub active_animation: Option<usize>,
-    /// Current time [s].
+    /// Current time \[s\].
     pub time: f64,
     /// Non-fatal problems found while loading (unsupported features ignored, defaults used).
     pub warnings: Vec<String>,
@@ -459,14 +459,14 @@ impl Scene {
         }
     }
 
-    /// Duration of the active animation [s] (0 without one).
+    /// Duration of the active animation \[s\] (0 without one).
     pub fn animation_duration(&self) -> f64 {
         self.active_animation
             .map(|a| self.animations[a].duration())
             .unwrap_or(0.0)
     }
 
-    /// Total emitted power of emissive triangles [W] per channel: Σ π·Le·A (one-sided).
+    /// Total emitted power of emissive triangles \[W\] per channel: Σ π·Le·A (one-sided).
     pub fn emissive_power(&self) -> Rgb {
         let mut total = Rgb::ZERO;
         for inst in &self.instances {
@@ -484,7 +484,7 @@ impl Scene {
         total
     }
 
-    /// Total power of all lights [W] per channel, analytic and emissive.
+    /// Total power of all lights \[W\] per channel, analytic and emissive.
     pub fn total_power(&self) -> Rgb {
         let r = self.bounds().bounding_radius();
         self.lights.iter().map(|l| l.power(r)).sum::<Rgb>() + self.emissive_power()

@@ -43,7 +43,7 @@ pub fn lambert_pdf(normal: Vec3, wi: Vec3) -> f32 {
 
 /// Russian roulette: continue with probability `min(1, max channel of throughput)`;
 /// returns the weight factor `1/p` for a survivor or `None` for termination.
-/// Unbiased: E[weight] is unchanged.
+/// Unbiased: E\[weight\] is unchanged.
 #[inline]
 pub fn russian_roulette(throughput: Rgb, u: f32) -> Option<f32> {
     let p = throughput.max_element().min(1.0);

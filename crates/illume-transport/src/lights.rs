@@ -61,7 +61,7 @@ pub enum Emitter {
         corners: [Vec3; 3],
         /// Unit front normal.
         normal: Vec3,
-        /// Area [m²].
+        /// Area \[m²\].
         area: f32,
         /// Emitted radiance Le [W/(m²·sr)].
         radiance: Rgb,
@@ -90,7 +90,7 @@ pub struct LightSample {
 pub struct EmissionSample {
     /// Origin and unit direction.
     pub ray: Ray,
-    /// Flux carried [W] per channel, for one photon out of one (divide by the photon
+    /// Flux carried \[W\] per channel, for one photon out of one (divide by the photon
     /// count of the batch).
     pub flux: Rgb,
 }
@@ -228,12 +228,12 @@ impl LightSet {
         &self.emitters
     }
 
-    /// Power of each emitter [W] per channel.
+    /// Power of each emitter \[W\] per channel.
     pub fn powers(&self) -> &[Rgb] {
         &self.powers
     }
 
-    /// Total emitted power [W] per channel.
+    /// Total emitted power \[W\] per channel.
     pub fn total_power(&self) -> Rgb {
         self.total_power
     }

@@ -38,7 +38,7 @@ pub struct PhotonImpact {
     pub hit: PhotonHit,
     /// Unit direction the photon travelled in.
     pub incoming: Vec3,
-    /// Flux arriving with the photon [W] (per photon out of one; divide by the batch's
+    /// Flux arriving with the photon \[W\] (per photon out of one; divide by the batch's
     /// photon count).
     pub flux: Rgb,
     /// 0 for the first impact after leaving the light, 1 after one reflection, …

@@ -20,7 +20,7 @@ pub struct Budget {
     pub photons: Option<u64>,
     /// Samples per pixel to add (path tracing).
     pub samples: Option<u32>,
-    /// Wall-clock limit [ms].
+    /// Wall-clock limit \[ms\].
     pub time_ms: Option<f64>,
 }
 

@@ -44,7 +44,7 @@ impl World {
         Arc::new(RwLock::new(self))
     }
 
-    /// Moves the scene to time `t` [s] and brings the tracer and lights up to date.
+    /// Moves the scene to time `t` \[s\] and brings the tracer and lights up to date.
     pub fn set_time(&mut self, t: f64) -> Vec<SceneChange> {
         let changes = self.scene.set_time(t);
         self.refresh(&changes);

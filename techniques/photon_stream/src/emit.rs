@@ -1,6 +1,6 @@
 //! Photon emission and tracing (§0.7.1): equal-power photons from lights chosen by
 //! power, Russian roulette on albedo at each impact (the shared
-//! [`trace_photon`](illume_transport::photon::trace_photon) kernel, through the world's
+//! [`illume_transport::photon::trace_photon`] kernel, through the world's
 //! tracer), and each impact turned into a pool entry for its nearest VSL.
 //!
 //! What an impact deposits: the flux *leaving* the surface it hit, ρ(x)·Φ_arriving

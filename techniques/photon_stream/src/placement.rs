@@ -31,7 +31,7 @@ pub struct Vsl {
     pub position_object: Vec3,
     /// Unit normal in object space (the front face's side; the back side is `−normal`).
     pub normal_object: Vec3,
-    /// World area of the surface it represents [m²] (its Voronoi cell on the object).
+    /// World area of the surface it represents \[m²\] (its Voronoi cell on the object).
     pub area_m2: f32,
 }
 

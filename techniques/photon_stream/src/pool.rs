@@ -240,7 +240,7 @@ impl PhotonPool {
     }
 }
 
-/// Converts a non-negative flux [W] to quanta (rounded to nearest, halves up; saturates
+/// Converts a non-negative flux \[W\] to quanta (rounded to nearest, halves up; saturates
 /// at `i64::MAX`, which no physical photon reaches).
 #[inline]
 pub fn to_quanta(flux_w: f32, inv_quantum: f64) -> u64 {

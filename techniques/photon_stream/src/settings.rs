@@ -85,7 +85,7 @@ pub struct PhotonStreamSettings {
     /// Φ_s·R/(π r²) falls below ε, i.e. beyond r_ε = sqrt(Φ_s·R/(π ε)). Higher: more
     /// culling (faster), at the cost of cutting off faint light. Default 1e-6 (paper).
     pub epsilon: f32,
-    /// Side of the square screen tiles VSLs are culled against [pixels]. Smaller:
+    /// Side of the square screen tiles VSLs are culled against \[pixels\]. Smaller:
     /// tighter culling, at a per-tile overhead. Default 16.
     pub tile_size: u32,
     /// Shade one pixel in `shading_stride²` (a grid `shading_stride` pixels apart) and

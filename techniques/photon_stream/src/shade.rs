@@ -37,11 +37,11 @@ pub struct VslField {
     pub positions: Vec<Vec3>,
     /// Unit world normals (front side).
     pub normals: Vec<Vec3>,
-    /// Flux leaving the front side [W].
+    /// Flux leaving the front side \[W\].
     pub front_w: Vec<Rgb>,
-    /// Flux leaving the back side [W].
+    /// Flux leaving the back side \[W\].
     pub back_w: Vec<Rgb>,
-    /// Represented area A_s [m²].
+    /// Represented area A_s \[m²\].
     pub area_m2: Vec<f32>,
 }
 

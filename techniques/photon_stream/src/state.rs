@@ -29,7 +29,7 @@ pub struct PhotonStream {
     warmed_up: bool,
 }
 
-/// VSL fluxes [W] from a pool snapshot: front and back side of each VSL.
+/// VSL fluxes \[W\] from a pool snapshot: front and back side of each VSL.
 pub fn fluxes(snapshot: &PoolSnapshot) -> (Vec<Rgb>, Vec<Rgb>) {
     let scale = if snapshot.photons == 0 {
         0.0

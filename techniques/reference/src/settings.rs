@@ -4,9 +4,9 @@
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReferenceSettings {
-    /// Image width [pixels] (full-image rendering). Default 640.
+    /// Image width \[pixels\] (full-image rendering). Default 640.
     pub width: u32,
-    /// Image height [pixels]. Default 480.
+    /// Image height \[pixels\]. Default 480.
     pub height: u32,
     /// Samples per pixel of a full render. Noise falls as 1/√spp, time grows linearly.
     /// Default 256.
