@@ -1,13 +1,16 @@
 //! Photon streaming benchmarks (the paper's Tables 2–3 in kind, photon rate, latency).
 //!
 //! `cargo bench -p illume-photon-stream --bench photon_stream [-- SECTION...]` with
-//! SECTION among `fps`, `rate`, `latency`, `visibility` (default: all). Prints Markdown tables.
+//! SECTION among `fps`, `priority`, `rate`, `latency`, `visibility` (default: all). Prints
+//! Markdown tables.
 //!
 //! * `fps` — frames per second of whole frames (G-buffer + direct light + VSL indirect),
 //!   with a static camera and with the camera turning every frame, at 800×600 and
 //!   1280×1024 for 10/50/100/200 VSLs on the Cornell box, Cornell dragon and Dabrovic Sponza (`../shared/scenes`, or `ILLUME_SCENES`),
 //!   with the streaming thread running. As in the paper, each scene is lit by one spot
 //!   light (file emitters are switched off).
+//! * `priority` — frames per second and photon rate with the streaming thread at normal
+//!   and at low OS priority (800×600, 100 VSLs, static and moving camera).
 //! * `rate` — photon impacts per second of the streaming thread (alone) against the
 //!   tracer's incoherent closest-hit rays per second on one thread.
 //! * `visibility` — cost of the VSL visibility modes (beyond the paper).
@@ -16,7 +19,7 @@
 
 use illume_core::sampling::{Pcg32, SampleStream, uniform_sphere};
 use illume_core::{Affine3A, Quat, Ray, Rgb, Vec3};
-use illume_photon_stream::{PhotonStream, PhotonStreamSettings, VisibilityMode};
+use illume_photon_stream::{PhotonStream, PhotonStreamSettings, StreamPriority, VisibilityMode};
 use illume_render::{RenderSettings, Renderer};
 use illume_scene::{Edit, InstanceId, Light, LightKind, Node, Scene, Trs};
 use illume_transport::{SharedWorld, Technique, World};
@@ -84,6 +87,74 @@ const SCENES: [(&str, &str); 3] = [
     ("Sponza", "dabrovic_sponza/sponza.obj"),
 ];
 
+/// Whole-frame measurements of one configuration.
+struct FrameRun {
+    fps: f64,
+    gbuffer_ms: f64,
+    direct_ms: f64,
+    indirect_ms: f64,
+    vsls_per_tile: f64,
+    impacts_per_s: f64,
+}
+
+/// Renders frames for ~2 s (3–60 frames) with the streaming thread running; with
+/// `moving`, the camera turns a little every frame (no G-buffer pixel can be kept).
+fn run_frames(
+    world: &SharedWorld,
+    (w, h): (u32, u32),
+    settings: PhotonStreamSettings,
+    moving: bool,
+) -> FrameRun {
+    let home = world.read().unwrap().scene.camera.world_from_camera;
+    let mut ps = PhotonStream::new(world, settings).expect("photon_stream");
+    let renderer = Renderer::new(RenderSettings {
+        width: w,
+        height: h,
+        area_light_samples: 1,
+        ..Default::default()
+    });
+    {
+        let guard = world.read().unwrap();
+        ps.warm_up(&guard);
+        let _ = renderer.render(&guard, &mut ps, 0);
+    }
+    let t0 = Instant::now();
+    let (mut frames, mut indirect_ms, mut gbuffer_ms, mut direct_ms) = (0u32, 0.0, 0.0, 0.0);
+    while frames < 3 || (t0.elapsed() < Duration::from_secs(2) && frames < 60) {
+        if moving {
+            let yaw = 0.02 * ((frames % 7) as f32 - 3.0).to_radians();
+            let edit = Edit::SetCameraTransform {
+                world_from_camera: home * Affine3A::from_rotation_y(yaw),
+            };
+            ps.before_world_write();
+            let changes = world.write().unwrap().apply_edit(&edit).expect("edit");
+            ps.scene_changed(&world.read().unwrap(), &changes);
+        }
+        let guard = world.read().unwrap();
+        let f = renderer.render(&guard, &mut ps, frames as u64 + 1);
+        indirect_ms += f.timings.indirect_ms;
+        gbuffer_ms += f.timings.gbuffer_ms;
+        direct_ms += f.timings.direct_ms;
+        frames += 1;
+    }
+    let fps = frames as f64 / t0.elapsed().as_secs_f64();
+    let k = frames as f64;
+    let run = FrameRun {
+        fps,
+        gbuffer_ms: gbuffer_ms / k,
+        direct_ms: direct_ms / k,
+        indirect_ms: indirect_ms / k,
+        vsls_per_tile: ps.last_shade().vsls_per_tile(),
+        impacts_per_s: ps.impacts_per_s(),
+    };
+    drop(ps);
+    let edit = Edit::SetCameraTransform {
+        world_from_camera: home,
+    };
+    world.write().unwrap().apply_edit(&edit).expect("edit");
+    run
+}
+
 fn fps_table() {
     println!("\n### Frames per second (whole frame, streaming thread running)\n");
     println!(
@@ -94,71 +165,24 @@ fn fps_table() {
     let mut shading = Vec::new();
     for (label, file) in SCENES {
         let world: SharedWorld = World::new(load(file)).shared();
-        let home = world.read().unwrap().scene.camera.world_from_camera;
         for (w, h) in [(800u32, 600u32), (1280, 1024)] {
             for moving in [false, true] {
                 let view = if moving { "moving" } else { "static" };
                 let mut row = format!("| {label} | {w}×{h} | {view} |");
                 for n in [10u32, 50, 100, 200] {
-                    let mut ps = PhotonStream::new(
-                        &world,
-                        PhotonStreamSettings {
-                            vsl_count: n,
-                            ..Default::default()
-                        },
-                    )
-                    .expect("photon_stream");
-                    let renderer = Renderer::new(RenderSettings {
-                        width: w,
-                        height: h,
-                        area_light_samples: 1,
+                    let settings = PhotonStreamSettings {
+                        vsl_count: n,
                         ..Default::default()
-                    });
-                    {
-                        let guard = world.read().unwrap();
-                        ps.warm_up(&guard);
-                        let _ = renderer.render(&guard, &mut ps, 0);
-                    }
-                    let t0 = Instant::now();
-                    let (mut frames, mut indirect_ms, mut gbuffer_ms, mut direct_ms) =
-                        (0u32, 0.0, 0.0, 0.0);
-                    while frames < 3 || (t0.elapsed() < Duration::from_secs(2) && frames < 60) {
-                        if moving {
-                            // A small yaw that changes every frame: no pixel can be kept.
-                            let yaw = 0.02 * ((frames % 7) as f32 - 3.0).to_radians();
-                            let edit = Edit::SetCameraTransform {
-                                world_from_camera: home * Affine3A::from_rotation_y(yaw),
-                            };
-                            ps.before_world_write();
-                            let changes = world.write().unwrap().apply_edit(&edit).expect("edit");
-                            ps.scene_changed(&world.read().unwrap(), &changes);
-                        }
-                        let guard = world.read().unwrap();
-                        let f = renderer.render(&guard, &mut ps, frames as u64 + 1);
-                        indirect_ms += f.timings.indirect_ms;
-                        gbuffer_ms += f.timings.gbuffer_ms;
-                        direct_ms += f.timings.direct_ms;
-                        frames += 1;
-                    }
-                    let fps = frames as f64 / t0.elapsed().as_secs_f64();
-                    let k = frames as f64;
-                    row += &format!(" {fps:.1} |");
-                    let tile = ps.last_shade().vsls_per_tile();
-                    let rate = ps.impacts_per_s();
+                    };
+                    let r = run_frames(&world, (w, h), settings, moving);
+                    row += &format!(" {:.1} |", r.fps);
                     shading.push(format!(
-                        "| {label} | {w}×{h} | {view} | {n} | {:.1} | {:.1} | {:.1} | {tile:.1} | {:.0} |",
-                        gbuffer_ms / k,
-                        direct_ms / k,
-                        indirect_ms / k,
-                        rate
+                        "| {label} | {w}×{h} | {view} | {n} | {:.1} | {:.1} | {:.1} | {:.1} | {:.0} |",
+                        r.gbuffer_ms, r.direct_ms, r.indirect_ms, r.vsls_per_tile, r.impacts_per_s
                     ));
                 }
                 println!("{row}");
             }
-            let edit = Edit::SetCameraTransform {
-                world_from_camera: home,
-            };
-            world.write().unwrap().apply_edit(&edit).expect("edit");
         }
     }
     println!("\n### Frame breakdown [ms per frame]\n");
@@ -168,6 +192,39 @@ fn fps_table() {
     println!("|---|---|---|---|---|---|---|---|---|");
     for r in shading {
         println!("{r}");
+    }
+}
+
+/// Frame rate against photon rate for the streaming thread's two priorities.
+fn priority_table() {
+    println!(
+        "\n### Streaming thread priority: frames per second against photons (800×600, 100 VSLs)\n"
+    );
+    println!(
+        "| scene | camera | fps, normal | impacts/s, normal | latency, normal [s] | fps, low | impacts/s, low | latency, low [s] |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
+    for (label, file) in SCENES {
+        let world: SharedWorld = World::new(load(file)).shared();
+        for moving in [false, true] {
+            let view = if moving { "moving" } else { "static" };
+            let mut row = format!("| {label} | {view} |");
+            for priority in [StreamPriority::Normal, StreamPriority::Low] {
+                let settings = PhotonStreamSettings {
+                    stream_priority: priority,
+                    ..Default::default()
+                };
+                let pool = settings.pool_size as f64;
+                let r = run_frames(&world, (800, 600), settings, moving);
+                row += &format!(
+                    " {:.1} | {:.3e} | {:.3} |",
+                    r.fps,
+                    r.impacts_per_s,
+                    pool / r.impacts_per_s
+                );
+            }
+            println!("{row}");
+        }
     }
 }
 
@@ -368,5 +425,8 @@ fn main() {
     }
     if want("fps") {
         fps_table();
+    }
+    if want("priority") {
+        priority_table();
     }
 }

@@ -57,7 +57,9 @@ pub mod update;
 
 pub use placement::{Vsl, VslSet};
 pub use pool::PhotonPool;
-pub use settings::{ChangePolicy, PhotonStreamSettings, StreamMode, VisibilityMode};
+pub use settings::{
+    ChangePolicy, PhotonStreamSettings, StreamMode, StreamPriority, VisibilityMode,
+};
 pub use state::PhotonStream;
 
 /// Why photon streaming could not start.

@@ -17,6 +17,21 @@ pub enum StreamMode {
     Deterministic,
 }
 
+/// The streaming thread's share of the CPU when frames are rendered on the same cores.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum StreamPriority {
+    /// The thread competes with the renderer's threads as an equal (on 2 cores with 2
+    /// render threads it takes about a third of the machine while a frame renders, all
+    /// of it in between): the highest photon rate, the lowest latency.
+    #[default]
+    Normal,
+    /// The thread runs at the lowest OS priority (nice 19 on Linux): frames take the
+    /// cores first and photons fill the time the renderer leaves — higher frame rates,
+    /// a lower photon rate and so a longer latency (pool size / rate).
+    Low,
+}
+
 /// What a scene change does to the photon pool (§0.5 and §0.9.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -71,6 +86,10 @@ pub struct PhotonStreamSettings {
     pub pool_size: u32,
     /// Streaming or reproducible shooting. Default [`StreamMode::Streaming`].
     pub mode: StreamMode,
+    /// OS priority of the streaming thread: `normal` (default) or `low` (frames first;
+    /// `BENCHMARKS.md` has the frame rate against photon rate trade-off). Where the OS
+    /// refuses, the thread keeps normal priority and says so once on stderr.
+    pub stream_priority: StreamPriority,
     /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
     /// cost linear in the count. Default 20 000.
@@ -126,6 +145,7 @@ impl Default for PhotonStreamSettings {
             triangle_scale: 0.8,
             pool_size: 100_000,
             mode: StreamMode::Streaming,
+            stream_priority: StreamPriority::Normal,
             photons_per_frame: 20_000,
             batch_photons: 256,
             on_change: ChangePolicy::AgeOut,

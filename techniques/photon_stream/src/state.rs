@@ -97,6 +97,7 @@ impl PhotonStream {
                     Arc::clone(&shared),
                     StreamConfig {
                         batch_photons: settings.batch_photons as u64,
+                        priority: settings.stream_priority,
                         max_bounces: settings.max_bounces,
                         seed: settings.seed,
                         inv_quantum,

@@ -12,6 +12,7 @@
 use crate::emit::{Emitter, PhotonBatch};
 use crate::placement::VslSet;
 use crate::pool::PhotonPool;
+use crate::settings::StreamPriority;
 use illume_transport::SharedWorld;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
@@ -196,6 +197,8 @@ impl SharedPool {
 pub struct StreamConfig {
     /// Photons per world read-lock.
     pub batch_photons: u64,
+    /// OS priority of the thread.
+    pub priority: StreamPriority,
     /// Bounce limit.
     pub max_bounces: u32,
     /// Seed.
@@ -214,6 +217,15 @@ pub fn spawn(
     std::thread::Builder::new()
         .name("photon_stream".into())
         .spawn(move || {
+            if config.priority == StreamPriority::Low {
+                // Lowering one's own priority needs no privilege on Linux; elsewhere it
+                // may be refused, and streaming at normal priority is still correct.
+                if let Err(e) = thread_priority::set_current_thread_priority(
+                    thread_priority::ThreadPriority::Min,
+                ) {
+                    eprintln!("photon_stream: cannot lower the streaming thread's priority: {e:?}");
+                }
+            }
             while shared.wait_running() {
                 let (batch, epoch) = {
                     let w = world.read().unwrap_or_else(|e| e.into_inner());

@@ -3,7 +3,7 @@
 
 use illume_core::{Affine3A, Vec3};
 use illume_photon_stream::state::fluxes;
-use illume_photon_stream::{ChangePolicy, PhotonStream, PhotonStreamSettings};
+use illume_photon_stream::{ChangePolicy, PhotonStream, PhotonStreamSettings, StreamPriority};
 use illume_scene::{Edit, InstanceId};
 use illume_transport::{Budget, Technique, World};
 
@@ -229,11 +229,21 @@ fn deterministic_mode_is_reproducible() {
 
 #[test]
 fn streaming_thread_shoots_pauses_resumes_and_keeps_the_books() {
+    streaming_thread_checks(StreamPriority::Normal);
+}
+
+#[test]
+fn a_low_priority_streaming_thread_does_the_same() {
+    streaming_thread_checks(StreamPriority::Low);
+}
+
+fn streaming_thread_checks(stream_priority: StreamPriority) {
     let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
     let settings = PhotonStreamSettings {
         vsl_count: 30,
         pool_size: 20_000,
         batch_photons: 64,
+        stream_priority,
         ..PhotonStreamSettings::default()
     };
     let ps = PhotonStream::new(&world, settings).unwrap();
@@ -247,7 +257,9 @@ fn streaming_thread_shoots_pauses_resumes_and_keeps_the_books() {
     wait_for(&|| stat(&ps, "photon_stream.pool_fill") > 0.99);
     wait_for(&|| stat(&ps, "photon_stream.impacts_per_s") > 0.0);
     ps.validate().unwrap();
-    // Scene update under the write lock while the thread runs.
+    // Scene update under the write lock while the thread runs (announced, as the
+    // engine does: the thread ends its batch early).
+    ps.before_world_write();
     {
         let mut w = world.write().unwrap();
         w.set_time(1.0);
