@@ -88,6 +88,13 @@ impl RowRays {
     /// The unit-direction ray through the centre of pixel `x` of the row.
     #[inline]
     pub fn ray(&self, x: u32) -> Ray {
-        Ray::new(self.origin, (self.first + self.step * x as f32).normalize())
+        Ray::new(self.origin, self.direction(x).normalize())
+    }
+
+    /// The unnormalised direction through the centre of pixel `x` of the row (its
+    /// length grows away from the image centre).
+    #[inline]
+    pub fn direction(&self, x: u32) -> Vec3 {
+        self.first + self.step * x as f32
     }
 }

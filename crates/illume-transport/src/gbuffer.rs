@@ -154,14 +154,16 @@ pub(crate) struct PrimarySurfaces<'a> {
 pub(crate) struct TriangleSetup {
     instance: u32,
     triangle: u32,
-    p0: Vec3,
     /// Unit front-face normal.
     geometric_normal: Vec3,
-    /// `geometric_normal · p0`: the triangle's plane.
-    plane: f32,
     /// Dual vectors: `b1 = (p − p0)·dual1`, `b2 = (p − p0)·dual2` for p on the plane.
     dual1: Vec3,
     dual2: Vec3,
+    /// The camera's signed height over the plane, `n·(p0 − origin)`.
+    height: f32,
+    /// A corner: barycentrics are measured from it (close to the hit, so precise far
+    /// from the camera, unlike sums of large terms measured from the camera).
+    p0: Vec3,
     /// World shading normals at the corners (not normalised), `None` without normals.
     normals: Option<[Vec3; 3]>,
     uvs: Option<[Vec2; 3]>,
@@ -233,14 +235,15 @@ impl<'a> PrimarySurfaces<'a> {
         let mat = &scene.materials[material.index()];
         let reflects = front_face || mat.double_sided;
         let textured = reflects && mat.base_color_texture.is_some();
+        let (dual1, dual2) = (e2.cross(n) / nn, n.cross(e1) / nn);
         TriangleSetup {
             instance,
             triangle,
-            p0,
             geometric_normal,
-            plane: geometric_normal.dot(p0),
-            dual1: e2.cross(n) / nn,
-            dual2: n.cross(e1) / nn,
+            dual1,
+            dual2,
+            height: geometric_normal.dot(p0 - origin),
+            p0,
             normals,
             uvs,
             material,
@@ -253,15 +256,13 @@ impl<'a> PrimarySurfaces<'a> {
         }
     }
 
-    /// The G-buffer entry of a pixel whose centre ray `ray` sees `tri` (per the
-    /// rasterizer), or a BVH ray's answer when the ray does not actually hit it.
+    /// The G-buffer entry of a pixel whose centre ray (unnormalised direction `d` from
+    /// the camera) sees `tri` per the rasterizer, or a BVH ray's answer when the ray does
+    /// not actually hit it.
     #[inline]
-    pub(crate) fn pixel(
-        &self,
-        ray: &illume_core::Ray,
-        tri: &TriangleSetup,
-    ) -> Option<GBufferPixel> {
-        self.on_triangle(ray, tri).or_else(|| self.traced(ray))
+    pub(crate) fn pixel(&self, d: Vec3, tri: &TriangleSetup) -> Option<GBufferPixel> {
+        self.on_triangle(d, tri)
+            .or_else(|| self.traced(&illume_core::Ray::new(self.camera.origin(), d.normalize())))
     }
 
     /// The BVH's answer for `ray`.
@@ -274,25 +275,32 @@ impl<'a> PrimarySurfaces<'a> {
             })
     }
 
+    /// The surface where the camera ray with unnormalised direction `d` meets `tri`,
+    /// `None` when it misses. Worked with `d` as is — the hit is `o + s·d` for the
+    /// triangle's (per-triangle) camera height over its plane — so normalising `d` for
+    /// `to_camera` and `t` is off the chain of dependent divisions and square roots.
     #[inline]
-    fn on_triangle(&self, ray: &illume_core::Ray, tri: &TriangleSetup) -> Option<GBufferPixel> {
+    fn on_triangle(&self, d: Vec3, tri: &TriangleSetup) -> Option<GBufferPixel> {
         if !tri.usable {
             return None;
         }
         let ng = tri.geometric_normal;
-        let cos = ng.dot(ray.dir);
-        let t = (tri.plane - ng.dot(ray.origin)) / cos;
-        if !(t > 0.0 && t.is_finite()) {
+        let s = tri.height / ng.dot(d);
+        if !(s > 0.0 && s.is_finite()) {
             return None;
         }
-        let position = ray.origin + ray.dir * t;
-        let d = position - tri.p0;
-        let (b1, b2) = (d.dot(tri.dual1), d.dot(tri.dual2));
+        let origin = self.camera.origin();
+        let position = origin + d * s;
+        let e = position - tri.p0;
+        let (b1, b2) = (e.dot(tri.dual1), e.dot(tri.dual2));
         let b0 = 1.0 - b1 - b2;
         let slack = -Self::EDGE_SLACK;
         if b0 < slack || b1 < slack || b2 < slack {
             return None;
         }
+        let len = d.length();
+        let dir = d / len;
+        let t = s * len;
         let mut shading_normal = match tri.normals {
             Some([n0, n1, n2]) => {
                 let n = (n0 * b0 + n1 * b1 + n2 * b2).normalize_or_zero();
@@ -327,7 +335,7 @@ impl<'a> PrimarySurfaces<'a> {
                 reflects: tri.reflects,
                 t,
             },
-            to_camera: -ray.dir,
+            to_camera: -dir,
         })
     }
 }

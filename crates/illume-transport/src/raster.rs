@@ -255,7 +255,7 @@ impl GBuffer {
                                     current = Some(surfaces.setup(instance.0, triangle));
                                 }
                                 let tri = current.as_ref().expect("set up above");
-                                *px = surfaces.pixel(&rays.ray(x), tri);
+                                *px = surfaces.pixel(rays.direction(x), tri);
                             }
                             None if next_to_covered(vis, x, y) => {
                                 *px = surfaces.traced(&rays.ray(x))
