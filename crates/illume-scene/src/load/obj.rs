@@ -26,13 +26,9 @@
 //!   `map_bump`/`bump` are ignored with one warning per library (illume has no bump
 //!   mapping); other keywords are ignored.
 //!
-//! Result: **one illume [`Mesh`] and static instance per group**: every `o NAME` or
-//! `g NAME` starts a group (a repeated name starts another one, as in `tobj`); faces
-//! before the first of them form a group named after the file; groups without faces are
-//! dropped. Each instance
-//! sits at the identity under its own root node named after the group (so objects can be
-//! moved, and techniques see them as separate objects), each triangle keeps its own
-//! material, every material is two-sided. Vertices are shared between faces with the same `v/vt/vn` triple.
+//! Result: **one illume [`Mesh`] per OBJ file** (groups `o`/`g` are not split; each
+//! triangle keeps its own material), placed once by a root node at the identity, every
+//! material two-sided. Vertices are shared between faces with the same `v/vt/vn` triple.
 //! When some corners have normals and others not, the ones without get their face's
 //! geometric normal (flat shading there); when no corner has a normal the mesh has none.
 //! OBJ's `vt` has v = 0 at the bottom of the image; it is flipped to illume's
@@ -46,9 +42,6 @@ use crate::model::{Material, MaterialId, Mesh, Scene, TextureId, WrapMode};
 use illume_core::{Rgb, Vec2, Vec3};
 use std::collections::{BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
-
-/// Group of the faces before the first `o`/`g` statement.
-const UNGROUPED: u32 = u32::MAX;
 
 /// "No texture coordinate / normal" marker in a [`Corner`].
 const NONE: u32 = u32::MAX;
@@ -70,12 +63,6 @@ struct ObjReader<'a> {
     normals: Vec<Vec3>,
     triangles: Vec<[Corner; 3]>,
     triangle_materials: Vec<MaterialId>,
-    /// Group of each triangle, an index into `groups` or [`UNGROUPED`].
-    triangle_groups: Vec<u32>,
-    /// Group names in order of first appearance.
-    groups: Vec<String>,
-    /// The group new faces go to.
-    current_group: u32,
     materials: HashMap<String, MaterialId>,
     textures: HashMap<PathBuf, TextureId>,
     default_material: Option<MaterialId>,
@@ -95,9 +82,6 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         normals: Vec::new(),
         triangles: Vec::new(),
         triangle_materials: Vec::new(),
-        triangle_groups: Vec::new(),
-        groups: Vec::new(),
-        current_group: UNGROUPED,
         materials: HashMap::new(),
         textures: HashMap::new(),
         default_material: None,
@@ -131,16 +115,13 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "obj".into());
-    if r.triangles.is_empty() {
+    let mesh = r.build_mesh(&name);
+    if mesh.indices.is_empty() {
         r.builder.warn(format!("{}: no faces", path.display()));
     }
-    let meshes: Vec<Mesh> = r.build_meshes(&name);
     let mut b = r.builder;
-    for mesh in meshes {
-        let group = mesh.name.clone();
-        let mesh = b.mesh(mesh);
-        b.placed(&group, mesh, Trs::IDENTITY, false);
-    }
+    let mesh = b.mesh(mesh);
+    b.placed(&name, mesh, Trs::IDENTITY, false);
     let mut scene = b.finish(&path.to_string_lossy());
     default_camera_for_bounds(&mut scene);
     Ok(scene)
@@ -238,13 +219,7 @@ impl ObjReader<'_> {
                 });
             }
             "mtllib" => self.mtllib(n, after_keyword(text))?,
-            "o" | "g" => {
-                // Every statement starts a new group, as tobj does: files reuse names
-                // (CornellBox-Original.obj calls its tall box `leftWall` too).
-                self.groups.push(after_keyword(text).to_string());
-                self.current_group = self.groups.len() as u32 - 1;
-            }
-            "s" => {}
+            "o" | "g" | "s" => {}
             other => {
                 self.ignored.insert(other.to_string());
             }
@@ -286,7 +261,6 @@ impl ObjReader<'_> {
             self.triangles
                 .push([corners[0], corners[k], corners[k + 1]]);
             self.triangle_materials.push(material);
-            self.triangle_groups.push(self.current_group);
         }
         Ok(())
     }
@@ -445,44 +419,15 @@ impl ObjReader<'_> {
     }
 
     /// Turns the triangles into one mesh, sharing vertices with equal `v/vt/vn`.
-    /// One mesh per group with faces: the faces before any `o`/`g` first (named
-    /// `file_name`), then the groups in order of first appearance.
-    fn build_meshes(&self, file_name: &str) -> Vec<Mesh> {
-        let mut ungrouped = Vec::new();
-        let mut members: Vec<Vec<usize>> = vec![Vec::new(); self.groups.len()];
-        for (t, &g) in self.triangle_groups.iter().enumerate() {
-            match g {
-                UNGROUPED => ungrouped.push(t),
-                g => members[g as usize].push(t),
-            }
-        }
-        std::iter::once((file_name, ungrouped))
-            .chain(self.groups.iter().map(String::as_str).zip(members))
-            .filter(|(_, faces)| !faces.is_empty())
-            .map(|(name, faces)| {
-                let name = if name.is_empty() { file_name } else { name };
-                self.build_mesh(name, &faces)
-            })
-            .collect()
-    }
-
-    /// The mesh of triangles `triangles` (indices into the file's triangles).
-    fn build_mesh(&self, name: &str, triangles: &[usize]) -> Mesh {
-        let has_uv = triangles
-            .iter()
-            .flat_map(|&t| self.triangles[t])
-            .any(|c| c.vt != NONE);
-        let has_normal = triangles
-            .iter()
-            .flat_map(|&t| self.triangles[t])
-            .any(|c| c.vn != NONE);
+    fn build_mesh(&self, name: &str) -> Mesh {
+        let has_uv = self.triangles.iter().flatten().any(|c| c.vt != NONE);
+        let has_normal = self.triangles.iter().flatten().any(|c| c.vn != NONE);
         let mut mesh = Mesh {
             name: name.into(),
             ..Default::default()
         };
         let mut map: HashMap<(u32, u32, u64), u32> = HashMap::with_capacity(self.positions.len());
-        for &t in triangles {
-            let tri = &self.triangles[t];
+        for (t, tri) in self.triangles.iter().enumerate() {
             let p = tri.map(|c| self.positions[c.v as usize]);
             let flat = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Y);
             let mut idx = [0u32; 3];
@@ -516,10 +461,7 @@ impl ObjReader<'_> {
             }
             mesh.indices.push(idx);
         }
-        mesh.triangle_materials = triangles
-            .iter()
-            .map(|&t| self.triangle_materials[t])
-            .collect();
+        mesh.triangle_materials = self.triangle_materials.clone();
         mesh
     }
 }
