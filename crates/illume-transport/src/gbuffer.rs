@@ -144,9 +144,10 @@ impl GBuffer {
 pub(crate) struct PrimarySurfaces<'a> {
     world: &'a World,
     camera: CameraRays,
-    /// Inverse-transpose-like normal matrix of each instance (cofactor matrix with the
-    /// determinant's sign, as [`illume_core::transform_normal`]), computed once per frame.
-    normal_from_object: Vec<glam::Mat3A>,
+    /// Each instance's frame (its cofactor normal matrix), computed once per frame. The
+    /// determinant's sign is left out: interpolated normals are flipped to the geometric
+    /// normal's side anyway.
+    frames: Vec<crate::surface::InstanceFrame>,
 }
 
 /// The world-space data of one triangle, shared by the pixels that see it.
@@ -187,21 +188,16 @@ impl<'a> PrimarySurfaces<'a> {
     pub(crate) const EDGE_SLACK: f32 = 0.0;
 
     pub(crate) fn new(world: &'a World, width: u32, height: u32) -> Self {
-        let normal_from_object = world
+        let frames = world
             .scene
             .instances
             .iter()
-            .map(|inst| {
-                let m = &inst.world_from_object.matrix3;
-                let (c0, c1, c2) = (m.x_axis, m.y_axis, m.z_axis);
-                let det = c0.dot(c1.cross(c2));
-                glam::Mat3A::from_cols(c1.cross(c2), c2.cross(c0), c0.cross(c1)) * det.signum()
-            })
+            .map(|inst| crate::surface::InstanceFrame::new(&inst.world_from_object))
             .collect();
         Self {
             world,
             camera: CameraRays::new(&world.scene.camera, width, height),
-            normal_from_object,
+            frames,
         }
     }
 
@@ -227,9 +223,9 @@ impl<'a> PrimarySurfaces<'a> {
         let usable = nn > 0.0 && nn.is_finite();
         let geometric_normal = n.normalize_or(Vec3::Y);
         let front_face = (p0 - origin).dot(geometric_normal) < 0.0;
-        let normal_matrix = self.normal_from_object[instance as usize];
-        let normals = (!mesh.normals.is_empty())
-            .then(|| idx.map(|i| normal_matrix.mul_vec3(mesh.normals[i])));
+        let frame = &self.frames[instance as usize];
+        let normals =
+            (!mesh.normals.is_empty()).then(|| idx.map(|i| frame.normal(mesh.normals[i])));
         let uvs = (!mesh.uvs.is_empty()).then(|| idx.map(|i| mesh.uvs[i]));
         let material = mesh.triangle_materials[t];
         let mat = &scene.materials[material.index()];
