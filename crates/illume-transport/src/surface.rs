@@ -7,6 +7,12 @@ use illume_core::{
 use illume_scene::{InstanceId, MaterialId, Scene, Texture, TextureId, WrapMode};
 use rayon::prelude::*;
 
+/// `normal` turned to the side a ray arrived from (`front_face`: the front).
+#[inline]
+fn on_side(normal: Vec3, front_face: bool) -> Vec3 {
+    if front_face { normal } else { -normal }
+}
+
 /// A ray's hit point with everything shading needs.
 #[derive(Clone, Copy, Debug)]
 pub struct SurfaceHit {
@@ -97,21 +103,13 @@ impl SurfaceHit {
     /// hits of double-sided materials).
     #[inline]
     pub fn facing_normal(&self) -> Vec3 {
-        if self.front_face {
-            self.shading_normal
-        } else {
-            -self.shading_normal
-        }
+        on_side(self.shading_normal, self.front_face)
     }
 
     /// The geometric normal on the side the ray arrived from.
     #[inline]
     pub fn facing_geometric_normal(&self) -> Vec3 {
-        if self.front_face {
-            self.geometric_normal
-        } else {
-            -self.geometric_normal
-        }
+        on_side(self.geometric_normal, self.front_face)
     }
 
     /// A ray origin just off the surface on the side `dir` leaves towards.
@@ -226,21 +224,13 @@ impl PhotonHit {
     /// The normal on the side the ray arrived from (see [`SurfaceHit::facing_normal`]).
     #[inline]
     pub fn facing_normal(&self) -> Vec3 {
-        if self.front_face {
-            self.shading_normal
-        } else {
-            -self.shading_normal
-        }
+        on_side(self.shading_normal, self.front_face)
     }
 
     /// The geometric normal on the side the ray arrived from.
     #[inline]
     pub fn facing_geometric_normal(&self) -> Vec3 {
-        if self.front_face {
-            self.geometric_normal
-        } else {
-            -self.geometric_normal
-        }
+        on_side(self.geometric_normal, self.front_face)
     }
 
     /// A ray origin just off the surface on the side `dir` leaves towards.
