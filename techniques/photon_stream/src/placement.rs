@@ -156,6 +156,28 @@ fn point_on_triangle(
     (p, n)
 }
 
+/// One nearest-VSL index per object: object `i` holds VSLs `first[i]..first[i + 1]`
+/// (sorted by object) in its object space, over the box `bounds_of(i)`.
+fn object_indices(
+    vsls: &[Vsl],
+    first: &[u32],
+    bounds_of: impl Fn(usize) -> Aabb,
+) -> Vec<NearestIndex> {
+    (0..first.len() - 1)
+        .map(|i| {
+            let r = first[i] as usize..first[i + 1] as usize;
+            NearestIndex::new(
+                vsls[r.clone()]
+                    .iter()
+                    .zip(r)
+                    .map(|(v, g)| (v.position_object, g as u32))
+                    .collect(),
+                bounds_of(i),
+            )
+        })
+        .collect()
+}
+
 impl VslSet {
     /// Places VSLs on every instance of `scene` at its current time (§0.4.2). Instances
     /// without area get none; every other instance gets at least one.
@@ -217,20 +239,9 @@ impl VslSet {
                 area_m2: 0.0,
             })
             .collect();
-        let trees: Vec<NearestIndex> = (0..scene.instances.len())
-            .map(|i| {
-                let r = first[i] as usize..first[i + 1] as usize;
-                let bounds = scene.meshes[scene.instances[i].mesh.index()].bounds();
-                NearestIndex::new(
-                    vsls[r.clone()]
-                        .iter()
-                        .zip(r.clone())
-                        .map(|(v, g)| (v.position_object, g as u32))
-                        .collect(),
-                    bounds,
-                )
-            })
-            .collect();
+        let trees = object_indices(&vsls, &first, |i| {
+            scene.meshes[scene.instances[i].mesh.index()].bounds()
+        });
         let triangle_owner: Vec<Vec<u32>> = (0..scene.instances.len())
             .map(|i| {
                 let r = first[i] as usize..first[i + 1] as usize;
@@ -283,19 +294,7 @@ impl VslSet {
         for i in 0..instance_count {
             first[i + 1] += first[i];
         }
-        let trees = (0..instance_count)
-            .map(|i| {
-                let r = first[i] as usize..first[i + 1] as usize;
-                NearestIndex::new(
-                    vsls[r.clone()]
-                        .iter()
-                        .zip(r.clone())
-                        .map(|(v, g)| (v.position_object, g as u32))
-                        .collect(),
-                    bounds,
-                )
-            })
-            .collect();
+        let trees = object_indices(&vsls, &first, |_| bounds);
         Self {
             vsls,
             first,
