@@ -10,7 +10,7 @@ use illume_core::{Aabb, Affine3A, Quat, Ray, Vec2, Vec3};
 use illume_scene::builtin::SceneBuilder;
 use illume_scene::{Edit, InstanceId, MASK_DEFAULT, Material, Mesh, MeshId, Scene, Trs};
 use rayon::prelude::*;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 fn uniform(rng: &mut Pcg32) -> f32 {
     rng.next_f64() as f32
@@ -467,21 +467,9 @@ fn masks_hide_instances() {
     assert_eq!(tracer.intersect(&down, 0), None);
 }
 
-fn shared_scene(rel: &str) -> Option<Scene> {
-    let path: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/scenes")
-        .join(rel);
-    if !path.exists() {
-        println!("skipping {rel}: {} not found", path.display());
-        return None;
-    }
-    match illume_scene::load_scene(&path) {
-        Ok(s) => Some(s),
-        Err(e) => {
-            println!("skipping {rel}: the loader cannot read it yet ({e})");
-            None
-        }
-    }
+fn shared_scene(rel: &str) -> Scene {
+    let path: PathBuf = illume_scene::shared_scenes_dir().join(rel);
+    illume_scene::load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
 #[test]
@@ -492,9 +480,7 @@ fn shared_scenes_validate_and_agree() {
         ("gltf/cornell_spot.gltf", 20_000),
         ("dabrovic_sponza/sponza.obj", 400),
     ] {
-        let Some(scene) = shared_scene(rel) else {
-            continue;
-        };
+        let scene = shared_scene(rel);
         check(rel, &scene, rays, 77);
         println!("{rel}: validated, {rays} rays agree with brute force");
     }

@@ -21,7 +21,6 @@ use illume_core::{Affine3A, Quat, Rgb, Vec3};
 use illume_render::{Shadows, direct_light, direct_light_with};
 use illume_scene::{Edit, Light, LightId, LightKind, Node, Scene, Trs};
 use illume_transport::{GBuffer, ShadowMapSettings, ShadowMaps, World};
-use std::path::Path;
 use std::time::Duration;
 
 const SIZE: (u32, u32) = (800, 600);
@@ -62,7 +61,7 @@ fn scenes() -> Vec<(String, World)> {
         "cornell-spot".to_string(),
         World::new(illume_scene::builtin::load("cornell-spot").expect("builtin")),
     )];
-    let path = Path::new("/work/shared/scenes/dabrovic_sponza/sponza.obj");
+    let path = &illume_scene::shared_scenes_dir().join("dabrovic_sponza/sponza.obj");
     match illume_scene::load_scene(path) {
         Ok(sponza) => {
             let e = sponza.bounds().extent();

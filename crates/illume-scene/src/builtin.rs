@@ -295,6 +295,43 @@ pub fn lit_plane(kind: LightKind, light_at: Trs, rho: f32, occluder: bool) -> Sc
     b.finish("builtin:lit-plane")
 }
 
+/// `scene` lit as in the photon-streaming paper's measurements: its emitters switched
+/// off (emissive materials and lights) and one spot light near the top of its bounds
+/// shining straight down (inner cone 30°, outer 45°, intensity 10·(height/2)² W/sr, so
+/// the floor below gets about 2.8 W/m² whatever the scene's size). Benchmarks and tests
+/// use it on the shared scenes.
+pub fn spot_from_above(mut scene: Scene) -> Scene {
+    for m in &mut scene.materials {
+        m.emission = Rgb::ZERO;
+    }
+    scene.lights.clear();
+    let b = scene.bounds();
+    let (c, e) = (b.center(), b.extent());
+    let node = NodeId(scene.nodes.len() as u32);
+    scene.nodes.push(Node {
+        name: "spot_from_above".into(),
+        parent: None,
+        local: Trs {
+            translation: Vec3::new(c.x, b.max.y - 0.05 * e.y, c.z),
+            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+            scale: Vec3::ONE,
+        },
+        world_from_node: Affine3A::IDENTITY,
+    });
+    scene.lights.push(Light {
+        name: "spot_from_above".into(),
+        kind: LightKind::Spot {
+            intensity: Rgb::splat(10.0 * (e.y / 2.0).powi(2)),
+            inner_cone_rad: 30f32.to_radians(),
+            outer_cone_rad: 45f32.to_radians(),
+        },
+        node,
+        world_from_light: Affine3A::IDENTITY,
+    });
+    scene.update_world_transforms();
+    scene
+}
+
 /// The furnace: closed sphere (radius 1, inner faces), albedo `rho`, emission `le`.
 pub fn furnace(rho: f32, le: Rgb) -> Scene {
     let mut b = SceneBuilder::new();

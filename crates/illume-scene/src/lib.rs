@@ -28,3 +28,21 @@ pub use animation::{Animation, Channel, ChannelValues, Interpolation, Trs};
 pub use change::{Edit, SceneChange};
 pub use load::{LoadError, load_scene};
 pub use model::*;
+
+/// The shared test scenes folder (Cornell box variants, Dabrovic Sponza, bunny, dragon)
+/// for tests and benchmarks: `$ILLUME_SCENES`, else `shared/scenes` beside the
+/// repository's checkout (fixed when this crate is compiled). Panics, naming the folder,
+/// when it does not exist: a test that needs a shared scene fails rather than skips.
+pub fn shared_scenes_dir() -> std::path::PathBuf {
+    let dir = std::env::var_os("ILLUME_SCENES")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes")
+        });
+    assert!(
+        dir.is_dir(),
+        "shared scenes folder {} not found (clone the repository beside `shared/`, or set ILLUME_SCENES)",
+        dir.display()
+    );
+    dir
+}

@@ -11,16 +11,7 @@ use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 
 fn scenes_dir() -> PathBuf {
-    let dir = match std::env::var_os("ILLUME_SCENES") {
-        Some(d) => PathBuf::from(d),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes"),
-    };
-    assert!(
-        dir.is_dir(),
-        "scenes folder {} not found (set ILLUME_SCENES)",
-        dir.display()
-    );
-    dir
+    illume_scene::shared_scenes_dir()
 }
 
 fn load(rel: &str) -> Scene {

@@ -17,7 +17,6 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use illume_core::{Affine3A, Vec2};
 use illume_scene::Edit;
 use illume_transport::{GBuffer, VisibilityBuffer, World};
-use std::path::Path;
 use std::time::Duration;
 
 const SIZES: [(u32, u32); 3] = [(640, 480), (800, 600), (1280, 1024)];
@@ -27,7 +26,7 @@ fn scenes() -> Vec<(&'static str, World)> {
         "cornell-spot",
         World::new(illume_scene::builtin::load("cornell-spot").expect("builtin")),
     )];
-    let sponza = Path::new("/work/shared/scenes/dabrovic_sponza/sponza.obj");
+    let sponza = &illume_scene::shared_scenes_dir().join("dabrovic_sponza/sponza.obj");
     match illume_scene::load_scene(sponza) {
         Ok(scene) => scenes.push(("sponza", World::new(scene))),
         Err(e) => println!("sponza skipped: {e}"),

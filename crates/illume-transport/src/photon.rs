@@ -20,6 +20,13 @@ pub struct PhotonPathSettings {
     pub max_bounces: u32,
     /// Instances visible to photons (`ray_mask & instance.mask != 0`).
     pub mask: u32,
+    /// Read base-colour textures through copies box-filtered to at most
+    /// [`PHOTON_TEXTURE_SIDE`](crate::surface::PHOTON_TEXTURE_SIDE) texels a side: each
+    /// region keeps its mean albedo, so photon estimates gathered over regions larger
+    /// than a filtered texel are unchanged in expectation, and large textures stop
+    /// costing a cache miss per impact. False (default): full resolution, the albedo
+    /// the renderer sees.
+    pub filtered_textures: bool,
 }
 
 impl Default for PhotonPathSettings {
@@ -27,6 +34,7 @@ impl Default for PhotonPathSettings {
         Self {
             max_bounces: 32,
             mask: illume_scene::MASK_DEFAULT,
+            filtered_textures: false,
         }
     }
 }
@@ -78,7 +86,9 @@ pub fn trace_photon(
     world.tracer.scoped(|tracer| {
         for bounce in 0..=settings.max_bounces {
             stats.rays += 1;
-            let Some(hit) = world.trace_photon_hit(tracer, &ray, settings.mask) else {
+            let Some(hit) =
+                world.trace_photon_hit(tracer, &ray, settings.mask, settings.filtered_textures)
+            else {
                 break;
             };
             if !hit.reflects {

@@ -103,19 +103,21 @@ impl World {
     /// less what photons never read, at a fraction of the cost.
     pub fn photon_hit(&self, ray: &Ray, hit: &Hit) -> PhotonHit {
         let geometry = mesh_hit_geometry(&self.scene, hit);
-        PhotonHit::new(&self.scene, &self.hit_tables, ray, hit, &geometry)
+        PhotonHit::new(&self.scene, &self.hit_tables, ray, hit, &geometry, false)
     }
 
     /// Closest hit of `ray` among instances visible to `mask`, as a [`PhotonHit`], traced
     /// with `tracer` (this world's tracer, [`Tracer::scoped`]). The hit point and normal
     /// come from the tracer's copy of the triangle, still in cache, so the next photon
-    /// ray does not wait on the mesh's arrays.
+    /// ray does not wait on the mesh's arrays. `filtered_textures`: see
+    /// [`PhotonPathSettings::filtered_textures`](crate::photon::PhotonPathSettings).
     #[inline]
     pub fn trace_photon_hit(
         &self,
         tracer: &mut ScopedTracer<'_>,
         ray: &Ray,
         mask: u32,
+        filtered_textures: bool,
     ) -> Option<PhotonHit> {
         let (hit, geometry) = tracer.intersect_geometry(ray, mask)?;
         Some(PhotonHit::new(
@@ -124,6 +126,7 @@ impl World {
             ray,
             &hit,
             &geometry,
+            filtered_textures,
         ))
     }
 

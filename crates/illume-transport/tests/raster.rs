@@ -6,7 +6,6 @@
 use illume_core::{Affine3A, Quat, Vec2, Vec3};
 use illume_scene::{Edit, InstanceId, Scene};
 use illume_transport::{GBuffer, World};
-use std::path::Path;
 
 /// Agreement of one raster/ray pair.
 #[derive(Debug, Default)]
@@ -88,14 +87,11 @@ fn builtin(name: &str) -> World {
     World::new(illume_scene::builtin::load(name).expect("built-in scene"))
 }
 
-fn file(path: &str) -> Option<World> {
-    if !Path::new(path).exists() {
-        println!("skipped: {path} is missing");
-        return None;
-    }
-    Some(World::new(
-        illume_scene::load_scene(Path::new(path)).expect("scene loads"),
-    ))
+fn file(relative: &str) -> World {
+    let path = illume_scene::shared_scenes_dir().join(relative);
+    World::new(
+        illume_scene::load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+    )
 }
 
 const SIZES: [(u32, u32); 3] = [(160, 120), (331, 207), (800, 600)];
@@ -158,16 +154,12 @@ fn furnace_everything_clips() {
 
 #[test]
 fn gltf_cornell_spot() {
-    if let Some(mut world) = file("/work/shared/scenes/gltf/cornell_spot.gltf") {
-        compare_while_moving(&mut world, "cornell_spot.gltf");
-    }
+    compare_while_moving(&mut file("gltf/cornell_spot.gltf"), "cornell_spot.gltf");
 }
 
 #[test]
 fn sponza() {
-    if let Some(mut world) = file("/work/shared/scenes/dabrovic_sponza/sponza.obj") {
-        compare_while_moving(&mut world, "sponza");
-    }
+    compare_while_moving(&mut file("dabrovic_sponza/sponza.obj"), "sponza");
 }
 
 #[test]

@@ -18,10 +18,10 @@
 //!   against pool size / impact rate, on `builtin:cornell-spot`.
 
 use illume_core::sampling::{Pcg32, SampleStream, uniform_sphere};
-use illume_core::{Affine3A, Quat, Ray, Rgb, Vec3};
+use illume_core::{Affine3A, Ray, Vec3};
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings, StreamPriority, VisibilityMode};
 use illume_render::{RenderSettings, Renderer};
-use illume_scene::{Edit, InstanceId, Light, LightKind, Node, Scene, Trs};
+use illume_scene::{Edit, InstanceId, Scene};
 use illume_transport::{SharedWorld, Technique, World};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -32,53 +32,14 @@ use std::time::{Duration, Instant};
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn scenes_dir() -> PathBuf {
-    std::env::var_os("ILLUME_SCENES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes"))
-}
-
-/// The scene with its emitters switched off and one spot light shining down from
-/// near the top of its bounds (the paper's setup).
-fn with_spot(mut scene: Scene) -> Scene {
-    for m in &mut scene.materials {
-        m.emission = Rgb::ZERO;
-    }
-    scene.lights.clear();
-    let b = scene.bounds();
-    let c = b.center();
-    let e = b.extent();
-    let pos = Vec3::new(c.x, b.max.y - 0.05 * e.y, c.z);
-    let node = illume_scene::NodeId(scene.nodes.len() as u32);
-    scene.nodes.push(Node {
-        name: "bench_spot".into(),
-        parent: None,
-        local: Trs {
-            translation: pos,
-            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-            scale: Vec3::ONE,
-        },
-        world_from_node: Affine3A::IDENTITY,
-    });
-    let intensity = 10.0 * (e.y / 2.0).powi(2);
-    scene.lights.push(Light {
-        name: "bench_spot".into(),
-        kind: LightKind::Spot {
-            intensity: Rgb::splat(intensity),
-            inner_cone_rad: 30f32.to_radians(),
-            outer_cone_rad: 45f32.to_radians(),
-        },
-        node,
-        world_from_light: Affine3A::IDENTITY,
-    });
-    scene.update_world_transforms();
-    scene
+    illume_scene::shared_scenes_dir()
 }
 
 fn load(name: &str) -> Scene {
     let path = scenes_dir().join(name);
     let scene =
         illume_scene::load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    with_spot(scene)
+    illume_scene::builtin::spot_from_above(scene)
 }
 
 const SCENES: [(&str, &str); 3] = [
@@ -237,7 +198,7 @@ fn rates_on_one_thread(world: &World, ps: &PhotonStream) -> (f64, f64, f64) {
         world,
         ps.vsls(),
         1.0 / ps.snapshot().quantum_w,
-        32,
+        ps.settings().photon_path(),
         7,
     );
     let (mut ray_n, mut ray_s, mut imp_n, mut prays_n, mut imp_s) =

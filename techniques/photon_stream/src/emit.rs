@@ -73,16 +73,13 @@ impl<'a> Emitter<'a> {
         _world: &World,
         vsls: &'a VslSet,
         inv_quantum: f64,
-        max_bounces: u32,
+        path: PhotonPathSettings,
         seed: u64,
     ) -> Self {
         Self {
             vsls,
             inv_quantum,
-            path: PhotonPathSettings {
-                max_bounces,
-                ..Default::default()
-            },
+            path,
             seed: mix64(seed ^ 0x9407_0a57),
         }
     }

@@ -128,6 +128,14 @@ pub struct PhotonStreamSettings {
     /// Longest photon path in bounces, a safety net behind Russian roulette (§0.7.1).
     /// Default 32.
     pub max_bounces: u32,
+    /// Photons read base-colour textures through copies box-filtered to at most
+    /// [`PHOTON_TEXTURE_SIDE`](illume_transport::surface::PHOTON_TEXTURE_SIDE) (128)
+    /// texels a side. A VSL sums photons over a surface element far larger than a
+    /// filtered texel and the filter keeps every region's mean albedo, so VSL powers
+    /// are unchanged in expectation (tested on Sponza); large textures stop costing a
+    /// cache miss per impact (Sponza: 17 % more impacts/s). False: full-resolution
+    /// albedo for photons too. Default true. Rendering always uses full resolution.
+    pub filtered_textures: bool,
     /// Fill the pool synchronously (on the calling thread and rayon) before the first
     /// frame, so the first frame is already converged (the paper renders at once and
     /// lets the stream fill in). False: frames start dark and brighten as the pool
@@ -158,6 +166,7 @@ impl Default for PhotonStreamSettings {
             visibility: VisibilityMode::Off,
             visibility_rays: 8,
             max_bounces: 32,
+            filtered_textures: true,
             warm_up: true,
             start_paused: false,
             seed: 0,
@@ -204,6 +213,15 @@ impl PhotonStreamSettings {
             "interactive" => Some(Self::interactive()),
             "quality" => Some(Self::quality()),
             _ => None,
+        }
+    }
+
+    /// The photon paths these settings ask for.
+    pub fn photon_path(&self) -> illume_transport::photon::PhotonPathSettings {
+        illume_transport::photon::PhotonPathSettings {
+            max_bounces: self.max_bounces,
+            filtered_textures: self.filtered_textures,
+            ..Default::default()
         }
     }
 

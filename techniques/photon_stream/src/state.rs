@@ -98,7 +98,7 @@ impl PhotonStream {
                     StreamConfig {
                         batch_photons: settings.batch_photons as u64,
                         priority: settings.stream_priority,
-                        max_bounces: settings.max_bounces,
+                        path: settings.photon_path(),
                         seed: settings.seed,
                         inv_quantum,
                     },
@@ -137,7 +137,7 @@ impl PhotonStream {
             world,
             &self.vsls,
             self.inv_quantum,
-            self.settings.max_bounces,
+            self.settings.photon_path(),
             self.settings.seed,
         );
         let epoch = self.shared.epoch();

@@ -14,6 +14,7 @@ use crate::placement::VslSet;
 use crate::pool::PhotonPool;
 use crate::settings::StreamPriority;
 use illume_transport::SharedWorld;
+use illume_transport::photon::PhotonPathSettings;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Instant;
@@ -199,8 +200,8 @@ pub struct StreamConfig {
     pub batch_photons: u64,
     /// OS priority of the thread.
     pub priority: StreamPriority,
-    /// Bounce limit.
-    pub max_bounces: u32,
+    /// Photon path settings.
+    pub path: PhotonPathSettings,
     /// Seed.
     pub seed: u64,
     /// 1 / (watts per quantum).
@@ -230,13 +231,8 @@ pub fn spawn(
                 let (batch, epoch) = {
                     let w = world.read().unwrap_or_else(|e| e.into_inner());
                     let epoch = shared.epoch();
-                    let emitter = Emitter::new(
-                        &w,
-                        &vsls,
-                        config.inv_quantum,
-                        config.max_bounces,
-                        config.seed,
-                    );
+                    let emitter =
+                        Emitter::new(&w, &vsls, config.inv_quantum, config.path, config.seed);
                     let first = shared.reserve(config.batch_photons);
                     let requests = shared.world_requests.load(Ordering::Acquire);
                     let wanted = || shared.world_requests.load(Ordering::Acquire) != requests;

@@ -13,9 +13,7 @@ use illume_transport::World;
 use std::path::PathBuf;
 
 fn scenes_dir() -> PathBuf {
-    std::env::var_os("ILLUME_SCENES")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes"))
+    illume_scene::shared_scenes_dir()
 }
 
 /// (full, direct) means from Mitsuba; indirect = full − direct.
