@@ -21,9 +21,10 @@ pub struct PhotonPathSettings {
     /// Instances visible to photons (`ray_mask & instance.mask != 0`).
     pub mask: u32,
     /// Read base-colour textures through copies box-filtered to at most
-    /// [`PHOTON_TEXTURE_SIDE`](crate::surface::PHOTON_TEXTURE_SIDE) texels a side: each
-    /// region keeps its mean albedo, so photon estimates gathered over regions larger
-    /// than a filtered texel are unchanged in expectation, and large textures stop
+    /// [`PHOTON_TEXTURE_SIDE`](crate::surface::PHOTON_TEXTURE_SIDE) texels a side, one
+    /// texel per impact ([`HitTables::sample_filtered`](crate::surface::HitTables)):
+    /// each region keeps its mean albedo, so photon estimates gathered over regions
+    /// larger than a filtered texel are unchanged in expectation, and large textures stop
     /// costing a cache miss per impact. False (default): full resolution, the albedo
     /// the renderer sees.
     pub filtered_textures: bool,
@@ -95,25 +96,31 @@ pub fn trace_photon(
                 break;
             }
             stats.impacts += 1;
-            on_impact(&PhotonImpact {
+            let impact = PhotonImpact {
                 hit,
                 incoming: ray.dir,
                 flux,
                 bounce,
-            });
+            };
+            // The next ray first, the caller's bookkeeping after: the path is one chain
+            // of dependent work, and the impact's bookkeeping (independent of it) then
+            // overlaps the next traversal instead of delaying its start.
             let u_rr = sampler.next_1d();
             let u_dir = sampler.next_2d();
             let p = channel_mean(hit.albedo).min(1.0);
-            if p <= 0.0 || u_rr >= p {
+            let next = (p > 0.0 && u_rr < p)
+                .then(|| diffuse_direction(hit.facing_normal(), u_dir))
+                // Below the geometric surface (a shading-normal artefact): absorbed.
+                .filter(|wi| wi.dot(hit.facing_geometric_normal()) > 0.0);
+            if let Some(wi) = next {
+                // Lambertian reflection sampled by cosine: the path weight f·cosθ/pdf is ρ.
+                flux *= hit.albedo / p;
+                ray = Ray::new(hit.spawn_origin(wi), wi);
+            }
+            on_impact(&impact);
+            if next.is_none() {
                 break;
             }
-            let wi = diffuse_direction(hit.facing_normal(), u_dir);
-            if wi.dot(hit.facing_geometric_normal()) <= 0.0 {
-                break; // below the geometric surface: shading-normal artefact, absorbed
-            }
-            // Lambertian reflection sampled by cosine: the path weight f·cosθ/pdf is ρ.
-            flux *= hit.albedo / p;
-            ray = Ray::new(hit.spawn_origin(wi), wi);
         }
     });
     stats

@@ -322,8 +322,8 @@ pub struct HitTables {
 /// A photon's albedo only matters averaged over the many photons that a VSL or a
 /// photon-map lookup gathers, over regions far larger than a texel; a box-filtered
 /// copy keeps each region's mean albedo and fits in cache. Full-resolution textures
-/// (Sponza's are 11 MB) cost photon tracing a cache miss per impact: 128 texels a side
-/// made photon impacts 17 % faster in Sponza (`BENCHMARKS.md`).
+/// (Sponza's are 11 MB) cost photon tracing a cache miss per impact: 128 texels a side,
+/// read one texel per impact, made Sponza's photon impacts 1.3× as fast (`BENCHMARKS.md`).
 pub const PHOTON_TEXTURE_SIDE: u32 = 128;
 
 /// A texture as packed sRGB-8 indices `[r, g, b, 0]` into [`SRGB8_LUT`].
@@ -391,13 +391,15 @@ impl HitTables {
             _ => scene.textures[texture.index()].sample(uv),
         }
     }
-    /// [`HitTables::sample`] on the texture's copy box-filtered to at most
-    /// [`PHOTON_TEXTURE_SIDE`] texels a side (the texture itself when it is no larger):
-    /// same mean, coarser detail, cache-resident.
+    /// The texel at `uv` of the texture's copy box-filtered to at most
+    /// [`PHOTON_TEXTURE_SIDE`] texels a side, unfiltered (a filtered texel is already
+    /// the mean of the area it covers, so a uniform `uv` over that area reads its mean);
+    /// [`HitTables::sample`] when the texture is no larger. Same mean, coarser detail,
+    /// one texel read from a cache-resident copy.
     #[inline]
     pub fn sample_filtered(&self, scene: &Scene, texture: TextureId, uv: Vec2) -> Rgb {
         match self.filtered.get(texture.index()) {
-            Some(Some(small)) => small.sample(uv),
+            Some(Some(small)) => small.sample_nearest(uv),
             _ => self.sample(scene, texture, uv),
         }
     }
@@ -473,6 +475,20 @@ impl PackedTexture {
             wrap_u: self.wrap_u,
             wrap_v: self.wrap_v,
         })
+    }
+
+    /// The texel containing `uv` (wrapped as [`Texture::sample`] wraps).
+    #[inline]
+    fn sample_nearest(&self, uv: Vec2) -> Rgb {
+        let lut = &*SRGB8_LUT;
+        let x = wrap(floor_i64(uv.x * self.width as f32), self.width, self.wrap_u);
+        let y = wrap(
+            floor_i64(uv.y * self.height as f32),
+            self.height,
+            self.wrap_v,
+        );
+        let [r, g, b, _] = self.texels[y * self.width as usize + x];
+        Rgb::new(lut[r as usize], lut[g as usize], lut[b as usize])
     }
 
     /// [`Texture::sample`]'s arithmetic on the decoded texels.
@@ -652,6 +668,12 @@ mod tests {
             .collect();
         assert_eq!((row[0], row[63], row[65], row[127]), (1.0, 1.0, 0.0, 0.0));
         assert!((row[64] - 0.5).abs() < 5e-3, "straddling texel {}", row[64]);
+        // Photons read the texel containing uv, wrapped.
+        let at = |u: f32| small.sample_nearest(Vec2::new(u, 0.3)).x;
+        assert_eq!(at(64.5 / 128.0), row[64]);
+        assert_eq!(at(63.99 / 128.0), 1.0);
+        assert_eq!(at(1.0 + 0.5 / 128.0), 1.0);
+        assert_eq!(at(-0.5 / 128.0), 0.0);
     }
 
     #[test]

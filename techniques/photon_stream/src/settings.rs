@@ -133,7 +133,7 @@ pub struct PhotonStreamSettings {
     /// texels a side. A VSL sums photons over a surface element far larger than a
     /// filtered texel and the filter keeps every region's mean albedo, so VSL powers
     /// are unchanged in expectation (tested on Sponza); large textures stop costing a
-    /// cache miss per impact (Sponza: 17 % more impacts/s). False: full-resolution
+    /// cache miss per impact (Sponza: 1.3× the impacts/s). False: full-resolution
     /// albedo for photons too. Default true. Rendering always uses full resolution.
     pub filtered_textures: bool,
     /// Fill the pool synchronously (on the calling thread and rayon) before the first
