@@ -23,7 +23,8 @@ pub struct AnimateArgs {
     /// Animation to play (default: the scene's first).
     #[arg(long)]
     pub animation: Option<String>,
-    /// Length of the sequence [s] (default: the animation's duration, or 2 s).
+    /// Length of the sequence [s] (default: the animation's duration, or 2 s); frames at
+    /// 0, 1/fps, …, duration, both ends included.
     #[arg(long)]
     pub duration: Option<f64>,
     /// Frames per second of scene time (deterministic mode) and of the preview.
@@ -301,6 +302,7 @@ pub fn demo(d: DemoArgs) -> Result<()> {
             width: Some(d.width),
             height: Some(d.height),
             config: None,
+            preset: None,
         },
         animation: Some("move".into()),
         duration: Some(d.duration),

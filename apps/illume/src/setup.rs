@@ -3,6 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 use illume_engine::{Config, TechniqueKind};
+use illume_photon_stream::PhotonStreamSettings;
 use std::path::PathBuf;
 
 /// Technique, image size and TOML configuration (flags override the file).
@@ -21,6 +22,12 @@ pub struct SetupArgs {
     /// TOML configuration (technique settings tables); flags override it.
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// Named photon_stream settings instead of a `[photon_stream]` table: `default`,
+    /// `deterministic`, `interactive` or `quality` (200 VSLs, 10⁶-impact pool, VSL
+    /// shadows, every pixel shaded). `render` uses `quality` with a shadow ray to
+    /// every VSL, shot deterministically, when neither this nor --config is given.
+    #[arg(long, conflicts_with = "config")]
+    pub preset: Option<String>,
 }
 
 impl SetupArgs {
@@ -36,6 +43,13 @@ impl SetupArgs {
         }
         if let Some(h) = self.height {
             config.render.height = h;
+        }
+        if let Some(name) = &self.preset {
+            config.photon_stream = PhotonStreamSettings::preset(name).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--preset {name}: unknown preset (default, deterministic, interactive, quality)"
+                )
+            })?;
         }
         Ok(config)
     }

@@ -1,0 +1,172 @@
+//! The `illume` command line end to end: images with the analytic answer, split images
+//! that add up, animations with one CSV row per frame, and bad input rejected with a
+//! message naming the file and the key.
+
+use illume_core::image::RgbImage;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn illume(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_illume"))
+        .args(args)
+        .output()
+        .expect("the illume binary runs")
+}
+
+/// A fresh empty folder for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("illume-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "illume failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn reference_render_of_the_furnace_gives_le_over_one_minus_rho() {
+    // builtin:furnace: closed sphere, ρ = 0.5, Le = 1 ⇒ every pixel converges to 2.
+    let dir = scratch("furnace");
+    let exr = dir.join("furnace.exr");
+    let out = illume(&[
+        "render",
+        "builtin:furnace",
+        "--technique",
+        "reference",
+        "--spp",
+        "64",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "-o",
+        path(&exr),
+    ]);
+    ok(&out);
+    let img = RgbImage::read(&exr).unwrap();
+    assert_eq!((img.width(), img.height()), (8, 8));
+    let m = img.mean();
+    for c in m.to_array() {
+        assert!((c - 2.0).abs() < 0.06, "furnace mean {m}, expected 2");
+    }
+}
+
+#[test]
+fn photon_stream_still_splits_into_direct_plus_indirect() {
+    let dir = scratch("split");
+    let exr = dir.join("still.exr");
+    let out = illume(&[
+        "render",
+        "builtin:cornell-spot",
+        "--preset",
+        "deterministic",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--split",
+        "-o",
+        path(&exr),
+    ]);
+    ok(&out);
+    let read = |s: &str| RgbImage::read(&dir.join(s)).unwrap();
+    let (full, direct, indirect) = (
+        read("still.exr"),
+        read("still_direct.exr"),
+        read("still_indirect.exr"),
+    );
+    assert_eq!((full.width(), full.height()), (64, 48));
+    let mut worst = 0.0f32;
+    for ((f, d), i) in full
+        .pixels()
+        .iter()
+        .zip(direct.pixels())
+        .zip(indirect.pixels())
+    {
+        worst = worst.max((*f - (*d + *i)).abs().max_element());
+    }
+    assert!(worst < 1e-4, "full − (direct + indirect) up to {worst}");
+    // The spot lights the box: both parts carry light.
+    assert!(direct.mean().max_element() > 0.01 && indirect.mean().max_element() > 0.01);
+}
+
+#[test]
+fn animate_writes_one_frame_and_one_csv_row_per_frame() {
+    let dir = scratch("animate");
+    let out = illume(&[
+        "animate",
+        "builtin:cornell-spot",
+        "--duration",
+        "0.4",
+        "--fps",
+        "10",
+        "--photons-per-frame",
+        "2000",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--output",
+        path(&dir),
+    ]);
+    ok(&out);
+    let frames = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter(|e| {
+            let n = e.as_ref().unwrap().file_name();
+            let n = n.to_string_lossy();
+            n.starts_with("frame_") && n.ends_with(".png")
+        })
+        .count();
+    assert_eq!(frames, 5, "0.4 s at 10 fps: t = 0, 0.1, …, 0.4, both ends");
+    let csv = std::fs::read_to_string(dir.join("frames.csv")).unwrap();
+    assert_eq!(
+        csv.lines().count(),
+        1 + frames,
+        "header + one row per frame:\n{csv}"
+    );
+}
+
+#[test]
+fn bad_input_is_named_in_the_error() {
+    let dir = scratch("bad");
+    // An unknown settings key: the file and the key are named, nothing is written.
+    let toml = dir.join("bad.toml");
+    std::fs::write(&toml, "[photon_stream]\nvsl_cont = 20\n").unwrap();
+    let png = dir.join("never.png");
+    let out = illume(&[
+        "render",
+        "builtin:cornell-spot",
+        "--config",
+        path(&toml),
+        "-o",
+        path(&png),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("bad.toml") && err.contains("vsl_cont"),
+        "{err}"
+    );
+    assert!(!png.exists());
+    // A missing scene file is named.
+    let out = illume(&["render", path(&dir.join("nowhere.gltf")), "-o", path(&png)]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("nowhere.gltf"), "{err}");
+    // An unknown preset is named with the valid ones.
+    let out = illume(&["render", "builtin:cornell-spot", "--preset", "fast"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("fast") && err.contains("quality"), "{err}");
+}
