@@ -28,8 +28,8 @@ pub enum StreamPriority {
     /// The thread runs at the lowest OS priority (nice 19 on Linux): frames take the
     /// cores first and photons fill the time the renderer leaves — as in the paper,
     /// where the GPU renders and the CPU streams. Measured (`BENCHMARKS.md`, Cornell box
-    /// 800×600, camera moving): 41 fps at 1.6 M impacts/s against 29 fps at 3.4 M with
-    /// `normal`; latency (pool size / rate) 0.06 s against 0.03 s.
+    /// 800×600, camera moving): 38.5 fps at 2.1 M impacts/s against 26.9 fps at 3.5 M
+    /// with `normal`; latency (pool size / rate) 0.05 s against 0.03 s.
     #[default]
     Low,
 }
