@@ -602,6 +602,21 @@ mod tests {
     }
 
     #[test]
+    fn every_srgb8_code_packs_to_itself_and_nothing_else_packs() {
+        let all = srgb8_texture(256, 1, |x, _| [x as u8, 255 - x as u8, (x * 7 % 256) as u8]);
+        let packed = PackedTexture::new(&all).expect("all 256 codes pack");
+        for (x, t) in packed.texels.iter().enumerate() {
+            assert_eq!(*t, [x as u8, 255 - x as u8, (x * 7 % 256) as u8, 0]);
+        }
+        // A value between two codes, one above 1 and NaN keep the texture unpacked.
+        for bad in [0.5f32, 1.0001, f32::NAN, -0.0001] {
+            let mut t = all.clone();
+            t.texels[17].y = bad;
+            assert!(PackedTexture::new(&t).is_none(), "{bad} packed");
+        }
+    }
+
+    #[test]
     fn box_weights_cover_each_source_texel_once() {
         for (src, dst) in [(1000u32, 128u32), (129, 128), (1024, 128), (7, 3)] {
             let w = box_weights(src, dst);
