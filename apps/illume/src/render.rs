@@ -134,8 +134,13 @@ pub fn run(a: RenderArgs) -> Result<()> {
         let imgs = r.images();
         (imgs.full, imgs.direct, imgs.indirect)
     } else {
+        let spinner = progress::spinner(&format!(
+            "{}: placing VSLs, shooting photons, shading",
+            config.technique
+        ));
         let mut engine = Engine::new(scene, &config)?;
         let out = engine.step(a.time);
+        spinner.finish_and_clear();
         (out.frame.full, out.frame.direct, out.frame.indirect)
     };
     let secs = t0.elapsed().as_secs_f64();
