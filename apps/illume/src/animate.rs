@@ -112,7 +112,13 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     if w == 0 || h == 0 {
         bail!("image size must be at least 1×1");
     }
-    let scene = load_scene(&a.scene, a.animation.as_deref(), 0.0)?;
+    let mut scene = load_scene(
+        &a.scene,
+        a.animation.as_deref(),
+        0.0,
+        a.setup.spot_from_above,
+    )?;
+    a.setup.place_camera(&mut scene)?;
     let animation_s = scene.animation_duration();
     let duration = a
         .duration
@@ -303,6 +309,9 @@ pub fn demo(d: DemoArgs) -> Result<()> {
             height: Some(d.height),
             config: None,
             preset: None,
+            spot_from_above: false,
+            look_from: None,
+            look_at: None,
         },
         animation: Some("move".into()),
         duration: Some(d.duration),

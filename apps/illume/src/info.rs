@@ -15,7 +15,7 @@ pub struct InfoArgs {
 
 /// Runs `illume info`.
 pub fn run(a: InfoArgs) -> Result<()> {
-    let scene = crate::render::load_scene(&a.scene, None, 0.0)?;
+    let scene = crate::render::load_scene(&a.scene, None, 0.0, false)?;
     let b = scene.bounds();
     println!("scene        {}", scene.source);
     println!(

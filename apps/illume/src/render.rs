@@ -43,10 +43,19 @@ pub struct RenderArgs {
 }
 
 /// Loads a scene given on the command line (file or builtin:NAME), selects its
-/// animation and moves it to `time`; prints load warnings.
-pub fn load_scene(path: &Path, animation: Option<&str>, time: f64) -> Result<illume_scene::Scene> {
+/// animation and moves it to `time`, optionally relit by
+/// [`illume_scene::builtin::spot_from_above`]; prints load warnings.
+pub fn load_scene(
+    path: &Path,
+    animation: Option<&str>,
+    time: f64,
+    spot_from_above: bool,
+) -> Result<illume_scene::Scene> {
     let t0 = Instant::now();
     let mut scene = illume_scene::load_scene(path)?;
+    if spot_from_above {
+        scene = illume_scene::builtin::spot_from_above(scene);
+    }
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
@@ -56,7 +65,7 @@ pub fn load_scene(path: &Path, animation: Option<&str>, time: f64) -> Result<ill
     scene.set_time(time);
     if scene.lights.is_empty() && scene.materials.iter().all(|m| !m.is_emissive()) {
         eprintln!(
-            "warning: {}: the scene has no lights and no emissive materials; it will render black",
+            "warning: {}: the scene has no lights and no emissive materials; it will render black (--spot-from-above adds a spot light)",
             path.display()
         );
     }
@@ -116,7 +125,13 @@ pub fn run(a: RenderArgs) -> Result<()> {
         exposure_ev: a.exposure,
         ..Default::default()
     };
-    let scene = load_scene(&a.scene, a.animation.as_deref(), a.time)?;
+    let mut scene = load_scene(
+        &a.scene,
+        a.animation.as_deref(),
+        a.time,
+        a.setup.spot_from_above,
+    )?;
+    a.setup.place_camera(&mut scene)?;
     let t0 = Instant::now();
     let (full, direct, indirect) = if config.technique == TechniqueKind::Reference {
         let world = World::new(scene);

@@ -170,3 +170,74 @@ fn bad_input_is_named_in_the_error() {
     assert!(!out.status.success());
     assert!(err.contains("fast") && err.contains("quality"), "{err}");
 }
+
+#[test]
+fn a_scene_without_lights_is_lit_by_spot_from_above_and_seen_from_look_from() {
+    // The Stanford bunny (PLY) has no light: black, with a warning naming the way out;
+    // --spot-from-above lights it. --look-from/--look-at move the camera: looking away
+    // from the bunny leaves only the background.
+    let bunny = illume_scene::shared_scenes_dir().join("stanford_bunny/bun_zipper_res4.ply");
+    let dir = scratch("bunny");
+    let render = |name: &str, extra: &[&str]| {
+        let exr = dir.join(name);
+        let mut args = vec![
+            "render",
+            path(&bunny),
+            "--preset",
+            "deterministic",
+            "--width",
+            "48",
+            "--height",
+            "36",
+            "-o",
+            path(&exr),
+        ];
+        args.extend_from_slice(extra);
+        let out = illume(&args);
+        ok(&out);
+        (
+            RgbImage::read(&exr).unwrap().mean().max_element(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (unlit, err) = render("unlit.exr", &[]);
+    assert_eq!(unlit, 0.0);
+    assert!(err.contains("--spot-from-above"), "{err}");
+    let (lit, _) = render("lit.exr", &["--spot-from-above"]);
+    assert!(lit > 0.01, "lit bunny mean {lit}");
+    let (away, _) = render(
+        "away.exr",
+        &[
+            "--spot-from-above",
+            "--look-from",
+            "0,0.1,0.5",
+            "--look-at",
+            "0,0.1,5",
+        ],
+    );
+    assert!(
+        away < 0.2 * lit,
+        "looking away still sees {away} (bunny {lit})"
+    );
+    // Impossible views and malformed points are errors that say why.
+    let out = illume(&[
+        "render",
+        path(&bunny),
+        "--look-from",
+        "0,0,0",
+        "--look-at",
+        "0,1,0",
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("straight up"));
+    let out = illume(&[
+        "render",
+        path(&bunny),
+        "--look-from",
+        "1,2",
+        "--look-at",
+        "0,0,0",
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("X,Y,Z"));
+}

@@ -63,7 +63,9 @@ fn scenes() -> Vec<(String, World)> {
     )];
     let path = &illume_scene::shared_scenes_dir().join("dabrovic_sponza/sponza.obj");
     match illume_scene::load_scene(path) {
-        Ok(sponza) => {
+        Ok(mut sponza) => {
+            let (eye, target) = illume_scene::builtin::SPONZA_ATRIUM_VIEW;
+            illume_scene::builtin::look_from(&mut sponza, eye, target).expect("a valid view");
             let e = sponza.bounds().extent();
             let intensity = Rgb::splat(10.0 * (e.y / 2.0).powi(2));
             for (name, kind) in [

@@ -295,6 +295,33 @@ pub fn lit_plane(kind: LightKind, light_at: Trs, rho: f32, occluder: bool) -> Sc
     b.finish("builtin:lit-plane")
 }
 
+/// The view benchmarks and tests use for the shared Dabrovic Sponza
+/// (`dabrovic_sponza/sponza.obj`, which has no camera): from one end of the atrium at
+/// head height towards the far end and up, as in the photon-streaming paper's figures
+/// (eye, target) \[m\]. Apply it with [`look_from`].
+pub const SPONZA_ATRIUM_VIEW: (Vec3, Vec3) = (Vec3::new(-14.0, 2.0, 0.0), Vec3::new(0.0, 5.0, 0.0));
+
+/// Points `scene`'s camera from `eye` at `target` (+Y up), keeping its field of view —
+/// for scene files without a camera, whose default view from outside the bounds sees
+/// only the outer walls of an interior like Sponza. Errors on non-finite points, `eye`
+/// on `target`, or a vertical view direction.
+pub fn look_from(scene: &mut Scene, eye: Vec3, target: Vec3) -> Result<(), String> {
+    let forward = target - eye;
+    if !eye.is_finite() || !target.is_finite() {
+        return Err(format!("camera points {eye} and {target} must be finite"));
+    }
+    if forward.length() < 1e-6 || forward.normalize().cross(Vec3::Y).length() < 1e-4 {
+        return Err(format!(
+            "the camera cannot look from {eye} at {target} (same point, or straight up or down)"
+        ));
+    }
+    let world_from_camera = Affine3A::look_at_rh(eye, target, Vec3::Y).inverse();
+    scene
+        .apply_edit(&crate::Edit::SetCameraTransform { world_from_camera })
+        .map_err(|e| e.to_string())?;
+    Ok(())
+}
+
 /// `scene` lit as in the photon-streaming paper's measurements: its emitters switched
 /// off (emissive materials and lights) and one spot light near the top of its bounds
 /// shining straight down (inner cone 30°, outer 45°, intensity 10·(height/2)² W/sr, so
@@ -544,6 +571,26 @@ pub fn root_transform(trs: &Trs) -> Affine3A {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn look_from_places_the_camera_and_rejects_impossible_views() {
+        let mut scene = load("cornell-spot").unwrap();
+        let (eye, target) = (Vec3::new(0.5, 1.2, 0.8), Vec3::new(-0.3, 0.4, -0.9));
+        look_from(&mut scene, eye, target).unwrap();
+        let m = scene.camera.world_from_camera;
+        assert!((m.transform_point3(Vec3::ZERO) - eye).length() < 1e-5);
+        let dir = m.transform_vector3(-Vec3::Z);
+        assert!(
+            (dir - (target - eye).normalize()).length() < 1e-5,
+            "looks along {dir}"
+        );
+        // The image stays upright: camera +Y has a positive world Y component.
+        assert!(m.transform_vector3(Vec3::Y).y > 0.0);
+        for (e, t) in [(eye, eye), (eye, eye + Vec3::Y), (Vec3::NAN, target)] {
+            assert!(look_from(&mut scene, e, t).is_err(), "{e} → {t}");
+        }
+        assert!((scene.camera.world_from_camera.translation - m.translation).length() == 0.0);
+    }
 
     #[test]
     fn every_builtin_validates() {

@@ -28,7 +28,11 @@ fn scenes() -> Vec<(&'static str, World)> {
     )];
     let sponza = &illume_scene::shared_scenes_dir().join("dabrovic_sponza/sponza.obj");
     match illume_scene::load_scene(sponza) {
-        Ok(scene) => scenes.push(("sponza", World::new(scene))),
+        Ok(mut scene) => {
+            let (eye, target) = illume_scene::builtin::SPONZA_ATRIUM_VIEW;
+            illume_scene::builtin::look_from(&mut scene, eye, target).expect("a valid view");
+            scenes.push(("sponza", World::new(scene)))
+        }
         Err(e) => println!("sponza skipped: {e}"),
     }
     scenes

@@ -35,11 +35,19 @@ fn scenes_dir() -> PathBuf {
     illume_scene::shared_scenes_dir()
 }
 
+/// The scene lit by one spot light from above (the paper's setup). Sponza, whose file
+/// has no camera, is seen from inside the atrium as in the paper's figures (the
+/// default camera would stand outside and see the outer end wall).
 fn load(name: &str) -> Scene {
     let path = scenes_dir().join(name);
     let scene =
         illume_scene::load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    illume_scene::builtin::spot_from_above(scene)
+    let mut scene = illume_scene::builtin::spot_from_above(scene);
+    if name.contains("sponza") {
+        let (eye, target) = illume_scene::builtin::SPONZA_ATRIUM_VIEW;
+        illume_scene::builtin::look_from(&mut scene, eye, target).expect("a valid view");
+    }
+    scene
 }
 
 const SCENES: [(&str, &str); 3] = [
