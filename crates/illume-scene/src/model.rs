@@ -156,6 +156,27 @@ pub enum WrapMode {
     Mirror,
 }
 
+impl WrapMode {
+    /// Texel index `i` of a row or column of `n` texels, wrapped into `0..n` (the
+    /// integer division only when `i` lies outside).
+    #[inline]
+    pub fn wrap(self, i: i64, n: u32) -> usize {
+        let n = i64::from(n);
+        if (0..n).contains(&i) {
+            return i as usize;
+        }
+        let r = match self {
+            WrapMode::Repeat => i.rem_euclid(n),
+            WrapMode::Clamp => i.clamp(0, n - 1),
+            WrapMode::Mirror => {
+                let m = i.rem_euclid(2 * n);
+                if m < n { m } else { 2 * n - 1 - m }
+            }
+        };
+        r as usize
+    }
+}
+
 /// An RGB texture, linear values (sRGB base-colour images are decoded on load).
 #[derive(Clone, Debug)]
 pub struct Texture {
@@ -184,8 +205,8 @@ impl Texture {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let t = |ix: i64, iy: i64| {
-            let cx = wrap(ix, self.width, self.wrap_u);
-            let cy = wrap(iy, self.height, self.wrap_v);
+            let cx = self.wrap_u.wrap(ix, self.width);
+            let cy = self.wrap_v.wrap(iy, self.height);
             self.texels[cy * self.width as usize + cx]
         };
         let (ix, iy) = (x0 as i64, y0 as i64);
@@ -201,19 +222,6 @@ impl Texture {
         }
         self.texels.iter().copied().sum::<Rgb>() / self.texels.len() as f32
     }
-}
-
-fn wrap(i: i64, n: u32, mode: WrapMode) -> usize {
-    let n = n as i64;
-    let r = match mode {
-        WrapMode::Repeat => i.rem_euclid(n),
-        WrapMode::Clamp => i.clamp(0, n - 1),
-        WrapMode::Mirror => {
-            let m = i.rem_euclid(2 * n);
-            if m < n { m } else { 2 * n - 1 - m }
-        }
-    };
-    r as usize
 }
 
 /// A surface material. illume's light transport is Lambertian; `glossiness` is carried

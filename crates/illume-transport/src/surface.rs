@@ -481,12 +481,12 @@ impl PackedTexture {
     #[inline]
     fn sample_nearest(&self, uv: Vec2) -> Rgb {
         let lut = &*SRGB8_LUT;
-        let x = wrap(floor_i64(uv.x * self.width as f32), self.width, self.wrap_u);
-        let y = wrap(
-            floor_i64(uv.y * self.height as f32),
-            self.height,
-            self.wrap_v,
-        );
+        let x = self
+            .wrap_u
+            .wrap(floor_i64(uv.x * self.width as f32), self.width);
+        let y = self
+            .wrap_v
+            .wrap(floor_i64(uv.y * self.height as f32), self.height);
         let [r, g, b, _] = self.texels[y * self.width as usize + x];
         Rgb::new(lut[r as usize], lut[g as usize], lut[b as usize])
     }
@@ -501,12 +501,12 @@ impl PackedTexture {
         let (x0, y0) = (ix as f32, iy as f32);
         let (fx, fy) = (x - x0, y - y0);
         let (cx0, cx1) = (
-            wrap(ix, self.width, self.wrap_u),
-            wrap(ix + 1, self.width, self.wrap_u),
+            self.wrap_u.wrap(ix, self.width),
+            self.wrap_u.wrap(ix + 1, self.width),
         );
         let (r0, r1) = (
-            wrap(iy, self.height, self.wrap_v) * self.width as usize,
-            wrap(iy + 1, self.height, self.wrap_v) * self.width as usize,
+            self.wrap_v.wrap(iy, self.height) * self.width as usize,
+            self.wrap_v.wrap(iy + 1, self.height) * self.width as usize,
         );
         let t = |i: usize| {
             let [r, g, b, _] = self.texels[i];
@@ -549,25 +549,6 @@ fn floor_i64(x: f32) -> i64 {
     } else {
         i
     }
-}
-
-/// Texel index `i` wrapped into `0..n` as [`Texture::sample`] wraps it, without the
-/// integer division when `i` is already inside.
-#[inline]
-fn wrap(i: i64, n: u32, mode: WrapMode) -> usize {
-    let n = n as i64;
-    if (0..n).contains(&i) {
-        return i as usize;
-    }
-    let r = match mode {
-        WrapMode::Repeat => i.rem_euclid(n),
-        WrapMode::Clamp => i.clamp(0, n - 1),
-        WrapMode::Mirror => {
-            let m = i.rem_euclid(2 * n);
-            if m < n { m } else { 2 * n - 1 - m }
-        }
-    };
-    r as usize
 }
 
 #[cfg(test)]
