@@ -341,6 +341,18 @@ static SRGB8_LUT: std::sync::LazyLock<[f32; 256]> = std::sync::LazyLock::new(|| 
     std::array::from_fn(|i| illume_core::image::srgb_decode(i as f32 / 255.0))
 });
 
+/// For each of the 2¹⁶ high halves `h` of an f32 bit pattern, the first code whose
+/// [`SRGB8_LUT`] value has a bit pattern ≥ `h << 16` (256 if none). Non-negative floats
+/// order like their bit patterns and a bucket spans at most a couple of codes, so
+/// finding a texel's code is one lookup and a step or two: packing Sponza's 2.7 M
+/// texels took 43 ms with a binary search per channel.
+static SRGB8_BUCKETS: std::sync::LazyLock<Box<[u16]>> = std::sync::LazyLock::new(|| {
+    let lut = &*SRGB8_LUT;
+    (0u32..1 << 16)
+        .map(|h| lut.partition_point(|x| x.to_bits() < h << 16) as u16)
+        .collect()
+});
+
 impl HitTables {
     /// Tables for `scene` at its current time.
     pub fn new(scene: &Scene) -> Self {
@@ -409,9 +421,15 @@ impl PackedTexture {
     /// Packs `texture` when every channel of every texel is one of [`SRGB8_LUT`].
     fn new(texture: &Texture) -> Option<Self> {
         let lut = &*SRGB8_LUT;
+        let buckets = &*SRGB8_BUCKETS;
+        // The first code at or above `v`'s bucket, then up to `v`: a code or two.
         let code = |v: f32| -> Option<u8> {
-            let k = lut.partition_point(|&x| x < v);
-            (k < 256 && lut[k].to_bits() == v.to_bits()).then_some(k as u8)
+            let bits = v.to_bits();
+            let mut k = usize::from(buckets[(bits >> 16) as usize]);
+            while k < 256 && lut[k].to_bits() < bits {
+                k += 1;
+            }
+            (k < 256 && lut[k].to_bits() == bits).then_some(k as u8)
         };
         let texels: Option<Vec<[u8; 4]>> = texture
             .texels
