@@ -6,7 +6,8 @@
 //! surface from its triangle), `raster moving camera` is [`GBuffer::rasterize_into`] last
 //! frame's buffer with the camera turned since (every pixel rebuilt, allocation reused),
 //! `raster static` the same with nothing changed (the whole buffer kept), and
-//! `visibility` is the rasterizer alone ([`VisibilityBuffer::render`]).
+//! `visibility` is the rasterizer alone ([`VisibilityBuffer::render`]). Group
+//! `hit_tables`: the per-world texture tables (`HitTables::new`).
 
 #![expect(
     missing_docs,
@@ -84,5 +85,19 @@ fn gbuffer(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, gbuffer);
+/// `HitTables::new`: packing a scene's textures to sRGB-8 codes and building the photon
+/// copies (once per `World`, so part of every scene load).
+fn hit_tables(c: &mut Criterion) {
+    let mut g = c.benchmark_group("hit_tables");
+    g.sample_size(10);
+    g.measurement_time(Duration::from_secs(2));
+    for (name, world) in scenes() {
+        g.bench_function(format!("{name} HitTables::new"), |b| {
+            b.iter(|| illume_transport::surface::HitTables::new(&world.scene))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, gbuffer, hit_tables);
 criterion_main!(benches);
