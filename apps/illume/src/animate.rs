@@ -7,13 +7,16 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use illume_core::image::{RgbImage, ToneMap, to_srgb8, write_exr};
 use illume_engine::{Engine, TechniqueKind};
-use illume_photon_stream::StreamMode;
+use illume_scene::Timeline;
+use illume_scene::timeline::ping_pong_time;
+use illume_transport::Pacing;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Arguments of `illume animate`.
 #[derive(Args, Clone)]
+#[command(after_help = crate::setup::techniques_help())]
 pub struct AnimateArgs {
     /// Scene file (.gltf, .glb, .obj, .ply) or builtin:NAME.
     pub scene: PathBuf,
@@ -31,20 +34,19 @@ pub struct AnimateArgs {
     #[arg(long, default_value_t = 15.0)]
     pub fps: f64,
     /// Real time: scene time follows the wall clock, frames are rendered as fast as
-    /// they come, photons stream in a background thread (photon_stream).
-    #[arg(long, conflicts_with = "photons_per_frame")]
+    /// they come, and the technique runs its interactive mode (photon_stream: photons
+    /// stream in a background thread).
+    #[arg(long, conflicts_with = "work_per_frame")]
     pub realtime: bool,
-    /// Deterministic: shoot exactly N photons between frames (reproducible frames).
-    /// Default when --realtime is not given (with the technique's photons_per_frame).
-    #[arg(long)]
-    pub photons_per_frame: Option<u64>,
+    /// Reproducible frames: exactly N units of the technique's work between frames
+    /// (photons, samples per pixel…: listed below). Default when --realtime is not
+    /// given, with the technique's own amount.
+    #[arg(long, value_name = "N")]
+    pub work_per_frame: Option<u64>,
     /// Play the animation forwards then backwards (ping-pong) when the sequence is
     /// longer than the animation.
     #[arg(long)]
     pub ping_pong: bool,
-    /// Number of VSLs (photon_stream's vsl_count).
-    #[arg(long)]
-    pub vsls: Option<u32>,
     /// Output folder: frame_NNNNN.png, frames.csv, preview.gif or preview.mp4.
     #[arg(long, short, default_value = "out/animate")]
     pub output: PathBuf,
@@ -71,19 +73,10 @@ pub struct DemoArgs {
     /// Image height [pixels].
     #[arg(long, default_value_t = 480)]
     pub height: u32,
-    /// Number of VSLs.
-    #[arg(long, default_value_t = 100)]
-    pub vsls: u32,
-}
-
-/// Scene time of sequence time `t`: the animation time itself, or ping-pong over it.
-fn scene_time(t: f64, animation_s: f64, ping_pong: bool) -> f64 {
-    if !ping_pong || animation_s <= 0.0 {
-        return t;
-    }
-    let period = 2.0 * animation_s;
-    let u = t.rem_euclid(period);
-    if u <= animation_s { u } else { period - u }
+    /// Set one photon_stream setting, TABLE.KEY=VALUE (repeatable), e.g.
+    /// `photon_stream.vsl_count=200`.
+    #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
+    pub sets: Vec<String>,
 }
 
 struct StoredFrame {
@@ -93,25 +86,18 @@ struct StoredFrame {
 
 /// Runs `illume animate`.
 pub fn run(a: AnimateArgs) -> Result<()> {
-    let mut config = a.setup.config()?;
-    if let Some(n) = a.vsls {
-        config.photon_stream.vsl_count = n;
-    }
-    if a.realtime {
-        config.photon_stream.mode = StreamMode::Streaming;
+    let mut config = a.setup.config(None)?;
+    config.technique_settings_mut().pace(if a.realtime {
+        Pacing::RealTime
     } else {
-        config.photon_stream.mode = StreamMode::Deterministic;
-        if let Some(n) = a.photons_per_frame {
-            config.photon_stream.photons_per_frame = n;
+        Pacing::FixedWork {
+            work_per_frame: a.work_per_frame,
         }
-    }
+    });
     if !(a.fps > 0.0 && a.fps.is_finite()) {
         bail!("--fps must be positive, got {}", a.fps);
     }
     let (w, h) = (config.render.width, config.render.height);
-    if w == 0 || h == 0 {
-        bail!("image size must be at least 1×1");
-    }
     let mut scene = load_scene(
         &a.scene,
         a.animation.as_deref(),
@@ -132,8 +118,17 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         exposure_ev: a.exposure,
         ..Default::default()
     };
-    let mut engine = Engine::new(scene, &config)?;
     let planned = (duration * a.fps).round() as u64 + 1;
+    // Every frame's scene time, in rendering order: the timeline handed to techniques
+    // that need the future (in real time, the frames' nominal times).
+    let times: Vec<f64> = (0..planned)
+        .map(|i| ping_pong_time(i as f64 / a.fps, animation_s, a.ping_pong))
+        .collect();
+    let timeline = Timeline::new(scene.clone(), times, w, h)?;
+    let mut engine = Engine::with_timeline(scene, &config, timeline)?;
+    let mut bars = progress::Bars::default();
+    let precompute_ms = engine.precompute(&mut bars)?;
+    bars.finish();
     let pb = progress::bar(planned, if a.realtime { "real time" } else { "frames" });
     let mut csv_header: Option<Vec<String>> = None;
     let mut csv_rows: Vec<String> = Vec::new();
@@ -151,15 +146,18 @@ pub fn run(a: AnimateArgs) -> Result<()> {
             break;
         }
         let t_frame = Instant::now();
-        let out = engine.step(scene_time(t, animation_s, a.ping_pong));
-        render_s += t_frame.elapsed().as_secs_f64();
+        let out = engine.step(ping_pong_time(t, animation_s, a.ping_pong))?;
+        render_s += t_frame.elapsed().as_secs_f64() - out.precompute_ms / 1e3;
         let ft = out.frame.timings;
-        let names: Vec<String> = out.stats.iter().map(|(n, _)| n.clone()).collect();
+        let names: Vec<String> = out.stats.names().map(str::to_owned).collect();
         if csv_header.is_none() {
             csv_header = Some(names.clone());
         }
+        // Precompute is its own column: frame 0 carries the phase before the first
+        // frame, any frame a rebuild's.
+        let frame_precompute_ms = out.precompute_ms + if index == 0 { precompute_ms } else { 0.0 };
         let mut row = format!(
-            "{index},{t:.6},{:.6},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
+            "{index},{t:.6},{:.6},{frame_precompute_ms:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
             start.elapsed().as_secs_f64(),
             out.update_ms,
             out.advance_ms,
@@ -168,7 +166,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
             ft.indirect_ms,
             ft.total_ms
         );
-        for (_, v) in &out.stats {
+        for (_, v) in out.stats.iter() {
             row += &format!(",{v}");
         }
         csv_rows.push(row);
@@ -204,7 +202,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     let header = csv_header.unwrap_or_default();
     writeln!(
         csv,
-        "frame,time_s,wall_s,update_ms,advance_ms,gbuffer_ms,direct_ms,indirect_ms,render_ms{}",
+        "frame,time_s,wall_s,precompute_ms,update_ms,advance_ms,gbuffer_ms,direct_ms,indirect_ms,render_ms{}",
         header.iter().map(|n| format!(",{n}")).collect::<String>()
     )?;
     for r in &csv_rows {
@@ -222,11 +220,16 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         },
     )?;
     eprintln!(
-        "{} frames of {}×{} with {} in {wall:.2} s: {:.2} frames per second (rendering alone {:.2} fps)",
+        "{} frames of {}×{} with {} in {wall:.2} s{}: {:.2} frames per second (rendering alone {:.2} fps)",
         index,
         w,
         h,
         config.technique,
+        if precompute_ms > 0.0 {
+            format!(" after {:.2} s of precompute", precompute_ms / 1e3)
+        } else {
+            String::new()
+        },
         index as f64 / wall,
         index as f64 / render_s
     );
@@ -304,22 +307,18 @@ pub fn demo(d: DemoArgs) -> Result<()> {
     run(AnimateArgs {
         scene: PathBuf::from("builtin:cornell-spot"),
         setup: crate::setup::SetupArgs {
-            technique: TechniqueKind::PhotonStream,
+            technique: Some(TechniqueKind::PhotonStream),
             width: Some(d.width),
             height: Some(d.height),
-            config: None,
-            preset: None,
-            spot_from_above: false,
-            look_from: None,
-            look_at: None,
+            sets: d.sets,
+            ..Default::default()
         },
         animation: Some("move".into()),
         duration: Some(d.duration),
         fps: 15.0,
         realtime: true,
-        photons_per_frame: None,
+        work_per_frame: None,
         ping_pong: true,
-        vsls: Some(d.vsls),
         output: d.output,
         exr: false,
         exposure: 0.0,

@@ -3,8 +3,7 @@
 use crate::progress;
 use anyhow::{Context, Result};
 use clap::Args;
-use illume_bench::{Progress, RunOptions, Scenario, run, write_report};
-use indicatif::ProgressBar;
+use illume_bench::{RunOptions, Scenario, run, write_report};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -24,38 +23,6 @@ pub struct BenchArgs {
     pub save_frames: bool,
 }
 
-/// indicatif bars for the harness's progress reports.
-#[derive(Default)]
-struct Bars {
-    bar: Option<ProgressBar>,
-}
-
-impl Progress for Bars {
-    fn begin(&mut self, what: &str, total: u64) {
-        self.end();
-        self.bar = Some(progress::bar(total, what));
-    }
-
-    fn set(&mut self, done: u64) {
-        if let Some(b) = &self.bar {
-            b.set_position(done);
-        }
-    }
-
-    fn end(&mut self) {
-        if let Some(b) = self.bar.take() {
-            b.finish_and_clear();
-        }
-    }
-
-    fn message(&mut self, text: &str) {
-        match &self.bar {
-            Some(b) => b.println(text),
-            None => eprintln!("{text}"),
-        }
-    }
-}
-
 /// Runs `illume bench`.
 pub fn run_bench(a: BenchArgs) -> Result<()> {
     let t0 = Instant::now();
@@ -70,10 +37,10 @@ pub fn run_bench(a: BenchArgs) -> Result<()> {
     options
         .notes
         .push(format!("Command: `{}`", command.join(" ")));
-    let mut bars = Bars::default();
+    let mut bars = progress::Bars::default();
     let outcome = run(&scenario, &options, &mut bars)
         .with_context(|| format!("running {}", a.scenario.display()))?;
-    bars.end();
+    bars.finish();
     let files = write_report(&scenario, &outcome, &options)?;
     for s in &outcome.summaries {
         let metrics: Vec<String> = s

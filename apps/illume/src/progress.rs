@@ -27,3 +27,59 @@ pub fn spinner(what: &str) -> ProgressBar {
     pb.enable_steady_tick(Duration::from_millis(200));
     pb
 }
+
+/// indicatif bars for progress reports of long work (a technique's precompute, the
+/// bench's converged references): one bar per phase, with rate and ETA; between phases,
+/// an optional spinner with the elapsed time (work whose progress is not known).
+#[derive(Default)]
+pub struct Bars {
+    bar: Option<ProgressBar>,
+    idle: Option<String>,
+}
+
+impl Bars {
+    /// Bars that show a spinner labelled `what` while no phase runs.
+    pub fn with_spinner(what: &str) -> Self {
+        Self {
+            bar: Some(spinner(what)),
+            idle: Some(what.to_owned()),
+        }
+    }
+
+    /// Clears whatever is shown.
+    pub fn finish(&mut self) {
+        self.idle = None;
+        if let Some(b) = self.bar.take() {
+            b.finish_and_clear();
+        }
+    }
+}
+
+impl illume_core::Progress for Bars {
+    fn begin(&mut self, what: &str, total: u64) {
+        if let Some(b) = self.bar.take() {
+            b.finish_and_clear();
+        }
+        self.bar = Some(bar(total, what));
+    }
+
+    fn set(&mut self, done: u64) {
+        if let Some(b) = &self.bar {
+            b.set_position(done);
+        }
+    }
+
+    fn end(&mut self) {
+        if let Some(b) = self.bar.take() {
+            b.finish_and_clear();
+        }
+        self.bar = self.idle.as_deref().map(spinner);
+    }
+
+    fn message(&mut self, text: &str) {
+        match &self.bar {
+            Some(b) => b.println(text),
+            None => eprintln!("{text}"),
+        }
+    }
+}

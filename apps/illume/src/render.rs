@@ -1,18 +1,16 @@
 //! `illume render`.
 
 use crate::progress;
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use illume_core::image::{RgbImage, ToneMap};
-use illume_engine::{Engine, TechniqueKind};
-use illume_photon_stream::{PhotonStreamSettings, StreamMode, VisibilityMode};
-use illume_reference::ReferenceRenderer;
-use illume_transport::World;
+use illume_engine::render_still;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Arguments of `illume render`.
 #[derive(Args)]
+#[command(after_help = crate::setup::techniques_help())]
 pub struct RenderArgs {
     /// Scene file (.gltf, .glb, .obj, .ply) or builtin:NAME.
     pub scene: PathBuf,
@@ -25,7 +23,8 @@ pub struct RenderArgs {
     /// Animation to play (default: the scene's first).
     #[arg(long)]
     pub animation: Option<String>,
-    /// Samples per pixel (reference path tracer).
+    /// Samples per pixel of the still, for techniques that have such a setting (the
+    /// reference's `spp`); others warn that it is ignored.
     #[arg(long)]
     pub spp: Option<u32>,
     /// Output image: .exr (linear radiance) or .png (tone-mapped sRGB).
@@ -37,7 +36,7 @@ pub struct RenderArgs {
     /// Exposure for PNG output [stops].
     #[arg(long, default_value_t = 0.0)]
     pub exposure: f32,
-    /// Random seed.
+    /// Random seed of the renderer and the technique.
     #[arg(long)]
     pub seed: Option<u64>,
 }
@@ -98,29 +97,21 @@ fn write(img: &RgbImage, path: &Path, tone: &ToneMap) -> Result<()> {
 
 /// Runs `illume render`.
 pub fn run(a: RenderArgs) -> Result<()> {
-    let mut config = a.setup.config()?;
-    if a.setup.config.is_none() && a.setup.preset.is_none() {
-        // A still wants the converged look, not the interactive one, and the same
-        // image on every run: the quality preset with a shadow ray to every VSL (no
-        // visibility noise; 2.9 s for builtin:cornell-spot at 640×480 on 2 cores).
-        config.photon_stream = PhotonStreamSettings {
-            mode: StreamMode::Deterministic,
-            visibility: VisibilityMode::All,
-            ..PhotonStreamSettings::quality()
-        };
-    }
-    if let Some(s) = a.spp {
-        config.reference.spp = s;
+    // A still wants the converged look, not the interactive one, and the same image on
+    // every run: the technique's `still` preset, when it has one and neither --preset
+    // nor --config says otherwise.
+    let mut config = a.setup.config(Some("still"))?;
+    if let Some(s) = a.spp
+        && !config.technique_settings_mut().set_samples_per_pixel(s)
+    {
+        eprintln!(
+            "warning: --spp {s}: {} has no samples-per-pixel setting; ignored",
+            config.technique
+        );
     }
     if let Some(s) = a.seed {
-        config.render.seed = s;
-        config.reference.seed = s;
+        config.set_seed(s);
     }
-    if config.render.width == 0 || config.render.height == 0 {
-        bail!("image size must be at least 1×1");
-    }
-    config.reference.width = config.render.width;
-    config.reference.height = config.render.height;
     let tone = ToneMap {
         exposure_ev: a.exposure,
         ..Default::default()
@@ -133,41 +124,30 @@ pub fn run(a: RenderArgs) -> Result<()> {
     )?;
     a.setup.place_camera(&mut scene)?;
     let t0 = Instant::now();
-    let (full, direct, indirect) = if config.technique == TechniqueKind::Reference {
-        let world = World::new(scene);
-        let mut r = ReferenceRenderer::new(config.reference.clone());
-        let spp = config.reference.spp.max(1);
-        let pb = progress::bar(spp as u64, "path tracing");
-        // Chunks of samples keep the bar moving and the work parallel over pixels.
-        let chunk = (spp / 32).max(1);
-        while r.samples() < spp {
-            let n = chunk.min(spp - r.samples());
-            r.add_samples(&world, n);
-            pb.set_position(r.samples() as u64);
-        }
-        pb.finish_and_clear();
-        let imgs = r.images();
-        (imgs.full, imgs.direct, imgs.indirect)
-    } else {
-        let spinner = progress::spinner(&format!(
-            "{}: placing VSLs, shooting photons, shading",
-            config.technique
-        ));
-        let mut engine = Engine::new(scene, &config)?;
-        let out = engine.step(a.time);
-        spinner.finish_and_clear();
-        (out.frame.full, out.frame.direct, out.frame.indirect)
-    };
+    let mut bars = progress::Bars::with_spinner(&format!("{}: rendering", config.technique));
+    let still = render_still(scene, &config, &mut bars);
+    bars.finish();
+    let still = still?;
     let secs = t0.elapsed().as_secs_f64();
-    let m = full.mean();
+    let m = still.full.mean();
     eprintln!(
-        "{} {}×{} in {secs:.2} s; mean radiance ({:.5}, {:.5}, {:.5}) W/(m²·sr)",
-        config.technique, config.render.width, config.render.height, m.x, m.y, m.z
+        "{} {}×{} in {secs:.2} s{}; mean radiance ({:.5}, {:.5}, {:.5}) W/(m²·sr)",
+        config.technique,
+        config.render.width,
+        config.render.height,
+        if still.precompute_ms > 0.0 {
+            format!(" ({:.2} s precompute)", still.precompute_ms / 1e3)
+        } else {
+            String::new()
+        },
+        m.x,
+        m.y,
+        m.z
     );
-    write(&full, &a.output, &tone)?;
+    write(&still.full, &a.output, &tone)?;
     if a.split {
-        write(&direct, &with_suffix(&a.output, "direct"), &tone)?;
-        write(&indirect, &with_suffix(&a.output, "indirect"), &tone)?;
+        write(&still.direct, &with_suffix(&a.output, "direct"), &tone)?;
+        write(&still.indirect, &with_suffix(&a.output, "indirect"), &tone)?;
     }
     Ok(())
 }

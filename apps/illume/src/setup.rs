@@ -1,34 +1,60 @@
-//! Arguments every rendering command shares: technique, image size, configuration file.
+//! Arguments every rendering command shares: technique, image size, configuration
+//! layers (preset, file, `--set`), camera placement. No technique's fields here: a
+//! technique is reached through its name, its presets and its settings table.
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::Args;
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use illume_core::Vec3;
-use illume_engine::{Config, TechniqueKind};
-use illume_photon_stream::PhotonStreamSettings;
+use illume_engine::{Config, ConfigLayers, TechniqueKind};
 use std::path::PathBuf;
 
-/// Technique, image size and TOML configuration (flags override the file).
-#[derive(Args, Clone)]
+/// `--technique`'s parser: the names of [`TechniqueKind::ALL`], listed in `--help`.
+fn technique_parser() -> impl TypedValueParser<Value = TechniqueKind> {
+    PossibleValuesParser::new(TechniqueKind::ALL.iter().map(|k| k.name()))
+        .try_map(|name| name.parse::<TechniqueKind>())
+}
+
+/// The text after `--help`: every technique with its work unit and presets.
+pub fn techniques_help() -> String {
+    let mut s = String::from("Techniques (--technique NAME), their work unit and presets:\n");
+    for &kind in TechniqueKind::ALL {
+        s += &format!("  {kind} (work unit: {})\n", kind.work_unit());
+        for (name, what) in kind.presets() {
+            s += &format!("      --preset {name:<14} {what}\n");
+        }
+    }
+    s += "Any setting: --set TABLE.KEY=VALUE (e.g. --set photon_stream.vsl_count=50,\n\
+          --set render.shadows=rays); the tables and keys are those of a --config file.";
+    s
+}
+
+/// Technique, image size and configuration layers (each over the one before: the
+/// technique's preset, the --config file, then --set in order; flags like --width last).
+#[derive(Args, Clone, Default)]
 pub struct SetupArgs {
-    /// Technique supplying indirect light; `reference` renders everything with the
-    /// reference path tracer.
-    #[arg(long, default_value = "photon_stream")]
-    pub technique: TechniqueKind,
+    /// Technique supplying indirect light [default: the --config file's `technique`,
+    /// else photon_stream]; `reference` renders everything with the reference path
+    /// tracer.
+    #[arg(long, value_parser = technique_parser())]
+    pub technique: Option<TechniqueKind>,
     /// Image width [pixels].
     #[arg(long)]
     pub width: Option<u32>,
     /// Image height [pixels].
     #[arg(long)]
     pub height: Option<u32>,
-    /// TOML configuration (technique settings tables); flags override it.
+    /// TOML configuration: `technique`, `[render]` and one table per technique.
     #[arg(long)]
     pub config: Option<PathBuf>,
-    /// Named photon_stream settings instead of a `[photon_stream]` table: `default`,
-    /// `deterministic`, `interactive` or `quality` (200 VSLs, 10⁶-impact pool, VSL
-    /// shadows, every pixel shaded). `render` uses `quality` with a shadow ray to
-    /// every VSL, shot deterministically, when neither this nor --config is given.
-    #[arg(long, conflicts_with = "config")]
+    /// Named settings of the chosen technique (listed below); a --config file's table
+    /// and --set override single keys of it.
+    #[arg(long)]
     pub preset: Option<String>,
+    /// Set one setting, TABLE.KEY=VALUE (repeatable; typed by the technique's
+    /// settings; unknown keys are errors), e.g. `photon_stream.vsl_count=50`.
+    #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
+    pub sets: Vec<String>,
     /// Replace the scene's lights and emitters by one spot light near the top of its
     /// bounds, shining down (the photon-streaming paper's setup; for files without
     /// lights, such as Sponza, the bunny and the dragon).
@@ -56,25 +82,36 @@ fn parse_point(s: &str) -> Result<Vec3, String> {
 }
 
 impl SetupArgs {
-    /// The configuration file (or the defaults) with these flags applied.
-    pub fn config(&self) -> Result<Config> {
-        let mut config = match &self.config {
-            Some(p) => Config::load(p)?,
-            None => Config::default(),
+    /// The configuration these arguments give. `default_preset` is used when neither
+    /// --preset nor --config is given and the chosen technique has a preset of that
+    /// name (`render` asks for `still`).
+    pub fn config(&self, default_preset: Option<&str>) -> Result<Config> {
+        let technique = match (self.technique, &self.config) {
+            (Some(k), _) => k,
+            (None, Some(path)) => Config::load(path)?.technique,
+            (None, None) => TechniqueKind::default(),
         };
-        config.technique = self.technique;
+        let preset = self.preset.as_deref().or_else(|| {
+            default_preset.filter(|p| self.config.is_none() && technique.preset_table(p).is_some())
+        });
+        let mut config = Config::layered(&ConfigLayers {
+            technique: self.technique,
+            file: self.config.as_deref(),
+            preset,
+            sets: &self.sets,
+        })?;
         if let Some(w) = self.width {
             config.render.width = w;
         }
         if let Some(h) = self.height {
             config.render.height = h;
         }
-        if let Some(name) = &self.preset {
-            config.photon_stream = PhotonStreamSettings::preset(name).ok_or_else(|| {
-                anyhow::anyhow!(
-                    "--preset {name}: unknown preset (default, deterministic, interactive, quality)"
-                )
-            })?;
+        if config.render.width == 0 || config.render.height == 0 {
+            bail!(
+                "image size must be at least 1×1, got {}×{}",
+                config.render.width,
+                config.render.height
+            );
         }
         Ok(config)
     }

@@ -28,9 +28,14 @@ pub struct CacheKey {
 
 impl CacheKey {
     /// The key of the converged reference of `scene` in its current state, rendered with
-    /// `settings`; `scene_identity` names the scene's content (see
-    /// [`Scenario::scene_identity`](crate::Scenario::scene_identity)).
-    pub fn new(scene_identity: &str, scene: &Scene, settings: &ReferenceSettings) -> Self {
+    /// `settings` at `width × height` pixels; `scene_identity` names the scene's content
+    /// (see [`Scenario::scene_identity`](crate::Scenario::scene_identity)).
+    pub fn new(
+        scene_identity: &str,
+        scene: &Scene,
+        settings: &ReferenceSettings,
+        (width, height): (u32, u32),
+    ) -> Self {
         let mut text = String::new();
         let _ = writeln!(text, "illume {}", env!("CARGO_PKG_VERSION"));
         let _ = writeln!(text, "scene {scene_identity}");
@@ -38,7 +43,7 @@ impl CacheKey {
         let _ = writeln!(
             text,
             "reference width {} height {} spp {} seed {} rr_start_depth {} max_depth {}",
-            s.width, s.height, s.spp, s.seed, s.rr_start_depth, s.max_depth
+            width, height, s.spp, s.seed, s.rr_start_depth, s.max_depth
         );
         // Debug output of f32 is the shortest round-trip form: exact.
         for inst in &scene.instances {
@@ -157,10 +162,10 @@ mod tests {
     fn key_follows_state_and_settings_not_identity_of_objects() {
         let scene = illume_scene::builtin::load("cornell-spot").unwrap();
         let settings = ReferenceSettings::default();
-        let a = CacheKey::new("builtin:cornell-spot", &scene, &settings);
+        let a = CacheKey::new("builtin:cornell-spot", &scene, &settings, (64, 48));
         assert_eq!(
             a,
-            CacheKey::new("builtin:cornell-spot", &scene.clone(), &settings)
+            CacheKey::new("builtin:cornell-spot", &scene.clone(), &settings, (64, 48))
         );
         let more_spp = ReferenceSettings {
             spp: settings.spp + 1,
@@ -168,14 +173,17 @@ mod tests {
         };
         assert_ne!(
             a.hash,
-            CacheKey::new("builtin:cornell-spot", &scene, &more_spp).hash
+            CacheKey::new("builtin:cornell-spot", &scene, &more_spp, (64, 48)).hash
         );
         let mut moved = scene.clone();
         moved.set_time(1.0); // the default animation moves the sphere and the light
         assert_ne!(
             a.hash,
-            CacheKey::new("builtin:cornell-spot", &moved, &settings).hash
+            CacheKey::new("builtin:cornell-spot", &moved, &settings, (64, 48)).hash
         );
-        assert_ne!(a.hash, CacheKey::new("other", &scene, &settings).hash);
+        assert_ne!(
+            a.hash,
+            CacheKey::new("other", &scene, &settings, (64, 48)).hash
+        );
     }
 }

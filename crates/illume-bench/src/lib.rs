@@ -38,7 +38,8 @@ pub mod scenario;
 
 pub use cache::{CacheKey, ReferenceCache};
 pub use error::BenchError;
+pub use illume_core::{Progress, Silent};
 pub use replay::{EditTarget, Replay};
 pub use report::{ReportFiles, write_report};
-pub use run::{BenchOutcome, Event, FrameRecord, Progress, RunOptions, SeriesSummary, Silent, run};
+pub use run::{BenchOutcome, Event, FrameRecord, RunOptions, SeriesSummary, run};
 pub use scenario::{EditSpec, ReferenceSpec, Scenario, TechniqueSpec};

@@ -6,7 +6,7 @@ use crate::error::BenchError;
 use crate::run::{BenchOutcome, FrameRecord, RunOptions};
 use crate::scenario::Scenario;
 use illume_metrics::report::{Bar, Cell, Series, Table, plot_bars, plot_lines, write_csv};
-use illume_metrics::{Counters, Metric};
+use illume_metrics::{Counters, Metric, counters_table};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -29,7 +29,7 @@ pub fn results_table(scenario: &Scenario, records: &[FrameRecord]) -> Table {
         .iter()
         .map(|r| (String::new(), r.counters.clone()))
         .collect();
-    let counters = Counters::to_table("", &counter_rows);
+    let counters = counters_table("", &counter_rows);
     let mut columns: Vec<String> = ["series", "technique", "frame", "time_s", "frame_ms", "fps"]
         .map(String::from)
         .to_vec();
@@ -62,12 +62,18 @@ pub fn results_table(scenario: &Scenario, records: &[FrameRecord]) -> Table {
     Table { columns, rows }
 }
 
-/// One row per series: frames, median frame time and fps, mean and max of each metric,
-/// mean and max flicker.
+/// One row per series: frames, precompute time, median frame time and fps, mean and max
+/// of each metric, mean and max flicker.
 pub fn summary_table(scenario: &Scenario, outcome: &BenchOutcome) -> Table {
-    let mut columns: Vec<String> = ["series", "frames", "median frame [ms]", "median fps"]
-        .map(String::from)
-        .to_vec();
+    let mut columns: Vec<String> = [
+        "series",
+        "frames",
+        "precompute [ms]",
+        "median frame [ms]",
+        "median fps",
+    ]
+    .map(String::from)
+    .to_vec();
     for m in &scenario.metrics {
         columns.push(format!("{m} mean"));
         columns.push(format!("{m} max"));
@@ -86,6 +92,7 @@ pub fn summary_table(scenario: &Scenario, outcome: &BenchOutcome) -> Table {
             let mut row = vec![
                 Cell::Text(s.series.clone()),
                 Cell::Text(frames.to_string()),
+                Cell::Number(s.precompute_ms),
                 Cell::Number(s.median_frame_ms),
                 Cell::Number(1000.0 / s.median_frame_ms),
             ];

@@ -5,38 +5,16 @@ use crate::cache::{CacheKey, ReferenceCache};
 use crate::error::BenchError;
 use crate::replay::Replay;
 use crate::scenario::Scenario;
+use illume_core::Progress;
 use illume_core::image::{RgbImage, ToneMap};
 use illume_engine::Engine;
 use illume_metrics::{Counters, Latency, Metric, compare_images, flicker, latency_after_event};
 use illume_reference::{ReferenceRenderer, ReferenceSettings};
-use illume_scene::Scene;
+use illume_scene::{Scene, Timeline};
 use illume_transport::World;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// Progress of long work, shown by the caller (the CLI draws bars); [`Silent`] shows
-/// nothing.
-pub trait Progress {
-    /// Work of `total` units called `what` starts.
-    fn begin(&mut self, what: &str, total: u64);
-    /// `done` of the units are finished.
-    fn set(&mut self, done: u64);
-    /// The work is over.
-    fn end(&mut self);
-    /// A line of information (cache use, warnings).
-    fn message(&mut self, text: &str);
-}
-
-/// Shows no progress.
-pub struct Silent;
-
-impl Progress for Silent {
-    fn begin(&mut self, _what: &str, _total: u64) {}
-    fn set(&mut self, _done: u64) {}
-    fn end(&mut self) {}
-    fn message(&mut self, _text: &str) {}
-}
 
 /// Where a run writes and what extra it keeps.
 #[derive(Clone, Debug)]
@@ -118,8 +96,11 @@ pub struct SeriesSummary {
     pub series: String,
     /// The technique name.
     pub technique: String,
-    /// Median frame time \[ms\].
+    /// Median frame time \[ms\] (precompute excluded).
     pub median_frame_ms: f64,
+    /// Time in the technique's precompute phase \[ms\]: before the first frame and in
+    /// rebuilds (counter `engine.precompute_ms`, summed over frames).
+    pub precompute_ms: f64,
     /// `(metric, mean, max)` over the frames.
     pub metrics: Vec<(Metric, f64, f64)>,
     /// `(mean, max)` flicker over consecutive frame pairs (`None` with one frame).
@@ -152,8 +133,6 @@ pub struct BenchOutcome {
 /// The converged reference settings of `scenario`.
 pub fn reference_settings(scenario: &Scenario) -> ReferenceSettings {
     ReferenceSettings {
-        width: scenario.width,
-        height: scenario.height,
         spp: scenario.reference.spp,
         seed: scenario.reference.seed,
         rr_start_depth: scenario.reference.rr_start_depth,
@@ -265,7 +244,12 @@ fn reference_keys(
     for &t in times {
         replay.apply_due(&mut state, t)?;
         state.set_time(t);
-        keys.push(CacheKey::new(identity, &state, settings));
+        keys.push(CacheKey::new(
+            identity,
+            &state,
+            settings,
+            (scenario.width, scenario.height),
+        ));
     }
     Ok(keys)
 }
@@ -322,7 +306,7 @@ fn converged_references(
             continue;
         }
         let image = cache.get_or_render(key, || {
-            let mut r = ReferenceRenderer::new(settings.clone());
+            let mut r = ReferenceRenderer::new(settings.clone(), scenario.width, scenario.height);
             // Chunks keep the bar moving; the image does not depend on the chunking.
             let chunk = (spp / 16).max(1);
             while r.samples() < spp {
@@ -416,25 +400,42 @@ fn run_technique(
 ) -> Result<(Vec<FrameRecord>, Vec<RgbImage>), BenchError> {
     let spec = &scenario.techniques[k];
     let config = scenario.technique_config(k)?;
-    let mut engine = Engine::new(scene.clone(), &config).map_err(|e| BenchError::Technique {
+    let technique_error = |e: illume_engine::EngineError| BenchError::Technique {
+        path: scenario.file.clone(),
+        index: k,
+        name: spec.name.clone(),
+        message: e.to_string(),
+    };
+    // The scenario's frame times are the timeline; scripted edits stay surprises.
+    let timeline = Timeline::new(
+        scene.clone(),
+        times.to_vec(),
+        scenario.width,
+        scenario.height,
+    )
+    .map_err(|e| BenchError::Technique {
         path: scenario.file.clone(),
         index: k,
         name: spec.name.clone(),
         message: e.to_string(),
     })?;
+    let mut engine =
+        Engine::with_timeline(scene.clone(), &config, timeline).map_err(technique_error)?;
     engine.set_budget(scenario.technique_budget(k, &config));
+    let precompute_ms = engine.precompute(progress).map_err(technique_error)?;
     let mut replay = Replay::new(scenario);
     let mut frames = Vec::with_capacity(times.len());
     progress.begin(spec.label(), times.len() as u64);
     for (i, &t) in times.iter().enumerate() {
         let start = Instant::now();
         replay.apply_due(&mut engine, t)?;
-        let out = engine.step(t);
-        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        let mut counters = Counters::new();
-        for (name, value) in &out.stats {
-            counters.set(name, *value);
-        }
+        let out = engine.step(t).map_err(technique_error)?;
+        let frame_ms = start.elapsed().as_secs_f64() * 1e3 - out.precompute_ms;
+        let mut counters = out.stats.clone();
+        // The precompute phase is timed apart from the frames: it is on frame 0's row
+        // (plus any rebuild a frame's changes caused), not in its frame_ms.
+        let frame_precompute_ms = out.precompute_ms + if i == 0 { precompute_ms } else { 0.0 };
+        counters.set("engine.precompute_ms", frame_precompute_ms);
         counters.set("engine.update_ms", out.update_ms);
         counters.set("engine.advance_ms", out.advance_ms);
         counters.set("engine.render_ms", out.frame.timings.total_ms);
@@ -527,7 +528,7 @@ fn run_equal_time(
     let series = equal_time_series(label);
     let mut settings = reference_settings(scenario);
     settings.seed = settings.seed.wrapping_add(EQUAL_TIME_SEED_OFFSET);
-    let mut tracer = ReferenceRenderer::new(settings);
+    let mut tracer = ReferenceRenderer::new(settings, scenario.width, scenario.height);
     let mut world = World::new(scene.clone());
     let mut replay = Replay::new(scenario);
     let mut frames: Vec<TimedFrame> = Vec::with_capacity(times.len());
@@ -646,6 +647,10 @@ fn summarize(
                 series: name.to_owned(),
                 technique: rs[0].technique.clone(),
                 median_frame_ms: median(rs.iter().map(|r| r.frame_ms).collect()),
+                precompute_ms: rs
+                    .iter()
+                    .filter_map(|r| r.counters.get("engine.precompute_ms"))
+                    .sum(),
                 metrics,
                 flicker,
                 latencies,

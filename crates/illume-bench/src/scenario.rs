@@ -168,11 +168,12 @@ pub struct TechniqueSpec {
     /// Wall-clock budget of the technique's `advance` per frame \[ms\]. Default: none
     /// (the technique's default budget).
     pub budget_ms: Option<f64>,
-    /// Photons per frame (photon techniques). Default: none.
-    pub photons: Option<u64>,
-    /// Samples per pixel per frame (path tracing). Default: the technique's setting
-    /// (`reference`: `spp_per_frame`).
-    pub samples: Option<u32>,
+    /// Work per frame in the technique's own unit (`photon_stream`: photons;
+    /// `reference`: samples per pixel; `illume render --help` lists them). Also accepted
+    /// as `photons` or `samples`. Default: the technique's setting (`photon_stream`:
+    /// `photons_per_frame` in deterministic mode; `reference`: `spp_per_frame`).
+    #[serde(alias = "photons", alias = "samples")]
+    pub work: Option<u64>,
 }
 
 impl TechniqueSpec {
@@ -520,12 +521,10 @@ impl Scenario {
         if let Some(settings) = &spec.settings {
             table.insert(spec.name.clone(), toml::Value::Table(settings.clone()));
         }
-        let mut config: Config = toml::Value::Table(table)
+        let config: Config = toml::Value::Table(table)
             .try_into()
             .map_err(|e: toml::de::Error| error(format!("settings: {}", e.message())))?;
         debug_assert_eq!(config.technique, kind);
-        config.reference.width = self.width;
-        config.reference.height = self.height;
         Ok(config)
     }
 
@@ -535,8 +534,7 @@ impl Scenario {
         let spec = &self.techniques[index];
         let default = config.budget();
         Budget {
-            photons: spec.photons.or(default.photons),
-            samples: spec.samples.or(default.samples),
+            work: spec.work.or(default.work),
             time_ms: spec.budget_ms.or(default.time_ms),
         }
     }

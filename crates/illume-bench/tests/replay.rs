@@ -65,7 +65,7 @@ fn engine_sees_the_edit_at_the_same_frame() {
     let mut replay = Replay::new(&s);
     for t in s.frame_times() {
         replay.apply_due(&mut engine, t).unwrap();
-        let out = engine.step(t);
+        let out = engine.step(t).unwrap();
         let p = sphere(&read_world(engine.world()).scene);
         if t >= 0.5 {
             assert!(

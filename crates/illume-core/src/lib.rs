@@ -1,6 +1,7 @@
 //! illume's foundation, shared by every other crate: math types and conventions
 //! ([`math`]), index-addressable random and quasi-random sample sources with their
-//! warps ([`sampling`]), and HDR images with tone mapping and EXR/PNG I/O ([`image`]).
+//! warps ([`sampling`]), HDR images with tone mapping and EXR/PNG I/O ([`image`]), named
+//! counters ([`Counters`]) and progress reports of long work ([`progress`]).
 //!
 //! Conventions (see `shared/DESIGN.md`): metres and seconds, right-handed with +Y up,
 //! cameras look down −Z, colour is linear Rec.709 RGB radiometry, time is `f64` seconds.
@@ -12,8 +13,12 @@
 //! assert_eq!(a.next_1d(), b.next_1d()); // same seed and stream ⇒ same numbers
 //! ```
 
+pub mod counters;
 pub mod image;
 pub mod math;
+pub mod progress;
 pub mod sampling;
 
+pub use counters::Counters;
 pub use math::*;
+pub use progress::{Progress, Silent};

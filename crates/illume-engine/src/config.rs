@@ -1,5 +1,6 @@
-//! One TOML file configures a run: the technique, the renderer, and a table per
-//! technique. Unknown keys are errors that name the file and the key.
+//! One TOML configuration drives a run: the technique, the renderer, and a table per
+//! technique. Unknown keys are errors that name the file (or `--set` argument) and the
+//! key.
 //!
 //! ```toml
 //! technique = "reference"
@@ -9,12 +10,19 @@
 //! [reference]
 //! spp_per_frame = 8
 //! ```
+//!
+//! A run's configuration is layered ([`Config::layered`]), each layer over the one
+//! before: the defaults; the chosen technique's preset (`--preset NAME`); the
+//! configuration file (`--config FILE`); then each `--set TABLE.KEY=VALUE` in order.
+//! The technique is `--technique` if given, else the file's `technique`, else the
+//! default (`photon_stream`). No layer knows a technique's fields: presets and `--set`
+//! go through the TOML tables, typed by the technique's own settings struct.
 
 use crate::TechniqueKind;
 use illume_photon_stream::PhotonStreamSettings;
 use illume_reference::ReferenceSettings;
 use illume_render::RenderSettings;
-use illume_transport::Budget;
+use illume_transport::{Budget, Pacing, TechniqueSettings};
 use std::path::{Path, PathBuf};
 
 /// A whole run's configuration.
@@ -31,7 +39,7 @@ pub struct Config {
     pub photon_stream: PhotonStreamSettings,
 }
 
-/// Why a configuration file was rejected.
+/// Why a configuration was rejected.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
     /// The file could not be read.
@@ -50,16 +58,72 @@ pub enum ConfigError {
         /// The parser's message (names the key and line).
         message: String,
     },
+    /// A `--set TABLE.KEY=VALUE` argument is malformed, names an unknown key or gives a
+    /// value of the wrong type.
+    #[error("--set {argument}: {message}")]
+    Set {
+        /// The argument as given.
+        argument: String,
+        /// What is wrong (names the key).
+        message: String,
+    },
+    /// `--preset NAME` names no preset of the chosen technique.
+    #[error("--preset {name}: {technique} has no such preset (have: {available})")]
+    UnknownPreset {
+        /// The technique.
+        technique: TechniqueKind,
+        /// The name given.
+        name: String,
+        /// The technique's presets, comma-separated.
+        available: String,
+    },
+}
+
+/// The layers of a run's configuration, from the command line.
+#[derive(Clone, Debug, Default)]
+pub struct ConfigLayers<'a> {
+    /// `--technique`: overrides the file's `technique`.
+    pub technique: Option<TechniqueKind>,
+    /// `--config FILE`.
+    pub file: Option<&'a Path>,
+    /// `--preset NAME`, looked up in the chosen technique's presets.
+    pub preset: Option<&'a str>,
+    /// `--set TABLE.KEY=VALUE`, applied in order after everything else.
+    pub sets: &'a [String],
+}
+
+/// The operations the shared layers need on any technique's settings; every
+/// [`TechniqueSettings`] has them.
+pub trait AnySettings {
+    /// See [`TechniqueSettings::pace`].
+    fn pace(&mut self, pacing: Pacing);
+    /// See [`TechniqueSettings::default_budget`].
+    fn default_budget(&self) -> Budget;
+    /// See [`TechniqueSettings::set_seed`].
+    fn set_seed(&mut self, seed: u64);
+    /// See [`TechniqueSettings::set_samples_per_pixel`].
+    fn set_samples_per_pixel(&mut self, spp: u32) -> bool;
+}
+
+impl<T: TechniqueSettings> AnySettings for T {
+    fn pace(&mut self, pacing: Pacing) {
+        TechniqueSettings::pace(self, pacing);
+    }
+    fn default_budget(&self) -> Budget {
+        TechniqueSettings::default_budget(self)
+    }
+    fn set_seed(&mut self, seed: u64) {
+        TechniqueSettings::set_seed(self, seed);
+    }
+    fn set_samples_per_pixel(&mut self, spp: u32) -> bool {
+        TechniqueSettings::set_samples_per_pixel(self, spp)
+    }
 }
 
 impl Config {
     /// Reads a configuration file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-            path: path.into(),
-            source,
-        })?;
-        Self::parse(&text, path)
+        Self::parse(&read(path)?, path)
     }
 
     /// Parses configuration text; `path` names it in errors.
@@ -68,23 +132,170 @@ impl Config {
             path: path.into(),
             message: e.to_string(),
         })?;
-        // Values in range for serde but not for the renderer (shadow-map resolution…).
-        config.render.validate().map_err(|e| ConfigError::Parse {
-            path: path.into(),
-            message: format!("[render] {e}"),
-        })?;
-        Ok(config)
+        config.validate(&path.display().to_string())
     }
 
-    /// The per-frame budget the configured technique gets by default.
-    pub fn budget(&self) -> Budget {
+    /// The configuration the command-line layers give (see the module documentation).
+    pub fn layered(layers: &ConfigLayers<'_>) -> Result<Self, ConfigError> {
+        let mut table = toml::Table::new();
+        let file_config = match layers.file {
+            Some(path) => {
+                let text = read(path)?;
+                // Parsed once as a whole for errors with the line and key…
+                let config = Self::parse(&text, path)?;
+                // …and kept as a table so that only its keys override the preset.
+                table = toml::from_str(&text).map_err(|e| ConfigError::Parse {
+                    path: path.into(),
+                    message: e.to_string(),
+                })?;
+                Some(config)
+            }
+            None => None,
+        };
+        let technique = layers
+            .technique
+            .or(file_config.map(|c| c.technique))
+            .unwrap_or_default();
+        table.insert("technique".into(), technique.name().into());
+        if let Some(name) = layers.preset {
+            let preset =
+                technique
+                    .preset_table(name)
+                    .ok_or_else(|| ConfigError::UnknownPreset {
+                        technique,
+                        name: name.to_owned(),
+                        available: technique
+                            .presets()
+                            .iter()
+                            .map(|(n, _)| *n)
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                    })?;
+            let mut merged = preset;
+            if let Some(toml::Value::Table(file)) = table.remove(technique.name()) {
+                merge(&mut merged, file);
+            }
+            table.insert(technique.name().into(), toml::Value::Table(merged));
+        }
+        for argument in layers.sets {
+            let (path, value) = parse_set(argument)?;
+            // Checked alone first, so an unknown key or a wrong type names this argument.
+            let mut alone = toml::Table::new();
+            insert_path(&mut alone, &path, value.clone());
+            if path[0] != "technique" {
+                alone.insert("technique".into(), technique.name().into());
+            }
+            from_table::<Self>(alone).map_err(|message| ConfigError::Set {
+                argument: argument.clone(),
+                message,
+            })?;
+            insert_path(&mut table, &path, value);
+        }
+        let config: Self = from_table(table).map_err(|message| ConfigError::Set {
+            argument: layers.sets.join(" "),
+            message,
+        })?;
+        config.validate("--set")
+    }
+
+    /// Values in range for serde but not for the renderer (shadow-map resolution…).
+    fn validate(self, source: &str) -> Result<Self, ConfigError> {
+        self.render.validate().map_err(|e| ConfigError::Parse {
+            path: source.into(),
+            message: format!("[render] {e}"),
+        })?;
+        Ok(self)
+    }
+
+    /// The chosen technique's settings.
+    pub fn technique_settings(&self) -> &dyn AnySettings {
         match self.technique {
-            TechniqueKind::Reference => Budget {
-                samples: Some(self.reference.spp_per_frame),
-                ..Default::default()
-            },
-            // photon_stream: its own photons_per_frame (deterministic mode) or the stream.
-            TechniqueKind::PhotonStream => Budget::default(),
+            TechniqueKind::Reference => &self.reference,
+            TechniqueKind::PhotonStream => &self.photon_stream,
+        }
+    }
+
+    /// The chosen technique's settings, to change.
+    pub fn technique_settings_mut(&mut self) -> &mut dyn AnySettings {
+        match self.technique {
+            TechniqueKind::Reference => &mut self.reference,
+            TechniqueKind::PhotonStream => &mut self.photon_stream,
+        }
+    }
+
+    /// The per-frame budget the chosen technique's settings give.
+    pub fn budget(&self) -> Budget {
+        self.technique_settings().default_budget()
+    }
+
+    /// Seeds the renderer and the chosen technique (`--seed`).
+    pub fn set_seed(&mut self, seed: u64) {
+        self.render.seed = seed;
+        self.technique_settings_mut().set_seed(seed);
+    }
+}
+
+fn read(path: &Path) -> Result<String, ConfigError> {
+    std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+        path: path.into(),
+        source,
+    })
+}
+
+fn from_table<T: serde::de::DeserializeOwned>(table: toml::Table) -> Result<T, String> {
+    toml::Value::Table(table)
+        .try_into()
+        .map_err(|e: toml::de::Error| e.message().to_owned())
+}
+
+/// `TABLE.KEY=VALUE` → the key path and the value: TOML when it parses as a TOML value
+/// (`50`, `true`, `0.5`, `"text"`, `[1, 2]`), else the text as a string (so
+/// `--set photon_stream.mode=deterministic` needs no quotes).
+fn parse_set(argument: &str) -> Result<(Vec<String>, toml::Value), ConfigError> {
+    let error = |message: &str| ConfigError::Set {
+        argument: argument.to_owned(),
+        message: message.to_owned(),
+    };
+    let (key, text) = argument
+        .split_once('=')
+        .ok_or_else(|| error("expected TABLE.KEY=VALUE"))?;
+    let path: Vec<String> = key.trim().split('.').map(|s| s.trim().to_owned()).collect();
+    if path.iter().any(String::is_empty) {
+        return Err(error("empty key (expected TABLE.KEY=VALUE)"));
+    }
+    let text = text.trim();
+    let value = toml::from_str::<toml::Table>(&format!("v = {text}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(text.to_owned()));
+    Ok((path, value))
+}
+
+/// Sets `value` at `path` inside `table`, creating tables on the way (a non-table in
+/// the way is replaced).
+fn insert_path(table: &mut toml::Table, path: &[String], value: toml::Value) {
+    let (last, parents) = path.split_last().expect("a non-empty key path");
+    let mut t = table;
+    for p in parents {
+        let entry = t
+            .entry(p.clone())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        if !entry.is_table() {
+            *entry = toml::Value::Table(toml::Table::new());
+        }
+        t = entry.as_table_mut().expect("made a table above");
+    }
+    t.insert(last.clone(), value);
+}
+
+/// `over`'s keys replace `base`'s, recursively for tables.
+fn merge(base: &mut toml::Table, over: toml::Table) {
+    for (k, v) in over {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
+            (_, v) => {
+                base.insert(k, v);
+            }
         }
     }
 }
@@ -163,5 +374,110 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("cfg/s.toml") && e.contains("resolution"), "{e}");
+    }
+
+    fn sets(args: &[&str]) -> Vec<String> {
+        args.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn set_is_typed_by_the_settings_and_names_unknown_keys() {
+        let s = sets(&[
+            "photon_stream.vsl_count=50",
+            "photon_stream.mode=deterministic",
+            "render.shadow_maps.resolution=256",
+        ]);
+        let c = Config::layered(&ConfigLayers {
+            sets: &s,
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(c.photon_stream.vsl_count, 50);
+        assert_eq!(
+            c.photon_stream.mode,
+            illume_photon_stream::StreamMode::Deterministic
+        );
+        assert_eq!(c.render.shadow_maps.resolution, 256);
+        for (arg, key) in [
+            ("reference.nope=1", "nope"),
+            ("photon_stream.vsl_count=many", "vsl_count"),
+            ("nosuchtable.x=1", "nosuchtable"),
+        ] {
+            let s = sets(&[arg]);
+            let e = Config::layered(&ConfigLayers {
+                sets: &s,
+                ..Default::default()
+            })
+            .unwrap_err()
+            .to_string();
+            assert!(e.contains(arg) && e.contains(key), "{arg}: {e}");
+        }
+        let s = sets(&["novalue"]);
+        assert!(
+            Config::layered(&ConfigLayers {
+                sets: &s,
+                ..Default::default()
+            })
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn layers_apply_in_order_preset_file_set() {
+        let dir = std::env::temp_dir().join(format!("illume-config-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("c.toml");
+        std::fs::write(
+            &file,
+            "technique = \"reference\"\n[photon_stream]\npool_size = 1234\n",
+        )
+        .unwrap();
+        // The file's technique is honoured when --technique is not given.
+        let c = Config::layered(&ConfigLayers {
+            file: Some(&file),
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(c.technique, TechniqueKind::Reference);
+        // --technique overrides it; the preset is the base, the file's keys override the
+        // preset's, --set overrides both.
+        let s = sets(&["photon_stream.vsl_count=7"]);
+        let c = Config::layered(&ConfigLayers {
+            technique: Some(TechniqueKind::PhotonStream),
+            file: Some(&file),
+            preset: Some("quality"),
+            sets: &s,
+        })
+        .unwrap();
+        let quality = PhotonStreamSettings::quality();
+        assert_eq!(c.technique, TechniqueKind::PhotonStream);
+        assert_eq!(c.photon_stream.pool_size, 1234);
+        assert_eq!(c.photon_stream.vsl_count, 7);
+        assert_eq!(c.photon_stream.shading_stride, quality.shading_stride);
+        assert_eq!(c.photon_stream.visibility, quality.visibility);
+        let e = Config::layered(&ConfigLayers {
+            preset: Some("fastest"),
+            ..Default::default()
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("fastest") && e.contains("quality"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn every_preset_of_every_technique_round_trips_through_its_table() {
+        for &kind in TechniqueKind::ALL {
+            assert_eq!(kind.presets()[0].0, "default", "{kind}");
+            for (name, _) in kind.presets() {
+                let c = Config::layered(&ConfigLayers {
+                    technique: Some(kind),
+                    preset: Some(name),
+                    ..Default::default()
+                })
+                .unwrap_or_else(|e| panic!("{kind} preset {name}: {e}"));
+                assert_eq!(c.technique, kind);
+            }
+        }
     }
 }

@@ -14,19 +14,23 @@
 //! config.render.width = 16;
 //! config.render.height = 12;
 //! let mut engine = Engine::new(scene, &config).unwrap();
-//! let frame = engine.step(0.5);
+//! let frame = engine.step(0.5).unwrap();
 //! assert_eq!(frame.frame.full.width(), 16);
+//! assert!(frame.stats.get("reference.spp").is_some()); // counters filed by technique
 //! ```
 
 pub mod config;
+pub mod still;
 pub mod technique_kind;
 
-pub use config::{Config, ConfigError};
+pub use config::{AnySettings, Config, ConfigError, ConfigLayers};
+pub use still::{Still, render_still};
 pub use technique_kind::TechniqueKind;
 
+use illume_core::{Counters, Progress, Silent};
 use illume_render::{Frame, Renderer};
-use illume_scene::{Edit, Scene, SceneChange};
-use illume_transport::{Budget, SharedWorld, Technique, TechniqueStats, World};
+use illume_scene::{Edit, Scene, SceneChange, Timeline};
+use illume_transport::{Budget, ChangeResponse, SharedWorld, Technique, TechniqueError, World};
 use std::time::Instant;
 
 /// What one [`Engine::step`] produced.
@@ -35,50 +39,83 @@ pub struct StepOutput {
     pub frame: Frame,
     /// The scene changes this step applied.
     pub changes: Vec<SceneChange>,
-    /// The technique's counters after the frame.
-    pub stats: TechniqueStats,
+    /// The technique's counters after the frame, filed under its name
+    /// (`photon_stream.photons_per_s`).
+    pub stats: Counters,
     /// Time spent updating the world and the technique \[ms\].
     pub update_ms: f64,
     /// Time spent in the technique's `advance` \[ms\].
     pub advance_ms: f64,
+    /// Time spent in the technique's precompute during this step \[ms\]: the first
+    /// step when [`Engine::precompute`] was not called, or a step whose changes made the
+    /// technique rebuild; 0 otherwise.
+    pub precompute_ms: f64,
+    /// Why the technique was rebuilt during this step, if it was.
+    pub rebuilt: Option<&'static str>,
 }
 
 /// A scene, a technique and a renderer, stepped frame by frame.
 pub struct Engine {
     world: SharedWorld,
+    kind: TechniqueKind,
+    config: Config,
+    timeline: Timeline,
     technique: Box<dyn Technique>,
+    precomputed: bool,
     renderer: Renderer,
     budget: Budget,
     frame_index: u64,
 }
 
-/// Why an engine could not be built.
+/// Why an engine could not be built or run.
 #[derive(Debug, thiserror::Error)]
 pub enum EngineError {
     /// The scene failed validation.
     #[error("{0}")]
     InvalidScene(String),
-    /// The technique could not be constructed.
-    #[error("technique {technique}: {message}")]
+    /// The technique could not be constructed or failed in its precompute.
+    #[error("{technique}: {source}")]
     Technique {
         /// Which technique.
         technique: &'static str,
-        /// Why.
-        message: String,
+        /// The technique's own error.
+        source: TechniqueError,
     },
 }
 
 impl Engine {
-    /// An engine for `scene` with the technique and settings of `config`.
+    /// An engine for `scene` with the technique and settings of `config`, for a
+    /// one-frame timeline at the scene's current time (a still, or frames whose times
+    /// are not known in advance).
     pub fn new(scene: Scene, config: &Config) -> Result<Self, EngineError> {
+        let timeline = Timeline::single(
+            scene.clone(),
+            scene.time,
+            config.render.width,
+            config.render.height,
+        );
+        Self::with_timeline(scene, config, timeline)
+    }
+
+    /// An engine for `scene` that will render the frames of `timeline` (techniques that
+    /// need the future receive it; frames off the timeline are surprises to them).
+    pub fn with_timeline(
+        scene: Scene,
+        config: &Config,
+        timeline: Timeline,
+    ) -> Result<Self, EngineError> {
         scene
             .validate()
             .map_err(|e| EngineError::InvalidScene(format!("{}: {e}", scene.source)))?;
         let world = World::new(scene).shared();
-        let technique = config.technique.build(&world, config)?;
+        let technique = config.technique.build(&world, config, &timeline)?;
         Ok(Self {
             world,
+            kind: config.technique,
+            config: config.clone(),
+            timeline,
             technique,
+            precomputed: false,
             renderer: Renderer::new(config.render.clone()),
             budget: config.budget(),
             frame_index: 0,
@@ -100,33 +137,80 @@ impl Engine {
         self.technique.as_mut()
     }
 
+    /// The timeline the engine was built for.
+    pub fn timeline(&self) -> &Timeline {
+        &self.timeline
+    }
+
     /// Sets the per-frame work budget of the technique.
     pub fn set_budget(&mut self, budget: Budget) {
         self.budget = budget;
     }
 
-    /// Applies an interactive edit now; the technique sees the changes at once.
-    pub fn apply_edit(
-        &mut self,
-        edit: &Edit,
-    ) -> Result<Vec<SceneChange>, illume_scene::change::EditError> {
-        self.technique.before_world_write();
-        let changes = write_world(&self.world).apply_edit(edit)?;
+    /// Runs the technique's precompute phase now, reporting to `progress`; returns its
+    /// wall-clock time \[ms\]. Does nothing (0 ms) when it already ran. Without this
+    /// call the first [`Engine::step`] runs it silently.
+    pub fn precompute(&mut self, progress: &mut dyn Progress) -> Result<f64, EngineError> {
+        if self.precomputed {
+            return Ok(0.0);
+        }
+        let start = Instant::now();
         let world = read_world(&self.world);
-        self.technique.scene_changed(&world, &changes);
+        self.technique
+            .precompute(&world, progress)
+            .map_err(|source| EngineError::Technique {
+                technique: self.kind.name(),
+                source,
+            })?;
+        self.precomputed = true;
+        Ok(start.elapsed().as_secs_f64() * 1e3)
+    }
+
+    /// Applies an interactive edit now; the technique sees the changes at once (and is
+    /// rebuilt if it asks to be).
+    pub fn apply_edit(&mut self, edit: &Edit) -> Result<Vec<SceneChange>, EngineError> {
+        self.technique.before_world_write();
+        let changes = write_world(&self.world)
+            .apply_edit(edit)
+            .map_err(|e| EngineError::InvalidScene(format!("edit refused: {e}")))?;
+        self.propagate(&changes)?;
         Ok(changes)
     }
 
+    /// Hands `changes` to the technique; rebuilds it when it asks. Returns the rebuild
+    /// reason and the precompute time it took.
+    fn propagate(
+        &mut self,
+        changes: &[SceneChange],
+    ) -> Result<(Option<&'static str>, f64), EngineError> {
+        if changes.is_empty() {
+            return Ok((None, 0.0));
+        }
+        let response = self
+            .technique
+            .scene_changed(&read_world(&self.world), changes);
+        match response {
+            ChangeResponse::Updated => Ok((None, 0.0)),
+            ChangeResponse::Rebuild { reason } => {
+                self.technique = self.kind.build(&self.world, &self.config, &self.timeline)?;
+                self.precomputed = false;
+                let ms = self.precompute(&mut Silent)?;
+                Ok((Some(reason), ms))
+            }
+        }
+    }
+
     /// One frame at scene time `t` \[s\]: advance time, propagate changes, advance the
-    /// technique within its budget, render, collect counters.
-    pub fn step(&mut self, t: f64) -> StepOutput {
+    /// technique within its budget, render, collect counters. Fails only when the
+    /// technique's precompute (first frame) or a rebuild fails.
+    pub fn step(&mut self, t: f64) -> Result<StepOutput, EngineError> {
+        let mut precompute_ms = self.precompute(&mut Silent)?;
         let t0 = Instant::now();
         self.technique.before_world_write();
         let changes = write_world(&self.world).set_time(t);
+        let (rebuilt, rebuild_ms) = self.propagate(&changes)?;
+        precompute_ms += rebuild_ms;
         let world = read_world(&self.world);
-        if !changes.is_empty() {
-            self.technique.scene_changed(&world, &changes);
-        }
         let t1 = Instant::now();
         self.technique.advance(&world, &self.budget);
         let t2 = Instant::now();
@@ -135,15 +219,17 @@ impl Engine {
             .render(&world, self.technique.as_mut(), self.frame_index);
         drop(world);
         self.frame_index += 1;
-        let stats = self.technique.stats();
+        let stats = self.technique.stats().prefixed(self.kind.name());
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
-        StepOutput {
+        Ok(StepOutput {
             frame,
             changes,
             stats,
-            update_ms: ms(t0, t1),
+            update_ms: ms(t0, t1) - rebuild_ms,
             advance_ms: ms(t1, t2),
-        }
+            precompute_ms,
+            rebuilt,
+        })
     }
 }
 

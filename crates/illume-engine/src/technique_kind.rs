@@ -1,12 +1,15 @@
-//! The closed set of techniques, selected by name.
+//! The closed set of techniques, selected by name. Adding a technique: a variant here, a
+//! settings table in [`Config`], one arm in each `match` of this file and of
+//! [`Config::technique_settings`]; the compiler lists every place.
 
 use crate::{Config, EngineError};
-use illume_photon_stream::PhotonStream;
-use illume_reference::ReferenceTechnique;
-use illume_transport::{SharedWorld, Technique};
+use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
+use illume_reference::{ReferenceSettings, ReferenceTechnique};
+use illume_scene::Timeline;
+use illume_transport::{SharedWorld, Technique, TechniqueError, TechniqueSettings};
 
 /// Every technique illume implements; the name is the same everywhere (module, TOML
-/// table, CLI value, metric prefix, docs page).
+/// table, CLI value, counter prefix, docs page).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum TechniqueKind {
@@ -23,29 +26,71 @@ impl TechniqueKind {
     pub const ALL: &'static [TechniqueKind] =
         &[TechniqueKind::Reference, TechniqueKind::PhotonStream];
 
-    /// The technique's one name.
+    /// The technique's one name (its crate's `NAME`).
     pub fn name(self) -> &'static str {
         match self {
-            TechniqueKind::Reference => "reference",
-            TechniqueKind::PhotonStream => "photon_stream",
+            TechniqueKind::Reference => illume_reference::NAME,
+            TechniqueKind::PhotonStream => illume_photon_stream::NAME,
         }
     }
 
-    /// Builds the technique for `world` with its settings from `config`.
+    /// Named presets with a one-line description each (the first is `default`).
+    pub fn presets(self) -> &'static [(&'static str, &'static str)] {
+        match self {
+            TechniqueKind::Reference => ReferenceSettings::presets(),
+            TechniqueKind::PhotonStream => PhotonStreamSettings::presets(),
+        }
+    }
+
+    /// The preset `name` as the technique's TOML table (None: no such preset).
+    pub fn preset_table(self, name: &str) -> Option<toml::Table> {
+        fn table<T: TechniqueSettings>(name: &str) -> Option<toml::Table> {
+            let settings = T::preset(name)?;
+            Some(toml::Table::try_from(settings).expect("settings serialize to a table"))
+        }
+        match self {
+            TechniqueKind::Reference => table::<ReferenceSettings>(name),
+            TechniqueKind::PhotonStream => table::<PhotonStreamSettings>(name),
+        }
+    }
+
+    /// What one unit of [`Budget::work`](illume_transport::Budget) is for this
+    /// technique.
+    pub fn work_unit(self) -> &'static str {
+        match self {
+            TechniqueKind::Reference => ReferenceSettings::WORK_UNIT,
+            TechniqueKind::PhotonStream => PhotonStreamSettings::WORK_UNIT,
+        }
+    }
+
+    /// True for techniques that need the future: they are built with the
+    /// [`Timeline`] of the sequence. Interactive techniques never receive it.
+    pub fn needs_timeline(self) -> bool {
+        match self {
+            TechniqueKind::Reference | TechniqueKind::PhotonStream => false,
+        }
+    }
+
+    /// Builds the technique for `world` with its settings from `config`; `timeline` is
+    /// handed on only where [`TechniqueKind::needs_timeline`].
     pub fn build(
         self,
         world: &SharedWorld,
         config: &Config,
+        timeline: &Timeline,
     ) -> Result<Box<dyn Technique>, EngineError> {
+        let _ = timeline; // no offline technique yet
+        let wrap = |source: TechniqueError| EngineError::Technique {
+            technique: self.name(),
+            source,
+        };
         Ok(match self {
-            TechniqueKind::Reference => Box::new(ReferenceTechnique::new(config.reference.clone())),
+            TechniqueKind::Reference => Box::new(
+                ReferenceTechnique::new(config.reference.clone()).map_err(|e| wrap(e.into()))?,
+            ),
             TechniqueKind::PhotonStream => Box::new(
-                PhotonStream::new(world, config.photon_stream.clone()).map_err(|e| {
-                    EngineError::Technique {
-                        technique: self.name(),
-                        message: e.to_string(),
-                    }
-                })?,
+                PhotonStream::new(world, config.photon_stream.clone())
+                    .map_err(|e| wrap(e.into()))?,
             ),
         })
     }
@@ -59,16 +104,18 @@ impl std::str::FromStr for TechniqueKind {
             .iter()
             .copied()
             .find(|k| k.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown technique '{s}' (have: {})",
-                    Self::ALL
-                        .iter()
-                        .map(|k| k.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            })
+            .ok_or_else(|| format!("unknown technique '{s}' (have: {})", Self::names()))
+    }
+}
+
+impl TechniqueKind {
+    /// Every technique's name, comma-separated (for help texts and errors).
+    pub fn names() -> String {
+        Self::ALL
+            .iter()
+            .map(|k| k.name())
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }
 

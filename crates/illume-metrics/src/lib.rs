@@ -46,7 +46,7 @@ pub use compare::{
     CompareSettings, FileComparison, FolderComparison, Metric, compare_files, compare_folders,
     compare_images, compare_images_with, measure, parse_metric_list,
 };
-pub use counters::Counters;
+pub use counters::{CounterReport, Counters, counters_table};
 pub use error::MetricsError;
 pub use flip::{
     FlipMap, FlipSettings, FlipToneMapper, HdrFlip, flip_error_map, hdr_flip, ldr_flip,

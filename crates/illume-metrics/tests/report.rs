@@ -5,7 +5,9 @@ use illume_core::Rgb;
 use illume_core::image::RgbImage;
 use illume_metrics::report::{Bar, BenchReport, Cell, Series, Table, read_csv, write_report};
 use illume_metrics::temporal::error_curve;
-use illume_metrics::{CompareSettings, Counters, FlipSettings, Metric, flicker, ldr_flip};
+use illume_metrics::{
+    CompareSettings, Counters, FlipSettings, Metric, counters_table, flicker, ldr_flip,
+};
 use std::path::PathBuf;
 
 fn scratch(name: &str) -> PathBuf {
@@ -63,7 +65,7 @@ fn synthetic_report() -> BenchReport {
         results,
         tables: vec![(
             "Counters".into(),
-            Counters::to_table("technique", &counter_rows),
+            counters_table("technique", &counter_rows),
         )],
         error_label: "RMSE".into(),
         error_curves: vec![Series::from_curve(&fast), Series::from_curve(&slow)],

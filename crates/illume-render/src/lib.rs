@@ -364,13 +364,19 @@ mod tests {
         fn name(&self) -> &'static str {
             "black"
         }
-        fn scene_changed(&mut self, _: &World, _: &[illume_scene::SceneChange]) {}
+        fn scene_changed(
+            &mut self,
+            _: &World,
+            _: &[illume_scene::SceneChange],
+        ) -> illume_transport::ChangeResponse {
+            illume_transport::ChangeResponse::Updated
+        }
         fn advance(&mut self, _: &World, _: &illume_transport::Budget) {}
         fn indirect(&mut self, _: &World, g: &GBuffer) -> RgbImage {
             RgbImage::black(g.width, g.height)
         }
-        fn stats(&self) -> illume_transport::TechniqueStats {
-            Vec::new()
+        fn stats(&self) -> illume_core::Counters {
+            illume_core::Counters::default()
         }
         fn reset(&mut self) {}
     }

@@ -58,13 +58,13 @@ impl SceneBuilder {
 
     /// Adds a mesh.
     pub fn mesh(&mut self, m: Mesh) -> MeshId {
-        self.scene.meshes.push(m);
+        self.scene.meshes.push(std::sync::Arc::new(m));
         MeshId(self.scene.meshes.len() as u32 - 1)
     }
 
     /// Adds a texture.
     pub fn texture(&mut self, t: Texture) -> TextureId {
-        self.scene.textures.push(t);
+        self.scene.textures.push(std::sync::Arc::new(t));
         TextureId(self.scene.textures.len() as u32 - 1)
     }
 

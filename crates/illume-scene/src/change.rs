@@ -34,6 +34,19 @@ pub enum SceneChange {
         /// Transform after.
         to: Affine3A,
     },
+    /// An instance was added (its id is the last one; ids of other instances stay).
+    InstanceAdded {
+        /// The new instance.
+        instance: InstanceId,
+    },
+    /// An instance was removed. Its id stays allocated (ids of other instances do not
+    /// shift) with mask 0, so no ray sees it and no light set counts it.
+    InstanceRemoved {
+        /// Which instance.
+        instance: InstanceId,
+        /// The instance as it was, with its mask and transform.
+        from: Box<Instance>,
+    },
     /// A material's parameters changed.
     MaterialChanged {
         /// Which material.
@@ -81,6 +94,21 @@ pub enum Edit {
         /// New parameters.
         value: Material,
     },
+    /// Place a new instance of an existing mesh (see [`Scene::add_mesh`]) under a new
+    /// root node; it is dynamic and visible to [`MASK_DEFAULT`] rays.
+    AddInstance {
+        /// Name, for messages.
+        name: String,
+        /// The mesh it places.
+        mesh: MeshId,
+        /// Its `world_from_object`.
+        world_from_object: Affine3A,
+    },
+    /// Remove an instance (see [`SceneChange::InstanceRemoved`]).
+    RemoveInstance {
+        /// Which instance.
+        instance: InstanceId,
+    },
 }
 
 /// Why an edit was refused.
@@ -99,6 +127,20 @@ pub enum EditError {
     NotFinite {
         /// What was being set.
         what: &'static str,
+    },
+    /// The instance was removed before.
+    #[error("instance {index} was removed")]
+    Removed {
+        /// The id given.
+        index: u32,
+    },
+    /// A mesh handed to [`Scene::add_mesh`] breaks a mesh invariant.
+    #[error("mesh '{name}': {reason}")]
+    InvalidMesh {
+        /// The mesh's name.
+        name: String,
+        /// What is wrong.
+        reason: String,
     },
     /// An item placed by an animated node's ancestor cannot be placed arbitrarily.
     #[error("{what}: parent transform is singular, cannot place a child")]
@@ -260,6 +302,61 @@ impl Scene {
                     to: Box::new(l.clone()),
                 }])
             }
+            Edit::AddInstance {
+                name,
+                mesh,
+                world_from_object,
+            } => {
+                if mesh.index() >= self.meshes.len() {
+                    return Err(EditError::NoSuchItem {
+                        what: "mesh",
+                        index: mesh.0,
+                    });
+                }
+                if !affine_is_finite(world_from_object) {
+                    return Err(EditError::NotFinite {
+                        what: "instance transform",
+                    });
+                }
+                let node = NodeId(self.nodes.len() as u32);
+                self.nodes.push(Node {
+                    name: name.clone(),
+                    parent: None,
+                    local: Trs::from_affine(world_from_object),
+                    world_from_node: *world_from_object,
+                });
+                let instance = InstanceId(self.instances.len() as u32);
+                self.instances.push(Instance {
+                    name: name.clone(),
+                    mesh: *mesh,
+                    node,
+                    world_from_object: *world_from_object,
+                    dynamic: true,
+                    mask: MASK_DEFAULT,
+                });
+                let mut changes = vec![SceneChange::InstanceAdded { instance }];
+                // The TRS round trip may move the node by rounding: report it as motion.
+                changes.extend(self.update_world_transforms());
+                Ok(changes)
+            }
+            Edit::RemoveInstance { instance } => {
+                let inst =
+                    self.instances
+                        .get_mut(instance.index())
+                        .ok_or(EditError::NoSuchItem {
+                            what: "instance",
+                            index: instance.0,
+                        })?;
+                if inst.mask == 0 {
+                    return Err(EditError::Removed { index: instance.0 });
+                }
+                let from = Box::new(inst.clone());
+                inst.mask = 0;
+                Ok(vec![SceneChange::InstanceRemoved {
+                    instance: *instance,
+                    from,
+                }])
+            }
             Edit::SetMaterial { material, value } => {
                 let m = self
                     .materials
@@ -279,6 +376,19 @@ impl Scene {
                 }])
             }
         }
+    }
+
+    /// Adds a mesh (object space) for [`Edit::AddInstance`] to place; the mesh is
+    /// checked first ([`Mesh::validate`]). Adding a mesh changes nothing visible, so
+    /// there is no scene change for it.
+    pub fn add_mesh(&mut self, mesh: Mesh) -> Result<MeshId, EditError> {
+        mesh.validate(self.materials.len())
+            .map_err(|reason| EditError::InvalidMesh {
+                name: mesh.name.clone(),
+                reason,
+            })?;
+        self.meshes.push(std::sync::Arc::new(mesh));
+        Ok(MeshId(self.meshes.len() as u32 - 1))
     }
 
     fn place_node(

@@ -23,11 +23,13 @@ pub mod builtin;
 pub mod change;
 pub mod load;
 pub mod model;
+pub mod timeline;
 
 pub use animation::{Animation, Channel, ChannelValues, Interpolation, Trs};
 pub use change::{Edit, SceneChange};
 pub use load::{LoadError, load_scene};
 pub use model::*;
+pub use timeline::{Timeline, TimelineError};
 
 /// The shared test scenes folder (Cornell box variants, Dabrovic Sponza, bunny, dragon)
 /// for tests and benchmarks: `$ILLUME_SCENES`, else `shared/scenes` beside the

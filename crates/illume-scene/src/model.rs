@@ -3,6 +3,7 @@
 
 use crate::animation::{Animation, Trs};
 use illume_core::{Aabb, Affine3A, PI, Rgb, Vec2, Vec3, channel_mean};
+use std::sync::Arc;
 
 macro_rules! typed_id {
     ($(#[$m:meta])* $name:ident) => {
@@ -402,12 +403,13 @@ pub struct Instance {
 pub struct Scene {
     /// Where it came from (file path or `builtin:NAME`), for messages.
     pub source: String,
-    /// Meshes in object space.
-    pub meshes: Vec<Mesh>,
+    /// Meshes in object space, shared (never changed in place once added), so cloning a
+    /// scene — a second world at another time — copies no vertex data.
+    pub meshes: Vec<Arc<Mesh>>,
     /// Materials.
     pub materials: Vec<Material>,
-    /// Textures.
-    pub textures: Vec<Texture>,
+    /// Textures, shared like the meshes.
+    pub textures: Vec<Arc<Texture>>,
     /// Transform hierarchy (parents before children).
     pub nodes: Vec<Node>,
     /// Mesh placements.
@@ -438,10 +440,12 @@ impl Default for Camera {
 }
 
 impl Scene {
-    /// World-space bounds of every instance at the current time.
+    /// World-space bounds of every instance at the current time (removed instances,
+    /// mask 0, excluded).
     pub fn bounds(&self) -> Aabb {
         self.instances
             .iter()
+            .filter(|i| i.mask != 0)
             .map(|i| {
                 self.meshes[i.mesh.index()]
                     .bounds()

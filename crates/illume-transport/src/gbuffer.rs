@@ -154,6 +154,7 @@ pub(crate) struct PrimarySurfaces<'a> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TriangleSetup {
     instance: u32,
+    mesh: illume_scene::MeshId,
     triangle: u32,
     /// Unit front-face normal.
     geometric_normal: Vec3,
@@ -234,6 +235,7 @@ impl<'a> PrimarySurfaces<'a> {
         let (dual1, dual2) = (e2.cross(n) / nn, n.cross(e1) / nn);
         TriangleSetup {
             instance,
+            mesh: inst.mesh,
             triangle,
             geometric_normal,
             dual1,
@@ -323,7 +325,9 @@ impl<'a> PrimarySurfaces<'a> {
                 shading_normal,
                 uv,
                 instance: illume_scene::InstanceId(tri.instance),
+                mesh: tri.mesh,
                 triangle: tri.triangle,
+                barycentrics: Vec2::new(b1, b2),
                 material: tri.material,
                 albedo,
                 emission: tri.emission,

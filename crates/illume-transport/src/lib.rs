@@ -6,6 +6,8 @@
 //! * [`lights`] — light selection proportional to power, direct-light sampling (next-event
 //!   estimation) and emission sampling for every light type.
 //! * [`bsdf`] — the Lambertian BSDF with cosine-weighted sampling, Russian roulette.
+//! * [`path`] — radiance arriving along a ray: path tracing with next-event estimation
+//!   and MIS, shared by the reference and every technique that gathers radiance.
 //! * [`photon`] — the photon-path generator: a pure function of an addressable
 //!   [`SampleStream`](illume_core::sampling::SampleStream) (same index ⇒ same path).
 //! * [`gbuffer`] — the per-pixel primary-hit buffer a technique shades.
@@ -21,6 +23,7 @@ pub mod bsdf;
 pub mod camera;
 pub mod gbuffer;
 pub mod lights;
+pub mod path;
 pub mod photon;
 pub mod raster;
 pub mod shadow_map;
@@ -34,5 +37,5 @@ pub use lights::{EmissionSample, LightSample, LightSet};
 pub use raster::VisibilityBuffer;
 pub use shadow_map::{ShadowMapError, ShadowMapSettings, ShadowMaps};
 pub use surface::SurfaceHit;
-pub use technique::{Budget, Technique, TechniqueStats};
+pub use technique::{Budget, ChangeResponse, Pacing, Technique, TechniqueError, TechniqueSettings};
 pub use world::{SharedWorld, World};

@@ -153,6 +153,11 @@ impl LightSet {
             });
         }
         for (ii, inst) in scene.instances.iter().enumerate() {
+            // Emitters are what ordinary rays see: removed instances (mask 0) and
+            // technique-only copies (phantoms) emit nothing.
+            if inst.mask & illume_scene::MASK_DEFAULT == 0 {
+                continue;
+            }
             let mesh = &scene.meshes[inst.mesh.index()];
             for (t, m) in mesh.triangle_materials.iter().enumerate() {
                 let mat = &scene.materials[m.index()];

@@ -4,7 +4,7 @@ use illume_accel::{Hit, HitGeometry};
 use illume_core::{
     Affine3A, Mat3A, Ray, Rgb, Vec2, Vec3, Vec3A, offset_ray_origin, transform_normal,
 };
-use illume_scene::{InstanceId, MaterialId, Scene, Texture, TextureId, WrapMode};
+use illume_scene::{InstanceId, MaterialId, MeshId, Scene, Texture, TextureId, WrapMode};
 use rayon::prelude::*;
 
 /// `normal` turned to the side a ray arrived from (`front_face`: the front).
@@ -26,8 +26,14 @@ pub struct SurfaceHit {
     pub uv: Vec2,
     /// Instance hit.
     pub instance: InstanceId,
+    /// The mesh the instance places (so mesh elements and texels can be found without
+    /// looking the instance up again).
+    pub mesh: MeshId,
     /// Triangle within the instance's mesh.
     pub triangle: u32,
+    /// Barycentric coordinates (b1, b2) of the hit on `triangle`, weights of its second
+    /// and third corners (the first corner's is 1 − b1 − b2).
+    pub barycentrics: Vec2,
     /// Material of the triangle.
     pub material: MaterialId,
     /// Diffuse albedo ρ at the hit (texture × factor).
@@ -89,7 +95,9 @@ impl SurfaceHit {
             shading_normal,
             uv,
             instance: hit.instance,
+            mesh: inst.mesh,
             triangle: hit.triangle,
+            barycentrics: hit.barycentrics,
             material,
             albedo,
             emission,
@@ -373,8 +381,11 @@ impl HitTables {
         );
         let known = self.textures.len().min(scene.textures.len());
         self.textures.truncate(known);
-        self.textures
-            .extend(scene.textures[known..].iter().map(PackedTexture::new));
+        self.textures.extend(
+            scene.textures[known..]
+                .iter()
+                .map(|t| PackedTexture::new(t)),
+        );
         self.filtered.truncate(known);
         let added = self.textures[known..]
             .iter()

@@ -60,10 +60,14 @@ impl World {
 
     /// Re-derives the tracer's instance level and the light set after `changes`.
     pub fn refresh(&mut self, changes: &[SceneChange]) {
-        if changes
-            .iter()
-            .any(|c| matches!(c, SceneChange::InstanceMoved { .. }))
-        {
+        if changes.iter().any(|c| {
+            matches!(
+                c,
+                SceneChange::InstanceMoved { .. }
+                    | SceneChange::InstanceAdded { .. }
+                    | SceneChange::InstanceRemoved { .. }
+            )
+        }) {
             self.tracer.update(&self.scene);
         }
         if !changes.is_empty() {

@@ -304,13 +304,8 @@ fn latency_table() {
         .expect("photon_stream");
         ps.warm_up(&world.read().unwrap());
         std::thread::sleep(Duration::from_millis(1500));
-        let stat = |ps: &PhotonStream, name: &str| {
-            ps.stats()
-                .into_iter()
-                .find(|(n, _)| n == name)
-                .map_or(0.0, |s| s.1)
-        };
-        let rate = stat(&ps, "photon_stream.impacts_per_s");
+        let stat = |ps: &PhotonStream, name: &str| ps.stats().get(name).unwrap_or(0.0);
+        let rate = stat(&ps, "impacts_per_s");
         let changes = world
             .write()
             .unwrap()
@@ -320,15 +315,13 @@ fn latency_table() {
             })
             .expect("edit");
         let t0 = Instant::now();
-        let shot0 = stat(&ps, "photon_stream.impacts_shot");
+        let shot0 = stat(&ps, "impacts_shot");
         ps.scene_changed(&world.read().unwrap(), &changes);
-        while stat(&ps, "photon_stream.stale_fraction") > 0.0
-            && t0.elapsed() < Duration::from_secs(120)
-        {
+        while stat(&ps, "stale_fraction") > 0.0 && t0.elapsed() < Duration::from_secs(120) {
             std::thread::sleep(Duration::from_millis(2));
         }
         let measured = t0.elapsed().as_secs_f64();
-        let during = (stat(&ps, "photon_stream.impacts_shot") - shot0) / measured;
+        let during = (stat(&ps, "impacts_shot") - shot0) / measured;
         println!(
             "| {pool} | {rate:.3e} | {:.3} | {measured:.3} | {during:.3e} | {:.3} |",
             pool as f64 / rate,

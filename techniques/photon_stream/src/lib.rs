@@ -19,6 +19,8 @@
 //! | §0.7.2: simulation thread, mutual exclusion | [`stream`] |
 //! | §0.4.1, §0.6, §0.7.3: VSL shading, ε culling | [`shade`] |
 //! | §0.5, §0.9.1: dynamic scenes, latency, flush | [`update`] |
+//! | the [`Technique`](illume_transport::Technique) the renderer drives | [`state`] |
+//! | settings (a tuning guide) and presets | [`settings`] |
 //!
 //! **Failure modes.** (1) No VSL visibility (the paper's choice, [`VisibilityMode::Off`]):
 //! VSLs light points they cannot see — over-illumination behind occluders (Figure 7);
@@ -47,6 +49,7 @@
 //! ```
 
 pub mod emit;
+pub mod error;
 pub mod placement;
 pub mod pool;
 pub mod settings;
@@ -55,6 +58,7 @@ pub mod state;
 pub mod stream;
 pub mod update;
 
+pub use error::PhotonStreamError;
 pub use placement::{Vsl, VslSet};
 pub use pool::PhotonPool;
 pub use settings::{
@@ -62,27 +66,5 @@ pub use settings::{
 };
 pub use state::PhotonStream;
 
-/// Why photon streaming could not start.
-#[derive(Debug, thiserror::Error)]
-pub enum PhotonStreamError {
-    /// A setting is out of range.
-    #[error("photon_stream.{field}: {reason}")]
-    InvalidSetting {
-        /// The field.
-        field: &'static str,
-        /// What is wrong.
-        reason: String,
-    },
-    /// The scene has no surface to place VSLs on.
-    #[error("{scene}: no surface with area to place VSLs on")]
-    NoSurfaces {
-        /// The scene's source (file or builtin name).
-        scene: String,
-    },
-    /// The shared world's lock was poisoned by a panic elsewhere.
-    #[error("the shared world's lock is poisoned")]
-    PoisonedWorld,
-    /// The simulation thread could not be started.
-    #[error("cannot start the photon_stream simulation thread: {0}")]
-    Thread(std::io::Error),
-}
+/// The technique's one name: CLI value, settings table, counter and error prefix.
+pub const NAME: &str = "photon_stream";

@@ -1,5 +1,6 @@
 //! Settings of photon streaming (`[photon_stream]` table), written as a tuning guide.
 
+use illume_transport::{Budget, Pacing, TechniqueSettings};
 use serde::{Deserialize, Serialize};
 
 /// How photons are shot.
@@ -205,14 +206,14 @@ impl PhotonStreamSettings {
         }
     }
 
-    /// The preset named `name` (`default`, `deterministic`, `interactive`, `quality`).
-    pub fn preset(name: &str) -> Option<Self> {
-        match name {
-            "default" => Some(Self::default()),
-            "deterministic" => Some(Self::deterministic()),
-            "interactive" => Some(Self::interactive()),
-            "quality" => Some(Self::quality()),
-            _ => None,
+    /// Preset for stills (`illume render`'s default for this technique): the quality
+    /// preset, shot deterministically, with a shadow ray to every VSL — no visibility
+    /// noise, the same image on every run.
+    pub fn still() -> Self {
+        Self {
+            mode: StreamMode::Deterministic,
+            visibility: VisibilityMode::All,
+            ..Self::quality()
         }
     }
 
@@ -279,5 +280,74 @@ impl PhotonStreamSettings {
             );
         }
         Ok(())
+    }
+}
+
+impl TechniqueSettings for PhotonStreamSettings {
+    const NAME: &'static str = crate::NAME;
+    const WORK_UNIT: &'static str = "photons";
+
+    fn presets() -> &'static [(&'static str, &'static str)] {
+        &[
+            (
+                "default",
+                "the paper's values: 100 VSLs, a 100 000-impact pool, streaming",
+            ),
+            (
+                "deterministic",
+                "the defaults, shot between frames: reproducible frames",
+            ),
+            (
+                "interactive",
+                "50 VSLs, a 50 000-impact pool: lower latency",
+            ),
+            (
+                "quality",
+                "200 VSLs, a 10⁶-impact pool, stochastic VSL shadows, every pixel shaded",
+            ),
+            (
+                "still",
+                "quality, deterministic, a shadow ray to every VSL: `render`'s default",
+            ),
+        ]
+    }
+
+    fn preset(name: &str) -> Option<Self> {
+        match name {
+            "default" => Some(Self::default()),
+            "deterministic" => Some(Self::deterministic()),
+            "interactive" => Some(Self::interactive()),
+            "quality" => Some(Self::quality()),
+            "still" => Some(Self::still()),
+            _ => None,
+        }
+    }
+
+    /// Real time: the simulation thread streams ([`StreamMode::Streaming`]). A fixed
+    /// amount of work: [`StreamMode::Deterministic`], `work_per_frame` photons between
+    /// frames (default [`PhotonStreamSettings::photons_per_frame`]).
+    fn pace(&mut self, pacing: Pacing) {
+        match pacing {
+            Pacing::RealTime => self.mode = StreamMode::Streaming,
+            Pacing::FixedWork { work_per_frame } => {
+                self.mode = StreamMode::Deterministic;
+                if let Some(n) = work_per_frame {
+                    self.photons_per_frame = n;
+                }
+            }
+        }
+    }
+
+    /// Deterministic mode: `photons_per_frame` photons; streaming: no budget (the thread
+    /// runs by itself).
+    fn default_budget(&self) -> Budget {
+        Budget {
+            work: (self.mode == StreamMode::Deterministic).then_some(self.photons_per_frame),
+            time_ms: None,
+        }
+    }
+
+    fn set_seed(&mut self, seed: u64) {
+        self.seed = seed;
     }
 }

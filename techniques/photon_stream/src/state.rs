@@ -8,10 +8,10 @@ use crate::settings::{PhotonStreamSettings, StreamMode};
 use crate::shade::{ShadeStats, VslField, shade};
 use crate::stream::{PoolSnapshot, SharedPool, StreamConfig, spawn};
 use crate::{PhotonStreamError, update};
-use illume_core::Rgb;
 use illume_core::image::RgbImage;
+use illume_core::{Counters, Rgb};
 use illume_scene::SceneChange;
-use illume_transport::{Budget, GBuffer, SharedWorld, Technique, TechniqueStats, World};
+use illume_transport::{Budget, ChangeResponse, GBuffer, SharedWorld, Technique, World};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Instant;
@@ -223,15 +223,15 @@ impl Drop for PhotonStream {
 
 impl Technique for PhotonStream {
     fn name(&self) -> &'static str {
-        "photon_stream"
+        crate::NAME
     }
 
-    fn scene_changed(&mut self, _world: &World, changes: &[SceneChange]) {
-        update::on_changes(&self.shared, self.settings.on_change, changes);
+    fn scene_changed(&mut self, _world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        update::on_changes(&self.shared, self.settings.on_change, changes)
     }
 
     /// First call with [`PhotonStreamSettings::warm_up`]: fills the pool. Then, in
-    /// deterministic mode: shoots `budget.photons` (default
+    /// deterministic mode: shoots `budget.work` photons (default
     /// [`PhotonStreamSettings::photons_per_frame`]). Streaming mode: nothing (the thread
     /// runs by itself); `budget` is ignored.
     fn advance(&mut self, world: &World, budget: &Budget) {
@@ -239,7 +239,7 @@ impl Technique for PhotonStream {
             self.warm_up(world);
         }
         if self.settings.mode == StreamMode::Deterministic {
-            let n = budget.photons.unwrap_or(self.settings.photons_per_frame);
+            let n = budget.work.unwrap_or(self.settings.photons_per_frame);
             self.shoot(world, n);
         }
     }
@@ -254,7 +254,7 @@ impl Technique for PhotonStream {
         img
     }
 
-    fn stats(&self) -> TechniqueStats {
+    fn stats(&self) -> Counters {
         let now = self.shared.now_s();
         let s = self.shared.lock();
         let pool = &s.pool;
@@ -270,25 +270,28 @@ impl Technique for PhotonStream {
         } else {
             f64::INFINITY
         };
-        let v = |name: &str, x: f64| (format!("photon_stream.{name}"), x);
-        vec![
-            v("photons_shot", pool.photons_pushed() as f64),
-            v("impacts_shot", pool.impacts_pushed() as f64),
-            v("photons_per_s", s.photons_per_s),
-            v("impacts_per_s", s.impacts_per_s),
-            v("rays_per_s", s.rays_per_s),
-            v("pool_impacts", pool.len() as f64),
-            v("pool_fill", pool.len() as f64 / pool.capacity() as f64),
-            v("pool_photons", pool.photons() as f64),
-            v("pool_age_s", age),
-            v("latency_s", latency),
-            v("stale_fraction", stale),
-            v("vsl_count", self.vsls.len() as f64),
-            v("vsls_per_tile", self.last_shade.vsls_per_tile()),
-            v("shading_ms", self.shading_ms),
-            v("shadow_rays", self.last_shade.shadow_rays as f64),
-            v("paused", if self.shared.is_paused() { 1.0 } else { 0.0 }),
-        ]
+        let mut c = Counters::new();
+        for (name, x) in [
+            ("photons_shot", pool.photons_pushed() as f64),
+            ("impacts_shot", pool.impacts_pushed() as f64),
+            ("photons_per_s", s.photons_per_s),
+            ("impacts_per_s", s.impacts_per_s),
+            ("rays_per_s", s.rays_per_s),
+            ("pool_impacts", pool.len() as f64),
+            ("pool_fill", pool.len() as f64 / pool.capacity() as f64),
+            ("pool_photons", pool.photons() as f64),
+            ("pool_age_s", age),
+            ("latency_s", latency),
+            ("stale_fraction", stale),
+            ("vsl_count", self.vsls.len() as f64),
+            ("vsls_per_tile", self.last_shade.vsls_per_tile()),
+            ("shading_ms", self.shading_ms),
+            ("shadow_rays", self.last_shade.shadow_rays as f64),
+            ("paused", if self.shared.is_paused() { 1.0 } else { 0.0 }),
+        ] {
+            c.set(name, x);
+        }
+        c
     }
 
     /// The streaming thread ends its batch at the next photon (see

@@ -43,10 +43,8 @@ fn blend_fraction(x: &[f64], from: &[f64], to: &[f64]) -> f64 {
 
 fn stat(ps: &PhotonStream, name: &str) -> f64 {
     ps.stats()
-        .into_iter()
-        .find(|(n, _)| n == name)
+        .get(name)
         .unwrap_or_else(|| panic!("no stat {name}"))
-        .1
 }
 
 const POOL: u32 = 30_000;
@@ -99,9 +97,9 @@ fn after_the_sphere_moves_the_field_converges_with_latency_pool_size_over_rate()
     let mut distances = Vec::new();
     let mut impacts_per_frame = Vec::new();
     for _ in 0..100 {
-        let i0 = stat(&ps, "photon_stream.impacts_shot");
+        let i0 = stat(&ps, "impacts_shot");
         ps.advance(&world.read().unwrap(), &budget);
-        impacts_per_frame.push(stat(&ps, "photon_stream.impacts_shot") - i0);
+        impacts_per_frame.push(stat(&ps, "impacts_shot") - i0);
         distances.push(field_distance(&ps, &steady));
         fractions.push(blend_fraction(&field_vector(&ps), &old_field, &new_field));
     }
@@ -144,7 +142,7 @@ fn after_the_sphere_moves_the_field_converges_with_latency_pool_size_over_rate()
         "not converged after one turnover: {}",
         distances[turnover]
     );
-    assert_eq!(stat(&ps, "photon_stream.stale_fraction"), 0.0);
+    assert_eq!(stat(&ps, "stale_fraction"), 0.0);
 }
 
 #[test]
@@ -161,11 +159,11 @@ fn flush_policy_empties_the_pool_on_a_change_but_not_on_a_camera_move() {
     ps.advance(
         &world.read().unwrap(),
         &Budget {
-            photons: Some(3000),
+            work: Some(3000),
             ..Default::default()
         },
     );
-    assert!(stat(&ps, "photon_stream.pool_impacts") > 0.0);
+    assert!(stat(&ps, "pool_impacts") > 0.0);
     let cam = world.read().unwrap().scene.camera.world_from_camera;
     let changes = world
         .write()
@@ -176,22 +174,22 @@ fn flush_policy_empties_the_pool_on_a_change_but_not_on_a_camera_move() {
         .unwrap();
     ps.scene_changed(&world.read().unwrap(), &changes);
     assert!(
-        stat(&ps, "photon_stream.pool_impacts") > 0.0,
+        stat(&ps, "pool_impacts") > 0.0,
         "a camera move keeps the pool"
     );
     let changes = world.write().unwrap().set_time(0.5);
     ps.scene_changed(&world.read().unwrap(), &changes);
-    assert_eq!(stat(&ps, "photon_stream.pool_impacts"), 0.0);
-    assert_eq!(stat(&ps, "photon_stream.pool_photons"), 0.0);
+    assert_eq!(stat(&ps, "pool_impacts"), 0.0);
+    assert_eq!(stat(&ps, "pool_photons"), 0.0);
     ps.validate().unwrap();
     ps.advance(
         &world.read().unwrap(),
         &Budget {
-            photons: Some(1000),
+            work: Some(1000),
             ..Default::default()
         },
     );
-    assert_eq!(stat(&ps, "photon_stream.pool_photons"), 1000.0);
+    assert_eq!(stat(&ps, "pool_photons"), 1000.0);
     ps.validate().unwrap();
 }
 
@@ -211,7 +209,7 @@ fn deterministic_mode_is_reproducible() {
         ps.advance(
             &world.read().unwrap(),
             &Budget {
-                photons: Some(5000),
+                work: Some(5000),
                 ..Default::default()
             },
         );
@@ -254,8 +252,8 @@ fn streaming_thread_checks(stream_priority: StreamPriority) {
             std::thread::sleep(std::time::Duration::from_millis(10));
         }
     };
-    wait_for(&|| stat(&ps, "photon_stream.pool_fill") > 0.99);
-    wait_for(&|| stat(&ps, "photon_stream.impacts_per_s") > 0.0);
+    wait_for(&|| stat(&ps, "pool_fill") > 0.99);
+    wait_for(&|| stat(&ps, "impacts_per_s") > 0.0);
     ps.validate().unwrap();
     // Scene update under the write lock while the thread runs (announced, as the
     // engine does: the thread ends its batch early).
@@ -266,18 +264,18 @@ fn streaming_thread_checks(stream_priority: StreamPriority) {
     }
     ps.pause();
     std::thread::sleep(std::time::Duration::from_millis(50)); // let a batch in flight land
-    let shot = stat(&ps, "photon_stream.photons_shot");
+    let shot = stat(&ps, "photons_shot");
     std::thread::sleep(std::time::Duration::from_millis(200));
     assert_eq!(
-        stat(&ps, "photon_stream.photons_shot"),
+        stat(&ps, "photons_shot"),
         shot,
         "paused thread kept shooting"
     );
-    assert_eq!(stat(&ps, "photon_stream.paused"), 1.0);
-    assert!(stat(&ps, "photon_stream.pool_age_s") > 0.0);
-    assert!(stat(&ps, "photon_stream.latency_s").is_finite());
+    assert_eq!(stat(&ps, "paused"), 1.0);
+    assert!(stat(&ps, "pool_age_s") > 0.0);
+    assert!(stat(&ps, "latency_s").is_finite());
     ps.resume();
-    wait_for(&|| stat(&ps, "photon_stream.photons_shot") > shot);
+    wait_for(&|| stat(&ps, "photons_shot") > shot);
     ps.validate().unwrap();
     // Snapshots are consistent: every VSL side is a sum of whole photons' quanta, so
     // the snapshot total equals a sum the pool validated; check K > 0 and finite flux.

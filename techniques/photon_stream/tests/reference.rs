@@ -76,11 +76,12 @@ fn converged_vsl_indirect_agrees_with_reference_indirect_and_visibility_reduces_
             spp_per_frame: 256,
             seed,
             ..Default::default()
-        });
+        })
+        .unwrap();
         r.advance(
             &w,
             &Budget {
-                samples: Some(256),
+                work: Some(256),
                 ..Default::default()
             },
         );
@@ -117,7 +118,7 @@ fn converged_vsl_indirect_agrees_with_reference_indirect_and_visibility_reduces_
         ps.advance(
             &w,
             &Budget {
-                photons: Some(400_000),
+                work: Some(400_000),
                 ..Default::default()
             },
         );
@@ -160,11 +161,12 @@ fn in_the_empty_box_vsl_shading_converges_to_the_reference_as_the_vsl_count_grow
     let mut r = ReferenceTechnique::new(ReferenceSettings {
         spp_per_frame: 256,
         ..Default::default()
-    });
+    })
+    .unwrap();
     r.advance(
         &w,
         &Budget {
-            samples: Some(256),
+            work: Some(256),
             ..Default::default()
         },
     );
@@ -182,7 +184,7 @@ fn in_the_empty_box_vsl_shading_converges_to_the_reference_as_the_vsl_count_grow
             ps.advance(
                 &w,
                 &Budget {
-                    photons: Some(400_000),
+                    work: Some(400_000),
                     ..Default::default()
                 },
             );

@@ -28,12 +28,14 @@ fn main() {
     println!("scene {scene_name}, {w}×{h}, {threads} threads");
 
     let t0 = Instant::now();
-    let mut long = ReferenceRenderer::new(ReferenceSettings {
-        width: w,
-        height: h,
-        seed: 1000,
-        ..Default::default()
-    });
+    let mut long = ReferenceRenderer::new(
+        ReferenceSettings {
+            seed: 1000,
+            ..Default::default()
+        },
+        w,
+        h,
+    );
     let chunk = 64;
     while long.samples() < long_spp {
         long.add_samples(&world, chunk.min(long_spp - long.samples()));
@@ -45,12 +47,14 @@ fn main() {
         (w * h) as f64 * long_spp as f64 / long_s / 1e6
     );
 
-    let mut r = ReferenceRenderer::new(ReferenceSettings {
-        width: w,
-        height: h,
-        seed: 0,
-        ..Default::default()
-    });
+    let mut r = ReferenceRenderer::new(
+        ReferenceSettings {
+            seed: 0,
+            ..Default::default()
+        },
+        w,
+        h,
+    );
     let mut elapsed = 0.0f64;
     let mut converged_at: Option<(u32, f64)> = None;
     let mut first_relmse = None;

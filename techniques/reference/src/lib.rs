@@ -1,8 +1,9 @@
 //! The reference path tracer: illume's ground truth, against which every technique is
-//! measured.
+//! measured (`reference`; `shared/DESIGN.md`, "The reference is a peer").
 //!
-//! Unidirectional path tracing from the camera with next-event estimation at every
-//! vertex, multiple importance sampling (power heuristic) between light sampling and
+//! **What it computes.** The rendering equation (Kajiya 1986) by unidirectional path
+//! tracing from the camera with next-event estimation at every vertex, multiple
+//! importance sampling with the power heuristic (Veach 1997) between light sampling and
 //! BSDF sampling for area lights (emissive triangles), Russian roulette after
 //! [`ReferenceSettings::rr_start_depth`] bounces, and a box pixel filter (uniform jitter
 //! within the pixel). It is unbiased under `shared/DESIGN.md`'s conventions and
@@ -15,25 +16,38 @@
 //! * **indirect** image = light reflected two or more times;
 //! * **full** = direct + indirect.
 //!
-//! As a [`Technique`](illume_transport::Technique) (`reference`), it supplies the
-//! indirect light of G-buffer points by path tracing from them, accumulating over frames
-//! while nothing changes.
+//! | mechanism | module |
+//! |---|---|
+//! | path kernel: NEE + MIS + Russian roulette (shared with other techniques) | [`illume_transport::path`] |
+//! | full-image progressive rendering, direct/indirect split | [`full_image`] |
+//! | indirect light at G-buffer points, accumulated over frames ([`Technique`](illume_transport::Technique)) | [`state`] |
+//! | scene changes → restart of the average | [`update`] |
+//! | settings and presets | [`settings`] |
+//!
+//! **Failure modes.** Noise, falling as 1/√spp; caustics through specular paths are
+//! found only by BSDF sampling (slow); an animated scene restarts the average at every
+//! change, so a moving scene is never converged in the frame loop.
 //!
 //! ```
 //! use illume_reference::{ReferenceRenderer, ReferenceSettings};
 //! use illume_transport::World;
 //! let world = World::new(illume_scene::builtin::load("furnace").unwrap());
-//! let mut r = ReferenceRenderer::new(ReferenceSettings { width: 8, height: 8, ..Default::default() });
+//! let mut r = ReferenceRenderer::new(ReferenceSettings::default(), 8, 8);
 //! r.add_samples(&world, 64);
 //! let mean = r.images().full.mean();
 //! assert!((mean.x - 2.0).abs() < 0.1); // furnace: Le/(1 − ρ) = 2
 //! ```
 
+pub mod error;
+pub mod full_image;
 pub mod settings;
 pub mod state;
-pub mod trace;
 pub mod update;
 
+pub use error::ReferenceError;
+pub use full_image::{ReferenceRenderer, SplitImages};
 pub use settings::ReferenceSettings;
-pub use state::{ReferenceRenderer, SplitImages};
-pub use update::ReferenceTechnique;
+pub use state::ReferenceTechnique;
+
+/// The technique's one name: CLI value, settings table, counter and error prefix.
+pub const NAME: &str = "reference";

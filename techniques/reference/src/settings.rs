@@ -1,18 +1,20 @@
-//! Settings of the reference path tracer, as a tuning guide.
+//! Settings of the reference path tracer (`[reference]` table), as a tuning guide.
 
-/// Reference path tracer settings (`[reference]` table).
+use illume_transport::{Budget, Pacing, TechniqueSettings};
+
+/// Reference path tracer settings (`[reference]` table). The image size is the
+/// renderer's (`[render]`), not the technique's.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReferenceSettings {
-    /// Image width \[pixels\] (full-image rendering). Default 640.
-    pub width: u32,
-    /// Image height \[pixels\]. Default 480.
-    pub height: u32,
-    /// Samples per pixel of a full render. Noise falls as 1/√spp, time grows linearly.
-    /// Default 256.
+    /// Samples per pixel of a full-image render ([`ReferenceRenderer`](crate::ReferenceRenderer),
+    /// `illume render --technique reference`). Noise falls as 1/√spp, time grows
+    /// linearly. Default 256.
     pub spp: u32,
     /// Samples per pixel a [`ReferenceTechnique`](crate::ReferenceTechnique) adds each
-    /// frame (indirect-only, progressive while the scene is static). Default 4.
+    /// frame when the frame loop's budget does not say (indirect-only, progressive while
+    /// the scene is static). Higher: faster convergence per frame, slower frames.
+    /// Default 4.
     pub spp_per_frame: u32,
     /// Bounces before Russian roulette may end a path. Lower: faster, noisier deep
     /// paths (still unbiased). Default 3.
@@ -27,13 +29,106 @@ pub struct ReferenceSettings {
 impl Default for ReferenceSettings {
     fn default() -> Self {
         Self {
-            width: 640,
-            height: 480,
             spp: 256,
             spp_per_frame: 4,
             rr_start_depth: 3,
             max_depth: 1024,
             seed: 0,
+        }
+    }
+}
+
+impl ReferenceSettings {
+    /// Checks every value; the error names the field.
+    pub fn validate(&self) -> Result<(), crate::ReferenceError> {
+        let bad = |field: &'static str, reason: &str| {
+            Err(crate::ReferenceError::InvalidSetting {
+                field,
+                reason: reason.to_owned(),
+            })
+        };
+        if self.spp == 0 {
+            return bad("spp", "must be at least 1");
+        }
+        if self.spp_per_frame == 0 {
+            return bad("spp_per_frame", "must be at least 1");
+        }
+        if self.max_depth == 0 {
+            return bad("max_depth", "must be at least 1");
+        }
+        Ok(())
+    }
+}
+
+impl TechniqueSettings for ReferenceSettings {
+    const NAME: &'static str = crate::NAME;
+    const WORK_UNIT: &'static str = "samples per pixel";
+
+    fn presets() -> &'static [(&'static str, &'static str)] {
+        &[
+            ("default", "256 spp stills, 4 spp per frame"),
+            (
+                "preview",
+                "16 spp stills, 1 spp per frame: a quick, noisy look",
+            ),
+            (
+                "converged",
+                "4096 spp stills, 16 spp per frame: ground truth for comparisons",
+            ),
+        ]
+    }
+
+    fn preset(name: &str) -> Option<Self> {
+        let d = Self::default();
+        match name {
+            "default" => Some(d),
+            "preview" => Some(Self {
+                spp: 16,
+                spp_per_frame: 1,
+                ..d
+            }),
+            "converged" => Some(Self {
+                spp: 4096,
+                spp_per_frame: 16,
+                ..d
+            }),
+            _ => None,
+        }
+    }
+
+    /// Real time keeps `spp_per_frame`; a fixed amount of work sets it.
+    fn pace(&mut self, pacing: Pacing) {
+        if let Pacing::FixedWork {
+            work_per_frame: Some(n),
+        } = pacing
+        {
+            self.spp_per_frame = n.clamp(1, u32::MAX as u64) as u32;
+        }
+    }
+
+    fn default_budget(&self) -> Budget {
+        Budget {
+            work: Some(self.spp_per_frame as u64),
+            time_ms: None,
+        }
+    }
+
+    fn set_seed(&mut self, seed: u64) {
+        self.seed = seed;
+    }
+
+    fn set_samples_per_pixel(&mut self, spp: u32) -> bool {
+        self.spp = spp;
+        true
+    }
+}
+
+impl ReferenceSettings {
+    /// The path kernel's settings.
+    pub fn path(&self) -> illume_transport::path::PathSettings {
+        illume_transport::path::PathSettings {
+            rr_start_depth: self.rr_start_depth,
+            max_depth: self.max_depth,
         }
     }
 }

@@ -1,121 +1,143 @@
-//! Progressive accumulation of full-image reference renders.
+//! The reference as a [`Technique`]: indirect light at G-buffer points by path tracing,
+//! accumulated over frames; any scene change or a new G-buffer restarts the average.
 
 use crate::settings::ReferenceSettings;
-use crate::trace::radiance;
+use crate::update;
 use illume_core::image::RgbImage;
-use illume_core::sampling::{Pcg32, SampleStream, mix64};
-use illume_core::{Rgb, Vec3};
-use illume_transport::{CameraRays, World};
+use illume_core::sampling::{Pcg32, mix64};
+use illume_core::{Counters, Rgb, Vec3};
+use illume_scene::SceneChange;
+use illume_transport::path::{PathRadiance, continue_path};
+use illume_transport::{Budget, ChangeResponse, GBuffer, Technique, World};
 use rayon::prelude::*;
 
-/// The reference's output images (linear radiance).
-#[derive(Clone, Debug)]
-pub struct SplitImages {
-    /// direct + indirect.
-    pub full: RgbImage,
-    /// Emission seen directly plus light reflected once.
-    pub direct: RgbImage,
-    /// Light reflected two or more times.
-    pub indirect: RgbImage,
-}
-
-/// Progressive full-image path tracing: each call to [`ReferenceRenderer::add_samples`]
-/// adds samples per pixel; the running mean is always available.
-pub struct ReferenceRenderer {
+/// Path-traced indirect light for the renderer (technique name `reference`).
+pub struct ReferenceTechnique {
     settings: ReferenceSettings,
-    direct_sum: Vec<[f64; 3]>,
-    indirect_sum: Vec<[f64; 3]>,
+    sum: Vec<[f64; 3]>,
     samples: u32,
+    pending: u32,
+    signature: Option<u64>,
+    paths_traced: u64,
 }
 
-impl ReferenceRenderer {
-    /// An empty accumulator for `settings.width × settings.height`.
-    pub fn new(settings: ReferenceSettings) -> Self {
-        let n = settings.width as usize * settings.height as usize;
-        Self {
+impl ReferenceTechnique {
+    /// A technique with `settings` (its `spp_per_frame` is the default budget).
+    pub fn new(settings: ReferenceSettings) -> Result<Self, crate::ReferenceError> {
+        settings.validate()?;
+        let pending = settings.spp_per_frame;
+        Ok(Self {
             settings,
-            direct_sum: vec![[0.0; 3]; n],
-            indirect_sum: vec![[0.0; 3]; n],
+            sum: Vec::new(),
             samples: 0,
+            pending,
+            signature: None,
+            paths_traced: 0,
+        })
+    }
+}
+
+/// A cheap fingerprint of a G-buffer (positions and instances) to tell when accumulation
+/// must restart.
+fn signature(g: &GBuffer) -> u64 {
+    let mut h = mix64(g.width as u64) ^ mix64(g.height as u64 + 1);
+    for (i, p) in g.pixels.iter().enumerate().step_by(7) {
+        if let Some(p) = p {
+            let v = p.hit.position.to_array().map(f32::to_bits);
+            h = mix64(
+                h ^ (i as u64)
+                    ^ ((v[0] as u64) << 32 | v[1] as u64)
+                    ^ v[2] as u64
+                    ^ ((p.hit.instance.0 as u64) << 40),
+            );
         }
     }
+    h
+}
 
-    /// Samples per pixel so far.
-    pub fn samples(&self) -> u32 {
-        self.samples
+impl Technique for ReferenceTechnique {
+    fn name(&self) -> &'static str {
+        crate::NAME
     }
 
-    /// The settings.
-    pub fn settings(&self) -> &ReferenceSettings {
-        &self.settings
+    fn scene_changed(&mut self, _world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        if update::restarts_accumulation(changes) {
+            self.reset();
+        }
+        ChangeResponse::Updated
     }
 
-    /// Adds `spp` samples per pixel (in parallel over pixels).
-    pub fn add_samples(&mut self, world: &World, spp: u32) {
-        let (w, h) = (self.settings.width, self.settings.height);
-        let cam = CameraRays::new(&world.scene.camera, w, h);
-        let settings = &self.settings;
+    /// Adds `budget.work` samples per pixel at the next [`Technique::indirect`]
+    /// (default [`ReferenceSettings::spp_per_frame`]); `budget.time_ms` is ignored.
+    fn advance(&mut self, _world: &World, budget: &Budget) {
+        self.pending = budget.work.map_or(self.settings.spp_per_frame, |n| {
+            n.clamp(1, u32::MAX as u64) as u32
+        });
+    }
+
+    fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
+        let sig = signature(gbuffer);
+        if self.signature != Some(sig) || self.sum.len() != gbuffer.pixels.len() {
+            self.sum = vec![[0.0; 3]; gbuffer.pixels.len()];
+            self.samples = 0;
+            self.signature = Some(sig);
+        }
         let first = self.samples;
-        self.direct_sum
+        let spp = self.pending.max(1);
+        let settings = &self.settings;
+        let path = settings.path();
+        self.sum
             .par_iter_mut()
-            .zip(self.indirect_sum.par_iter_mut())
+            .zip(&gbuffer.pixels)
             .enumerate()
             .with_min_len(16)
-            .for_each(|(i, (d, ind))| {
-                let (x, y) = (i as u32 % w, i as u32 / w);
+            .for_each(|(i, (acc, px))| {
+                let Some(px) = px else { return };
                 for s in first..first + spp {
-                    let mut rng = Pcg32::new(mix64(settings.seed.wrapping_add(s as u64)), i as u64);
-                    let ray = cam.ray(x, y, rng.next_2d());
-                    let r = radiance(world, &ray, &mut rng, settings);
-                    let direct = r.emitted + r.direct;
-                    for c in 0..3 {
-                        d[c] += direct[c] as f64;
-                        ind[c] += r.indirect[c] as f64;
+                    let mut rng = Pcg32::new(
+                        mix64(
+                            settings
+                                .seed
+                                .wrapping_add(0x5bd1e995)
+                                .wrapping_add(s as u64),
+                        ),
+                        i as u64,
+                    );
+                    let mut out = PathRadiance::default();
+                    continue_path(world, px.hit, &mut rng, &path, &mut out);
+                    for (a, v) in acc.iter_mut().zip(out.indirect.to_array()) {
+                        *a += f64::from(v);
                     }
                 }
             });
         self.samples += spp;
+        self.paths_traced +=
+            spp as u64 * gbuffer.pixels.iter().filter(|p| p.is_some()).count() as u64;
+        let inv = 1.0 / self.samples as f64;
+        let px = self
+            .sum
+            .iter()
+            .map(|s| {
+                Vec3::new(
+                    (s[0] * inv) as f32,
+                    (s[1] * inv) as f32,
+                    (s[2] * inv) as f32,
+                )
+            })
+            .collect::<Vec<Rgb>>();
+        RgbImage::from_vec(gbuffer.width, gbuffer.height, px).expect("one value per pixel")
     }
 
-    /// The running means.
-    pub fn images(&self) -> SplitImages {
-        let (w, h) = (self.settings.width, self.settings.height);
-        let inv = 1.0 / self.samples.max(1) as f64;
-        let to_img = |sum: &[[f64; 3]]| {
-            RgbImage::from_vec(
-                w,
-                h,
-                sum.iter()
-                    .map(|s| {
-                        Vec3::new(
-                            (s[0] * inv) as f32,
-                            (s[1] * inv) as f32,
-                            (s[2] * inv) as f32,
-                        )
-                    })
-                    .collect(),
-            )
-            .expect("one value per pixel")
-        };
-        let direct = to_img(&self.direct_sum);
-        let indirect = to_img(&self.indirect_sum);
-        let full = direct.add(&indirect);
-        SplitImages {
-            full,
-            direct,
-            indirect,
-        }
+    fn stats(&self) -> Counters {
+        let mut c = Counters::new();
+        c.set("spp", self.samples as f64);
+        c.set("paths_traced", self.paths_traced as f64);
+        c
     }
 
-    /// Forgets all samples.
-    pub fn reset(&mut self) {
-        self.direct_sum.iter_mut().for_each(|v| *v = [0.0; 3]);
-        self.indirect_sum.iter_mut().for_each(|v| *v = [0.0; 3]);
+    fn reset(&mut self) {
+        self.sum.clear();
         self.samples = 0;
+        self.signature = None;
     }
-}
-
-/// Mean of an image as `Rgb` in f64 accumulation (for tests and reports).
-pub fn image_mean(img: &RgbImage) -> Rgb {
-    img.mean()
 }

@@ -11,11 +11,7 @@ use illume_transport::{GBuffer, World};
 fn furnace_converges_to_le_over_one_minus_rho() {
     for (rho, le) in [(0.5f32, 1.0f32), (0.8, 0.25)] {
         let world = World::new(illume_scene::builtin::furnace(rho, Rgb::splat(le)));
-        let mut r = ReferenceRenderer::new(ReferenceSettings {
-            width: 16,
-            height: 16,
-            ..Default::default()
-        });
+        let mut r = ReferenceRenderer::new(ReferenceSettings::default(), 16, 16);
         r.add_samples(&world, 256);
         let expected = le / (1.0 - rho);
         let mean = r.images().full.mean();
@@ -83,11 +79,7 @@ fn point_light_over_plane_matches_inverse_square_law() {
     assert_eq!(checked, 32 * 24, "every pixel sees the plane");
     // The path tracer (box filter) agrees on the image mean within 1 %, and finds no
     // indirect light (a single plane cannot light itself).
-    let mut r = ReferenceRenderer::new(ReferenceSettings {
-        width: 32,
-        height: 24,
-        ..Default::default()
-    });
+    let mut r = ReferenceRenderer::new(ReferenceSettings::default(), 32, 24);
     r.add_samples(&world, 64);
     let imgs = r.images();
     let (a, b) = (imgs.full.mean(), direct.mean());
@@ -106,30 +98,24 @@ fn point_light_over_plane_matches_inverse_square_law() {
 fn same_seed_same_image_different_seed_different_image() {
     let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap());
     let render = |seed| {
-        let mut r = ReferenceRenderer::new(ReferenceSettings {
-            width: 24,
-            height: 16,
-            seed,
-            ..Default::default()
-        });
+        let mut r = ReferenceRenderer::new(
+            ReferenceSettings {
+                seed,
+                ..Default::default()
+            },
+            24,
+            16,
+        );
         r.add_samples(&world, 2);
         r.images().full
     };
     assert_eq!(render(3), render(3));
     assert_ne!(render(3), render(4));
     // Progressive accumulation in two steps equals one step.
-    let mut a = ReferenceRenderer::new(ReferenceSettings {
-        width: 24,
-        height: 16,
-        ..Default::default()
-    });
+    let mut a = ReferenceRenderer::new(ReferenceSettings::default(), 24, 16);
     a.add_samples(&world, 1);
     a.add_samples(&world, 1);
-    let mut b = ReferenceRenderer::new(ReferenceSettings {
-        width: 24,
-        height: 16,
-        ..Default::default()
-    });
+    let mut b = ReferenceRenderer::new(ReferenceSettings::default(), 24, 16);
     b.add_samples(&world, 2);
     assert_eq!(a.images().full, b.images().full);
 }

@@ -21,12 +21,14 @@ fn check(file: &str, full: [f32; 3], direct: [f32; 3]) {
     let path = scenes_dir().join("gltf").join(file);
     let scene = illume_scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
     let world = World::new(scene);
-    let mut r = ReferenceRenderer::new(ReferenceSettings {
-        width: 160,
-        height: 120,
-        seed: 1,
-        ..Default::default()
-    });
+    let mut r = ReferenceRenderer::new(
+        ReferenceSettings {
+            seed: 1,
+            ..Default::default()
+        },
+        160,
+        120,
+    );
     r.add_samples(&world, 48);
     let imgs = r.images();
     let (f, d, i) = (imgs.full.mean(), imgs.direct.mean(), imgs.indirect.mean());

@@ -1,10 +1,33 @@
-//! The path kernel: radiance along one camera path, split by bounce count.
+//! The path kernel shared by every technique that needs radiance arriving along a ray:
+//! unidirectional path tracing with next-event estimation and multiple importance
+//! sampling (power heuristic) between light sampling and BSDF sampling, split by bounce
+//! count. The reference technique renders with it; radiance caching fills its records
+//! with it.
 
-use crate::settings::ReferenceSettings;
+use crate::bsdf::{lambert_pdf, lambert_sample, russian_roulette};
+use crate::{SurfaceHit, World};
 use illume_core::sampling::SampleStream;
 use illume_core::{INV_PI, Ray, Rgb};
-use illume_transport::bsdf::{lambert_pdf, lambert_sample, russian_roulette};
-use illume_transport::{SurfaceHit, World};
+
+/// Path length settings for [`radiance`] and [`continue_path`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PathSettings {
+    /// Reflections after which Russian roulette may end a path (unbiased: survivors are
+    /// re-weighted). Lower = faster, noisier deep bounces. Default 3.
+    pub rr_start_depth: u32,
+    /// Hard cap on reflections (biased when reached; at the default it practically never
+    /// is, as roulette ends paths long before). Default 1024.
+    pub max_depth: u32,
+}
+
+impl Default for PathSettings {
+    fn default() -> Self {
+        Self {
+            rr_start_depth: 3,
+            max_depth: 1024,
+        }
+    }
+}
 
 /// Radiance of one path split by how many reflections it took.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -38,12 +61,12 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
 }
 
-/// Radiance arriving along a camera `ray`.
+/// Radiance arriving along `ray` (a camera ray, or any other), split by bounce count.
 pub fn radiance(
     world: &World,
     ray: &Ray,
     sampler: &mut impl SampleStream,
-    settings: &ReferenceSettings,
+    settings: &PathSettings,
 ) -> PathRadiance {
     match world.trace(ray, illume_scene::MASK_DEFAULT) {
         Some(hit) => {
@@ -64,7 +87,7 @@ pub fn continue_path(
     world: &World,
     first: SurfaceHit,
     sampler: &mut impl SampleStream,
-    settings: &ReferenceSettings,
+    settings: &PathSettings,
     out: &mut PathRadiance,
 ) {
     let mut hit = first;

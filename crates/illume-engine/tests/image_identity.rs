@@ -1,0 +1,80 @@
+//! Images that must not change when shared layers are reshaped: photon_stream with its
+//! deterministic preset and the reference path tracer (full image and technique) on
+//! `builtin:cornell-spot`. The checksums were recorded with the code before the
+//! technique-contract rework (issue 8); a change that alters any pixel bit fails here
+//! and must say why in its commit.
+
+use illume_core::image::RgbImage;
+use illume_engine::{Config, Engine, TechniqueKind};
+
+/// FNV-1a over the pixels' f32 bits.
+fn checksum(img: &RgbImage) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for p in img.pixels() {
+        for c in p.to_array() {
+            for b in c.to_bits().to_le_bytes() {
+                h ^= b as u64;
+                h = h.wrapping_mul(0x100_0000_01b3);
+            }
+        }
+    }
+    h
+}
+
+fn config(kind: TechniqueKind) -> Config {
+    let mut c = Config::default();
+    c.technique = kind;
+    c.render.width = 64;
+    c.render.height = 48;
+    c.photon_stream = illume_photon_stream::PhotonStreamSettings {
+        vsl_count: 40,
+        photons_per_frame: 5000,
+        ..illume_photon_stream::PhotonStreamSettings::deterministic()
+    };
+    c.reference.spp_per_frame = 2;
+    c
+}
+
+fn frames(kind: TechniqueKind) -> Vec<u64> {
+    let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+    let mut engine = Engine::new(scene, &config(kind)).unwrap();
+    [0.0, 0.0, 0.25]
+        .iter()
+        .map(|&t| {
+            let out = engine.step(t).unwrap();
+            checksum(&out.frame.full) ^ checksum(&out.frame.indirect).rotate_left(17)
+        })
+        .collect()
+}
+
+#[test]
+fn photon_stream_deterministic_frames_are_unchanged() {
+    assert_eq!(
+        frames(TechniqueKind::PhotonStream),
+        [0xc39c96ff499bee11, 0x13350fc1eb2ac33e, 0xc038aea6786eebe1]
+    );
+}
+
+#[test]
+fn reference_technique_frames_are_unchanged() {
+    assert_eq!(
+        frames(TechniqueKind::Reference),
+        [0x85d845b6095dbdb5, 0xa463cb1fb708f412, 0x6b6e71eaa9630f90]
+    );
+}
+
+#[test]
+fn full_image_reference_is_unchanged() {
+    let world = illume_transport::World::new(illume_scene::builtin::load("cornell-spot").unwrap());
+    let mut r = illume_reference::ReferenceRenderer::new(
+        illume_reference::ReferenceSettings::default(),
+        48,
+        36,
+    );
+    r.add_samples(&world, 8);
+    let i = r.images();
+    assert_eq!(
+        checksum(&i.full) ^ checksum(&i.indirect).rotate_left(17),
+        0x6b157db8ebaa3057
+    );
+}
