@@ -73,6 +73,9 @@ pub enum EngineError {
     /// The scene failed validation.
     #[error("{0}")]
     InvalidScene(String),
+    /// An interactive edit was refused (the world is unchanged).
+    #[error("edit refused: {0}")]
+    Edit(#[from] illume_scene::change::EditError),
     /// The technique could not be constructed or failed in its precompute.
     #[error("{technique}: {source}")]
     Technique {
@@ -170,9 +173,7 @@ impl Engine {
     /// rebuilt if it asks to be).
     pub fn apply_edit(&mut self, edit: &Edit) -> Result<Vec<SceneChange>, EngineError> {
         self.technique.before_world_write();
-        let changes = write_world(&self.world)
-            .apply_edit(edit)
-            .map_err(|e| EngineError::InvalidScene(format!("edit refused: {e}")))?;
+        let changes = write_world(&self.world).apply_edit(edit)?;
         self.propagate(&changes)?;
         Ok(changes)
     }

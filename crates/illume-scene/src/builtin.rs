@@ -20,17 +20,24 @@ use illume_core::{Affine3A, PI, Quat, Rgb, Vec2, Vec3};
 /// Names accepted by [`load`].
 pub const NAMES: [&str; 3] = ["furnace", "cornell-spot", "cube-in-box"];
 
+/// A built-in scene name that does not exist.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("builtin:{name}: no such built-in scene (have: {})", NAMES.join(", "))]
+pub struct UnknownBuiltin {
+    /// The name asked for.
+    pub name: String,
+}
+
 /// Builds the built-in scene `name` at time 0.
-pub fn load(name: &str) -> Result<Scene, String> {
+pub fn load(name: &str) -> Result<Scene, UnknownBuiltin> {
     let mut s = match name {
         "furnace" => furnace(0.5, Rgb::ONE),
         "cornell-spot" => cornell_spot(),
         "cube-in-box" => cube_in_box(),
         _ => {
-            return Err(format!(
-                "builtin:{name}: no such built-in scene (have: {})",
-                NAMES.join(", ")
-            ));
+            return Err(UnknownBuiltin {
+                name: name.to_owned(),
+            });
         }
     };
     s.source = format!("builtin:{name}");
@@ -598,7 +605,9 @@ mod tests {
             let s = load(name).unwrap();
             s.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
         }
-        assert!(load("nope").unwrap_err().contains("nope"));
+        let e = load("nope").unwrap_err();
+        assert_eq!(e.name, "nope");
+        assert!(e.to_string().contains("builtin:nope") && e.to_string().contains("furnace"));
     }
 
     #[test]

@@ -503,4 +503,78 @@ mod tests {
             }]
         );
     }
+
+    #[test]
+    fn instances_are_added_and_removed_with_stable_ids() {
+        let mut s = crate::builtin::load("cornell-spot").unwrap();
+        let n = s.instances.len();
+        let mesh = s
+            .add_mesh(Mesh {
+                name: "tri".into(),
+                positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+                indices: vec![[0, 1, 2]],
+                triangle_materials: vec![MaterialId(0)],
+                ..Default::default()
+            })
+            .unwrap();
+        let at = Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0));
+        let ch = s
+            .apply_edit(&Edit::AddInstance {
+                name: "new".into(),
+                mesh,
+                world_from_object: at,
+            })
+            .unwrap();
+        let id = InstanceId(n as u32);
+        assert_eq!(ch[0], SceneChange::InstanceAdded { instance: id });
+        assert_eq!(s.instances[n].world_from_object, at);
+        assert_eq!(s.instances[n].mask, MASK_DEFAULT);
+        // It stays where it was put when time moves on.
+        s.set_time(0.5);
+        assert_eq!(s.instances[n].world_from_object, at);
+        let ch = s
+            .apply_edit(&Edit::RemoveInstance { instance: id })
+            .unwrap();
+        assert!(
+            matches!(&ch[..], [SceneChange::InstanceRemoved { instance, from }]
+            if *instance == id && from.mask == MASK_DEFAULT)
+        );
+        assert_eq!(s.instances.len(), n + 1, "ids do not shift");
+        assert_eq!(s.instances[n].mask, 0);
+        assert_eq!(
+            s.apply_edit(&Edit::RemoveInstance { instance: id }),
+            Err(EditError::Removed { index: id.0 })
+        );
+        // Bad input is refused and changes nothing.
+        let bad = Affine3A::from_translation(Vec3::new(f32::INFINITY, 0.0, 0.0));
+        let count = s.instances.len();
+        assert!(
+            s.apply_edit(&Edit::AddInstance {
+                name: "x".into(),
+                mesh,
+                world_from_object: bad,
+            })
+            .is_err()
+        );
+        assert!(
+            s.apply_edit(&Edit::AddInstance {
+                name: "x".into(),
+                mesh: MeshId(999),
+                world_from_object: at,
+            })
+            .is_err()
+        );
+        assert_eq!(s.instances.len(), count);
+        let broken = Mesh {
+            name: "broken".into(),
+            positions: vec![Vec3::ZERO],
+            indices: vec![[0, 1, 2]],
+            triangle_materials: vec![MaterialId(0)],
+            ..Default::default()
+        };
+        assert!(matches!(
+            s.add_mesh(broken),
+            Err(EditError::InvalidMesh { ref name, .. }) if name == "broken"
+        ));
+    }
 }

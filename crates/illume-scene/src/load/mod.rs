@@ -111,10 +111,13 @@ impl LoadError {
 pub fn load_scene(path: &Path) -> Result<Scene, LoadError> {
     let s = path.to_string_lossy();
     if let Some(name) = s.strip_prefix("builtin:") {
-        return crate::builtin::load(name).map_err(|message| LoadError::Malformed {
+        return crate::builtin::load(name).map_err(|_| LoadError::Malformed {
             path: path.into(),
             place: "name".into(),
-            message,
+            message: format!(
+                "no such built-in scene (have: {})",
+                crate::builtin::NAMES.join(", ")
+            ),
         });
     }
     let ext = path
