@@ -94,6 +94,7 @@ use crate::wide::{Bvh4, Item, PreparedRay, StackEntry, traverse, with_stack};
 use illume_core::{Aabb, Affine3A, Mat3A, Ray, Vec2, Vec3, Vec3A};
 use illume_scene::{InstanceId, Scene};
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A ray–triangle hit.
@@ -222,11 +223,16 @@ impl Default for BvhSettings {
 const BATCH_CHUNK: usize = 256;
 
 /// Answers ray queries against a scene.
+///
+/// Cloning is cheap: mesh BVHs are shared (`Arc`) between clones, so a clone updated for
+/// another state of the same scene (another time, an object moved or added) costs an
+/// instance-level rebuild only; see [`Tracer::shares_mesh_bvh`].
+#[derive(Clone)]
 pub struct Tracer {
     /// How mesh BVHs are built.
     settings: BvhSettings,
-    /// One BVH per scene mesh, indexed like `Scene::meshes`.
-    blases: Vec<Blas>,
+    /// One BVH per scene mesh, indexed like `Scene::meshes`; shared between clones.
+    blases: Vec<Arc<Blas>>,
     /// Instance level; leaves index `instances`.
     tlas: Bvh4,
     /// Instances in instance-level leaf order.
@@ -267,9 +273,9 @@ impl Tracer {
     pub fn update(&mut self, scene: &Scene) {
         if scene.meshes.len() > self.blases.len() {
             let start = Instant::now();
-            let new: Vec<Blas> = scene.meshes[self.blases.len()..]
+            let new: Vec<Arc<Blas>> = scene.meshes[self.blases.len()..]
                 .par_iter()
-                .map(|m| Blas::build(m, &self.settings))
+                .map(|m| Arc::new(Blas::build(m, &self.settings)))
                 .collect();
             self.stats.mesh_builds += new.len() as u64;
             self.blases.extend(new);
@@ -317,7 +323,7 @@ impl Tracer {
         self.stats.instance_nodes = self.tlas.nodes.len();
         self.stats.triangles = self.blases.iter().map(|b| b.triangle_count).sum();
         self.stats.instances = self.instances.len();
-        self.stats.memory_bytes = self.blases.iter().map(Blas::memory_bytes).sum::<usize>()
+        self.stats.memory_bytes = self.blases.iter().map(|b| b.memory_bytes()).sum::<usize>()
             + self.tlas.memory_bytes()
             + self.instances.len() * std::mem::size_of::<InstanceRecord>();
     }
@@ -333,6 +339,18 @@ impl Tracer {
         self.blases
             .get(mesh.index())
             .map(|b| b.packets.as_ptr() as usize)
+    }
+
+    /// True when this tracer and `other` use the same BVH (the same memory, not a copy)
+    /// for mesh `mesh`: true for clones of one tracer, whatever their instances.
+    pub fn shares_mesh_bvh(&self, other: &Tracer, mesh: illume_scene::MeshId) -> bool {
+        match (
+            self.blases.get(mesh.index()),
+            other.blases.get(mesh.index()),
+        ) {
+            (Some(a), Some(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        }
     }
 
     /// Closest hit along `ray` among instances whose mask intersects `mask`.
@@ -729,7 +747,8 @@ mod tests {
             .position(|i| i.name == "sphere")
             .unwrap();
         let mesh = scene.instances[sphere].mesh.index();
-        tracer.blases[mesh].bvh.nodes[0].bounds[3][1] -= 0.05;
+        let blas = Arc::get_mut(&mut tracer.blases[mesh]).expect("not shared");
+        blas.bvh.nodes[0].bounds[3][1] -= 0.05;
         let err = tracer.validate().unwrap_err();
         assert!(err.starts_with(&format!("mesh {mesh} BVH:")), "{err}");
         assert!(
@@ -739,7 +758,10 @@ mod tests {
         // Losing a triangle reference is caught too.
         let mut tracer = Tracer::new(&scene);
         let first = tracer.blases[mesh].packets[0].index[0];
-        tracer.blases[mesh].packets[1].index[0] = first;
+        Arc::get_mut(&mut tracer.blases[mesh])
+            .expect("not shared")
+            .packets[1]
+            .index[0] = first;
         let err = tracer.validate().unwrap_err();
         assert!(err.contains(" times"), "{err}");
         // An instance box that no longer covers its mesh.
@@ -747,5 +769,31 @@ mod tests {
         tracer.instances[0].world_bounds.max.y -= 0.5;
         let err = tracer.validate().unwrap_err();
         assert!(err.starts_with("instance level:"), "{err}");
+    }
+
+    #[test]
+    fn a_clone_for_another_time_shares_mesh_bvhs_and_hits_like_a_fresh_build() {
+        let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+        let tracer = Tracer::new(&scene);
+        let mut later = scene.clone();
+        later.set_time(1.0);
+        let mut second = tracer.clone();
+        second.update(&later);
+        let fresh = Tracer::new(&later);
+        for m in 0..scene.meshes.len() {
+            let id = illume_scene::MeshId(m as u32);
+            assert!(second.shares_mesh_bvh(&tracer, id));
+            assert!(!fresh.shares_mesh_bvh(&tracer, id));
+        }
+        assert_eq!(second.stats().mesh_builds, tracer.stats().mesh_builds);
+        let rays = crate::ray_sets::incoherent_rays(&later, 500, 7);
+        let mask = illume_scene::MASK_DEFAULT;
+        let mut differ = 0;
+        for r in &rays {
+            assert_eq!(second.intersect(r, mask), fresh.intersect(r, mask));
+            differ += usize::from(tracer.intersect(r, mask) != second.intersect(r, mask));
+        }
+        assert!(differ > 0, "the sphere moved: some hits must differ");
+        second.validate().unwrap();
     }
 }

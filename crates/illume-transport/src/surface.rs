@@ -6,6 +6,7 @@ use illume_core::{
 };
 use illume_scene::{InstanceId, MaterialId, MeshId, Scene, Texture, TextureId, WrapMode};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// `normal` turned to the side a ray arrived from (`front_face`: the front).
 #[inline]
@@ -315,13 +316,17 @@ impl InstanceFrame {
 /// memory of `f32` texels, so far fewer cache misses for scattered photon lookups)
 /// whenever that reproduces every texel exactly — always for textures decoded from
 /// 8-bit images; other textures are sampled as they are.
+///
+/// Cloning copies the instance frames only: the packed textures never change once
+/// packed and are shared (`Arc`) between clones, so a second world (another time) does
+/// not copy them.
 #[derive(Clone, Debug, Default)]
 pub struct HitTables {
     frames: Vec<InstanceFrame>,
-    textures: Vec<Option<PackedTexture>>,
+    textures: Vec<Option<Arc<PackedTexture>>>,
     /// Copies of `textures` box-filtered to at most [`PHOTON_TEXTURE_SIDE`] texels a
     /// side (`None` where the texture is no larger, or not packed).
-    filtered: Vec<Option<PackedTexture>>,
+    filtered: Vec<Option<Arc<PackedTexture>>>,
 }
 
 /// Longest side, in texels, of the texture copies photons read with
@@ -384,12 +389,16 @@ impl HitTables {
         self.textures.extend(
             scene.textures[known..]
                 .iter()
-                .map(|t| PackedTexture::new(t)),
+                .map(|t| PackedTexture::new(t).map(Arc::new)),
         );
         self.filtered.truncate(known);
         let added = self.textures[known..]
             .iter()
-            .map(|t| t.as_ref().and_then(|t| t.box_filtered(PHOTON_TEXTURE_SIDE)))
+            .map(|t| {
+                t.as_ref()
+                    .and_then(|t| t.box_filtered(PHOTON_TEXTURE_SIDE))
+                    .map(Arc::new)
+            })
             .collect::<Vec<_>>();
         self.filtered.extend(added);
     }

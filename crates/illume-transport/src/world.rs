@@ -39,6 +39,34 @@ impl World {
         }
     }
 
+    /// A second world for `scene`, a scene derived from this world's (the same meshes
+    /// and textures, e.g. at another time, with instances moved, added or masked): it
+    /// shares every mesh BVH and packed texture with this world (`Arc`), so it costs an
+    /// instance-level rebuild, the light set and the instance frames — never a mesh BVH
+    /// build or a texture copy. Meshes `scene` has beyond this world's get their BVHs
+    /// built. This world is not touched.
+    pub fn with_scene(&self, scene: Scene) -> World {
+        let mut tracer = self.tracer.clone();
+        tracer.update(&scene);
+        let mut hit_tables = self.hit_tables.clone();
+        hit_tables.update(&scene);
+        let lights = LightSet::new(&scene);
+        World {
+            scene,
+            tracer,
+            lights,
+            hit_tables,
+        }
+    }
+
+    /// A second world at scene time `t` \[s\] (see [`World::with_scene`]): this world's
+    /// scene, edits included, evaluated at `t`.
+    pub fn at_time(&self, t: f64) -> World {
+        let mut scene = self.scene.clone();
+        scene.set_time(t);
+        self.with_scene(scene)
+    }
+
     /// Wraps the world for sharing between threads.
     pub fn shared(self) -> SharedWorld {
         Arc::new(RwLock::new(self))
