@@ -8,6 +8,8 @@
 //! * [`bsdf`] — the Lambertian BSDF with cosine-weighted sampling, Russian roulette.
 //! * [`path`] — radiance arriving along a ray: path tracing with next-event estimation
 //!   and MIS, shared by the reference and every technique that gathers radiance.
+//! * [`flux`] — signed fixed-point photon power: exact, order-independent adding and
+//!   removing of photons.
 //! * [`photon`] — the photon-path generator: a pure function of an addressable
 //!   [`SampleStream`](illume_core::sampling::SampleStream) (same index ⇒ same path).
 //! * [`gbuffer`] — the per-pixel primary-hit buffer a technique shades.
@@ -21,6 +23,7 @@
 
 pub mod bsdf;
 pub mod camera;
+pub mod flux;
 pub mod gbuffer;
 pub mod lights;
 pub mod path;

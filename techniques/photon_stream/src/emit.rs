@@ -12,9 +12,10 @@
 //! in the same world gives the same path, whatever the thread count.
 
 use crate::placement::VslSet;
-use crate::pool::{PoolImpact, to_quanta};
+use crate::pool::PoolImpact;
 use illume_core::sampling::{Pcg32, mix64};
 use illume_transport::World;
+use illume_transport::flux::Quanta;
 use illume_transport::photon::{PhotonPathSettings, trace_photon};
 use rayon::prelude::*;
 
@@ -120,11 +121,8 @@ impl<'a> Emitter<'a> {
                 let out = imp.hit.albedo * imp.flux; // flux leaving the surface, ρ·Φ
                 batch.impacts.push(PoolImpact {
                     slot: 2 * vsl + side,
-                    quanta: [
-                        to_quanta(out.x, self.inv_quantum),
-                        to_quanta(out.y, self.inv_quantum),
-                        to_quanta(out.z, self.inv_quantum),
-                    ],
+                    // ρ·Φ ≥ 0; the clamp keeps a NaN or rounding sign out of the pool.
+                    quanta: Quanta::from_flux(out.max(illume_core::Rgb::ZERO), self.inv_quantum),
                 });
             });
             batch.rays += stats.rays as u64;

@@ -41,7 +41,7 @@
 //! let settings = PhotonStreamSettings { vsl_count: 20, warm_up: false, ..PhotonStreamSettings::deterministic() };
 //! let mut ps = PhotonStream::new(&world, settings).unwrap();
 //! let w = world.read().unwrap();
-//! ps.advance(&w, &Budget { photons: Some(2000), ..Default::default() });
+//! ps.advance(&w, &Budget { work: Some(2000), ..Default::default() });
 //! let g = GBuffer::render(&w, 16, 12, illume_core::Vec2::splat(0.5));
 //! let indirect = ps.indirect(&w, &g);
 //! assert!(indirect.mean().x > 0.0);

@@ -1,10 +1,10 @@
 //! The photon pool (§0.3, §0.5, Algorithm 2, Figure 6): a fixed-size FIFO of photon
 //! impacts, each linked to its VSL, whose power sums are updated in O(1) per impact.
 //!
-//! **Fixed point.** Powers are integers: an impact carries `quanta = round(ρ·Φ / q)`
-//! per channel (q = [`PhotonPool::quantum_w`] watts), a VSL side sums the quanta of its
-//! pooled impacts in `u64`, and evicting an impact subtracts exactly the integers it
-//! added. Integer addition is associative, so a VSL's power equals the sum of its
+//! **Fixed point.** Powers are integers ([`Quanta`], illume-transport's shared signed
+//! fixed-point flux): an impact carries `quanta = round(ρ·Φ / q)` per channel
+//! (q = [`PhotonPool::quantum_w`] watts), a VSL side sums the quanta of its pooled
+//! impacts, and evicting an impact subtracts exactly the integers it added. Integer addition is associative, so a VSL's power equals the sum of its
 //! pooled impacts *exactly*, after any number of updates: no drift, by construction
 //! ([`PhotonPool::validate`] re-sums and compares).
 //!
@@ -17,6 +17,7 @@
 //! **Sides.** Each VSL has a front and a back accumulator (index `2·vsl + side`): a
 //! double-sided surface lit from both sides emits on both.
 
+use illume_transport::flux::Quanta;
 use std::collections::VecDeque;
 
 /// One impact entering the pool.
@@ -25,7 +26,7 @@ pub struct PoolImpact {
     /// Accumulator index `2·vsl + side` (side 1 = the VSL's back face).
     pub slot: u32,
     /// ρ·Φ of the impact in quanta per channel.
-    pub quanta: [u64; 3],
+    pub quanta: Quanta,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -34,7 +35,7 @@ struct Pooled {
     /// Photons this entry closes: 1 + preceding impact-less photons for a photon's
     /// first impact, 0 for its later impacts.
     weight: u32,
-    quanta: [u64; 3],
+    quanta: Quanta,
 }
 
 /// The FIFO pool and the VSL power sums it feeds.
@@ -43,7 +44,7 @@ pub struct PhotonPool {
     capacity: usize,
     quantum_w: f64,
     ring: VecDeque<Pooled>,
-    power: Vec<[u64; 3]>,
+    power: Vec<Quanta>,
     applied_photons: u64,
     evicted_photons: u64,
     carry: u32,
@@ -59,7 +60,7 @@ impl PhotonPool {
             capacity,
             quantum_w,
             ring: VecDeque::with_capacity(capacity),
-            power: vec![[0; 3]; 2 * vsl_count],
+            power: vec![Quanta::ZERO; 2 * vsl_count],
             applied_photons: 0,
             evicted_photons: 0,
             carry: 0,
@@ -104,7 +105,7 @@ impl PhotonPool {
     }
 
     /// The power accumulators in quanta, index `2·vsl + side`.
-    pub fn power_quanta(&self) -> &[[u64; 3]] {
+    pub fn power_quanta(&self) -> &[Quanta] {
         &self.power
     }
 
@@ -160,10 +161,7 @@ impl PhotonPool {
             } else {
                 0
             };
-            let acc = &mut self.power[imp.slot as usize];
-            for (a, q) in acc.iter_mut().zip(imp.quanta) {
-                *a += q;
-            }
+            self.power[imp.slot as usize] += imp.quanta;
             self.ring.push_back(Pooled {
                 slot: imp.slot,
                 weight,
@@ -181,10 +179,7 @@ impl PhotonPool {
             }
             first = false;
             let p = self.ring.pop_front().expect("front exists");
-            let acc = &mut self.power[p.slot as usize];
-            for (a, q) in acc.iter_mut().zip(p.quanta) {
-                *a -= q;
-            }
+            self.power[p.slot as usize] -= p.quanta;
             self.evicted_photons += p.weight as u64;
         }
         while self.stamps.len() > 1 && self.stamps[1].0 <= self.evicted_photons {
@@ -195,7 +190,7 @@ impl PhotonPool {
     /// Empties the pool (the paper's alternative to ageing out, §0.9.1).
     pub fn flush(&mut self) {
         self.ring.clear();
-        self.power.iter_mut().for_each(|p| *p = [0; 3]);
+        self.power.iter_mut().for_each(|p| *p = Quanta::ZERO);
         self.evicted_photons = self.applied_photons;
         self.carry = 0;
         self.stamps.clear();
@@ -204,12 +199,10 @@ impl PhotonPool {
     /// Checks that every VSL side's power equals the sum of its pooled impacts and that
     /// K equals the pooled photon weights; the message names the first mismatch.
     pub fn validate(&self) -> Result<(), String> {
-        let mut sums = vec![[0u64; 3]; self.power.len()];
+        let mut sums = vec![Quanta::ZERO; self.power.len()];
         let mut weights = self.carry as u64;
         for p in &self.ring {
-            for (a, q) in sums[p.slot as usize].iter_mut().zip(p.quanta) {
-                *a += q;
-            }
+            sums[p.slot as usize] += p.quanta;
             weights += p.weight as u64;
         }
         if let Some((i, _)) = sums
@@ -240,17 +233,6 @@ impl PhotonPool {
     }
 }
 
-/// Converts a non-negative flux \[W\] to quanta (rounded to nearest, halves up; saturates
-/// at `i64::MAX`, which no physical photon reaches).
-#[inline]
-pub fn to_quanta(flux_w: f32, inv_quantum: f64) -> u64 {
-    // Adding ½ and truncating rounds a non-negative value without `f64::round`, which is
-    // a libm call on the baseline x86-64 target (three per impact).
-    // Through i64: one conversion instruction where u64 needs a branchy sequence;
-    // saturation at i64::MAX is as unreachable as at u64::MAX.
-    (flux_w.max(0.0) as f64 * inv_quantum + 0.5) as i64 as u64
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -260,7 +242,7 @@ mod tests {
         let mut pool = PhotonPool::new(4, 2, 1.0);
         let imp = |slot, q| PoolImpact {
             slot,
-            quanta: [q, 2 * q, 3 * q],
+            quanta: Quanta([q, 2 * q, 3 * q]),
         };
         pool.push_photon(&[]); // hits nothing
         pool.push_photon(&[imp(0, 1), imp(1, 2)]);
@@ -271,14 +253,14 @@ mod tests {
         pool.push_photon(&[imp(3, 8), imp(3, 16)]);
         assert_eq!(pool.len(), 3);
         assert_eq!(pool.photons(), 2);
-        assert_eq!(pool.power_quanta()[0], [0, 0, 0]);
-        assert_eq!(pool.power_quanta()[1], [0, 0, 0]);
-        assert_eq!(pool.power_quanta()[2], [4, 8, 12]);
-        assert_eq!(pool.power_quanta()[3], [24, 48, 72]);
+        assert_eq!(pool.power_quanta()[0], Quanta([0, 0, 0]));
+        assert_eq!(pool.power_quanta()[1], Quanta([0, 0, 0]));
+        assert_eq!(pool.power_quanta()[2], Quanta([4, 8, 12]));
+        assert_eq!(pool.power_quanta()[3], Quanta([24, 48, 72]));
         pool.validate().unwrap();
         pool.flush();
         assert_eq!(pool.photons(), 0);
-        assert!(pool.power_quanta().iter().all(|p| *p == [0; 3]));
+        assert!(pool.power_quanta().iter().all(|p| p.is_zero()));
         pool.validate().unwrap();
     }
 }

@@ -36,13 +36,7 @@ pub fn fluxes(snapshot: &PoolSnapshot) -> (Vec<Rgb>, Vec<Rgb>) {
     } else {
         snapshot.quantum_w / snapshot.photons as f64
     };
-    let to_w = |q: &[u64; 3]| {
-        Rgb::new(
-            (q[0] as f64 * scale) as f32,
-            (q[1] as f64 * scale) as f32,
-            (q[2] as f64 * scale) as f32,
-        )
-    };
+    let to_w = |q: &illume_transport::flux::Quanta| q.to_flux(scale);
     snapshot
         .quanta
         .chunks_exact(2)

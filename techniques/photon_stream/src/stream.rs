@@ -43,7 +43,7 @@ pub struct PoolState {
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoolSnapshot {
     /// Power accumulators in quanta, index `2·vsl + side`.
-    pub quanta: Vec<[u64; 3]>,
+    pub quanta: Vec<illume_transport::flux::Quanta>,
     /// K, the photons the powers are summed over.
     pub photons: u64,
     /// Watts per quantum.

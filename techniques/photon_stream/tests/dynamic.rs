@@ -222,7 +222,7 @@ fn deterministic_mode_is_reproducible() {
         .unwrap()
         .install(run);
     assert_eq!(a, b);
-    assert!(a.quanta.iter().any(|q| q[0] > 0));
+    assert!(a.quanta.iter().any(|q| q.0[0] > 0));
 }
 
 #[test]

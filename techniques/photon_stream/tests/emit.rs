@@ -43,7 +43,7 @@ fn slot_flux(w: &World, ps: &PhotonStream, filtered: bool, seed: u64, n: u64) ->
     let emitter = Emitter::new(w, ps.vsls(), 1.0 / ps.snapshot().quantum_w, path, seed);
     let mut flux = vec![0.0; 2 * ps.vsls().len()];
     for imp in emitter.trace_parallel(w, 0, n).impacts {
-        flux[imp.slot as usize] += imp.quanta.iter().sum::<u64>() as f64;
+        flux[imp.slot as usize] += imp.quanta.channel_sum() as f64;
     }
     flux
 }

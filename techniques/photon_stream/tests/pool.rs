@@ -3,16 +3,17 @@
 
 use illume_core::sampling::Pcg32;
 use illume_photon_stream::pool::{PhotonPool, PoolImpact};
+use illume_transport::flux::Quanta;
 
 fn random_photon(rng: &mut Pcg32, slots: u32, out: &mut Vec<PoolImpact>) {
     out.clear();
     let n = rng.next_below(5); // 0..4 impacts, zero-impact photons included
     for _ in 0..n {
         let slot = rng.next_below(slots);
-        let q = rng.next_u32() as u64;
+        let q = rng.next_u32() as i64;
         out.push(PoolImpact {
             slot,
-            quanta: [q, q >> 3, (q * 7) >> 2],
+            quanta: Quanta([q, q >> 3, (q * 7) >> 2]),
         });
     }
 }
@@ -41,7 +42,7 @@ fn power_is_conserved_after_every_update_and_across_flushes() {
             pool.flush();
             pool.validate().unwrap();
             assert_eq!(pool.photons(), 0);
-            assert!(pool.power_quanta().iter().all(|p| *p == [0; 3]));
+            assert!(pool.power_quanta().iter().all(|p| p.is_zero()));
             pushed_since_flush = 0;
             impacts_since_flush = 0;
         }
@@ -63,17 +64,17 @@ fn no_drift_after_a_billion_add_subtract_pairs() {
     let mut rng = Pcg32::new(99, 1);
     let mut imp = [PoolImpact {
         slot: 0,
-        quanta: [0; 3],
+        quanta: Quanta::ZERO,
     }];
     for i in 0..N {
         let r = rng.next_u32();
         imp[0] = PoolImpact {
             slot: r & 7,
-            quanta: [
-                (r >> 3) as u64,
-                (r >> 9) as u64 + 1,
-                1 + (r as u64 & 0xffff) * 40_000,
-            ],
+            quanta: Quanta([
+                (r >> 3) as i64,
+                (r >> 9) as i64 + 1,
+                1 + (r as i64 & 0xffff) * 40_000,
+            ]),
         };
         pool.push_photon(&imp);
         if i % 100_000_000 == 0 {
@@ -85,14 +86,14 @@ fn no_drift_after_a_billion_add_subtract_pairs() {
     assert_eq!(pool.impacts_pushed(), N);
     // Replay the last 1024 impacts independently: the VSL sums must be equal exactly.
     let mut rng = Pcg32::new(99, 1);
-    let mut expected = [[0u64; 3]; 8];
+    let mut expected = [Quanta::ZERO; 8];
     for i in 0..N {
         let r = rng.next_u32();
         if i >= N - 1024 {
             let s = (r & 7) as usize;
-            expected[s][0] += (r >> 3) as u64;
-            expected[s][1] += (r >> 9) as u64 + 1;
-            expected[s][2] += 1 + (r as u64 & 0xffff) * 40_000;
+            expected[s].0[0] += (r >> 3) as i64;
+            expected[s].0[1] += (r >> 9) as i64 + 1;
+            expected[s].0[2] += 1 + (r as i64 & 0xffff) * 40_000;
         }
     }
     assert_eq!(pool.power_quanta(), &expected[..]);
