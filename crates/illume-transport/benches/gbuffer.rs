@@ -93,7 +93,7 @@ fn hit_tables(c: &mut Criterion) {
     g.measurement_time(Duration::from_secs(2));
     for (name, world) in scenes() {
         g.bench_function(format!("{name} HitTables::new"), |b| {
-            b.iter(|| illume_transport::surface::HitTables::new(&world.scene))
+            b.iter(|| illume_transport::hit_tables::HitTables::new(&world.scene))
         });
     }
     g.finish();

@@ -3,9 +3,11 @@
 //! * [`World`] — a scene together with its [`Tracer`](illume_accel::Tracer) and
 //!   [`LightSet`], kept consistent under time changes and edits.
 //! * [`SurfaceHit`] — what a ray hit: position, normals, albedo, emission, sidedness.
+//! * [`hit_tables`] — per-instance frames and packed textures behind cheap photon hits.
 //! * [`lights`] — light selection proportional to power, direct-light sampling (next-event
 //!   estimation) and emission sampling for every light type.
 //! * [`bsdf`] — the Lambertian BSDF with cosine-weighted sampling, Russian roulette.
+//! * [`nearest`] — exact nearest-point indices (grid + k-d tree) over fixed points.
 //! * [`path`] — radiance arriving along a ray: path tracing with next-event estimation
 //!   and MIS, shared by the reference and every technique that gathers radiance.
 //! * [`flux`] — signed fixed-point photon power: exact, order-independent adding and
@@ -25,7 +27,9 @@ pub mod bsdf;
 pub mod camera;
 pub mod flux;
 pub mod gbuffer;
+pub mod hit_tables;
 pub mod lights;
+pub mod nearest;
 pub mod path;
 pub mod photon;
 pub mod raster;

@@ -21,8 +21,8 @@ pub struct PhotonPathSettings {
     /// Instances visible to photons (`ray_mask & instance.mask != 0`).
     pub mask: u32,
     /// Read base-colour textures through copies box-filtered to at most
-    /// [`PHOTON_TEXTURE_SIDE`](crate::surface::PHOTON_TEXTURE_SIDE) texels a side, one
-    /// texel per impact ([`HitTables::sample_filtered`](crate::surface::HitTables)):
+    /// [`PHOTON_TEXTURE_SIDE`](crate::hit_tables::PHOTON_TEXTURE_SIDE) texels a side, one
+    /// texel per impact ([`HitTables::sample_filtered`](crate::hit_tables::HitTables::sample_filtered)):
     /// each region keeps its mean albedo, so photon estimates gathered over regions
     /// larger than a filtered texel are unchanged in expectation, and large textures stop
     /// costing a cache miss per impact. False (default): full resolution, the albedo

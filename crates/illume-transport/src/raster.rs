@@ -1,6 +1,7 @@
 //! Primary visibility by rasterization: a CPU visibility buffer of (depth, instance,
-//! triangle) per pixel, from which [`GBuffer::rasterize`] builds the same G-buffer that
-//! ray casting ([`GBuffer::render`]) builds, far cheaper.
+//! triangle) per pixel, from which [`GBuffer::rasterize`](crate::GBuffer::rasterize)
+//! (in [`crate::gbuffer`]) builds the same G-buffer that ray casting
+//! ([`GBuffer::render`](crate::GBuffer::render)) builds, far cheaper.
 //!
 //! Photon streaming (Meneveaux & Bridault 2008) rasterizes its G-buffer; we do it on the
 //! CPU. The projection is exactly [`CameraRays`](crate::CameraRays)'s: vertical field of view `yfov_rad`,
@@ -26,11 +27,12 @@
 //! 4. Strips are rasterized in parallel (rayon), each into its own rows of the buffer:
 //!    the nearer `1/w` wins, the first drawn on an exact tie.
 //!
-//! # Cost (`BENCHMARKS.md`, cornell-spot 800×600, 2 threads)
+//! # Cost
 //!
-//! The visibility buffer takes 1.5 ms where BVH rays took ≈ 60 ms; the G-buffer around it
-//! (camera ray, one-triangle test, `SurfaceHit::new`, 48 MB of pixels) takes the rest,
-//! 28 ms into a reused allocation and 43 ms into a fresh one.
+//! The visibility buffer is a small part of a G-buffer build; most of the rest is the
+//! per-pixel surface (camera ray, one-triangle test, attribute interpolation) and
+//! touching the pixels' memory. Measurements: `BENCHMARKS.md`, "G-buffer"
+//! (`cargo bench -p illume-transport --bench gbuffer`).
 //!
 //! Strips rather than square tiles: a strip is a contiguous run of the row-major output,
 //! so workers write the final buffer directly, and 16 rows × 1280 pixels of state stays in
@@ -41,8 +43,6 @@
 //! faces) or an orthographic one (directional lights), whose depth attribute is `1/w` or,
 //! orthographically, a plane of world position.
 
-use crate::gbuffer::{BuildState, GBuffer, PrimarySurfaces, TriangleSetup};
-use crate::world::World;
 use glam::{Affine3A, DVec4, Vec3, Vec4};
 use illume_scene::{InstanceId, MASK_DEFAULT, Scene};
 use rayon::prelude::*;
@@ -173,113 +173,6 @@ impl VisibilityBuffer {
     pub fn get(&self, x: u32, y: u32) -> &VisibilitySample {
         &self.pixels[(y * self.width + x) as usize]
     }
-}
-
-impl GBuffer {
-    /// The G-buffer of [`GBuffer::render`] at pixel centres (offset 0.5, 0.5 only),
-    /// with primary visibility from the [`VisibilityBuffer`] rasterizer instead of a BVH
-    /// ray per pixel.
-    ///
-    /// Each pixel intersects its centre ray with the plane of the triangle the rasterizer
-    /// found, in world space, and interpolates that triangle's attributes (set up once per
-    /// run of pixels seeing the same triangle): the [`SurfaceHit`](crate::SurfaceHit)
-    /// [`GBuffer::render`] builds for the same triangle, up to f32 rounding. Where the ray
-    /// misses the chosen triangle (an edge moved by snapping, an edge-on triangle), and on
-    /// empty pixels next to covered ones (silhouettes against the background), a full BVH
-    /// ray decides.
-    pub fn rasterize(world: &World, width: u32, height: u32) -> Self {
-        let mut g = Self::empty();
-        g.rasterize_into(world, width, height);
-        g
-    }
-
-    /// [`GBuffer::rasterize`] into this buffer, reusing its pixel allocation (a fresh
-    /// 800×600 G-buffer is 48 MB whose first touch costs page faults every frame) and
-    /// its pixels where nothing they depend on changed: with the same camera, image size
-    /// and materials as the previous build, a pixel that sees the same triangle of an
-    /// instance that has not moved keeps its surface (counted in
-    /// [`GBuffer::reused_pixels`]). The result is bit-identical to a fresh build; only
-    /// the pixels of moving objects (where they are and where they were) cost anything.
-    pub fn rasterize_into(&mut self, world: &World, width: u32, height: u32) {
-        let n = (width * height) as usize;
-        let next = BuildState::of(world, width, height);
-        let unchanged = self.built_from.unchanged_instances(&next);
-        let nothing_moved = !unchanged.is_empty() && unchanged.iter().all(|&u| u);
-        self.built_from = next;
-        if nothing_moved && self.pixels.len() == n {
-            // Same camera, size, materials and instances: the same G-buffer.
-            self.reused_pixels = n as u64;
-            return;
-        }
-        let vis = &mut self.visibility;
-        vis.width = width;
-        vis.height = height;
-        vis.render_into(&world.scene);
-        self.width = width;
-        self.height = height;
-        if self.pixels.len() != n {
-            self.pixels.clear();
-            self.pixels.resize(n, None);
-        }
-        if n == 0 {
-            return;
-        }
-        let surfaces = PrimarySurfaces::new(world, width, height);
-        let vis = &self.visibility;
-        let w = width as usize;
-        self.reused_pixels = self
-            .pixels
-            .par_chunks_mut(w * SURFACE_ROWS as usize)
-            .enumerate()
-            .map(|(chunk, out)| {
-                let mut current: Option<TriangleSetup> = None;
-                let mut reused = 0u64;
-                for (r, row) in out.chunks_mut(w).enumerate() {
-                    let y = chunk as u32 * SURFACE_ROWS + r as u32;
-                    let samples = &vis.pixels[y as usize * w..][..w];
-                    let rays = surfaces.row(y);
-                    for (x, (px, sample)) in row.iter_mut().zip(samples).enumerate() {
-                        let x = x as u32;
-                        match sample.visible() {
-                            Some((instance, triangle)) => {
-                                // Same camera, same static triangle: same surface.
-                                let keep = unchanged.get(instance.index()) == Some(&true)
-                                    && px.as_ref().is_some_and(|p| {
-                                        p.hit.instance == instance && p.hit.triangle == triangle
-                                    });
-                                if keep {
-                                    reused += 1;
-                                    continue;
-                                }
-                                if !current.as_ref().is_some_and(|t| t.is(instance.0, triangle)) {
-                                    current = Some(surfaces.setup(instance.0, triangle));
-                                }
-                                let tri = current.as_ref().expect("set up above");
-                                *px = surfaces.pixel(rays.direction(x), tri);
-                            }
-                            None if next_to_covered(vis, x, y) => {
-                                *px = surfaces.traced(&rays.ray(x))
-                            }
-                            None => *px = None,
-                        }
-                    }
-                }
-                reused
-            })
-            .sum();
-    }
-}
-
-/// Image rows per parallel job when building surfaces from the visibility buffer.
-const SURFACE_ROWS: u32 = 4;
-
-/// True when a 4-neighbour of empty pixel (x, y) is covered.
-fn next_to_covered(vis: &VisibilityBuffer, x: u32, y: u32) -> bool {
-    let covered = |x: u32, y: u32| vis.get(x, y).instance != u32::MAX;
-    (x > 0 && covered(x - 1, y))
-        || (x + 1 < vis.width && covered(x + 1, y))
-        || (y > 0 && covered(x, y - 1))
-        || (y + 1 < vis.height && covered(x, y + 1))
 }
 
 /// The image and the projection shared by every triangle of a frame: the camera's, or a

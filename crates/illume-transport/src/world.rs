@@ -1,7 +1,8 @@
 //! A scene with its tracer and light set, updated together.
 
+use crate::hit_tables::HitTables;
 use crate::lights::{LightSample, LightSet};
-use crate::surface::{HitTables, PhotonHit, SurfaceHit, mesh_hit_geometry};
+use crate::surface::{PhotonHit, SurfaceHit, mesh_hit_geometry};
 use illume_accel::{Hit, ScopedTracer, Tracer};
 use illume_core::Ray;
 use illume_scene::change::EditError;

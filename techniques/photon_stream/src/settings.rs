@@ -130,7 +130,7 @@ pub struct PhotonStreamSettings {
     /// Default 32.
     pub max_bounces: u32,
     /// Photons read base-colour textures through copies box-filtered to at most
-    /// [`PHOTON_TEXTURE_SIDE`](illume_transport::surface::PHOTON_TEXTURE_SIDE) (128)
+    /// [`PHOTON_TEXTURE_SIDE`](illume_transport::hit_tables::PHOTON_TEXTURE_SIDE) (128)
     /// texels a side. A VSL sums photons over a surface element far larger than a
     /// filtered texel and the filter keeps every region's mean albedo, so VSL powers
     /// are unchanged in expectation (tested on Sponza); large textures stop costing a
