@@ -27,8 +27,8 @@ use clap::{Parser, Subcommand};
 
 /// Frames allocate several images of megabytes each; the system allocator hands such
 /// blocks back to the kernel on free, and touching them again next frame costs a page
-/// fault per 4 KiB (≈ 10 ms per frame at 800×600 measured on the 2-vCPU machine of
-/// `BENCHMARKS.md`). mimalloc keeps them mapped for reuse.
+/// fault per 4 KiB, a measurable share of a frame at 800×600 (`BENCHMARKS.md`).
+/// mimalloc keeps them mapped for reuse.
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 

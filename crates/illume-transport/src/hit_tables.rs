@@ -93,8 +93,8 @@ static SRGB8_LUT: std::sync::LazyLock<[f32; 256]> = std::sync::LazyLock::new(|| 
 /// For each of the 2¹⁶ high halves `h` of an f32 bit pattern, the first code whose
 /// [`SRGB8_LUT`] value has a bit pattern ≥ `h << 16` (256 if none). Non-negative floats
 /// order like their bit patterns and a bucket spans at most a couple of codes, so
-/// finding a texel's code is one lookup and a step or two: packing Sponza's 2.7 M
-/// texels took 43 ms with a binary search per channel.
+/// finding a texel's code is one lookup and a step or two instead of a binary search
+/// per channel (`BENCHMARKS.md`, `HitTables::new` on Sponza).
 static SRGB8_BUCKETS: std::sync::LazyLock<Box<[u16]>> = std::sync::LazyLock::new(|| {
     let lut = &*SRGB8_LUT;
     (0u32..1 << 16)

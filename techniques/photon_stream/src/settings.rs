@@ -28,9 +28,8 @@ pub enum StreamPriority {
     Normal,
     /// The thread runs at the lowest OS priority (nice 19 on Linux): frames take the
     /// cores first and photons fill the time the renderer leaves — as in the paper,
-    /// where the GPU renders and the CPU streams. Measured (`BENCHMARKS.md`, Cornell box
-    /// 800×600, camera moving): 38.2 fps at 2.5 M impacts/s against 30.9 fps at 3.8 M
-    /// with `normal`; latency (pool size / rate) 0.04 s against 0.03 s.
+    /// where the GPU renders and the CPU streams: faster frames, a lower photon rate and
+    /// so a longer latency than `normal` (measured in `BENCHMARKS.md`, photon_stream).
     #[default]
     Low,
 }
