@@ -34,6 +34,10 @@ pub fn results_table(scenario: &Scenario, records: &[FrameRecord]) -> Table {
         .map(String::from)
         .to_vec();
     columns.extend(scenario.metrics.iter().map(|m| m.name().to_owned()));
+    let own = scenario.own_converged_frames > 0;
+    if own {
+        columns.extend(scenario.metrics.iter().map(|m| format!("own_{}", m.name())));
+    }
     columns.push("flicker".into());
     columns.extend(counters.columns.iter().skip(1).cloned());
     let rows = records
@@ -54,6 +58,14 @@ pub fn results_table(scenario: &Scenario, records: &[FrameRecord]) -> Table {
                     .iter()
                     .map(|&m| r.metric(m).map_or(Cell::Empty, Cell::Number)),
             );
+            if own {
+                row.extend(
+                    scenario
+                        .metrics
+                        .iter()
+                        .map(|&m| r.own_metric(m).map_or(Cell::Empty, Cell::Number)),
+                );
+            }
             row.push(r.flicker.map_or(Cell::Empty, Cell::Number));
             row.extend(c.iter().skip(1).cloned());
             row
@@ -78,6 +90,10 @@ pub fn summary_table(scenario: &Scenario, outcome: &BenchOutcome) -> Table {
         columns.push(format!("{m} mean"));
         columns.push(format!("{m} max"));
     }
+    let own = scenario.own_converged_frames > 0;
+    if own {
+        columns.push(format!("{} vs own converged mean", scenario.error_metric));
+    }
     columns.push("flicker mean".into());
     columns.push("flicker max".into());
     let rows = outcome
@@ -100,6 +116,14 @@ pub fn summary_table(scenario: &Scenario, outcome: &BenchOutcome) -> Table {
                 row.push(Cell::Number(mean));
                 row.push(Cell::Number(max));
             }
+            if own {
+                let mean = s
+                    .own_metrics
+                    .iter()
+                    .find(|(m, _, _)| *m == scenario.error_metric)
+                    .map(|&(_, mean, _)| mean);
+                row.push(mean.map_or(Cell::Empty, Cell::Number));
+            }
             match s.flicker {
                 Some((mean, max)) => row.extend([Cell::Number(mean), Cell::Number(max)]),
                 None => row.extend([Cell::Empty, Cell::Empty]),
@@ -111,27 +135,52 @@ pub fn summary_table(scenario: &Scenario, outcome: &BenchOutcome) -> Table {
 }
 
 /// One row per series per event: when it happened and how long the error took to stay
-/// below the threshold (`never` if it did not by the last frame).
+/// below the threshold, in frames, scene seconds and wall-clock seconds (`never` if it
+/// did not by the next event or the last frame); with `own_converged_frames`, the same
+/// against the technique's own converged images.
 pub fn latency_table(outcome: &BenchOutcome) -> Table {
-    let mut t = Table::new(&[
+    let own = outcome
+        .summaries
+        .iter()
+        .any(|s| !s.own_latencies.is_empty());
+    let mut columns = vec![
         "series",
         "event",
         "at [s]",
         "frame",
         "latency [frames]",
         "latency [s]",
-    ]);
+        "latency wall [s]",
+    ];
+    if own {
+        columns.extend([
+            "to own steady state [frames]",
+            "to own steady state wall [s]",
+        ]);
+    }
+    let mut t = Table::new(&columns);
     for s in &outcome.summaries {
-        for (e, l) in outcome.events.iter().zip(&s.latencies) {
+        for (k, (e, l)) in outcome.events.iter().zip(&s.latencies).enumerate() {
             let never = || Cell::Text("never".into());
-            t.push(vec![
+            let mut row = vec![
                 Cell::Text(s.series.clone()),
                 Cell::Text(e.name.clone()),
                 Cell::Number(e.at_s),
                 Cell::Text(e.frame.to_string()),
                 l.frames.map_or_else(never, |f| Cell::Text(f.to_string())),
                 l.seconds.map_or_else(never, Cell::Number),
-            ]);
+                l.wall_seconds.map_or_else(never, Cell::Number),
+            ];
+            if own {
+                match s.own_latencies.get(k) {
+                    Some(o) => row.extend([
+                        o.frames.map_or_else(never, |f| Cell::Text(f.to_string())),
+                        o.wall_seconds.map_or_else(never, Cell::Number),
+                    ]),
+                    None => row.extend([Cell::Empty, Cell::Empty]),
+                }
+            }
+            t.push(row);
         }
     }
     t
@@ -175,7 +224,8 @@ fn metric_series(outcome: &BenchOutcome, metric: Metric) -> Vec<Series> {
                 .records
                 .iter()
                 .filter(|r| r.series == s.series)
-                .map(|r| (r.time_s, r.metric(metric).unwrap_or(f64::NAN)))
+                // Frames outside `reference_frames` have no error: no point.
+                .filter_map(|r| r.metric(metric).map(|v| (r.time_s, v)))
                 .collect(),
         })
         .collect()
@@ -332,8 +382,10 @@ fn markdown(
     );
     let _ = write!(
         md,
-        "## Latency after events\n\nFrames and seconds from the event until {} stays below \
-         {} up to the next event (or the last frame); `never` if it does not.\n\n{}\n",
+        "## Latency after events\n\nFrames, scene seconds and wall-clock seconds (the frame \
+         times of the frames rendered after the event's frame, up to the settled one) from \
+         the event until {} stays below {} up to the next event (or the last frame), judged \
+         on the measured frames; `never` if it does not.\n\n{}\n",
         scenario.error_metric,
         scenario.latency_threshold,
         latency_table(outcome).to_markdown()

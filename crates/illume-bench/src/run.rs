@@ -7,11 +7,12 @@ use crate::replay::Replay;
 use crate::scenario::Scenario;
 use illume_core::Progress;
 use illume_core::image::{RgbImage, ToneMap};
-use illume_engine::Engine;
-use illume_metrics::{Counters, Latency, Metric, compare_images, flicker, latency_after_event};
+use illume_engine::{Config, Engine};
+use illume_metrics::{Counters, Metric, compare_images, flicker, latency_after_event};
 use illume_reference::{ReferenceRenderer, ReferenceSettings};
 use illume_scene::{Scene, Timeline};
 use illume_transport::World;
+use illume_transport::{Budget, Pacing};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -60,9 +61,14 @@ pub struct FrameRecord {
     /// Wall-clock time of the frame \[ms\]: edits, time step, the technique's update and
     /// advance, and rendering (equal-time series: the path tracer's time).
     pub frame_ms: f64,
-    /// Each scenario metric against the converged reference.
+    /// Each scenario metric against the converged reference (empty on frames not in
+    /// `reference_frames`).
     pub metrics: Vec<(Metric, f64)>,
-    /// Flicker between this frame and the previous one (`None` on frame 0).
+    /// Each scenario metric against the technique's own converged image of the frame's
+    /// state (`own_converged_frames`; empty when off or not measured).
+    pub own_metrics: Vec<(Metric, f64)>,
+    /// Flicker between this frame and the previous one (`None` on frame 0 and where
+    /// either frame is not measured).
     pub flicker: Option<f64>,
     /// Technique counters after the frame, plus `engine.*` stage timings \[ms\].
     pub counters: Counters,
@@ -76,6 +82,29 @@ impl FrameRecord {
             .find(|(m, _)| *m == metric)
             .map(|&(_, v)| v)
     }
+
+    /// The value of `metric` against the technique's own converged image, if measured.
+    pub fn own_metric(&self, metric: Metric) -> Option<f64> {
+        self.own_metrics
+            .iter()
+            .find(|(m, _)| *m == metric)
+            .map(|&(_, v)| v)
+    }
+}
+
+/// How long the error took to settle after an event.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EventLatency {
+    /// Frames from the event's frame to the first measured frame from which the error
+    /// stays below the threshold (up to the next event); `None` if it never settles or
+    /// no frame after the event is measured.
+    pub frames: Option<usize>,
+    /// The same in scene seconds (difference of frame times).
+    pub seconds: Option<f64>,
+    /// The same in wall-clock seconds: the measured times of the frames rendered after
+    /// the event's frame up to and including the settled one (precompute excluded) —
+    /// how long a viewer waits, at this technique's speed.
+    pub wall_seconds: Option<f64>,
 }
 
 /// A moment after which the error is expected to rise and then settle.
@@ -101,14 +130,20 @@ pub struct SeriesSummary {
     /// Time in the technique's precompute phase \[ms\]: before the first frame and in
     /// rebuilds (counter `engine.precompute_ms`, summed over frames).
     pub precompute_ms: f64,
-    /// `(metric, mean, max)` over the frames.
+    /// `(metric, mean, max)` over the measured frames (NaN when none is measured).
     pub metrics: Vec<(Metric, f64, f64)>,
+    /// `(metric, mean, max)` against the technique's own converged images (empty when
+    /// `own_converged_frames` is 0).
+    pub own_metrics: Vec<(Metric, f64, f64)>,
     /// `(mean, max)` flicker over consecutive frame pairs (`None` with one frame).
     pub flicker: Option<(f64, f64)>,
     /// Latency after each of [`BenchOutcome::events`], in the same order: until the
     /// error stays below the threshold up to the next event on a later frame (or the
     /// last frame).
-    pub latencies: Vec<Latency>,
+    pub latencies: Vec<EventLatency>,
+    /// Latency after each event against the technique's own converged images (empty
+    /// when `own_converged_frames` is 0): the time to reach its own steady state.
+    pub own_latencies: Vec<EventLatency>,
 }
 
 /// The result of [`run`].
@@ -157,9 +192,10 @@ pub fn run(
     let identity = scenario.scene_identity()?;
     let settings = reference_settings(scenario);
     let keys = reference_keys(scenario, &scene, &identity, &settings, &times)?;
+    let measured = scenario.measured_frames(times.len());
     let mut cache = ReferenceCache::new(&options.cache_dir);
     let references = converged_references(
-        scenario, &scene, &times, &keys, &settings, &mut cache, progress,
+        scenario, &scene, &times, &keys, &measured, &settings, &mut cache, progress,
     )?;
     progress.message(&format!(
         "converged references: {} distinct, {} from the cache, {} rendered ({})",
@@ -171,7 +207,9 @@ pub fn run(
     let frames_dir = options.output_dir.join("frames");
     if options.save_frames {
         for (i, r) in references.per_frame().enumerate() {
-            save_frame(&frames_dir.join("reference"), i, r)?;
+            if let Some(r) = r {
+                save_frame(&frames_dir.join("reference"), i, r)?;
+            }
         }
     }
     let events = events(scenario, &scene, &times, progress);
@@ -212,7 +250,7 @@ pub fn run(
             records.extend(equal);
         }
     }
-    let summaries = summarize(scenario, &records, &times, &events)?;
+    let summaries = summarize(scenario, &records, &times, &events, &measured)?;
     Ok(BenchOutcome {
         times_s: times,
         events,
@@ -255,34 +293,40 @@ fn reference_keys(
 }
 
 /// The converged references: distinct images and which one each frame uses.
+/// Frames outside `reference_frames` have none.
 struct References {
     images: Vec<RgbImage>,
-    frame_image: Vec<usize>,
+    frame_image: Vec<Option<usize>>,
     unique: usize,
 }
 
 impl References {
-    fn frame(&self, i: usize) -> &RgbImage {
-        &self.images[self.frame_image[i]]
+    fn frame(&self, i: usize) -> Option<&RgbImage> {
+        self.frame_image[i].map(|k| &self.images[k])
     }
 
-    fn per_frame(&self) -> impl Iterator<Item = &RgbImage> {
-        self.frame_image.iter().map(|&i| &self.images[i])
+    fn per_frame(&self) -> impl Iterator<Item = Option<&RgbImage>> {
+        self.frame_image.iter().map(|k| k.map(|k| &self.images[k]))
     }
 }
 
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the run's shared inputs; bundling them would only rename them"
+)]
 fn converged_references(
     scenario: &Scenario,
     scene: &Scene,
     times: &[f64],
     keys: &[CacheKey],
+    measured: &[bool],
     settings: &ReferenceSettings,
     cache: &mut ReferenceCache,
     progress: &mut dyn Progress,
 ) -> Result<References, BenchError> {
     let mut unique: HashMap<u64, usize> = HashMap::new();
     let mut to_render = 0u64;
-    for k in keys {
+    for (k, _) in keys.iter().zip(measured).filter(|(_, m)| **m) {
         if !unique.contains_key(&k.hash) {
             unique.insert(k.hash, unique.len());
             if !cache.contains(k) {
@@ -298,7 +342,7 @@ fn converged_references(
     let mut world = World::new(scene.clone());
     let mut replay = Replay::new(scenario);
     let mut rendered = 0u64;
-    for (key, &t) in keys.iter().zip(times) {
+    for ((key, &t), _) in keys.iter().zip(times).zip(measured).filter(|(_, m)| **m) {
         replay.apply_due(&mut world, t)?;
         world.set_time(t);
         let slot = unique[&key.hash];
@@ -321,7 +365,11 @@ fn converged_references(
     if to_render > 0 {
         progress.end();
     }
-    let frame_image = keys.iter().map(|k| unique[&k.hash]).collect();
+    let frame_image = keys
+        .iter()
+        .zip(measured)
+        .map(|(k, &m)| m.then(|| unique[&k.hash]))
+        .collect();
     Ok(References {
         images: images
             .into_iter()
@@ -450,14 +498,89 @@ fn run_technique(
     progress.end();
     // Stop the technique (and any thread it runs) before measuring.
     drop(engine);
+    let own = if scenario.own_converged_frames > 0 {
+        Some(own_converged_images(
+            scenario, k, &config, scene, times, references, progress,
+        )?)
+    } else {
+        None
+    };
     measure_series(
         scenario,
         spec.label(),
         &spec.name,
         frames,
         references,
+        own.as_deref(),
         keep_frames,
     )
+}
+
+/// Technique entry `k`'s own converged image of each measured frame's state: the same
+/// technique and settings built fresh on the scene, the scenario's edits due at the
+/// frame's time applied, then `own_converged_frames` frames at that time with fixed work
+/// per frame (the technique's default budget), so the result does not depend on the
+/// machine's speed.
+fn own_converged_images(
+    scenario: &Scenario,
+    k: usize,
+    config: &Config,
+    scene: &Scene,
+    times: &[f64],
+    references: &References,
+    progress: &mut dyn Progress,
+) -> Result<Vec<Option<RgbImage>>, BenchError> {
+    let spec = &scenario.techniques[k];
+    let technique_error = |e: illume_engine::EngineError| BenchError::Technique {
+        path: scenario.file.clone(),
+        index: k,
+        name: spec.name.clone(),
+        message: format!("own converged image: {e}"),
+    };
+    let mut config = config.clone();
+    config.technique_settings_mut().pace(Pacing::FixedWork {
+        work_per_frame: None,
+    });
+    let budget = Budget {
+        work: config.technique_settings().default_budget().work,
+        time_ms: None,
+    };
+    let wanted: Vec<usize> = (0..times.len())
+        .filter(|&i| references.frame(i).is_some())
+        .collect();
+    let steps = u64::from(scenario.own_converged_frames);
+    progress.begin(
+        &format!("{} own converged", spec.label()),
+        wanted.len() as u64 * steps,
+    );
+    let mut images = vec![None; times.len()];
+    for (n, &i) in wanted.iter().enumerate() {
+        let t = times[i];
+        let timeline = Timeline::new(
+            scene.clone(),
+            times.to_vec(),
+            scenario.width,
+            scenario.height,
+        )
+        .map_err(|e| BenchError::Technique {
+            path: scenario.file.clone(),
+            index: k,
+            name: spec.name.clone(),
+            message: e.to_string(),
+        })?;
+        let mut engine =
+            Engine::with_timeline(scene.clone(), &config, timeline).map_err(technique_error)?;
+        engine.set_budget(budget);
+        Replay::new(scenario).apply_due(&mut engine, t)?;
+        let mut last = None;
+        for step in 0..steps {
+            last = Some(engine.step(t).map_err(technique_error)?.frame.full);
+            progress.set(n as u64 * steps + step + 1);
+        }
+        images[i] = last;
+    }
+    progress.end();
+    Ok(images)
 }
 
 /// Measures each frame against its converged reference and the previous frame (flicker).
@@ -467,21 +590,32 @@ fn measure_series(
     technique: &str,
     frames: Vec<TimedFrame>,
     references: &References,
+    own: Option<&[Option<RgbImage>]>,
     keep_frames: bool,
 ) -> Result<(Vec<FrameRecord>, Vec<RgbImage>), BenchError> {
     let mut records = Vec::with_capacity(frames.len());
     for (i, f) in frames.iter().enumerate() {
         let reference = references.frame(i);
-        let metrics = compare_images(reference, &f.image, &scenario.metrics)?;
-        let flicker = match i {
-            0 => None,
-            _ => Some(
-                flicker(
-                    &[frames[i - 1].image.clone(), f.image.clone()],
-                    &[references.frame(i - 1).clone(), reference.clone()],
-                )?
-                .mean,
-            ),
+        let metrics = match reference {
+            Some(r) => compare_images(r, &f.image, &scenario.metrics)?,
+            None => Vec::new(),
+        };
+        let own_metrics = match own.and_then(|o| o[i].as_ref()) {
+            Some(o) => compare_images(o, &f.image, &scenario.metrics)?,
+            None => Vec::new(),
+        };
+        let flicker = match (i, reference) {
+            (0, _) | (_, None) => None,
+            (_, Some(reference)) => match references.frame(i - 1) {
+                None => None,
+                Some(previous) => Some(
+                    flicker(
+                        &[frames[i - 1].image.clone(), f.image.clone()],
+                        &[previous.clone(), reference.clone()],
+                    )?
+                    .mean,
+                ),
+            },
         };
         records.push(FrameRecord {
             series: series.to_owned(),
@@ -490,6 +624,7 @@ fn measure_series(
             time_s: f.time_s,
             frame_ms: f.frame_ms,
             metrics,
+            own_metrics,
             flicker,
             counters: f.counters.clone(),
         });
@@ -581,17 +716,20 @@ fn run_equal_time(
         "reference",
         frames,
         references,
+        None,
         keep_frames,
     )
 }
 
-/// Per-series summaries: median frame time, mean/max of each metric, flicker, latency
-/// after each event.
+/// Per-series summaries: median frame time, mean/max of each metric over the measured
+/// frames, flicker, latency after each event (against the reference and, when measured,
+/// against the technique's own converged images).
 fn summarize(
     scenario: &Scenario,
     records: &[FrameRecord],
     times: &[f64],
     events: &[Event],
+    measured: &[bool],
 ) -> Result<Vec<SeriesSummary>, BenchError> {
     let mut names: Vec<&str> = Vec::new();
     for r in records {
@@ -599,21 +737,37 @@ fn summarize(
             names.push(&r.series);
         }
     }
+    let stats = |values: Vec<f64>| {
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        (mean, if values.is_empty() { f64::NAN } else { max })
+    };
     names
         .into_iter()
         .map(|name| {
             let rs: Vec<&FrameRecord> = records.iter().filter(|r| r.series == name).collect();
-            let n = rs.len() as f64;
             let metrics = scenario
                 .metrics
                 .iter()
                 .map(|&m| {
-                    let values: Vec<f64> = rs.iter().filter_map(|r| r.metric(m)).collect();
-                    let mean = values.iter().sum::<f64>() / n;
-                    let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    let (mean, max) = stats(rs.iter().filter_map(|r| r.metric(m)).collect());
                     (m, mean, max)
                 })
                 .collect();
+            let has_own = rs.iter().any(|r| !r.own_metrics.is_empty());
+            let own_metrics = if has_own {
+                scenario
+                    .metrics
+                    .iter()
+                    .map(|&m| {
+                        let (mean, max) =
+                            stats(rs.iter().filter_map(|r| r.own_metric(m)).collect());
+                        (m, mean, max)
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            };
             let pairs: Vec<f64> = rs.iter().filter_map(|r| r.flicker).collect();
             let flicker = (!pairs.is_empty()).then(|| {
                 (
@@ -621,39 +775,82 @@ fn summarize(
                     pairs.iter().copied().fold(0.0, f64::max),
                 )
             });
+            let frame_ms: Vec<f64> = rs.iter().map(|r| r.frame_ms).collect();
             let errors: Vec<f64> = rs
                 .iter()
                 .map(|r| r.metric(scenario.error_metric).unwrap_or(f64::NAN))
                 .collect();
-            let latencies = events
-                .iter()
-                .map(|e| {
-                    // Settling is judged up to the next event that shows on a later frame.
-                    let end = events
-                        .iter()
-                        .map(|o| o.frame)
-                        .filter(|&f| f > e.frame)
-                        .min()
-                        .unwrap_or(errors.len());
-                    latency_after_event(
-                        &errors[..end],
-                        &times[..end],
-                        e.frame,
-                        scenario.latency_threshold,
-                    )
-                })
-                .collect::<Result<Vec<_>, _>>()?;
+            let latencies = event_latencies(scenario, &errors, times, &frame_ms, events, measured)?;
+            let own_latencies = if has_own {
+                let own_errors: Vec<f64> = rs
+                    .iter()
+                    .map(|r| r.own_metric(scenario.error_metric).unwrap_or(f64::NAN))
+                    .collect();
+                let own_measured: Vec<bool> =
+                    rs.iter().map(|r| !r.own_metrics.is_empty()).collect();
+                event_latencies(
+                    scenario,
+                    &own_errors,
+                    times,
+                    &frame_ms,
+                    events,
+                    &own_measured,
+                )?
+            } else {
+                Vec::new()
+            };
             Ok(SeriesSummary {
                 series: name.to_owned(),
                 technique: rs[0].technique.clone(),
-                median_frame_ms: median(rs.iter().map(|r| r.frame_ms).collect()),
+                median_frame_ms: median(frame_ms),
                 precompute_ms: rs
                     .iter()
                     .filter_map(|r| r.counters.get("engine.precompute_ms"))
                     .sum(),
                 metrics,
+                own_metrics,
                 flicker,
                 latencies,
+                own_latencies,
+            })
+        })
+        .collect()
+}
+
+/// Latency after each event, judged on the measured frames only, up to the next event
+/// that shows on a later frame (or the last frame).
+fn event_latencies(
+    scenario: &Scenario,
+    errors: &[f64],
+    times: &[f64],
+    frame_ms: &[f64],
+    events: &[Event],
+    measured: &[bool],
+) -> Result<Vec<EventLatency>, BenchError> {
+    events
+        .iter()
+        .map(|e| {
+            let end = events
+                .iter()
+                .map(|o| o.frame)
+                .filter(|&f| f > e.frame)
+                .min()
+                .unwrap_or(errors.len());
+            // The measured frames of the window, and their errors and times.
+            let frames: Vec<usize> = (e.frame..end).filter(|&i| measured[i]).collect();
+            if frames.is_empty() {
+                return Ok(EventLatency::default());
+            }
+            let window_errors: Vec<f64> = frames.iter().map(|&i| errors[i]).collect();
+            let window_times: Vec<f64> = frames.iter().map(|&i| times[i]).collect();
+            let l =
+                latency_after_event(&window_errors, &window_times, 0, scenario.latency_threshold)?;
+            let settled = l.frames.map(|k| frames[k]);
+            Ok(EventLatency {
+                frames: settled.map(|s| s - e.frame),
+                seconds: settled.map(|s| times[s] - times[e.frame]),
+                wall_seconds: settled
+                    .map(|s| frame_ms[e.frame + 1..=s.max(e.frame)].iter().sum::<f64>() / 1e3),
             })
         })
         .collect()
@@ -714,6 +911,7 @@ mod tests {
                 time_s: times[i],
                 frame_ms: 10.0 + i as f64,
                 metrics: vec![(Metric::Flip, e)],
+                own_metrics: Vec::new(),
                 flicker: (i > 0).then_some(0.01),
                 counters: Counters::new(),
             })
@@ -723,12 +921,38 @@ mod tests {
             at_s: times[frame],
             frame,
         };
-        let s = summarize(&scenario, &records, &times, &[event(0), event(3)]).unwrap();
+        let all = vec![true; errors.len()];
+        let s = summarize(&scenario, &records, &times, &[event(0), event(3)], &all).unwrap();
         // Window [0, 3): 0.5, 0.05, 0.05 settles at frame 1 (the later rise belongs to
         // the second event). Window [3, 6): 0.5, 0.3, 0.05 settles at frame 5.
         assert_eq!(s[0].latencies[0].frames, Some(1));
         assert_eq!(s[0].latencies[1].frames, Some(2));
         assert_eq!(s[0].latencies[1].seconds, Some(1.0));
+        // Wall clock: frames 4 and 5 rendered after the event's frame 3 (14 + 15 ms).
+        assert_eq!(s[0].latencies[1].wall_seconds, Some(0.029));
+        assert_eq!(s[0].latencies[0].wall_seconds, Some(0.011));
+        // Measuring only frames 0, 2, 3 and 5: the first window settles at frame 2 (the
+        // first measured frame below the threshold), the second at 5; the means are over
+        // the measured frames.
+        let mut some = all.clone();
+        some[1] = false;
+        some[4] = false;
+        let sparse: Vec<FrameRecord> = records
+            .iter()
+            .map(|r| FrameRecord {
+                metrics: if some[r.frame] {
+                    r.metrics.clone()
+                } else {
+                    Vec::new()
+                },
+                ..r.clone()
+            })
+            .collect();
+        let s2 = summarize(&scenario, &sparse, &times, &[event(0), event(3)], &some).unwrap();
+        assert_eq!(s2[0].latencies[0].frames, Some(2));
+        assert_eq!(s2[0].latencies[1].frames, Some(2));
+        let (_, mean, _) = s2[0].metrics[0];
+        assert!((mean - 1.1 / 4.0).abs() < 1e-12, "{mean}");
         assert_eq!(s[0].median_frame_ms, 12.5);
         let (metric, mean, max) = s[0].metrics[0];
         assert_eq!((metric, max), (Metric::Flip, 0.5));

@@ -76,6 +76,20 @@ pub struct Scenario {
     /// Latency threshold in units of `error_metric`: after an event, the latency is the
     /// time until the error stays below this value to the end of the run. Default 0.1.
     pub latency_threshold: f64,
+    /// Frame indices (0-based, into the frame times) measured against the converged
+    /// reference, e.g. `[0, 10, 20]`: only these get a reference image and metrics, so
+    /// long sequences stay affordable; other frames are rendered and timed but carry no
+    /// error (empty cells, not zeros). Latency is judged on the measured frames. Default:
+    /// every frame.
+    pub reference_frames: Option<Vec<usize>>,
+    /// Also measure each technique against its own converged image of each measured
+    /// frame's state, to separate a technique's latency (how long until it reaches its
+    /// own steady state after a change) from its bias (how far that steady state is from
+    /// the path tracer's). The converged image is the same technique with the same
+    /// settings, built fresh at that state (edits applied) and run for this many frames
+    /// at fixed work per frame (its default budget), all at the frame's time. Cost: this
+    /// many frames per measured frame per technique. 0 = off. Default 0.
+    pub own_converged_frames: u32,
     /// Renderer settings shared by every technique: the `[render]` table of a
     /// configuration file (e.g. `area_light_samples`, `seed`), without `width`/`height`
     /// (set above). Default: the renderer's defaults.
@@ -112,6 +126,8 @@ impl Default for Scenario {
             metrics: vec![Metric::Rmse, Metric::RelMse, Metric::Flip],
             error_metric: Metric::Flip,
             latency_threshold: 0.1,
+            reference_frames: None,
+            own_converged_frames: 0,
             render: None,
             reference: ReferenceSpec::default(),
             techniques: Vec::new(),
@@ -417,6 +433,30 @@ impl Scenario {
             ));
         }
         self.check_times()?;
+        if let Some(frames) = &self.reference_frames {
+            let n = self.frame_times().len();
+            if frames.is_empty() {
+                return Err(self.invalid(
+                    "reference_frames",
+                    "lists no frame (leave it out to measure every frame)",
+                ));
+            }
+            if let Some(f) = frames.iter().find(|&&f| f >= n) {
+                return Err(self.invalid(
+                    "reference_frames",
+                    format!("frame {f} is past the last frame ({})", n.saturating_sub(1)),
+                ));
+            }
+            if frames.windows(2).any(|w| w[0] >= w[1]) {
+                return Err(self.invalid(
+                    "reference_frames",
+                    "frame indices must be strictly increasing",
+                ));
+            }
+        }
+        if self.own_converged_frames > 10_000 {
+            return Err(self.invalid("own_converged_frames", "must be at most 10000"));
+        }
         if self.techniques.is_empty() {
             return Err(self.invalid("technique", "at least one [[technique]] entry is needed"));
         }
@@ -485,6 +525,23 @@ impl Scenario {
                 "times_s/duration_s/fps",
                 "give either `times_s`, or both `duration_s` and `fps`",
             )),
+        }
+    }
+
+    /// For each of `frame_count` frames, true when it is measured against the converged
+    /// reference (`reference_frames`, default all).
+    pub fn measured_frames(&self, frame_count: usize) -> Vec<bool> {
+        match &self.reference_frames {
+            None => vec![true; frame_count],
+            Some(list) => {
+                let mut m = vec![false; frame_count];
+                for &f in list {
+                    if let Some(x) = m.get_mut(f) {
+                        *x = true;
+                    }
+                }
+                m
+            }
         }
     }
 

@@ -24,7 +24,7 @@ spp = 16
 
 [[technique]]
 name = "reference"
-samples = 1
+work = 1
 
 [[edit]]
 at_s = 0.5
@@ -246,4 +246,110 @@ fn static_scene_shares_one_reference_across_frames() {
     assert_eq!(spp, vec![1.0, 2.0, 3.0]);
     assert!(outcome.records.iter().skip(1).all(|r| r.flicker.is_some()));
     std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// `reference_frames` measures only the listed frames (the others have no error, and no
+/// reference is rendered for them); `own_converged_frames` measures each technique
+/// against its own converged image, which for photon_stream (deterministic) is closer
+/// than the path tracer's: its own steady state carries its bias.
+#[test]
+fn reference_frames_and_own_converged_images() {
+    let text = r#"
+name = "sparse"
+scene = "builtin:cornell-spot"
+animation = "move_light"
+width = 24
+height = 18
+times_s = [0.0, 0.25, 0.5, 0.75, 1.0]
+metrics = ["rmse", "flip"]
+reference_frames = [0, 2, 4]
+own_converged_frames = 6
+
+[reference]
+spp = 16
+equal_time = false
+
+[[technique]]
+name = "photon_stream"
+settings = { mode = "deterministic", vsl_count = 30, photons_per_frame = 3000 }
+
+[[edit]]
+at_s = 0.5
+instance = "sphere"
+translation = [0.2, 0.3, 0.0]
+"#;
+    let root = temp_dir("sparse");
+    let scenario = Scenario::parse(text, &root.join("sparse.toml")).unwrap();
+    let options = RunOptions {
+        output_dir: root.join("report"),
+        cache_dir: root.join("cache"),
+        save_frames: false,
+        notes: vec![],
+    };
+    let out = run(&scenario, &options, &mut Silent).unwrap();
+    // Three references rendered, not five.
+    assert_eq!(out.cache_renders, 3);
+    let measured: Vec<bool> = out.records.iter().map(|r| !r.metrics.is_empty()).collect();
+    assert_eq!(measured, [true, false, true, false, true]);
+    let own: Vec<bool> = out
+        .records
+        .iter()
+        .map(|r| !r.own_metrics.is_empty())
+        .collect();
+    assert_eq!(own, measured);
+    // Its own converged image is nearer than the path tracer's on every measured frame.
+    for r in out.records.iter().filter(|r| !r.metrics.is_empty()) {
+        let (own, reference) = (
+            r.own_metric(Metric::Rmse).unwrap(),
+            r.metric(Metric::Rmse).unwrap(),
+        );
+        assert!(
+            own < reference,
+            "frame {}: own {own} vs reference {reference}",
+            r.frame
+        );
+    }
+    let s = &out.summaries[0];
+    assert_eq!(s.own_latencies.len(), out.events.len());
+    // Wall-clock latency is the frame times after the event's frame, up to the settled one.
+    for (e, l) in out.events.iter().zip(&s.latencies) {
+        if let (Some(k), Some(wall)) = (l.frames, l.wall_seconds) {
+            let expected: f64 = out.records[e.frame + 1..=e.frame + k]
+                .iter()
+                .map(|r| r.frame_ms)
+                .sum::<f64>()
+                / 1e3;
+            assert!((wall - expected).abs() < 1e-12, "{wall} vs {expected}");
+        }
+    }
+    let files = write_report(&scenario, &out, &options).unwrap();
+    let md = std::fs::read_to_string(&files.report_md).unwrap();
+    assert!(
+        md.contains("latency wall [s]") && md.contains("to own steady state"),
+        "{md}"
+    );
+    let csv = std::fs::read_to_string(&files.results_csv).unwrap();
+    let header = csv.lines().next().unwrap();
+    assert!(header.contains("own_rmse"), "{header}");
+    // Unmeasured frames have empty cells, not zeros.
+    let row1 = csv.lines().nth(2).unwrap();
+    assert!(row1.contains(",,"), "{row1}");
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+#[test]
+fn reference_frames_out_of_range_name_the_key() {
+    let text = "scene = \"builtin:cornell-spot\"\ntimes_s = [0.0, 0.5]\nreference_frames = [0, 2]\n[[technique]]\nname = \"reference\"\n";
+    let e = Scenario::parse(text, Path::new("scenarios/x.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("x.toml") && e.contains("reference_frames") && e.contains("frame 2"),
+        "{e}"
+    );
+    let text = text.replace("[0, 2]", "[1, 0]");
+    let e = Scenario::parse(&text, Path::new("scenarios/x.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("increasing"), "{e}");
 }

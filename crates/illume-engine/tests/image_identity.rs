@@ -22,8 +22,10 @@ fn checksum(img: &RgbImage) -> u64 {
 }
 
 fn config(kind: TechniqueKind) -> Config {
-    let mut c = Config::default();
-    c.technique = kind;
+    let mut c = Config {
+        technique: kind,
+        ..Default::default()
+    };
     c.render.width = 64;
     c.render.height = 48;
     c.photon_stream = illume_photon_stream::PhotonStreamSettings {

@@ -8,8 +8,10 @@ use illume_engine::{Config, Engine, TechniqueKind};
 use illume_scene::{Edit, InstanceId, SceneChange};
 
 fn config(kind: TechniqueKind) -> Config {
-    let mut c = Config::default();
-    c.technique = kind;
+    let mut c = Config {
+        technique: kind,
+        ..Default::default()
+    };
     c.render.width = 48;
     c.render.height = 36;
     c.photon_stream = illume_photon_stream::PhotonStreamSettings {
