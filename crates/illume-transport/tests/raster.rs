@@ -242,3 +242,35 @@ fn incremental_rebuild_equals_fresh_build() {
     assert_eq!(g.reused_pixels, 0, "a material edit rebuilds everything");
     assert!(same(&g, &GBuffer::rasterize(&world, w, h)));
 }
+
+/// Surface records carry what finds mesh elements and texels without re-intersecting: the
+/// mesh id and the barycentrics, the same from the rasterizer and from rays, and they
+/// rebuild the hit point from the mesh's corners.
+#[test]
+fn barycentrics_and_mesh_ids_rebuild_the_hit_point() {
+    let world = builtin("cornell-spot");
+    let (w, h) = (64, 48);
+    let raster = GBuffer::rasterize(&world, w, h);
+    let rays = GBuffer::render(&world, w, h, Vec2::splat(0.5));
+    let mut checked = 0;
+    for (a, b) in raster.pixels.iter().zip(&rays.pixels) {
+        let (Some(a), Some(b)) = (a, b) else { continue };
+        for hit in [&a.hit, &b.hit] {
+            let inst = &world.scene.instances[hit.instance.index()];
+            assert_eq!(hit.mesh, inst.mesh);
+            let mesh = &world.scene.meshes[hit.mesh.index()];
+            let [p0, p1, p2] = mesh
+                .triangle(hit.triangle as usize)
+                .map(|p| inst.world_from_object.transform_point3(p));
+            let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
+            assert!(b1 >= -1e-4 && b2 >= -1e-4 && b1 + b2 <= 1.0 + 1e-4, "{b1} {b2}");
+            let p = p0 * (1.0 - b1 - b2) + p1 * b1 + p2 * b2;
+            assert!((p - hit.position).length() < 1e-4, "{p} vs {}", hit.position);
+        }
+        if (a.hit.instance, a.hit.triangle) == (b.hit.instance, b.hit.triangle) {
+            assert!((a.hit.barycentrics - b.hit.barycentrics).length() < 1e-4);
+            checked += 1;
+        }
+    }
+    assert!(checked > (w * h / 2) as usize, "{checked} pixels compared");
+}
