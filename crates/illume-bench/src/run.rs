@@ -454,21 +454,7 @@ fn run_technique(
         name: spec.name.clone(),
         message: e.to_string(),
     };
-    // The scenario's frame times are the timeline; scripted edits stay surprises.
-    let timeline = Timeline::new(
-        scene.clone(),
-        times.to_vec(),
-        scenario.width,
-        scenario.height,
-    )
-    .map_err(|e| BenchError::Technique {
-        path: scenario.file.clone(),
-        index: k,
-        name: spec.name.clone(),
-        message: e.to_string(),
-    })?;
-    let mut engine =
-        Engine::with_timeline(scene.clone(), &config, timeline).map_err(technique_error)?;
+    let mut engine = technique_engine(scenario, k, &config, scene, times)?;
     engine.set_budget(scenario.technique_budget(k, &config));
     let precompute_ms = engine.precompute(progress).map_err(technique_error)?;
     let mut replay = Replay::new(scenario);
@@ -516,6 +502,31 @@ fn run_technique(
     )
 }
 
+/// An engine for technique entry `k` with `config` on `scene`, whose timeline is the
+/// scenario's frame times (scripted edits stay surprises).
+fn technique_engine(
+    scenario: &Scenario,
+    k: usize,
+    config: &Config,
+    scene: &Scene,
+    times: &[f64],
+) -> Result<Engine, BenchError> {
+    let error = |message: String| BenchError::Technique {
+        path: scenario.file.clone(),
+        index: k,
+        name: scenario.techniques[k].name.clone(),
+        message,
+    };
+    let timeline = Timeline::new(
+        scene.clone(),
+        times.to_vec(),
+        scenario.width,
+        scenario.height,
+    )
+    .map_err(|e| error(e.to_string()))?;
+    Engine::with_timeline(scene.clone(), config, timeline).map_err(|e| error(e.to_string()))
+}
+
 /// Technique entry `k`'s own converged image of each measured frame's state: the same
 /// technique and settings built fresh on the scene, the scenario's edits due at the
 /// frame's time applied, then `own_converged_frames` frames at that time with fixed work
@@ -556,20 +567,7 @@ fn own_converged_images(
     let mut images = vec![None; times.len()];
     for (n, &i) in wanted.iter().enumerate() {
         let t = times[i];
-        let timeline = Timeline::new(
-            scene.clone(),
-            times.to_vec(),
-            scenario.width,
-            scenario.height,
-        )
-        .map_err(|e| BenchError::Technique {
-            path: scenario.file.clone(),
-            index: k,
-            name: spec.name.clone(),
-            message: e.to_string(),
-        })?;
-        let mut engine =
-            Engine::with_timeline(scene.clone(), &config, timeline).map_err(technique_error)?;
+        let mut engine = technique_engine(scenario, k, &config, scene, times)?;
         engine.set_budget(budget);
         Replay::new(scenario).apply_due(&mut engine, t)?;
         let mut last = None;

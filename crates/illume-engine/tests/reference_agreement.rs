@@ -9,7 +9,7 @@
 //! converge, and its tolerance with the reason for it.
 
 use illume_core::image::{RgbImage, write_exr};
-use illume_core::{Rgb, Silent};
+use illume_core::Silent;
 use illume_engine::{Config, ConfigLayers, Engine, TechniqueKind};
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -104,27 +104,9 @@ fn reference() -> &'static RgbImage {
     })
 }
 
-fn blocks(img: &RgbImage) -> Vec<Rgb> {
-    let (bw, bh) = (W.div_ceil(BLOCK), H.div_ceil(BLOCK));
-    let mut out = vec![Rgb::ZERO; (bw * bh) as usize];
-    for y in 0..H {
-        for x in 0..W {
-            out[((y / BLOCK) * bw + x / BLOCK) as usize] += *img.get(x, y);
-        }
-    }
-    out
-}
-
-/// Relative L1 error of block means: Σ|a − b| / Σ b over blocks and channels.
+/// Relative L1 error of block means (shared metric, `illume_metrics::block_error`).
 fn block_error(img: &RgbImage, reference: &RgbImage) -> f64 {
-    let (a, b) = (blocks(img), blocks(reference));
-    let num: f64 = a
-        .iter()
-        .zip(&b)
-        .map(|(a, b)| (*a - *b).abs().element_sum() as f64)
-        .sum();
-    let den: f64 = b.iter().map(|b| b.element_sum() as f64).sum();
-    num / den
+    illume_metrics::block_error(reference, img, BLOCK).expect("same sizes")
 }
 
 fn energy_error(img: &RgbImage, reference: &RgbImage) -> f64 {

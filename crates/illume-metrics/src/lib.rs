@@ -51,5 +51,5 @@ pub use error::MetricsError;
 pub use flip::{
     FlipMap, FlipSettings, FlipToneMapper, HdrFlip, flip_error_map, hdr_flip, ldr_flip,
 };
-pub use pixel::{Peak, mse, psnr, rel_mse, rmse, ssim};
+pub use pixel::{Peak, block_error, mse, psnr, rel_mse, rmse, ssim};
 pub use temporal::{ErrorCurve, Flicker, Latency, error_curve, flicker, latency_after_event};

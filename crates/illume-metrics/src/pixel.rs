@@ -191,6 +191,44 @@ fn filter_valid(image: &Image<f64>, kernel: &[f64]) -> Vec<f64> {
 }
 
 /// Mean of `f(reference, test)` over all pixels and channels.
+/// Relative L1 error of block sums: the image is cut into `block`×`block` pixel blocks
+/// (partial blocks at the right and bottom edges included), and the result is
+/// `Σ |test − reference| / Σ reference` over the blocks' channel sums. Averaging within
+/// blocks removes per-pixel noise, so this measures bias at the scale of regions — what
+/// tests comparing a technique's converged light with the reference's ask.
+pub fn block_error(reference: &RgbImage, test: &RgbImage, block: u32) -> Result<f64, MetricsError> {
+    check_same_size(reference, test)?;
+    check_not_empty(reference, "block error")?;
+    if block == 0 {
+        return Err(MetricsError::InvalidArgument(
+            "block size must be ≥ 1".into(),
+        ));
+    }
+    let (w, h) = (reference.width(), reference.height());
+    let bw = w.div_ceil(block);
+    let sums = |img: &RgbImage| {
+        let mut out = vec![[0f64; 3]; (bw * h.div_ceil(block)) as usize];
+        for y in 0..h {
+            for x in 0..w {
+                let p = img.get(x, y);
+                let b = &mut out[((y / block) * bw + x / block) as usize];
+                for c in 0..3 {
+                    b[c] += p[c] as f64;
+                }
+            }
+        }
+        out
+    };
+    let (r, t) = (sums(reference), sums(test));
+    let num: f64 = r
+        .iter()
+        .zip(&t)
+        .map(|(r, t)| (0..3).map(|c| (t[c] - r[c]).abs()).sum::<f64>())
+        .sum();
+    let den: f64 = r.iter().map(|r| r.iter().sum::<f64>()).sum();
+    Ok(num / den)
+}
+
 fn mean_over_channels(
     reference: &RgbImage,
     test: &RgbImage,
@@ -211,6 +249,25 @@ fn mean_over_channels(
 mod tests {
     use super::*;
     use illume_core::Rgb;
+
+    #[test]
+    fn block_error_ignores_noise_within_blocks_and_sees_bias() {
+        let reference = RgbImage::filled(8, 8, Rgb::ONE);
+        // A checkerboard of 0.5 and 1.5: zero-mean noise within every 2×2 block.
+        let mut noisy = reference.clone();
+        for y in 0..8 {
+            for x in 0..8 {
+                *noisy.get_mut(x, y) = Rgb::splat(if (x + y) % 2 == 0 { 0.5 } else { 1.5 });
+            }
+        }
+        assert!(block_error(&reference, &noisy, 2).unwrap() < 1e-12);
+        assert!((block_error(&reference, &noisy, 1).unwrap() - 0.5).abs() < 1e-12);
+        // 10 % too dark everywhere: 0.1 at any block size, partial blocks included.
+        let dark = RgbImage::filled(8, 8, Rgb::splat(0.9));
+        assert!((block_error(&reference, &dark, 3).unwrap() - 0.1).abs() < 1e-6);
+        assert!(block_error(&reference, &dark, 0).is_err());
+        assert!(block_error(&reference, &RgbImage::filled(4, 8, Rgb::ONE), 2).is_err());
+    }
     use illume_core::sampling::Pcg32;
 
     /// A deterministic image whose values are multiples of 1/64 in [0, 0.75], so that adding

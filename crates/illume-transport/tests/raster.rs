@@ -263,9 +263,16 @@ fn barycentrics_and_mesh_ids_rebuild_the_hit_point() {
                 .triangle(hit.triangle as usize)
                 .map(|p| inst.world_from_object.transform_point3(p));
             let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
-            assert!(b1 >= -1e-4 && b2 >= -1e-4 && b1 + b2 <= 1.0 + 1e-4, "{b1} {b2}");
+            assert!(
+                b1 >= -1e-4 && b2 >= -1e-4 && b1 + b2 <= 1.0 + 1e-4,
+                "{b1} {b2}"
+            );
             let p = p0 * (1.0 - b1 - b2) + p1 * b1 + p2 * b2;
-            assert!((p - hit.position).length() < 1e-4, "{p} vs {}", hit.position);
+            assert!(
+                (p - hit.position).length() < 1e-4,
+                "{p} vs {}",
+                hit.position
+            );
         }
         if (a.hit.instance, a.hit.triangle) == (b.hit.instance, b.hit.triangle) {
             assert!((a.hit.barycentrics - b.hit.barycentrics).length() < 1e-4);

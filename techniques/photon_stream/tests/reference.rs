@@ -2,7 +2,7 @@
 //! light (light reflected ≥ 2 times) on `builtin:cornell-spot`, static.
 
 use illume_core::image::RgbImage;
-use illume_core::{Rgb, Vec2};
+use illume_core::Vec2;
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings, VisibilityMode};
 use illume_reference::{ReferenceSettings, ReferenceTechnique};
 use illume_transport::{Budget, GBuffer, Technique, World};
@@ -12,27 +12,9 @@ const W: u32 = 96;
 const H: u32 = 72;
 const BLOCK: u32 = 8;
 
-fn blocks(img: &RgbImage) -> Vec<Rgb> {
-    let (bw, bh) = (W / BLOCK, H / BLOCK);
-    let mut out = vec![Rgb::ZERO; (bw * bh) as usize];
-    for y in 0..H {
-        for x in 0..W {
-            out[((y / BLOCK) * bw + x / BLOCK) as usize] += *img.get(x, y) / (BLOCK * BLOCK) as f32;
-        }
-    }
-    out
-}
-
-/// Relative L1 error of block means: Σ|a − b| / Σ b over blocks and channels.
+/// Relative L1 error of block means (shared metric, `illume_metrics::block_error`).
 fn block_error(img: &RgbImage, reference: &RgbImage) -> f64 {
-    let (a, b) = (blocks(img), blocks(reference));
-    let num: f64 = a
-        .iter()
-        .zip(&b)
-        .map(|(a, b)| (*a - *b).abs().element_sum() as f64)
-        .sum();
-    let den: f64 = b.iter().map(|b| b.element_sum() as f64).sum();
-    num / den
+    illume_metrics::block_error(reference, img, BLOCK).expect("same sizes")
 }
 
 fn mean_ratio(img: &RgbImage, reference: &RgbImage) -> f64 {
