@@ -7,6 +7,8 @@
 //! * [`lights`] — light selection proportional to power, direct-light sampling (next-event
 //!   estimation) and emission sampling for every light type.
 //! * [`bsdf`] — the Lambertian BSDF with cosine-weighted sampling, Russian roulette.
+//! * [`metal_rough`] — the glTF 2.0 metallic-roughness BRDF (GGX, height-correlated
+//!   Smith, Schlick Fresnel): evaluation, visible-normal sampling and its pdf.
 //! * [`nearest`] — exact nearest-point indices (grid + k-d tree) over fixed points.
 //! * [`path`] — radiance arriving along a ray: path tracing with next-event estimation
 //!   and MIS, shared by the reference and every technique that gathers radiance.
@@ -29,6 +31,7 @@ pub mod flux;
 pub mod gbuffer;
 pub mod hit_tables;
 pub mod lights;
+pub mod metal_rough;
 pub mod nearest;
 pub mod path;
 pub mod photon;
