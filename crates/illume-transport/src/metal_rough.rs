@@ -158,7 +158,7 @@ impl MetalRough {
             cosine_hemisphere(u).normalize()
         };
         let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0) {
+        if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         Some(LocalSample {
