@@ -310,9 +310,11 @@ pub fn direct_at_with(
     rng: &mut Pcg32,
 ) -> Rgb {
     let hit = &px.hit;
-    if !hit.reflects || hit.albedo == Rgb::ZERO {
+    if hit.is_black() {
         return Rgb::ZERO;
     }
+    // Lambertian: one BRDF value for every light (exactly albedo/π); glossy: per light.
+    let lambert = hit.is_lambertian();
     let f = hit.albedo * INV_PI;
     let n = hit.facing_normal();
     let ng = hit.facing_geometric_normal();
@@ -333,6 +335,11 @@ pub fn direct_at_with(
             Some(v) => v,
             None if world.unoccluded(hit, &s) => 1.0,
             None => return Rgb::ZERO,
+        };
+        let f = if lambert {
+            f
+        } else {
+            hit.eval_brdf(px.to_camera, s.wi)
         };
         f * s.weight * (cos * visibility)
     };

@@ -225,21 +225,25 @@ impl Texture {
     }
 }
 
-/// A surface material. illume's light transport is Lambertian; `glossiness` is carried
-/// for techniques that will use it later.
+/// A surface material: the glTF 2.0 metallic-roughness model (its BRDF is
+/// `illume_transport::metal_rough`). `metallic = 0`, `roughness = 1` is exactly
+/// Lambertian with albedo `base_color` — the default, and every OBJ material.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Name from the file.
     pub name: String,
-    /// Diffuse albedo ρ (linear RGB, each channel in [0, 1]); multiplied by the texture.
+    /// Base colour (linear RGB, each channel in [0, 1]), multiplied by the texture: the
+    /// diffuse albedo ρ of a dielectric, the Fresnel reflectance at normal incidence of a
+    /// metal.
     pub base_color: Rgb,
     /// Optional base-colour texture (linear after decoding), multiplied into `base_color`.
     pub base_color_texture: Option<TextureId>,
     /// Emitted radiance Le [W/(m²·sr)], from the front face only.
     pub emission: Rgb,
-    /// 0 = perfectly diffuse (all of illume's transport today), 1 = mirror-like.
-    /// Read from glTF `1 − roughness` / OBJ `Ns`; not yet used by any technique.
-    pub glossiness: f32,
+    /// 0 = dielectric, 1 = metal (glTF `metallicFactor`), in [0, 1].
+    pub metallic: f32,
+    /// Perceptual roughness (glTF `roughnessFactor`), in [0, 1]; GGX α = roughness².
+    pub roughness: f32,
     /// When false (glTF `doubleSided: false`), a back face neither reflects nor emits:
     /// light arriving there is absorbed.
     pub double_sided: bool,
@@ -252,13 +256,19 @@ impl Default for Material {
             base_color: Rgb::splat(0.8),
             base_color_texture: None,
             emission: Rgb::ZERO,
-            glossiness: 0.0,
+            metallic: 0.0,
+            roughness: 1.0,
             double_sided: true,
         }
     }
 }
 
 impl Material {
+    /// True when the material is exactly Lambertian (metallic 0, roughness 1).
+    pub fn is_lambertian(&self) -> bool {
+        self.metallic <= 0.0 && self.roughness >= 1.0
+    }
+
     /// True when the material emits light.
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
@@ -522,6 +532,14 @@ impl Scene {
                     "material {i} '{}': colour or emission not finite or negative",
                     m.name
                 ));
+            }
+            for (field, v) in [("metallic", m.metallic), ("roughness", m.roughness)] {
+                if !(0.0..=1.0).contains(&v) {
+                    return Err(format!(
+                        "material {i} '{}': {field} {v} outside [0, 1]",
+                        m.name
+                    ));
+                }
             }
             if let Some(t) = m.base_color_texture
                 && t.index() >= self.textures.len()

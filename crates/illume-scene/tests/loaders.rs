@@ -172,10 +172,7 @@ fn cornell_original_bounds_lights_and_negative_indices() {
         .find(|m| m.name == "light")
         .expect("material 'light'");
     assert_eq!(light.emission, Vec3::new(17.0, 12.0, 4.0));
-    assert!(
-        (light.glossiness - 0.01).abs() < 1e-6,
-        "Ns 10 → glossiness 0.01"
-    );
+    assert!(light.is_lambertian(), "OBJ materials are Lambertian (Ks not mapped yet)");
     let left = s.materials.iter().find(|m| m.name == "leftWall").unwrap();
     assert_close(
         left.base_color,
@@ -497,7 +494,9 @@ fn cornell_spot_matches_its_json() {
     // Materials by name.
     let blue = s.materials.iter().find(|m| m.name == "blue").unwrap();
     assert_close(blue.base_color, Vec3::new(0.2, 0.3, 0.75), 1e-6, "blue");
-    assert_eq!(blue.glossiness, 0.0);
+    // The file gives metallicFactor 0 and roughnessFactor 1: exactly Lambertian.
+    assert_eq!((blue.metallic, blue.roughness), (0.0, 1.0));
+    assert!(blue.is_lambertian());
     // Animations: names, durations, dynamic flags.
     let names: Vec<&str> = s.animations.iter().map(|a| a.name.as_str()).collect();
     assert_eq!(names, ["move", "move_sphere", "move_light"]);
@@ -999,6 +998,26 @@ fn gltf_bad_json_extension_accessor_and_mode() {
 }
 
 #[test]
+fn gltf_metallic_roughness_factors() {
+    let (dir, doc) = cube_copy("gltf_mr");
+    let mut d = doc.clone();
+    // Absent factors default to 1 (a rough metal), as the glTF spec says.
+    d["materials"][1]["pbrMetallicRoughness"] = json!({"baseColorFactor": [1, 0.5, 0.2, 1]});
+    d["materials"][0]["pbrMetallicRoughness"]["metallicFactor"] = json!(0.25);
+    d["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = json!(0.4);
+    let s = load_scene(&write_json(&dir, "mr.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    let by = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap().clone();
+    let (white, orange) = (by("white"), by("orange"));
+    assert_eq!((orange.metallic, orange.roughness), (1.0, 1.0));
+    assert!(!orange.is_lambertian());
+    assert_eq!((white.metallic, white.roughness), (0.25, 0.4));
+    // Out of range: an error naming the material and the field.
+    d["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = json!(1.5);
+    let msg = load_err(&write_json(&dir, "mr_bad.gltf", &d));
+    assert_contains(&msg, &["material 0", "roughnessFactor 1.5"]);
+}
+
+#[test]
 fn gltf_missing_texture_and_data_uri_texture() {
     let (dir, doc) = cube_copy("gltf_tex");
     let mut d = doc.clone();
@@ -1144,7 +1163,7 @@ fn obj_materials_textures_and_missing_files() {
     let m = s.materials.iter().find(|m| m.name == "lamp").unwrap();
     assert_eq!(m.emission, Vec3::new(4.0, 3.0, 2.0));
     assert_eq!(m.base_color, Vec3::splat(0.5));
-    assert!((m.glossiness - 0.25).abs() < 1e-6);
+    assert!(m.is_lambertian());
     let t = &s.textures[m.base_color_texture.unwrap().index()];
     assert_eq!(t.wrap_u, illume_scene::WrapMode::Clamp);
     assert_eq!((t.width, t.height), (1, 2));

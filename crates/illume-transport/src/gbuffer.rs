@@ -175,6 +175,8 @@ pub(crate) struct TriangleSetup {
     reflects: bool,
     /// Albedo when untextured (the texture is sampled per pixel otherwise).
     albedo: Rgb,
+    metallic: f32,
+    roughness: f32,
     textured: bool,
     emission: Rgb,
     /// False for degenerate triangles (pixels then take a BVH ray).
@@ -248,6 +250,8 @@ impl<'a> PrimarySurfaces<'a> {
             front_face,
             reflects,
             albedo: if reflects { mat.base_color } else { Rgb::ZERO },
+            metallic: mat.metallic,
+            roughness: mat.roughness,
             textured,
             emission: if reflects { mat.emission } else { Rgb::ZERO },
             usable,
@@ -330,6 +334,8 @@ impl<'a> PrimarySurfaces<'a> {
                 barycentrics: Vec2::new(b1, b2),
                 material: tri.material,
                 albedo,
+                metallic: tri.metallic,
+                roughness: tri.roughness,
                 emission: tri.emission,
                 front_face: tri.front_face,
                 reflects: tri.reflects,

@@ -7,7 +7,7 @@
 use crate::bsdf::{lambert_pdf, lambert_sample, russian_roulette};
 use crate::{SurfaceHit, World};
 use illume_core::sampling::SampleStream;
-use illume_core::{INV_PI, Ray, Rgb};
+use illume_core::{Frame, INV_PI, Ray, Rgb, Vec3};
 
 /// Path length settings for [`radiance`] and [`continue_path`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,39 +74,56 @@ pub fn radiance(
                 emitted: hit.emission,
                 ..Default::default()
             };
-            continue_path(world, hit, sampler, settings, &mut out);
+            continue_path(world, hit, -ray.dir, sampler, settings, &mut out);
             out
         }
         None => PathRadiance::default(),
     }
 }
 
-/// Radiance leaving `first` towards where its ray came from, reflected one or more times
-/// (`direct` and `indirect`; `first`'s own emission is not added).
+/// Radiance leaving `first` towards `wo` (the unit direction back along the ray that
+/// found it), reflected one or more times (`direct` and `indirect`; `first`'s own
+/// emission is not added). Each vertex samples the light (next-event estimation) and its
+/// BRDF (the glTF metallic-roughness model, [`crate::metal_rough`]; exactly the
+/// Lambertian kernel with its cosine sampling for Lambertian surfaces), combined by the
+/// power heuristic.
 pub fn continue_path(
     world: &World,
     first: SurfaceHit,
+    wo: Vec3,
     sampler: &mut impl SampleStream,
     settings: &PathSettings,
     out: &mut PathRadiance,
 ) {
     let mut hit = first;
+    let mut wo = wo;
     let mut throughput = Rgb::ONE;
     // `bounces` = reflections so far on this path before the current vertex reflects.
     let mut bounces = 0u32;
     loop {
-        if !hit.reflects || hit.albedo == Rgb::ZERO {
+        if hit.is_black() {
             return;
         }
         let n = hit.facing_normal();
         let ng = hit.facing_geometric_normal();
-        let f = hit.albedo * INV_PI;
+        // Lambertian vertices take exactly the Lambertian kernel (same sample use, same
+        // arithmetic: images of Lambertian scenes do not depend on the glossy code).
+        let frame = (!hit.is_lambertian()).then(|| Frame::from_normal(n));
+        let brdf = hit.brdf();
+        let f_lambert = hit.albedo * INV_PI;
         // Next-event estimation: light reaching this vertex directly.
         if let Some(ls) = world.lights.sample_incident(hit.position, sampler) {
             let cos = n.dot(ls.wi);
             if cos > 0.0 && ng.dot(ls.wi) > 0.0 && world.unoccluded(&hit, &ls) {
+                let (f, bsdf_pdf) = match &frame {
+                    None => (f_lambert, lambert_pdf(n, ls.wi)),
+                    Some(fr) => {
+                        let (lo, li) = (fr.to_local(wo), fr.to_local(ls.wi));
+                        (brdf.eval(lo, li), brdf.pdf(lo, li))
+                    }
+                };
                 let w = if ls.pdf > 0.0 {
-                    power_heuristic(ls.pdf, lambert_pdf(n, ls.wi))
+                    power_heuristic(ls.pdf, bsdf_pdf)
                 } else {
                     1.0
                 };
@@ -115,11 +132,23 @@ pub fn continue_path(
         }
         // BSDF sampling.
         let u_rr = sampler.next_1d();
-        let s = lambert_sample(hit.albedo, n, sampler.next_2d());
-        if s.wi.dot(ng) <= 0.0 {
+        let (wi, weight, pdf) = match &frame {
+            None => {
+                let s = lambert_sample(hit.albedo, n, sampler.next_2d());
+                (s.wi, s.weight, s.pdf)
+            }
+            Some(fr) => {
+                let u_lobe = sampler.next_1d();
+                let Some(s) = brdf.sample(fr.to_local(wo), u_lobe, sampler.next_2d()) else {
+                    return;
+                };
+                (fr.to_world(s.wi).normalize(), s.weight, s.pdf)
+            }
+        };
+        if wi.dot(ng) <= 0.0 {
             return;
         }
-        throughput *= s.weight;
+        throughput *= weight;
         bounces += 1;
         if bounces >= settings.max_depth {
             return;
@@ -130,7 +159,7 @@ pub fn continue_path(
                 None => return,
             }
         }
-        let ray = Ray::new(hit.spawn_origin(s.wi), s.wi);
+        let ray = Ray::new(hit.spawn_origin(wi), wi);
         let Some(h) = world.tracer.intersect(&ray, illume_scene::MASK_DEFAULT) else {
             return;
         };
@@ -142,9 +171,10 @@ pub fn continue_path(
                 hit.position,
                 next.position,
             );
-            let w = power_heuristic(s.pdf, light_pdf);
+            let w = power_heuristic(pdf, light_pdf);
             out.add(bounces, throughput * next.emission * w);
         }
+        wo = -wi;
         hit = next;
     }
 }

@@ -2,7 +2,8 @@
 
 use crate::hit_tables::HitTables;
 use illume_accel::{Hit, HitGeometry};
-use illume_core::{Ray, Rgb, Vec2, Vec3, offset_ray_origin, transform_normal};
+use crate::metal_rough::MetalRough;
+use illume_core::{Frame, INV_PI, Ray, Rgb, Vec2, Vec3, offset_ray_origin, transform_normal};
 use illume_scene::{InstanceId, MaterialId, MeshId, Scene};
 
 /// `normal` turned to the side a ray arrived from (`front_face`: the front).
@@ -34,8 +35,13 @@ pub struct SurfaceHit {
     pub barycentrics: Vec2,
     /// Material of the triangle.
     pub material: MaterialId,
-    /// Diffuse albedo ρ at the hit (texture × factor).
+    /// Base colour at the hit (texture × factor): the diffuse albedo ρ of a Lambertian
+    /// surface.
     pub albedo: Rgb,
+    /// Metalness at the hit (0 = dielectric, 1 = metal).
+    pub metallic: f32,
+    /// Perceptual roughness at the hit (GGX α = roughness²).
+    pub roughness: f32,
     /// Emitted radiance towards the ray origin (zero from a one-sided emitter's back).
     pub emission: Rgb,
     /// True when the ray arrived on the front face.
@@ -98,11 +104,49 @@ impl SurfaceHit {
             barycentrics: hit.barycentrics,
             material,
             albedo,
+            metallic: mat.metallic,
+            roughness: mat.roughness,
             emission,
             front_face,
             reflects,
             t: hit.t,
         }
+    }
+
+    /// True when the surface reflects as a Lambertian one (metallic 0, roughness 1): its
+    /// BRDF is exactly `albedo/π`.
+    #[inline]
+    pub fn is_lambertian(&self) -> bool {
+        self.metallic <= 0.0 && self.roughness >= 1.0
+    }
+
+    /// True when the surface reflects nothing: it does not reflect on this side, or it
+    /// is a black Lambertian one (a black dielectric still has its specular layer).
+    #[inline]
+    pub fn is_black(&self) -> bool {
+        !self.reflects || (self.albedo == Rgb::ZERO && self.is_lambertian())
+    }
+
+    /// The BRDF at the hit, for directions in the frame of [`SurfaceHit::facing_normal`].
+    #[inline]
+    pub fn brdf(&self) -> MetalRough {
+        MetalRough {
+            base_color: self.albedo,
+            metallic: self.metallic,
+            roughness: self.roughness,
+        }
+    }
+
+    /// `f(wo, wi)` \[1/sr\] for world directions `wo` (towards the viewer) and `wi`
+    /// (towards the light), both leaving the surface; exactly `albedo/π` for a
+    /// Lambertian surface whatever the directions (the caller checks the hemisphere).
+    #[inline]
+    pub fn eval_brdf(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if self.is_lambertian() {
+            return self.albedo * INV_PI;
+        }
+        let frame = Frame::from_normal(self.facing_normal());
+        self.brdf().eval(frame.to_local(wo), frame.to_local(wi))
     }
 
     /// The normal on the side the ray arrived from (shading normal, flipped for back-face

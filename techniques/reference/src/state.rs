@@ -104,7 +104,7 @@ impl Technique for ReferenceTechnique {
                         i as u64,
                     );
                     let mut out = PathRadiance::default();
-                    continue_path(world, px.hit, &mut rng, &path, &mut out);
+                    continue_path(world, px.hit, px.to_camera, &mut rng, &path, &mut out);
                     for (a, v) in acc.iter_mut().zip(out.indirect.to_array()) {
                         *a += f64::from(v);
                     }

@@ -20,10 +20,13 @@
 //!   are concatenated with per-triangle materials; only `TRIANGLES` primitives, indexed
 //!   or not; `POSITION`, `NORMAL` (dropped with a warning when only some primitives have
 //!   it) and `TEXCOORD_0` (zero-filled for primitives without it);
-//! * materials: albedo = `baseColorFactor` rgb (× `baseColorTexture`, decoded
-//!   sRGB → linear, wrap modes from its sampler), emitted radiance = `emissiveFactor` ×
-//!   `KHR_materials_emissive_strength`, glossiness = 1 − `roughnessFactor`,
-//!   `doubleSided`; primitives without a material get a grey (0.8) one-sided default;
+//! * materials (metallic-roughness): base colour = `baseColorFactor` rgb (×
+//!   `baseColorTexture`, decoded sRGB → linear, wrap modes from its sampler),
+//!   `metallicFactor` and `roughnessFactor` (default 1 each, as the spec; outside
+//!   [0, 1] is an error), emitted radiance = `emissiveFactor` ×
+//!   `KHR_materials_emissive_strength`, `doubleSided`; `metallicRoughnessTexture` is not
+//!   read yet (a warning); primitives without a material get a grey (0.8) Lambertian
+//!   default;
 //! * camera: the lowest-index scene node with a perspective camera (`yfov`); without
 //!   one, [`super::default_camera_for_bounds`];
 //! * `KHR_lights_punctual`: point/spot intensity × colour = radiant intensity [W/sr],
@@ -621,6 +624,19 @@ impl Ctx<'_> {
                 }
                 None => None,
             };
+            // glTF's defaults are 1 for both factors (a rough metal), as the spec says.
+            let (metallic, roughness) = (pbr.metallic_factor.0, pbr.roughness_factor.0);
+            for (field, v) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
+                if !(0.0..=1.0).contains(&v) {
+                    return Err(self.malformed(
+                        format!("material {i} '{name}'"),
+                        format!("{field} {v} is not in [0, 1]"),
+                    ));
+                }
+            }
+            if pbr.metallic_roughness_texture.is_some() {
+                self.warn(format!("material {i} '{name}': metallicRoughnessTexture not read yet; the factors are used"));
+            }
             if m.emissive_texture.is_some() {
                 self.warn(format!("material {i} '{name}': emissiveTexture ignored (emission is emissiveFactor × strength)"));
             }
@@ -629,7 +645,8 @@ impl Ctx<'_> {
                 base_color: Rgb::new(r, g, b),
                 base_color_texture,
                 emission: Rgb::from(m.emissive_factor.0) * strength,
-                glossiness: (1.0 - pbr.roughness_factor.0).clamp(0.0, 1.0),
+                metallic,
+                roughness,
                 double_sided: m.double_sided,
             };
             let id = self.builder.material(material);

@@ -17,7 +17,8 @@
 //!   materials become the default material), `usemtl` (an unknown name is a warning and
 //!   the default material);
 //! * MTL: `newmtl`, `Kd` (albedo, clamped to [0, 1]), `Ke` (emitted radiance
-//!   [W/(m²·sr)]), `Ns` (glossiness = clamp(Ns / 1000, 0, 1)), `map_Kd` (an sRGB image
+//!   [W/(m²·sr)]), `Ns` (read and checked; OBJ materials are Lambertian until `Ks`/`Ns`
+//!   are mapped onto the metallic-roughness model), `map_Kd` (an sRGB image
 //!   relative to the MTL's folder, multiplied by `Kd` as the MTL spec says; `-clamp on`
 //!   selects clamped wrapping, other options are skipped). **A `map_Kd` file that cannot
 //!   be read or decoded is an error** (not a warning: a scene silently rendered without
@@ -351,8 +352,9 @@ impl ObjReader<'_> {
                     m.emission = c.max(Rgb::ZERO);
                 }
                 "ns" => {
-                    let [ns] = floats::<1>(&mut tokens, 1, "Ns").map_err(|e| err(n, e))?;
-                    m.glossiness = (ns / 1000.0).clamp(0.0, 1.0);
+                    // Read and checked; OBJ materials stay Lambertian until `Ks` is
+                    // mapped onto the metallic-roughness model with it.
+                    let [_ns] = floats::<1>(&mut tokens, 1, "Ns").map_err(|e| err(n, e))?;
                 }
                 "map_kd" => {
                     let (file, wrap) = texture_file(tokens);
