@@ -66,6 +66,20 @@ pub struct SetupArgs {
     /// Point the camera looks at, X,Y,Z [m] (with --look-from).
     #[arg(long, value_parser = parse_point, requires = "look_from", allow_hyphen_values = true)]
     pub look_at: Option<Vec3>,
+    /// A uniform sky of radiance R,G,B [W/(m²·sr)] (linear, each ≥ 0), replacing the
+    /// scene's: escaping rays see it and it lights the scene.
+    #[arg(long, value_parser = parse_radiance, value_name = "R,G,B")]
+    pub sky: Option<Vec3>,
+}
+
+/// `R,G,B` as a radiance: three finite numbers ≥ 0.
+fn parse_radiance(s: &str) -> Result<Vec3, String> {
+    let v =
+        parse_point(s).map_err(|_| format!("'{s}': expected three finite numbers R,G,B ≥ 0"))?;
+    if v.min_element() < 0.0 {
+        return Err(format!("'{s}': radiance must be ≥ 0"));
+    }
+    Ok(v)
 }
 
 /// `X,Y,Z` as a point.
@@ -116,10 +130,13 @@ impl SetupArgs {
         Ok(config)
     }
 
-    /// Applies --look-from/--look-at to a loaded scene.
+    /// Applies --look-from/--look-at and --sky to a loaded scene.
     pub fn place_camera(&self, scene: &mut illume_scene::Scene) -> Result<()> {
         if let (Some(eye), Some(target)) = (self.look_from, self.look_at) {
             illume_scene::builtin::look_from(scene, eye, target).map_err(anyhow::Error::msg)?;
+        }
+        if let Some(radiance) = self.sky {
+            scene.sky = Some(illume_scene::Sky::Uniform { radiance });
         }
         Ok(())
     }

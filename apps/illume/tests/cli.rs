@@ -359,3 +359,44 @@ fn help_lists_every_technique_and_its_presets() {
         );
     }
 }
+
+/// `--sky R,G,B` puts a uniform sky around any scene: light through the open Cornell
+/// box's front makes it brighter and bluer (the sky is blue); bad values are named.
+#[test]
+fn sky_flag_lights_the_scene_and_is_seen_behind_it() {
+    let dir = scratch("sky");
+    let render = |extra: &[&str], name: &str| {
+        let exr = dir.join(name);
+        let mut args = vec![
+            "render",
+            "builtin:cornell-spot",
+            "--technique",
+            "reference",
+            "--spp",
+            "4",
+            "--width",
+            "24",
+            "--height",
+            "18",
+            "-o",
+            path(&exr),
+        ];
+        args.extend_from_slice(extra);
+        ok(&illume(&args));
+        RgbImage::read(&exr).unwrap()
+    };
+    let dark = render(&[], "dark.exr");
+    let lit = render(&["--sky", "0.5,1,2"], "lit.exr");
+    assert!(
+        lit.mean().x > dark.mean().x && lit.mean().z > lit.mean().x,
+        "{} → {}",
+        dark.mean(),
+        lit.mean()
+    );
+    for bad in ["1,-1,0", "1,2", "nan,1,1"] {
+        let out = illume(&["render", "builtin:cornell-spot", "--sky", bad]);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--sky") && err.contains(bad), "{err}");
+    }
+}

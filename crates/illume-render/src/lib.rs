@@ -20,7 +20,7 @@
 //! ```
 
 use illume_core::image::RgbImage;
-use illume_core::sampling::{Pcg32, mix64};
+use illume_core::sampling::{Pcg32, SampleStream, mix64};
 use illume_core::{INV_PI, Rgb, Vec2};
 use illume_transport::{
     GBuffer, GBufferPixel, ShadowMapError, ShadowMapSettings, ShadowMaps, Technique, World,
@@ -272,6 +272,10 @@ pub fn direct_light_with(
 ) -> RgbImage {
     // Jobs of a few rows: per-pixel work is ~20 ns, so finer splitting costs more in
     // scheduling than it gains in balance.
+    // Pixels that see nothing see the sky (black without one).
+    let camera = world.lights.sky().map(|_| {
+        illume_transport::CameraRays::new(&world.scene.camera, gbuffer.width, gbuffer.height)
+    });
     let pixels: Vec<Rgb> = gbuffer
         .pixels
         .par_iter()
@@ -282,7 +286,15 @@ pub fn direct_light_with(
                 let mut rng = Pcg32::new(seed, i as u64);
                 px.hit.emission + direct_at_with(world, px, shadows, area_light_samples, &mut rng)
             }
-            None => Rgb::ZERO,
+            None => match &camera {
+                Some(c) => {
+                    let (x, y) = (i as u32 % gbuffer.width, i as u32 / gbuffer.width);
+                    world
+                        .lights
+                        .sky_radiance(c.ray(x, y, Vec2::splat(0.5)).dir)
+                }
+                None => Rgb::ZERO,
+            },
         })
         .collect();
     RgbImage::from_vec(gbuffer.width, gbuffer.height, pixels).expect("one value per pixel")
@@ -356,6 +368,18 @@ pub fn direct_at_with(
             }
         }
         sum += area / area_light_samples as f32;
+    }
+    // The sky: cosine-weighted samples about the normal with shadow rays to infinity
+    // (as many as area-light samples, at least one).
+    if lights.sky().is_some() {
+        let samples = area_light_samples.max(1);
+        let mut sky = Rgb::ZERO;
+        for _ in 0..samples {
+            if let Some(s) = lights.sample_sky(n, rng.next_2d()) {
+                sky += shade(s, None);
+            }
+        }
+        sum += sky / samples as f32;
     }
     sum
 }

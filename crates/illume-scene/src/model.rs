@@ -408,6 +408,42 @@ pub struct Instance {
     pub mask: u32,
 }
 
+/// Light arriving from every direction in which a ray leaves the scene (below the
+/// horizon too): escaping rays see it, surfaces are lit by it, photons are emitted from
+/// it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Sky {
+    /// The same radiance [W/(m²·sr)] from every direction.
+    Uniform {
+        /// Radiance per channel, finite and ≥ 0.
+        radiance: Rgb,
+    },
+}
+
+impl Sky {
+    /// Radiance arriving from direction `-dir` (seen looking along the unit `dir`).
+    #[inline]
+    pub fn radiance(&self, _dir: Vec3) -> Rgb {
+        match self {
+            Sky::Uniform { radiance } => *radiance,
+        }
+    }
+
+    /// Checks the values; the message names the field.
+    pub fn validate(&self) -> Result<(), String> {
+        match self {
+            Sky::Uniform { radiance } => {
+                if !radiance.is_finite() || radiance.min_element() < 0.0 {
+                    return Err(format!(
+                        "sky radiance {radiance} must be three finite numbers ≥ 0"
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A whole scene at one time.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
@@ -426,6 +462,8 @@ pub struct Scene {
     pub instances: Vec<Instance>,
     /// Analytic lights.
     pub lights: Vec<Light>,
+    /// The sky, if any: what rays leaving the scene see (none: black).
+    pub sky: Option<Sky>,
     /// The camera used for rendering.
     pub camera: Camera,
     /// Animations; [`Scene::active_animation`] selects the one that plays.
@@ -506,10 +544,24 @@ impl Scene {
         total
     }
 
-    /// Total power of all lights \[W\] per channel, analytic and emissive.
+    /// Total power of all lights \[W\] per channel, analytic, emissive and the sky.
     pub fn total_power(&self) -> Rgb {
         let r = self.bounds().bounding_radius();
-        self.lights.iter().map(|l| l.power(r)).sum::<Rgb>() + self.emissive_power()
+        self.lights.iter().map(|l| l.power(r)).sum::<Rgb>()
+            + self.emissive_power()
+            + self.sky_power(r)
+    }
+
+    /// Power \[W\] per channel the sky sends through the scene's bounding sphere of
+    /// radius `scene_radius`: radiance L from every direction through a disk of area πR²
+    /// facing it, `L·4π·πR²` for a uniform sky; 0 without a sky.
+    pub fn sky_power(&self, scene_radius: f32) -> Rgb {
+        match &self.sky {
+            Some(Sky::Uniform { radiance }) => {
+                *radiance * (4.0 * PI * PI * scene_radius * scene_radius)
+            }
+            None => Rgb::ZERO,
+        }
     }
 
     /// Mean-channel power of everything that emits, for choosing among lights.
@@ -519,6 +571,9 @@ impl Scene {
 
     /// Checks every cross-reference and value; the message names the offending item.
     pub fn validate(&self) -> Result<(), String> {
+        if let Some(sky) = &self.sky {
+            sky.validate()?;
+        }
         for (i, m) in self.meshes.iter().enumerate() {
             m.validate(self.materials.len())
                 .map_err(|e| format!("mesh {i} '{}': {e}", m.name))?;

@@ -172,7 +172,10 @@ fn cornell_original_bounds_lights_and_negative_indices() {
         .find(|m| m.name == "light")
         .expect("material 'light'");
     assert_eq!(light.emission, Vec3::new(17.0, 12.0, 4.0));
-    assert!(light.is_lambertian(), "OBJ materials are Lambertian (Ks not mapped yet)");
+    assert!(
+        light.is_lambertian(),
+        "OBJ materials are Lambertian (Ks not mapped yet)"
+    );
     let left = s.materials.iter().find(|m| m.name == "leftWall").unwrap();
     assert_close(
         left.base_color,
@@ -1015,6 +1018,34 @@ fn gltf_metallic_roughness_factors() {
     d["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = json!(1.5);
     let msg = load_err(&write_json(&dir, "mr_bad.gltf", &d));
     assert_contains(&msg, &["material 0", "roughnessFactor 1.5"]);
+}
+
+#[test]
+fn gltf_sky_in_root_extras() {
+    let (dir, doc) = cube_copy("gltf_sky");
+    assert!(load_scene(&write_json(&dir, "no_sky.gltf", &doc)).unwrap().sky.is_none());
+    let mut d = doc.clone();
+    d["extras"] = json!({"illume_sky": {"radiance": [0.5, 1, 2]}, "other": 3});
+    let s = load_scene(&write_json(&dir, "sky.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        s.sky,
+        Some(illume_scene::Sky::Uniform {
+            radiance: Vec3::new(0.5, 1.0, 2.0)
+        })
+    );
+    for (bad, words) in [
+        (json!({"radiance": [1, -1, 0]}), vec!["extras.illume_sky.radiance", "≥ 0"]),
+        (json!({"radiance": [1, 2]}), vec!["extras.illume_sky.radiance"]),
+        (json!({"radiance": "blue"}), vec!["extras.illume_sky.radiance"]),
+        (json!({"radiance": [1, 1, 1], "colour": 2}), vec!["unknown key 'colour'"]),
+        (json!({"equirect": "sky.exr"}), vec!["not supported yet"]),
+        (json!(7), vec!["must be an object"]),
+    ] {
+        d["extras"] = json!({ "illume_sky": bad });
+        let msg = load_err(&write_json(&dir, "bad_sky.gltf", &d));
+        assert_contains(&msg, &words);
+        assert!(msg.contains("bad_sky.gltf"), "{msg}");
+    }
 }
 
 #[test]

@@ -7,6 +7,12 @@
 //! The selection weight of an entry is the channel mean of its power:
 //! point 4πI, spot I·Ω_spot (glTF falloff integrated), directional E·πR² (R = scene
 //! bounding-sphere radius), triangle πLeA (×2 when double-sided).
+//!
+//! The sky ([`illume_scene::Sky`]) is not among the entries that next-event estimation
+//! selects: it is sampled on its own ([`LightSet::sample_sky`], cosine-weighted about the
+//! surface normal, so an unoccluded Lambertian surface under a uniform sky gets exactly
+//! ρ·L from every sample) and seen by escaping rays ([`LightSet::sky_radiance`]). Photon
+//! emission selects it by power (L·4π·πR²) beside the other emitters.
 
 use illume_core::sampling::{
     AliasTable, SampleStream, concentric_disk, cosine_hemisphere, uniform_sphere, uniform_triangle,
@@ -111,6 +117,13 @@ pub struct LightSet {
     /// direction, triangle front normal; unused for points), built once rather than per
     /// photon.
     emission_frames: Vec<Frame>,
+    /// The scene's sky, if any.
+    sky: Option<illume_scene::Sky>,
+    /// The sky's power (photon emission), zero without a sky.
+    sky_power: Rgb,
+    /// Photon-emission selection over the emitters then the sky (only with a sky; the
+    /// NEE table serves emission otherwise).
+    emission_table: Option<AliasTable>,
 }
 
 impl LightSet {
@@ -195,7 +208,13 @@ impl LightSet {
                 _ => None,
             })
             .collect();
-        let total_power = powers.iter().copied().sum();
+        let sky_power = scene.sky_power(scene_radius);
+        let total_power = powers.iter().copied().sum::<Rgb>() + sky_power;
+        let emission_table = scene.sky.as_ref().and_then(|_| {
+            let mut weights: Vec<f32> = powers.iter().map(|p| channel_mean(*p)).collect();
+            weights.push(channel_mean(sky_power));
+            AliasTable::new(&weights)
+        });
         let analytic_count = scene.lights.len();
         let area_table = AliasTable::new(
             &powers[analytic_count..]
@@ -225,7 +244,52 @@ impl LightSet {
             total_power,
             analytic_count,
             area_table,
+            sky: scene.sky.clone(),
+            sky_power,
+            emission_table,
         }
+    }
+
+    /// The sky, if the scene has one.
+    pub fn sky(&self) -> Option<&illume_scene::Sky> {
+        self.sky.as_ref()
+    }
+
+    /// Radiance a ray travelling along unit `dir` sees when it leaves the scene (zero
+    /// without a sky).
+    #[inline]
+    pub fn sky_radiance(&self, dir: Vec3) -> Rgb {
+        self.sky.as_ref().map_or(Rgb::ZERO, |s| s.radiance(dir))
+    }
+
+    /// Samples the sky for next-event estimation at a point with unit normal `normal`
+    /// (the side light arrives on): a cosine-weighted direction about it, pdf cosθ/π,
+    /// weight L/pdf; `None` without a sky or for a grazing sample. Visibility (a ray to
+    /// infinity) is the caller's job.
+    pub fn sample_sky(&self, normal: Vec3, u: illume_core::Vec2) -> Option<LightSample> {
+        let sky = self.sky.as_ref()?;
+        let local = cosine_hemisphere(u);
+        if local.z <= 0.0 {
+            return None;
+        }
+        let wi = Frame::from_normal(normal).to_world(local).normalize();
+        let pdf = local.z * std::f32::consts::FRAC_1_PI;
+        Some(LightSample {
+            wi,
+            distance: f32::INFINITY,
+            weight: sky.radiance(-wi) / pdf,
+            pdf,
+        })
+    }
+
+    /// Solid-angle pdf of [`LightSet::sample_sky`] choosing `wi` at a point with unit
+    /// `normal` (for MIS when a BSDF-sampled ray escapes).
+    #[inline]
+    pub fn sky_pdf(&self, normal: Vec3, wi: Vec3) -> f32 {
+        if self.sky.is_none() {
+            return 0.0;
+        }
+        normal.dot(wi).max(0.0) * std::f32::consts::FRAC_1_PI
     }
 
     /// The emitters.
@@ -243,9 +307,9 @@ impl LightSet {
         self.total_power
     }
 
-    /// True when nothing emits.
+    /// True when nothing emits (no emitter and no sky).
     pub fn is_empty(&self) -> bool {
-        self.table.is_none()
+        self.table.is_none() && self.emission_table.is_none()
     }
 
     /// Probability that emitter `i` is selected.
@@ -428,9 +492,25 @@ impl LightSet {
     /// total power; photons from point, spot and area lights all carry the same power
     /// (importance sampling matches each emitter's profile exactly).
     pub fn sample_emission(&self, sampler: &mut impl SampleStream) -> Option<EmissionSample> {
-        let (i, pmf) = self.select(sampler.next_1d())?;
+        let (i, pmf) = match &self.emission_table {
+            Some(t) => t.sample(sampler.next_1d()),
+            None => self.select(sampler.next_1d())?,
+        };
         let u_pos = sampler.next_2d();
         let u_dir = sampler.next_2d();
+        if i == self.emitters.len() {
+            // The sky: a direction uniform over the sphere, an origin uniform on the disk
+            // of the scene's bounding sphere facing it, outside the scene.
+            let dir = uniform_sphere(u_dir);
+            let f = Frame::from_normal(dir);
+            let d = concentric_disk(u_pos) * self.scene_radius;
+            let origin =
+                self.scene_center - dir * (2.0 * self.scene_radius) + f.s * d.x + f.t * d.y;
+            return Some(EmissionSample {
+                ray: Ray::new(origin, dir),
+                flux: self.sky_power / pmf,
+            });
+        }
         let power = self.powers[i];
         let ray = match &self.emitters[i] {
             Emitter::Point { position, .. } => Ray::new(*position, uniform_sphere(u_dir)),

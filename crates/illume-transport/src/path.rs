@@ -77,7 +77,10 @@ pub fn radiance(
             continue_path(world, hit, -ray.dir, sampler, settings, &mut out);
             out
         }
-        None => PathRadiance::default(),
+        None => PathRadiance {
+            emitted: world.lights.sky_radiance(ray.dir),
+            ..Default::default()
+        },
     }
 }
 
@@ -130,6 +133,23 @@ pub fn continue_path(
                 out.add(bounces + 1, throughput * f * ls.weight * (cos * w));
             }
         }
+        // The sky, sampled on its own (cosine-weighted about the normal), MIS against
+        // BSDF sampling. Scenes without a sky draw no numbers here.
+        let sky = world.lights.sky().is_some();
+        if sky && let Some(ls) = world.lights.sample_sky(n, sampler.next_2d()) {
+            let cos = n.dot(ls.wi);
+            if cos > 0.0 && ng.dot(ls.wi) > 0.0 && world.unoccluded(&hit, &ls) {
+                let (f, bsdf_pdf) = match &frame {
+                    None => (f_lambert, lambert_pdf(n, ls.wi)),
+                    Some(fr) => {
+                        let (lo, li) = (fr.to_local(wo), fr.to_local(ls.wi));
+                        (brdf.eval(lo, li), brdf.pdf(lo, li))
+                    }
+                };
+                let w = power_heuristic(ls.pdf, bsdf_pdf);
+                out.add(bounces + 1, throughput * f * ls.weight * (cos * w));
+            }
+        }
         // BSDF sampling.
         let u_rr = sampler.next_1d();
         let (wi, weight, pdf) = match &frame {
@@ -161,6 +181,10 @@ pub fn continue_path(
         }
         let ray = Ray::new(hit.spawn_origin(wi), wi);
         let Some(h) = world.tracer.intersect(&ray, illume_scene::MASK_DEFAULT) else {
+            if sky {
+                let w = power_heuristic(pdf, world.lights.sky_pdf(n, wi));
+                out.add(bounces, throughput * world.lights.sky_radiance(wi) * w);
+            }
             return;
         };
         let next = world.surface(&ray, &h);

@@ -46,7 +46,7 @@ use super::{LoadError, decode_srgb_texture, default_camera_for_bounds, read_file
 use crate::animation::{Animation, Channel, ChannelValues, Interpolation, Trs};
 use crate::builtin::SceneBuilder;
 use crate::model::{
-    LightKind, Material, MaterialId, Mesh, MeshId, NodeId, Scene, TextureId, WrapMode,
+    LightKind, Material, MaterialId, Mesh, MeshId, NodeId, Scene, Sky, TextureId, WrapMode,
 };
 use ::gltf::json;
 use illume_core::{Affine3A, Mat4, Quat, Rgb, Vec2, Vec3, Vec4};
@@ -155,7 +155,61 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         meshes: HashMap::new(),
         camera_set: false,
     };
-    ctx.convert()
+    let sky = sky_from_extras(path, root)?;
+    let mut scene = ctx.convert()?;
+    scene.sky = sky;
+    Ok(scene)
+}
+
+/// The sky declared in the document's root `extras` (no standard glTF extension holds
+/// a renderable sky): `{"illume_sky": {"radiance": [R, G, B]}}` [W/(m²·sr)], linear.
+/// Anything else under `illume_sky` is an error naming the field.
+fn sky_from_extras(path: &Path, root: &json::Root) -> Result<Option<Sky>, LoadError> {
+    let Some(raw) = &root.extras else {
+        return Ok(None);
+    };
+    let place = "extras.illume_sky";
+    let value: serde_json::Value = serde_json::from_str(raw.get())
+        .map_err(|e| LoadError::malformed(path, "extras", e.to_string()))?;
+    let Some(sky) = value.get("illume_sky") else {
+        return Ok(None);
+    };
+    let Some(table) = sky.as_object() else {
+        return Err(LoadError::malformed(path, place, "must be an object"));
+    };
+    if let Some(key) = table.keys().find(|k| k.as_str() != "radiance") {
+        return Err(if key == "equirect" {
+            LoadError::unsupported(
+                path,
+                place,
+                "environment maps (`equirect`) are not supported yet",
+            )
+        } else {
+            LoadError::malformed(path, place, format!("unknown key '{key}' (have: radiance)"))
+        });
+    }
+    let bad = || {
+        LoadError::malformed(
+            path,
+            format!("{place}.radiance"),
+            "must be three finite numbers ≥ 0 [W/(m²·sr)]",
+        )
+    };
+    let list = table
+        .get("radiance")
+        .and_then(|r| r.as_array())
+        .ok_or_else(bad)?;
+    let c: Vec<f32> = list
+        .iter()
+        .filter_map(|v| v.as_f64())
+        .map(|v| v as f32)
+        .collect();
+    if list.len() != 3 || c.len() != 3 || c.iter().any(|v| !v.is_finite() || *v < 0.0) {
+        return Err(bad());
+    }
+    Ok(Some(Sky::Uniform {
+        radiance: Rgb::new(c[0], c[1], c[2]),
+    }))
 }
 
 /// Checks the 12-byte GLB header before the `gltf` crate reads it (it subtracts 12 from
