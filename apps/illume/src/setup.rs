@@ -68,8 +68,28 @@ pub struct SetupArgs {
     pub look_at: Option<Vec3>,
     /// A uniform sky of radiance R,G,B [W/(m²·sr)] (linear, each ≥ 0), replacing the
     /// scene's: escaping rays see it and it lights the scene.
-    #[arg(long, value_parser = parse_radiance, value_name = "R,G,B")]
+    #[arg(long, value_parser = parse_radiance, value_name = "R,G,B", conflicts_with = "envmap")]
     pub sky: Option<Vec3>,
+    /// An equirectangular environment map (linear .exr or Radiance .hdr) as the sky,
+    /// replacing the scene's (mapping in the README, "Formats and units").
+    #[arg(long, value_name = "FILE")]
+    pub envmap: Option<std::path::PathBuf>,
+    /// Radiance = this × the environment map's texels.
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        requires = "envmap",
+        allow_hyphen_values = true
+    )]
+    pub envmap_scale: f32,
+    /// Turns the environment map about +Y by this many degrees (right-hand rule).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        requires = "envmap",
+        allow_hyphen_values = true
+    )]
+    pub envmap_rotation: f32,
 }
 
 /// `R,G,B` as a radiance: three finite numbers ≥ 0.
@@ -130,13 +150,20 @@ impl SetupArgs {
         Ok(config)
     }
 
-    /// Applies --look-from/--look-at and --sky to a loaded scene.
+    /// Applies --look-from/--look-at and --sky/--envmap to a loaded scene.
     pub fn place_camera(&self, scene: &mut illume_scene::Scene) -> Result<()> {
         if let (Some(eye), Some(target)) = (self.look_from, self.look_at) {
             illume_scene::builtin::look_from(scene, eye, target).map_err(anyhow::Error::msg)?;
         }
         if let Some(radiance) = self.sky {
             scene.sky = Some(illume_scene::Sky::Uniform { radiance });
+        }
+        if let Some(file) = &self.envmap {
+            scene.sky = Some(illume_scene::load_envmap(
+                file,
+                self.envmap_scale,
+                self.envmap_rotation,
+            )?);
         }
         Ok(())
     }

@@ -393,6 +393,36 @@ fn sky_flag_lights_the_scene_and_is_seen_behind_it() {
         dark.mean(),
         lit.mean()
     );
+    // An environment map: a uniform one of the same radiance gives the same image as
+    // --sky up to noise; bad files are named.
+    let env = dir.join("env.exr");
+    RgbImage::filled(16, 8, illume_core::Vec3::new(0.25, 0.5, 1.0))
+        .write(&env, &Default::default())
+        .unwrap();
+    let mapped = render(&["--envmap", path(&env), "--envmap-scale", "2"], "env.exr");
+    assert!(
+        ((mapped.mean() - lit.mean()) / lit.mean())
+            .abs()
+            .max_element()
+            < 0.1,
+        "{} vs {}",
+        mapped.mean(),
+        lit.mean()
+    );
+    for (file, words) in [
+        ("nowhere.exr", "nowhere.exr"),
+        ("lit.png", "not an HDR image"),
+    ] {
+        let out = illume(&[
+            "render",
+            "builtin:cornell-spot",
+            "--envmap",
+            path(&dir.join(file)),
+        ]);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(words), "{err}");
+    }
     for bad in ["1,-1,0", "1,2", "nan,1,1"] {
         let out = illume(&["render", "builtin:cornell-spot", "--sky", bad]);
         assert!(!out.status.success());

@@ -151,10 +151,12 @@ impl RgbImage {
         }
     }
 
-    /// Reads an `.exr` (linear) or `.png` (sRGB-decoded to linear) image.
+    /// Reads an `.exr` or Radiance `.hdr` (linear) or `.png`/`.jpg` (sRGB-decoded to
+    /// linear) image.
     pub fn read(path: &Path) -> Result<Self, ImageError> {
         match extension(path).as_deref() {
             Some("exr") => read_exr(path),
+            Some("hdr") => read_hdr(path),
             Some("png") | Some("jpg") | Some("jpeg") => read_ldr(path),
             _ => Err(ImageError::UnsupportedFormat {
                 path: path.to_owned(),
@@ -278,6 +280,27 @@ pub fn write_exr(img: &RgbImage, path: &Path) -> Result<(), ImageError> {
             path: path.to_owned(),
             message: e.to_string(),
         })
+}
+
+/// Reads a Radiance RGBE (`.hdr`) file as linear RGB.
+pub fn read_hdr(path: &Path) -> Result<RgbImage, ImageError> {
+    let read_error = |message: String| ImageError::Read {
+        path: path.to_owned(),
+        message,
+    };
+    let img = image::ImageReader::open(path)
+        .map_err(|e| read_error(e.to_string()))?
+        .with_guessed_format()
+        .map_err(|e| read_error(e.to_string()))?
+        .decode()
+        .map_err(|e| read_error(e.to_string()))?
+        .to_rgb32f();
+    let (w, h) = img.dimensions();
+    let texels = img
+        .pixels()
+        .map(|p| Rgb::new(p.0[0], p.0[1], p.0[2]))
+        .collect();
+    Image::from_vec(w, h, texels).ok_or_else(|| read_error("inconsistent size".into()))
 }
 
 /// Reads the first RGB(A) layer of an OpenEXR file as linear RGB.

@@ -20,7 +20,7 @@
 //! ```
 
 use illume_core::image::RgbImage;
-use illume_core::sampling::{Pcg32, SampleStream, mix64};
+use illume_core::sampling::{Pcg32, mix64};
 use illume_core::{INV_PI, Rgb, Vec2};
 use illume_transport::{
     GBuffer, GBufferPixel, ShadowMapError, ShadowMapSettings, ShadowMaps, Technique, World,
@@ -289,9 +289,7 @@ pub fn direct_light_with(
             None => match &camera {
                 Some(c) => {
                     let (x, y) = (i as u32 % gbuffer.width, i as u32 / gbuffer.width);
-                    world
-                        .lights
-                        .sky_radiance(c.ray(x, y, Vec2::splat(0.5)).dir)
+                    world.lights.sky_radiance(c.ray(x, y, Vec2::splat(0.5)).dir)
                 }
                 None => Rgb::ZERO,
             },
@@ -375,7 +373,7 @@ pub fn direct_at_with(
         let samples = area_light_samples.max(1);
         let mut sky = Rgb::ZERO;
         for _ in 0..samples {
-            if let Some(s) = lights.sample_sky(n, rng.next_2d()) {
+            if let Some(s) = lights.sample_sky(n, rng) {
                 sky += shade(s, None);
             }
         }

@@ -27,7 +27,7 @@ pub mod timeline;
 
 pub use animation::{Animation, Channel, ChannelValues, Interpolation, Trs};
 pub use change::{Edit, SceneChange};
-pub use load::{LoadError, load_scene};
+pub use load::{LoadError, load_envmap, load_scene};
 pub use model::*;
 pub use timeline::{Timeline, TimelineError};
 

@@ -418,14 +418,17 @@ pub enum Sky {
         /// Radiance per channel, finite and ≥ 0.
         radiance: Rgb,
     },
+    /// An equirectangular environment map ([`EnvMap`], its mapping fixed there).
+    Equirect(Arc<EnvMap>),
 }
 
 impl Sky {
-    /// Radiance arriving from direction `-dir` (seen looking along the unit `dir`).
+    /// Radiance seen looking along unit `dir` (arriving from that direction).
     #[inline]
-    pub fn radiance(&self, _dir: Vec3) -> Rgb {
+    pub fn radiance(&self, dir: Vec3) -> Rgb {
         match self {
             Sky::Uniform { radiance } => *radiance,
+            Sky::Equirect(map) => map.lookup(map.uv(dir)),
         }
     }
 
@@ -439,6 +442,124 @@ impl Sky {
                     ));
                 }
             }
+            Sky::Equirect(map) => map.validate()?,
+        }
+        Ok(())
+    }
+
+    /// ∫ L dω over the sphere [W/(m²)] per channel (4π·L for a uniform sky).
+    pub fn integral(&self) -> Rgb {
+        match self {
+            Sky::Uniform { radiance } => *radiance * (4.0 * PI),
+            Sky::Equirect(map) => map.integral(),
+        }
+    }
+}
+
+/// An equirectangular environment map: linear RGB radiance [W/(m²·sr)] (already
+/// multiplied by its scale), rotated by `rotation_deg` about +Y.
+///
+/// The mapping is fixed: for a world direction d,
+/// `u = 0.5 + (atan2(d.x, −d.z) + A·π/180) / 2π` (columns left to right, wrapping) and
+/// `v = acos(d.y) / π` (row 0 at the top is +Y, clamped). With A = 0, u = 0.5 looks along
+/// −Z, 0.75 along +X, 0.25 along −X, both edges along +Z; seen from inside the image is not
+/// mirrored. Texel (i, j) is centred at ((i + ½)/W, (j + ½)/H) and looked up bilinearly. A
+/// positive A turns the sky by the right-hand rule about +Y (+X toward −Z).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvMap {
+    /// File name, for messages.
+    pub name: String,
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// Row-major radiance, row 0 at the top (+Y).
+    pub texels: Vec<Rgb>,
+    /// Rotation about +Y \[degrees\].
+    pub rotation_deg: f32,
+}
+
+impl EnvMap {
+    /// Texture coordinates of world direction `dir` (unit).
+    #[inline]
+    pub fn uv(&self, dir: Vec3) -> Vec2 {
+        let phi = dir.x.atan2(-dir.z) + self.rotation_deg.to_radians();
+        let u = (0.5 + phi / (2.0 * PI)).rem_euclid(1.0);
+        let v = dir.y.clamp(-1.0, 1.0).acos() / PI;
+        Vec2::new(u, v)
+    }
+
+    /// The unit world direction of texture coordinates `uv` (inverse of [`EnvMap::uv`]).
+    #[inline]
+    pub fn direction(&self, uv: Vec2) -> Vec3 {
+        let phi = (uv.x - 0.5) * 2.0 * PI - self.rotation_deg.to_radians();
+        let theta = uv.y * PI;
+        let (st, ct) = theta.sin_cos();
+        let (sp, cp) = phi.sin_cos();
+        Vec3::new(st * sp, ct, -st * cp)
+    }
+
+    /// Bilinear lookup at `uv` (u wraps, v clamps).
+    pub fn lookup(&self, uv: Vec2) -> Rgb {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = (uv.y * self.height as f32 - 0.5).clamp(0.0, (h - 1) as f32);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let texel = |ix: i64, iy: i64| {
+            let cx = ix.rem_euclid(w) as usize;
+            let cy = iy.clamp(0, h - 1) as usize;
+            self.texels[cy * self.width as usize + cx]
+        };
+        let (ix, iy) = (x0 as i64, y0 as i64);
+        let top = texel(ix, iy) * (1.0 - fx) + texel(ix + 1, iy) * fx;
+        let bottom = texel(ix, iy + 1) * (1.0 - fx) + texel(ix + 1, iy + 1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// Solid angle of a texel of row `j` \[sr\]: (2π/W)·(π/H)·sin θ at the row centre.
+    #[inline]
+    pub fn texel_solid_angle(&self, j: u32) -> f32 {
+        let theta = (j as f32 + 0.5) / self.height as f32 * PI;
+        2.0 * PI * PI / (self.width as f32 * self.height as f32) * theta.sin()
+    }
+
+    /// ∫ L dω over the sphere, by texels.
+    pub fn integral(&self) -> Rgb {
+        let mut sum = Rgb::ZERO;
+        for j in 0..self.height {
+            let row = &self.texels[(j * self.width) as usize..((j + 1) * self.width) as usize];
+            sum += row.iter().copied().sum::<Rgb>() * self.texel_solid_angle(j);
+        }
+        sum
+    }
+
+    /// Checks size and values; the message names the map.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.width == 0 || self.height == 0 {
+            return Err(format!("environment map {}: empty image", self.name));
+        }
+        if self.texels.len() != (self.width * self.height) as usize {
+            return Err(format!("environment map {}: texel count", self.name));
+        }
+        if let Some(i) = self
+            .texels
+            .iter()
+            .position(|t| !t.is_finite() || t.min_element() < 0.0)
+        {
+            return Err(format!(
+                "environment map {}: texel ({}, {}) is {} (must be finite and ≥ 0)",
+                self.name,
+                i as u32 % self.width,
+                i as u32 / self.width,
+                self.texels[i]
+            ));
+        }
+        if !self.rotation_deg.is_finite() {
+            return Err(format!(
+                "environment map {}: rotation is not finite",
+                self.name
+            ));
         }
         Ok(())
     }
@@ -553,13 +674,11 @@ impl Scene {
     }
 
     /// Power \[W\] per channel the sky sends through the scene's bounding sphere of
-    /// radius `scene_radius`: radiance L from every direction through a disk of area πR²
-    /// facing it, `L·4π·πR²` for a uniform sky; 0 without a sky.
+    /// radius `scene_radius`: radiance from every direction through a disk of area πR²
+    /// facing it, `∫L dω · πR²` (`L·4π·πR²` for a uniform sky); 0 without a sky.
     pub fn sky_power(&self, scene_radius: f32) -> Rgb {
         match &self.sky {
-            Some(Sky::Uniform { radiance }) => {
-                *radiance * (4.0 * PI * PI * scene_radius * scene_radius)
-            }
+            Some(sky) => sky.integral() * (PI * scene_radius * scene_radius),
             None => Rgb::ZERO,
         }
     }

@@ -1023,7 +1023,12 @@ fn gltf_metallic_roughness_factors() {
 #[test]
 fn gltf_sky_in_root_extras() {
     let (dir, doc) = cube_copy("gltf_sky");
-    assert!(load_scene(&write_json(&dir, "no_sky.gltf", &doc)).unwrap().sky.is_none());
+    assert!(
+        load_scene(&write_json(&dir, "no_sky.gltf", &doc))
+            .unwrap()
+            .sky
+            .is_none()
+    );
     let mut d = doc.clone();
     d["extras"] = json!({"illume_sky": {"radiance": [0.5, 1, 2]}, "other": 3});
     let s = load_scene(&write_json(&dir, "sky.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
@@ -1034,11 +1039,40 @@ fn gltf_sky_in_root_extras() {
         })
     );
     for (bad, words) in [
-        (json!({"radiance": [1, -1, 0]}), vec!["extras.illume_sky.radiance", "≥ 0"]),
-        (json!({"radiance": [1, 2]}), vec!["extras.illume_sky.radiance"]),
-        (json!({"radiance": "blue"}), vec!["extras.illume_sky.radiance"]),
-        (json!({"radiance": [1, 1, 1], "colour": 2}), vec!["unknown key 'colour'"]),
-        (json!({"equirect": "sky.exr"}), vec!["not supported yet"]),
+        (
+            json!({"radiance": [1, -1, 0]}),
+            vec!["extras.illume_sky.radiance", "≥ 0"],
+        ),
+        (
+            json!({"radiance": [1, 2]}),
+            vec!["extras.illume_sky.radiance"],
+        ),
+        (
+            json!({"radiance": "blue"}),
+            vec!["extras.illume_sky.radiance"],
+        ),
+        (
+            json!({"radiance": [1, 1, 1], "colour": 2}),
+            vec!["unknown key 'colour'"],
+        ),
+        (
+            json!({"equirect": "nowhere.exr"}),
+            vec!["extras.illume_sky.equirect", "nowhere.exr"],
+        ),
+        (json!({"equirect": "sky.png"}), vec!["not an HDR image"]),
+        (
+            json!({"equirect": "sky.exr", "scale": "x"}),
+            vec!["extras.illume_sky.scale"],
+        ),
+        (
+            json!({"radiance": [1, 1, 1], "equirect": "sky.exr"}),
+            vec!["exactly one"],
+        ),
+        (
+            json!({"radiance": [1, 1, 1], "scale": 2}),
+            vec!["belong to `equirect`"],
+        ),
+        (json!({}), vec!["needs `radiance`"]),
         (json!(7), vec!["must be an object"]),
     ] {
         d["extras"] = json!({ "illume_sky": bad });
@@ -1046,6 +1080,17 @@ fn gltf_sky_in_root_extras() {
         assert_contains(&msg, &words);
         assert!(msg.contains("bad_sky.gltf"), "{msg}");
     }
+    // An environment map beside the glTF: scaled and rotated.
+    let img = illume_core::image::RgbImage::filled(8, 4, Vec3::new(1.0, 2.0, 3.0));
+    img.write(&dir.join("env.exr"), &Default::default())
+        .unwrap();
+    d["extras"] = json!({"illume_sky": {"equirect": "env.exr", "scale": 0.5, "rotation_deg": 90}});
+    let s = load_scene(&write_json(&dir, "env.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    let Some(illume_scene::Sky::Equirect(map)) = &s.sky else {
+        panic!("an environment map")
+    };
+    assert_eq!((map.width, map.height, map.rotation_deg), (8, 4, 90.0));
+    assert_eq!(map.texels[5], Vec3::new(0.5, 1.0, 1.5));
 }
 
 #[test]

@@ -124,6 +124,34 @@ pub struct LightSet {
     /// Photon-emission selection over the emitters then the sky (only with a sky; the
     /// NEE table serves emission otherwise).
     emission_table: Option<AliasTable>,
+    /// Texel selection of an environment map, by luminance × sinθ.
+    env_table: Option<AliasTable>,
+}
+
+/// Texel weights of `map` for importance sampling: the largest luminance in each texel's
+/// 3×3 neighbourhood (bilinear lookups spread a texel's radiance half a texel into its
+/// neighbours, which must keep a non-zero density) times sinθ of its row (texels shrink
+/// towards the poles).
+fn env_weights(map: &illume_scene::EnvMap) -> Vec<f32> {
+    let (w, h) = (map.width as i64, map.height as i64);
+    let lum = |x: i64, y: i64| {
+        let t = map.texels[(y.clamp(0, h - 1) * w + x.rem_euclid(w)) as usize];
+        illume_core::luminance(t).max(0.0)
+    };
+    let mut out = Vec::with_capacity((w * h) as usize);
+    for y in 0..h {
+        let sin = ((y as f32 + 0.5) / h as f32 * PI).sin();
+        for x in 0..w {
+            let mut m = 0f32;
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    m = m.max(lum(x + dx, y + dy));
+                }
+            }
+            out.push(m * sin);
+        }
+    }
+    out
 }
 
 impl LightSet {
@@ -244,10 +272,50 @@ impl LightSet {
             total_power,
             analytic_count,
             area_table,
+            env_table: match &scene.sky {
+                Some(illume_scene::Sky::Equirect(map)) => AliasTable::new(&env_weights(map)),
+                _ => None,
+            },
             sky: scene.sky.clone(),
             sky_power,
             emission_table,
         }
+    }
+
+    /// An environment map's sample: a direction from the texel table and a uniform
+    /// position in the texel; `None` for a degenerate (polar) direction or a black map.
+    fn sample_env(
+        &self,
+        map: &illume_scene::EnvMap,
+        u_texel: f32,
+        u: illume_core::Vec2,
+    ) -> Option<(Vec3, f32)> {
+        let (k, _) = self.env_table.as_ref()?.sample(u_texel);
+        let (i, j) = (k as u32 % map.width, k as u32 / map.width);
+        let uv = illume_core::Vec2::new(
+            (i as f32 + u.x) / map.width as f32,
+            (j as f32 + u.y) / map.height as f32,
+        );
+        let wi = map.direction(uv);
+        // The density at the sampled direction (the texel's pmf over its solid angle).
+        let pdf = self.env_pdf(map, wi);
+        (pdf > 0.0).then_some((wi, pdf))
+    }
+
+    /// Solid-angle pdf of [`LightSet::sample_env`] for `wi`.
+    fn env_pdf(&self, map: &illume_scene::EnvMap, wi: Vec3) -> f32 {
+        let Some(table) = &self.env_table else {
+            return 0.0;
+        };
+        let sin = (1.0 - wi.y * wi.y).max(0.0).sqrt();
+        if sin <= 1e-6 {
+            return 0.0;
+        }
+        let uv = map.uv(wi);
+        let i = ((uv.x * map.width as f32) as u32).min(map.width - 1);
+        let j = ((uv.y * map.height as f32) as u32).min(map.height - 1);
+        let texels = (map.width * map.height) as f32;
+        table.pmf((j * map.width + i) as usize) * texels / (2.0 * PI * PI * sin)
     }
 
     /// The sky, if the scene has one.
@@ -263,21 +331,30 @@ impl LightSet {
     }
 
     /// Samples the sky for next-event estimation at a point with unit normal `normal`
-    /// (the side light arrives on): a cosine-weighted direction about it, pdf cosθ/π,
-    /// weight L/pdf; `None` without a sky or for a grazing sample. Visibility (a ray to
-    /// infinity) is the caller's job.
-    pub fn sample_sky(&self, normal: Vec3, u: illume_core::Vec2) -> Option<LightSample> {
-        let sky = self.sky.as_ref()?;
-        let local = cosine_hemisphere(u);
-        if local.z <= 0.0 {
-            return None;
-        }
-        let wi = Frame::from_normal(normal).to_world(local).normalize();
-        let pdf = local.z * std::f32::consts::FRAC_1_PI;
+    /// (the side light arrives on). A uniform sky: a cosine-weighted direction about the
+    /// normal (pdf cosθ/π; one 2-D number). An environment map: a texel by luminance ×
+    /// sinθ, then a uniform point in it (one 1-D and one 2-D number), whatever the
+    /// normal. The weight is L/pdf; `None` without a sky or for a degenerate sample.
+    /// Visibility (a ray to infinity) is the caller's job.
+    pub fn sample_sky(&self, normal: Vec3, sampler: &mut impl SampleStream) -> Option<LightSample> {
+        let (wi, pdf) = match self.sky.as_ref()? {
+            illume_scene::Sky::Uniform { .. } => {
+                let local = cosine_hemisphere(sampler.next_2d());
+                if local.z <= 0.0 {
+                    return None;
+                }
+                let wi = Frame::from_normal(normal).to_world(local).normalize();
+                (wi, local.z * std::f32::consts::FRAC_1_PI)
+            }
+            illume_scene::Sky::Equirect(map) => {
+                let u_texel = sampler.next_1d();
+                self.sample_env(map, u_texel, sampler.next_2d())?
+            }
+        };
         Some(LightSample {
             wi,
             distance: f32::INFINITY,
-            weight: sky.radiance(-wi) / pdf,
+            weight: self.sky_radiance(wi) / pdf,
             pdf,
         })
     }
@@ -286,10 +363,13 @@ impl LightSet {
     /// `normal` (for MIS when a BSDF-sampled ray escapes).
     #[inline]
     pub fn sky_pdf(&self, normal: Vec3, wi: Vec3) -> f32 {
-        if self.sky.is_none() {
-            return 0.0;
+        match &self.sky {
+            None => 0.0,
+            Some(illume_scene::Sky::Uniform { .. }) => {
+                normal.dot(wi).max(0.0) * std::f32::consts::FRAC_1_PI
+            }
+            Some(illume_scene::Sky::Equirect(map)) => self.env_pdf(map, wi),
         }
-        normal.dot(wi).max(0.0) * std::f32::consts::FRAC_1_PI
     }
 
     /// The emitters.
@@ -499,16 +579,27 @@ impl LightSet {
         let u_pos = sampler.next_2d();
         let u_dir = sampler.next_2d();
         if i == self.emitters.len() {
-            // The sky: a direction uniform over the sphere, an origin uniform on the disk
-            // of the scene's bounding sphere facing it, outside the scene.
-            let dir = uniform_sphere(u_dir);
+            // The sky: a direction the light comes from (uniform over the sphere, or by
+            // the environment map's texel table), an origin uniform on the disk of the
+            // scene's bounding sphere facing it, outside the scene.
+            let disk_area = PI * self.scene_radius * self.scene_radius;
+            let (from, flux) = match self.sky.as_ref()? {
+                illume_scene::Sky::Uniform { .. } => {
+                    (uniform_sphere(u_dir), self.sky_power / pmf)
+                }
+                illume_scene::Sky::Equirect(map) => {
+                    let (from, pdf) = self.sample_env(map, u_dir.x, sampler.next_2d())?;
+                    (from, self.sky_radiance(from) * disk_area / (pdf * pmf))
+                }
+            };
+            let dir = -from;
             let f = Frame::from_normal(dir);
             let d = concentric_disk(u_pos) * self.scene_radius;
             let origin =
                 self.scene_center - dir * (2.0 * self.scene_radius) + f.s * d.x + f.t * d.y;
             return Some(EmissionSample {
                 ray: Ray::new(origin, dir),
-                flux: self.sky_power / pmf,
+                flux,
             });
         }
         let power = self.powers[i];

@@ -136,7 +136,7 @@ pub fn continue_path(
         // The sky, sampled on its own (cosine-weighted about the normal), MIS against
         // BSDF sampling. Scenes without a sky draw no numbers here.
         let sky = world.lights.sky().is_some();
-        if sky && let Some(ls) = world.lights.sample_sky(n, sampler.next_2d()) {
+        if sky && let Some(ls) = world.lights.sample_sky(n, sampler) {
             let cos = n.dot(ls.wi);
             if cos > 0.0 && ng.dot(ls.wi) > 0.0 && world.unoccluded(&hit, &ls) {
                 let (f, bsdf_pdf) = match &frame {

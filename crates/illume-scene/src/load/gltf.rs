@@ -162,8 +162,10 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
 }
 
 /// The sky declared in the document's root `extras` (no standard glTF extension holds
-/// a renderable sky): `{"illume_sky": {"radiance": [R, G, B]}}` [W/(m²·sr)], linear.
-/// Anything else under `illume_sky` is an error naming the field.
+/// a renderable sky), exactly one of `{"illume_sky": {"radiance": [R, G, B]}}`
+/// [W/(m²·sr)] or `{"illume_sky": {"equirect": "FILE", "scale": S, "rotation_deg": A}}`
+/// (FILE relative to the glTF, linear `.exr`/`.hdr`; S defaults to 1, A to 0). Anything
+/// else under `illume_sky` is an error naming the field.
 fn sky_from_extras(path: &Path, root: &json::Root) -> Result<Option<Sky>, LoadError> {
     let Some(raw) = &root.extras else {
         return Ok(None);
@@ -177,39 +179,77 @@ fn sky_from_extras(path: &Path, root: &json::Root) -> Result<Option<Sky>, LoadEr
     let Some(table) = sky.as_object() else {
         return Err(LoadError::malformed(path, place, "must be an object"));
     };
-    if let Some(key) = table.keys().find(|k| k.as_str() != "radiance") {
-        return Err(if key == "equirect" {
-            LoadError::unsupported(
-                path,
-                place,
-                "environment maps (`equirect`) are not supported yet",
-            )
-        } else {
-            LoadError::malformed(path, place, format!("unknown key '{key}' (have: radiance)"))
-        });
-    }
-    let bad = || {
-        LoadError::malformed(
+    const KEYS: [&str; 4] = ["radiance", "equirect", "scale", "rotation_deg"];
+    if let Some(key) = table.keys().find(|k| !KEYS.contains(&k.as_str())) {
+        return Err(LoadError::malformed(
             path,
-            format!("{place}.radiance"),
-            "must be three finite numbers ≥ 0 [W/(m²·sr)]",
-        )
-    };
-    let list = table
-        .get("radiance")
-        .and_then(|r| r.as_array())
-        .ok_or_else(bad)?;
-    let c: Vec<f32> = list
-        .iter()
-        .filter_map(|v| v.as_f64())
-        .map(|v| v as f32)
-        .collect();
-    if list.len() != 3 || c.len() != 3 || c.iter().any(|v| !v.is_finite() || *v < 0.0) {
-        return Err(bad());
+            place,
+            format!("unknown key '{key}' (have: {})", KEYS.join(", ")),
+        ));
     }
-    Ok(Some(Sky::Uniform {
-        radiance: Rgb::new(c[0], c[1], c[2]),
-    }))
+    let number = |key: &str, default: f32| -> Result<f32, LoadError> {
+        match table.get(key) {
+            None => Ok(default),
+            Some(v) => v
+                .as_f64()
+                .map(|v| v as f32)
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    LoadError::malformed(path, format!("{place}.{key}"), "must be a finite number")
+                }),
+        }
+    };
+    match (table.get("radiance"), table.get("equirect")) {
+        (Some(_), Some(_)) => Err(LoadError::malformed(
+            path,
+            place,
+            "give exactly one of `radiance` and `equirect`",
+        )),
+        (None, None) => Err(LoadError::malformed(
+            path,
+            place,
+            "needs `radiance` [R, G, B] or `equirect` \"FILE\"",
+        )),
+        (Some(radiance), None) => {
+            if table.contains_key("scale") || table.contains_key("rotation_deg") {
+                return Err(LoadError::malformed(
+                    path,
+                    place,
+                    "`scale` and `rotation_deg` belong to `equirect`",
+                ));
+            }
+            let bad = || {
+                LoadError::malformed(
+                    path,
+                    format!("{place}.radiance"),
+                    "must be three finite numbers ≥ 0 [W/(m²·sr)]",
+                )
+            };
+            let list = radiance.as_array().ok_or_else(bad)?;
+            let c: Vec<f32> = list
+                .iter()
+                .filter_map(|v| v.as_f64())
+                .map(|v| v as f32)
+                .collect();
+            if list.len() != 3 || c.len() != 3 || c.iter().any(|v| !v.is_finite() || *v < 0.0) {
+                return Err(bad());
+            }
+            Ok(Some(Sky::Uniform {
+                radiance: Rgb::new(c[0], c[1], c[2]),
+            }))
+        }
+        (None, Some(file)) => {
+            let file = file.as_str().ok_or_else(|| {
+                LoadError::malformed(path, format!("{place}.equirect"), "must be a file name")
+            })?;
+            let scale = number("scale", 1.0)?;
+            let rotation = number("rotation_deg", 0.0)?;
+            let folder = path.parent().unwrap_or(Path::new("."));
+            super::load_envmap(&folder.join(file), scale, rotation)
+                .map(Some)
+                .map_err(|e| LoadError::malformed(path, format!("{place}.equirect"), e.to_string()))
+        }
+    }
 }
 
 /// Checks the 12-byte GLB header before the `gltf` crate reads it (it subtracts 12 from

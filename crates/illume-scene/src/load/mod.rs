@@ -139,6 +139,50 @@ pub fn load_scene(path: &Path) -> Result<Scene, LoadError> {
 }
 
 /// Reads a whole file, mapping failure to [`LoadError::Io`].
+/// Reads an equirectangular environment map (linear `.exr` or Radiance `.hdr`) as a sky:
+/// radiance = `scale` × texel, turned by `rotation_deg` about +Y (the mapping is
+/// [`crate::EnvMap`]'s). Errors name the file: unreadable, not an HDR format, a texel
+/// that is not finite or negative, a scale that is not finite and ≥ 0.
+pub fn load_envmap(path: &Path, scale: f32, rotation_deg: f32) -> Result<crate::Sky, LoadError> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if ext != "exr" && ext != "hdr" {
+        return Err(LoadError::unsupported(
+            path,
+            "environment map",
+            format!("'.{ext}' is not an HDR image (use linear .exr or Radiance .hdr)"),
+        ));
+    }
+    if !scale.is_finite() || scale < 0.0 {
+        return Err(LoadError::malformed(
+            path,
+            "environment map",
+            format!("scale {scale} must be finite and ≥ 0"),
+        ));
+    }
+    if !rotation_deg.is_finite() {
+        return Err(LoadError::malformed(
+            path,
+            "environment map",
+            format!("rotation {rotation_deg}° is not finite"),
+        ));
+    }
+    let image = illume_core::image::RgbImage::read(path)
+        .map_err(|e| LoadError::malformed(path, "environment map", e.to_string()))?;
+    let map = crate::EnvMap {
+        name: path.display().to_string(),
+        width: image.width(),
+        height: image.height(),
+        texels: image.pixels().iter().map(|t| *t * scale).collect(),
+        rotation_deg,
+    };
+    map.validate()
+        .map_err(|m| LoadError::malformed(path, "environment map", m))?;
+    Ok(crate::Sky::Equirect(std::sync::Arc::new(map)))
+}
+
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, LoadError> {
     std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.into(),
