@@ -8,8 +8,8 @@
 //! A new technique joins by adding its arm to [`agreement`]: the settings that make it
 //! converge, and its tolerance with the reason for it.
 
-use illume_core::image::{RgbImage, write_exr};
 use illume_core::Silent;
+use illume_core::image::{RgbImage, write_exr};
 use illume_engine::{Config, ConfigLayers, Engine, TechniqueKind};
 use std::path::PathBuf;
 use std::sync::OnceLock;

@@ -1001,6 +1001,38 @@ fn gltf_bad_json_extension_accessor_and_mode() {
 }
 
 #[test]
+fn obj_phong_materials_map_onto_metallic_roughness() {
+    let s = load_scene(&scenes_dir().join("cornell_box/CornellBox-Sphere.obj")).unwrap();
+    let by = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap().clone();
+    // Ks 0: exactly Lambertian, Kd kept.
+    let floor = by("floor");
+    assert!(floor.is_lambertian());
+    assert_eq!(floor.base_color, Vec3::new(0.725, 0.71, 0.68));
+    // Kd 0.01, Ks 0.95, Ns 1000: a smooth metal-like mirror.
+    let mirror = by("leftSphere");
+    assert_close(mirror.base_color, Vec3::splat(0.96), 1e-6, "Kd + Ks");
+    assert!(
+        (mirror.metallic - 0.95 / 0.96).abs() < 1e-5,
+        "{}",
+        mirror.metallic
+    );
+    let alpha = (2.0f32 / 1002.0).sqrt();
+    assert!(
+        (mirror.roughness - alpha.sqrt()).abs() < 1e-6,
+        "{}",
+        mirror.roughness
+    );
+    // The glass sphere (Tf, illum 7) is opaque, with a warning naming it.
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("rightSphere") && w.contains("transmission")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
 fn gltf_metallic_roughness_factors() {
     let (dir, doc) = cube_copy("gltf_mr");
     let mut d = doc.clone();

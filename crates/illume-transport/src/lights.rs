@@ -584,9 +584,7 @@ impl LightSet {
             // scene's bounding sphere facing it, outside the scene.
             let disk_area = PI * self.scene_radius * self.scene_radius;
             let (from, flux) = match self.sky.as_ref()? {
-                illume_scene::Sky::Uniform { .. } => {
-                    (uniform_sphere(u_dir), self.sky_power / pmf)
-                }
+                illume_scene::Sky::Uniform { .. } => (uniform_sphere(u_dir), self.sky_power / pmf),
                 illume_scene::Sky::Equirect(map) => {
                     let (from, pdf) = self.sample_env(map, u_dir.x, sampler.next_2d())?;
                     (from, self.sky_radiance(from) * disk_area / (pdf * pmf))

@@ -1,8 +1,8 @@
 //! What a ray hit, in world space.
 
 use crate::hit_tables::HitTables;
-use illume_accel::{Hit, HitGeometry};
 use crate::metal_rough::MetalRough;
+use illume_accel::{Hit, HitGeometry};
 use illume_core::{Frame, INV_PI, Ray, Rgb, Vec2, Vec3, offset_ray_origin, transform_normal};
 use illume_scene::{InstanceId, MaterialId, MeshId, Scene};
 

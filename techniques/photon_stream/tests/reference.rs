@@ -1,8 +1,8 @@
 //! The converged VSL indirect light against the reference path tracer's indirect-only
 //! light (light reflected ≥ 2 times) on `builtin:cornell-spot`, static.
 
-use illume_core::image::RgbImage;
 use illume_core::Vec2;
+use illume_core::image::RgbImage;
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings, VisibilityMode};
 use illume_reference::{ReferenceSettings, ReferenceTechnique};
 use illume_transport::{Budget, GBuffer, Technique, World};

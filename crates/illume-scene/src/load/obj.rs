@@ -17,8 +17,10 @@
 //!   materials become the default material), `usemtl` (an unknown name is a warning and
 //!   the default material);
 //! * MTL: `newmtl`, `Kd` (albedo, clamped to [0, 1]), `Ke` (emitted radiance
-//!   [W/(m²·sr)]), `Ns` (read and checked; OBJ materials are Lambertian until `Ks`/`Ns`
-//!   are mapped onto the metallic-roughness model), `map_Kd` (an sRGB image
+//!   [W/(m²·sr)]), `Ks`/`Ns` (mapped onto the metallic-roughness model: `Ks` = 0 stays
+//!   exactly Lambertian; otherwise base = Kd + Ks, metallic = lum(Ks)/lum(Kd + Ks),
+//!   GGX α = √(2/(Ns + 2)), roughness = √α; Kd + Ks > 1 is scaled down with a warning;
+//!   transmission (`illum` 4, 6, 7, 9) is rendered opaque with a warning), `map_Kd` (an sRGB image
 //!   relative to the MTL's folder, multiplied by `Kd` as the MTL spec says; `-clamp on`
 //!   selects clamped wrapping, other options are skipped). **A `map_Kd` file that cannot
 //!   be read or decoded is an error** (not a warning: a scene silently rendered without
@@ -307,8 +309,10 @@ impl ObjReader<'_> {
             LoadError::malformed(obj_path, mtl_place(mtl_path, line), message)
         };
         let mut current: Option<Material> = None;
+        // `Ks`, `Ns` and whether it transmits (`illum`) of `current`.
+        let mut phong = Phong::default();
         let mut bump_ignored = false;
-        let mut finished: Vec<Material> = Vec::new();
+        let mut finished: Vec<(Material, Phong)> = Vec::new();
         for (i, raw) in text.split('\n').enumerate() {
             let n = i + 1;
             let text = strip_comment(raw);
@@ -319,7 +323,7 @@ impl ObjReader<'_> {
             let keyword = keyword.to_ascii_lowercase();
             if keyword == "newmtl" {
                 if let Some(m) = current.take() {
-                    finished.push(m);
+                    finished.push((m, std::mem::take(&mut phong)));
                 }
                 let name = after_keyword(text).to_string();
                 current = Some(Material {
@@ -352,9 +356,31 @@ impl ObjReader<'_> {
                     m.emission = c.max(Rgb::ZERO);
                 }
                 "ns" => {
-                    // Read and checked; OBJ materials stay Lambertian until `Ks` is
-                    // mapped onto the metallic-roughness model with it.
-                    let [_ns] = floats::<1>(&mut tokens, 1, "Ns").map_err(|e| err(n, e))?;
+                    let [ns] = floats::<1>(&mut tokens, 1, "Ns").map_err(|e| err(n, e))?;
+                    if !(ns.is_finite() && ns >= 0.0) {
+                        return Err(err(n, format!("Ns {ns} must be finite and ≥ 0")));
+                    }
+                    phong.ns = Some(ns);
+                }
+                "ks" => {
+                    let [r, g, b] = floats::<3>(&mut tokens, 1, "Ks").map_err(|e| err(n, e))?;
+                    let c = if text.split_whitespace().count() == 2 {
+                        Rgb::splat(r)
+                    } else {
+                        Rgb::new(r, g, b)
+                    };
+                    if !c.is_finite() || c.min_element() < 0.0 {
+                        return Err(err(n, format!("Ks {c} must be finite and ≥ 0")));
+                    }
+                    phong.ks = c;
+                }
+                "illum" => {
+                    // 4, 6, 7, 9: the MTL illumination models with transparency or
+                    // refraction (`Tf` alone is often the 1 1 1 default, and 5 is a
+                    // Fresnel mirror).
+                    if let Some(Ok(i)) = tokens.next().map(str::parse::<u32>) {
+                        phong.transmits = matches!(i, 4 | 6 | 7 | 9);
+                    }
                 }
                 "map_kd" => {
                     let (file, wrap) = texture_file(tokens);
@@ -371,7 +397,7 @@ impl ObjReader<'_> {
             }
         }
         if let Some(m) = current.take() {
-            finished.push(m);
+            finished.push((m, phong));
         }
         if bump_ignored {
             self.builder.warn(format!(
@@ -379,7 +405,14 @@ impl ObjReader<'_> {
                 mtl_path.display()
             ));
         }
-        for m in finished {
+        for (mut m, phong) in finished {
+            if let Some(warning) = phong.apply(&mut m) {
+                self.builder.warn(format!(
+                    "{}: material '{}': {warning}",
+                    mtl_path.display(),
+                    m.name
+                ));
+            }
             let name = m.name.clone();
             let id = self.builder.material(m);
             // The first definition of a name wins, as in most loaders.
@@ -512,4 +545,56 @@ fn is_option_argument(t: &str) -> bool {
             t.to_ascii_lowercase().as_str(),
             "on" | "off" | "r" | "g" | "b" | "m" | "l" | "z"
         )
+}
+
+/// The Phong terms of an MTL material, mapped onto the metallic-roughness model.
+#[derive(Clone, Copy, Debug, Default)]
+struct Phong {
+    /// Specular colour `Ks` (zero: Lambertian).
+    ks: Rgb,
+    /// Specular exponent `Ns`.
+    ns: Option<f32>,
+    /// The material asks for transmission (`illum` 4, 6, 7 or 9), which illume lacks.
+    transmits: bool,
+}
+
+impl Phong {
+    /// Maps `Kd` (the material's base colour) and `Ks`/`Ns` onto metallic-roughness: with
+    /// `Ks` = 0 the material stays exactly Lambertian. Otherwise the glTF mix's diffuse
+    /// part (1 − m)·base and specular part m·base match `Kd` and `Ks`:
+    /// base = Kd + Ks, metallic m = lum(Ks)/lum(Kd + Ks); the Phong exponent becomes GGX
+    /// α = √(2/(Ns + 2)) (Walter et al. 2007's Phong–Beckmann correspondence), roughness
+    /// = √α. Kd + Ks above 1 is scaled down to 1. Returns a warning for what was
+    /// approximated.
+    fn apply(&self, m: &mut Material) -> Option<String> {
+        if self.ks.max_element() <= 0.0 {
+            return self.transmits.then(|| {
+                "transmission (illum 4, 6, 7, 9) is not supported: rendered opaque".into()
+            });
+        }
+        let mut warnings = Vec::new();
+        let mut sum = m.base_color + self.ks;
+        let mut ks = self.ks;
+        if sum.max_element() > 1.0 {
+            let k = 1.0 / sum.max_element();
+            warnings.push(format!("Kd + Ks = {sum} exceeds 1: both scaled by {k:.3}"));
+            sum *= k;
+            ks *= k;
+        }
+        let ns = self.ns.unwrap_or(0.0);
+        let alpha = (2.0 / (ns + 2.0)).sqrt();
+        m.base_color = sum.clamp(Rgb::ZERO, Rgb::ONE);
+        let total = illume_core::luminance(sum);
+        m.metallic = if total > 0.0 {
+            (illume_core::luminance(ks) / total).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        m.roughness = alpha.sqrt().clamp(0.0, 1.0);
+        if self.transmits {
+            warnings
+                .push("transmission (illum 4, 6, 7, 9) is not supported: rendered opaque".into());
+        }
+        (!warnings.is_empty()).then(|| warnings.join("; "))
+    }
 }
