@@ -7,7 +7,8 @@
 //! into last frame's allocations, then [`direct_light_with`] — and `maps build` that
 //! rebuild alone; `maps static light` is a frame whose light and objects did not move
 //! (the maps are kept, only the lookups cost); `unshadowed` ([`Shadows::Off`]) is the same light with no visibility
-//! test, the part of the cost both modes share. Scenes: `cornell-spot` (its spot light) and Sponza with a spot light
+//! test, the part of the cost both modes share. Scenes: `cornell-spot` (its spot light),
+//! the same with every material glossy (metallic 0.5, roughness 0.4), and Sponza with a spot light
 //! under the roof aimed down (as in the photon-streaming bench), then with a point light
 //! and a sun in its place.
 
@@ -57,10 +58,18 @@ fn with_light(mut scene: Scene, kind: LightKind) -> Scene {
 }
 
 fn scenes() -> Vec<(String, World)> {
-    let mut scenes = vec![(
-        "cornell-spot".to_string(),
-        World::new(illume_scene::builtin::load("cornell-spot").expect("builtin")),
-    )];
+    let cornell = illume_scene::builtin::load("cornell-spot").expect("builtin");
+    // The same box with every material glossy (metallic 0.5, roughness 0.4): the BRDF
+    // is evaluated per light instead of once per pixel.
+    let mut glossy = cornell.clone();
+    for m in &mut glossy.materials {
+        m.metallic = 0.5;
+        m.roughness = 0.4;
+    }
+    let mut scenes = vec![
+        ("cornell-spot".to_string(), World::new(cornell)),
+        ("cornell-spot glossy".to_string(), World::new(glossy)),
+    ];
     let path = &illume_scene::shared_scenes_dir().join("dabrovic_sponza/sponza.obj");
     match illume_scene::load_scene(path) {
         Ok(mut sponza) => {
