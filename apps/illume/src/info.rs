@@ -39,6 +39,41 @@ pub fn run(a: InfoArgs) -> Result<()> {
         scene.materials.iter().filter(|m| m.is_emissive()).count(),
         scene.textures.len()
     );
+    let specular: Vec<&str> = scene
+        .materials
+        .iter()
+        .filter(|m| !m.is_lambertian())
+        .map(|m| m.name.as_str())
+        .collect();
+    if specular.is_empty() {
+        println!("surfaces     all Lambertian");
+    } else {
+        println!(
+            "surfaces     {} of {} materials have a specular part (metallic/roughness): {}",
+            specular.len(),
+            scene.materials.len(),
+            specular.join(", ")
+        );
+        println!(
+            "             note: photon_stream carries indirect light on the Lambertian albedo only \
+             (glossy interreflections are approximated); the reference renders them"
+        );
+    }
+    match &scene.sky {
+        None => println!("sky          none (escaping rays see black)"),
+        Some(illume_scene::Sky::Uniform { radiance }) => println!(
+            "sky          uniform, L = ({:.3}, {:.3}, {:.3}) W/(m²·sr)",
+            radiance.x, radiance.y, radiance.z
+        ),
+        Some(illume_scene::Sky::Equirect(map)) => println!(
+            "sky          environment map {} ({}×{}, rotated {:.1}°), ∫L dω mean {:.3} W/m²",
+            map.name,
+            map.width,
+            map.height,
+            map.rotation_deg,
+            channel_mean(map.integral())
+        ),
+    }
     println!(
         "bounds       ({:.3}, {:.3}, {:.3}) .. ({:.3}, {:.3}, {:.3}) m",
         b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
@@ -77,6 +112,13 @@ pub fn run(a: InfoArgs) -> Result<()> {
     }
     let e = scene.emissive_power();
     println!("emissive     power ({:.3}, {:.3}, {:.3}) W", e.x, e.y, e.z);
+    if scene.sky.is_some() {
+        let k = scene.sky_power(r);
+        println!(
+            "sky power    ({:.3}, {:.3}, {:.3}) W through the scene's bounding sphere",
+            k.x, k.y, k.z
+        );
+    }
     let t = scene.total_power();
     println!(
         "total power  ({:.3}, {:.3}, {:.3}) W (mean {:.3} W)",

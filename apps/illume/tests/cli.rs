@@ -430,3 +430,27 @@ fn sky_flag_lights_the_scene_and_is_seen_behind_it() {
         assert!(err.contains("--sky") && err.contains(bad), "{err}");
     }
 }
+
+/// `illume info` says which materials have a specular part and that photon_stream
+/// approximates them; a Lambertian scene says so too.
+#[test]
+fn info_names_glossy_materials_and_the_photon_stream_caveat() {
+    let run = |scene: &str| {
+        let out = illume(&["info", scene]);
+        ok(&out);
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let lambert = run("builtin:cornell-spot");
+    assert!(
+        lambert.contains("all Lambertian") && lambert.contains("sky          none"),
+        "{lambert}"
+    );
+    let sphere = illume_scene::shared_scenes_dir().join("cornell_box/CornellBox-Sphere.obj");
+    let glossy = run(path(&sphere));
+    assert!(
+        glossy.contains("specular part")
+            && glossy.contains("leftSphere")
+            && glossy.contains("photon_stream"),
+        "{glossy}"
+    );
+}
