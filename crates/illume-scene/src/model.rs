@@ -244,6 +244,9 @@ pub struct Material {
     pub metallic: f32,
     /// Perceptual roughness (glTF `roughnessFactor`), in [0, 1]; GGX α = roughness².
     pub roughness: f32,
+    /// Optional glTF metallic-roughness texture (linear): its blue channel multiplies
+    /// `metallic`, its green channel `roughness`.
+    pub metallic_roughness_texture: Option<TextureId>,
     /// When false (glTF `doubleSided: false`), a back face neither reflects nor emits:
     /// light arriving there is absorbed.
     pub double_sided: bool,
@@ -258,15 +261,17 @@ impl Default for Material {
             emission: Rgb::ZERO,
             metallic: 0.0,
             roughness: 1.0,
+            metallic_roughness_texture: None,
             double_sided: true,
         }
     }
 }
 
 impl Material {
-    /// True when the material is exactly Lambertian (metallic 0, roughness 1).
+    /// True when the material is exactly Lambertian everywhere (metallic 0, roughness 1,
+    /// no metallic-roughness texture).
     pub fn is_lambertian(&self) -> bool {
-        self.metallic <= 0.0 && self.roughness >= 1.0
+        self.metallic <= 0.0 && self.roughness >= 1.0 && self.metallic_roughness_texture.is_none()
     }
 
     /// True when the material emits light.
@@ -640,6 +645,19 @@ impl Scene {
         }
     }
 
+    /// `(metallic, roughness)` of `material` at texture coordinates `uv` (factors ×
+    /// the metallic-roughness texture's blue and green channels).
+    pub fn metal_rough(&self, material: MaterialId, uv: Vec2) -> (f32, f32) {
+        let m = &self.materials[material.index()];
+        match m.metallic_roughness_texture {
+            Some(t) => {
+                let texel = self.textures[t.index()].sample(uv);
+                (m.metallic * texel.z, m.roughness * texel.y)
+            }
+            None => (m.metallic, m.roughness),
+        }
+    }
+
     /// Duration of the active animation \[s\] (0 without one).
     pub fn animation_duration(&self) -> f64 {
         self.active_animation
@@ -714,6 +732,16 @@ impl Scene {
                         m.name
                     ));
                 }
+            }
+            if let Some(t) = m.metallic_roughness_texture
+                && t.index() >= self.textures.len()
+            {
+                return Err(format!(
+                    "material {i} '{}': metallic-roughness texture {} of {}",
+                    m.name,
+                    t.0,
+                    self.textures.len()
+                ));
             }
             if let Some(t) = m.base_color_texture
                 && t.index() >= self.textures.len()

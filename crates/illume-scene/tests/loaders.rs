@@ -1046,6 +1046,32 @@ fn gltf_metallic_roughness_factors() {
     assert_eq!((orange.metallic, orange.roughness), (1.0, 1.0));
     assert!(!orange.is_lambertian());
     assert_eq!((white.metallic, white.roughness), (0.25, 0.4));
+    // A metallic-roughness texture (linear: G = roughness, B = metallic), 2×1 texels.
+    let mut png = Vec::new();
+    let img = image::RgbImage::from_raw(2, 1, vec![0, 128, 255, 0, 255, 0]).unwrap();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let mut t = d.clone();
+    t["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64::encode(&png))}]);
+    t["samplers"] = json!([{"magFilter": 9728, "wrapS": 33071, "wrapT": 33071}]);
+    t["textures"] = json!([{"source": 0, "sampler": 0}]);
+    t["materials"][0]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({"index": 0});
+    // The same image as a base colour too: decoded once per colour space.
+    t["materials"][1]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    let s = load_scene(&write_json(&dir, "mr_tex.gltf", &t)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.textures.len(), 2, "linear and sRGB decodes of one image");
+    let white = s.materials.iter().position(|m| m.name == "white").unwrap();
+    let id = illume_scene::MaterialId(white as u32);
+    assert!(!s.materials[white].is_lambertian());
+    let (metal, rough) = s.metal_rough(id, illume_core::Vec2::new(0.25, 0.5));
+    assert!((metal - 0.25).abs() < 1e-6, "B 255 × factor 0.25: {metal}");
+    assert!(
+        (rough - 0.4 * 128.0 / 255.0).abs() < 1e-6,
+        "G 128 linear × 0.4: {rough}"
+    );
+    let (metal, rough) = s.metal_rough(id, illume_core::Vec2::new(0.75, 0.5));
+    assert_eq!(metal, 0.0);
+    assert!((rough - 0.4).abs() < 1e-6);
     // Out of range: an error naming the material and the field.
     d["materials"][0]["pbrMetallicRoughness"]["roughnessFactor"] = json!(1.5);
     let msg = load_err(&write_json(&dir, "mr_bad.gltf", &d));

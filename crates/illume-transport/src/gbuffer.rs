@@ -177,6 +177,8 @@ pub(crate) struct TriangleSetup {
     albedo: Rgb,
     metallic: f32,
     roughness: f32,
+    /// Metallic and roughness come from a texture (sampled per pixel).
+    metal_rough_textured: bool,
     textured: bool,
     emission: Rgb,
     /// False for degenerate triangles (pixels then take a BVH ray).
@@ -252,6 +254,7 @@ impl<'a> PrimarySurfaces<'a> {
             albedo: if reflects { mat.base_color } else { Rgb::ZERO },
             metallic: mat.metallic,
             roughness: mat.roughness,
+            metal_rough_textured: mat.metallic_roughness_texture.is_some(),
             textured,
             emission: if reflects { mat.emission } else { Rgb::ZERO },
             usable,
@@ -322,6 +325,11 @@ impl<'a> PrimarySurfaces<'a> {
         } else {
             tri.albedo
         };
+        let (metallic, roughness) = if tri.metal_rough_textured {
+            self.world.scene.metal_rough(tri.material, uv)
+        } else {
+            (tri.metallic, tri.roughness)
+        };
         Some(GBufferPixel {
             hit: SurfaceHit {
                 position,
@@ -334,8 +342,8 @@ impl<'a> PrimarySurfaces<'a> {
                 barycentrics: Vec2::new(b1, b2),
                 material: tri.material,
                 albedo,
-                metallic: tri.metallic,
-                roughness: tri.roughness,
+                metallic,
+                roughness,
                 emission: tri.emission,
                 front_face: tri.front_face,
                 reflects: tri.reflects,

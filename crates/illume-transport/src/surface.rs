@@ -93,6 +93,7 @@ impl SurfaceHit {
             Rgb::ZERO
         };
         let emission = if reflects { mat.emission } else { Rgb::ZERO };
+        let (metallic, roughness) = scene.metal_rough(material, uv);
         Self {
             position,
             geometric_normal,
@@ -104,8 +105,8 @@ impl SurfaceHit {
             barycentrics: hit.barycentrics,
             material,
             albedo,
-            metallic: mat.metallic,
-            roughness: mat.roughness,
+            metallic,
+            roughness,
             emission,
             front_face,
             reflects,

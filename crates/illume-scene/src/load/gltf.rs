@@ -24,9 +24,9 @@
 //!   `baseColorTexture`, decoded sRGB → linear, wrap modes from its sampler),
 //!   `metallicFactor` and `roughnessFactor` (default 1 each, as the spec; outside
 //!   [0, 1] is an error), emitted radiance = `emissiveFactor` ×
-//!   `KHR_materials_emissive_strength`, `doubleSided`; `metallicRoughnessTexture` is not
-//!   read yet (a warning); primitives without a material get a grey (0.8) Lambertian
-//!   default;
+//!   `KHR_materials_emissive_strength`, `doubleSided`; `metallicRoughnessTexture`
+//!   (decoded linearly; blue × metallicFactor, green × roughnessFactor); primitives
+//!   without a material get a grey (0.8) Lambertian default;
 //! * camera: the lowest-index scene node with a perspective camera (`yfov`); without
 //!   one, [`super::default_camera_for_bounds`];
 //! * `KHR_lights_punctual`: point/spot intensity × colour = radiant intensity [W/sr],
@@ -42,7 +42,7 @@
 //! or accessor. Skins, morph targets, sparse accessors and orthographic cameras are not
 //! supported (sparse accessors are an error, the rest warnings).
 
-use super::{LoadError, decode_srgb_texture, default_camera_for_bounds, read_file};
+use super::{LoadError, decode_texture, default_camera_for_bounds, read_file};
 use crate::animation::{Animation, Channel, ChannelValues, Interpolation, Trs};
 use crate::builtin::SceneBuilder;
 use crate::model::{
@@ -72,7 +72,7 @@ struct Ctx<'a> {
     builder: SceneBuilder,
     materials: Vec<MaterialId>,
     default_material: Option<MaterialId>,
-    textures: HashMap<(usize, u8, u8), TextureId>,
+    textures: HashMap<(usize, u8, u8, bool), TextureId>,
     meshes: HashMap<usize, MeshId>,
     camera_set: bool,
 }
@@ -714,7 +714,11 @@ impl Ctx<'_> {
                     if info.tex_coord != 0 {
                         self.warn(format!("material {i} '{name}': baseColorTexture uses TEXCOORD_{}; TEXCOORD_0 is used", info.tex_coord));
                     }
-                    Some(self.texture(info.index.value(), &format!("material {i} '{name}'"))?)
+                    Some(self.texture(
+                        info.index.value(),
+                        &format!("material {i} '{name}'"),
+                        true,
+                    )?)
                 }
                 None => None,
             };
@@ -728,9 +732,19 @@ impl Ctx<'_> {
                     ));
                 }
             }
-            if pbr.metallic_roughness_texture.is_some() {
-                self.warn(format!("material {i} '{name}': metallicRoughnessTexture not read yet; the factors are used"));
-            }
+            let metallic_roughness_texture = match &pbr.metallic_roughness_texture {
+                Some(info) => {
+                    if info.tex_coord != 0 {
+                        self.warn(format!("material {i} '{name}': metallicRoughnessTexture uses TEXCOORD_{}; TEXCOORD_0 is used", info.tex_coord));
+                    }
+                    Some(self.texture(
+                        info.index.value(),
+                        &format!("material {i} '{name}'"),
+                        false,
+                    )?)
+                }
+                None => None,
+            };
             if m.emissive_texture.is_some() {
                 self.warn(format!("material {i} '{name}': emissiveTexture ignored (emission is emissiveFactor × strength)"));
             }
@@ -741,6 +755,7 @@ impl Ctx<'_> {
                 emission: Rgb::from(m.emissive_factor.0) * strength,
                 metallic,
                 roughness,
+                metallic_roughness_texture,
                 double_sided: m.double_sided,
             };
             let id = self.builder.material(material);
@@ -749,8 +764,9 @@ impl Ctx<'_> {
         Ok(())
     }
 
-    /// The illume texture for glTF texture `index` (image decoded once per wrap mode).
-    fn texture(&mut self, index: usize, user: &str) -> Result<TextureId, LoadError> {
+    /// The illume texture for glTF texture `index` (image decoded once per wrap mode and
+    /// colour space: `srgb` for colours, linear for data).
+    fn texture(&mut self, index: usize, user: &str, srgb: bool) -> Result<TextureId, LoadError> {
         let root = self.root;
         let texture = root
             .textures
@@ -763,7 +779,7 @@ impl Ctx<'_> {
         let image_index = texture.source.value();
         if let Some(&id) = self
             .textures
-            .get(&(image_index, wrap_u as u8, wrap_v as u8))
+            .get(&(image_index, wrap_u as u8, wrap_v as u8, srgb))
         {
             return Ok(id);
         }
@@ -793,11 +809,11 @@ impl Ctx<'_> {
             }
             (None, None) => return Err(self.malformed(place, "neither uri nor bufferView")),
         };
-        let tex = decode_srgb_texture(&bytes, name, wrap_u, wrap_v)
+        let tex = decode_texture(&bytes, name, wrap_u, wrap_v, srgb)
             .map_err(|e| self.malformed(&place, format!("cannot decode: {e}")))?;
         let id = self.builder.texture(tex);
         self.textures
-            .insert((image_index, wrap_u as u8, wrap_v as u8), id);
+            .insert((image_index, wrap_u as u8, wrap_v as u8, srgb), id);
         Ok(id)
     }
 

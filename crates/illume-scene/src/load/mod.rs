@@ -238,10 +238,28 @@ pub(crate) fn decode_srgb_texture(
     wrap_u: WrapMode,
     wrap_v: WrapMode,
 ) -> Result<Texture, String> {
+    decode_texture(bytes, name, wrap_u, wrap_v, true)
+}
+
+/// [`decode_srgb_texture`], or with `srgb` false an image of linear data (glTF's
+/// metallic-roughness texture): 8-bit codes divided by 255.
+pub(crate) fn decode_texture(
+    bytes: &[u8],
+    name: String,
+    wrap_u: WrapMode,
+    wrap_v: WrapMode,
+    srgb: bool,
+) -> Result<Texture, String> {
     let img = image::load_from_memory(bytes)
         .map_err(|e| e.to_string())?
         .to_rgb8();
-    let lut: [f32; 256] = std::array::from_fn(|i| srgb_decode(i as f32 / 255.0));
+    let lut: [f32; 256] = std::array::from_fn(|i| {
+        if srgb {
+            srgb_decode(i as f32 / 255.0)
+        } else {
+            i as f32 / 255.0
+        }
+    });
     let texels = img
         .pixels()
         .map(|p| Rgb::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
