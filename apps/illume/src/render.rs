@@ -18,7 +18,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub setup: crate::setup::SetupArgs,
     /// Scene time [s] at which the active animation is evaluated.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = crate::setup::finite_f64, allow_hyphen_values = true)]
     pub time: f64,
     /// Animation to play (default: the scene's first).
     #[arg(long)]

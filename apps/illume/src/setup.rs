@@ -102,6 +102,15 @@ fn parse_radiance(s: &str) -> Result<Vec3, String> {
     Ok(v)
 }
 
+/// A finite number (NaN and ±inf are refused).
+pub fn finite_f64(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) => Err(format!("'{s}': {v} is not a finite number")),
+        Err(e) => Err(format!("'{s}': {e}")),
+    }
+}
+
 /// `X,Y,Z` as a point.
 fn parse_point(s: &str) -> Result<Vec3, String> {
     let v: Vec<f32> = s

@@ -454,3 +454,27 @@ fn info_names_glossy_materials_and_the_photon_stream_caveat() {
         "{glossy}"
     );
 }
+
+/// A non-finite `--time` is an error naming the flag, not a panic (issue 14, defect 1).
+#[test]
+fn non_finite_time_is_refused() {
+    for bad in ["NaN", "inf", "-inf"] {
+        let arg = format!("--time={bad}");
+        let out = illume(&[
+            "render",
+            "builtin:cornell-spot",
+            &arg,
+            "--width",
+            "8",
+            "--height",
+            "6",
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "clap's usage error, not a panic"
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--time") && !err.contains("panicked"), "{err}");
+    }
+}

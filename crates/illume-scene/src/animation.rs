@@ -129,7 +129,8 @@ impl Animation {
 /// beyond the end.
 fn locate(times: &[f32], t: f32) -> (usize, f32, f32) {
     let n = times.len();
-    if n == 1 || t <= times[0] {
+    // NaN compares false everywhere: treat it as before the first key (no panic).
+    if n == 1 || t <= times[0] || t.is_nan() {
         return (0, 0.0, 0.0);
     }
     if t >= times[n - 1] {
@@ -381,5 +382,19 @@ mod tests {
             Interpolation::Linear,
         );
         assert!(nan.validate().is_err());
+    }
+}
+
+#[cfg(test)]
+mod nan_tests {
+    /// A NaN time evaluates like a time before the first key instead of panicking.
+    #[test]
+    fn nan_time_does_not_panic() {
+        let mut s = crate::builtin::load("cornell-spot").unwrap();
+        let at_zero: Vec<_> = s.instances.iter().map(|i| i.world_from_object).collect();
+        s.set_time(1.0);
+        s.set_time(f64::NAN);
+        let at_nan: Vec<_> = s.instances.iter().map(|i| i.world_from_object).collect();
+        assert_eq!(at_nan, at_zero);
     }
 }
