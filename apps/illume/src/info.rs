@@ -138,8 +138,33 @@ pub fn run(a: InfoArgs) -> Result<()> {
             "  {:<12} {:.3} s, {} channels{active}",
             an.name,
             an.duration(),
-            an.channels.len()
+            an.channels.len() + an.properties.len()
         );
+        let mut nodes: Vec<&str> = an
+            .channels
+            .iter()
+            .map(|c| scene.nodes[c.node.index()].name.as_str())
+            .collect();
+        nodes.dedup();
+        if !nodes.is_empty() {
+            println!("               moves {}", nodes.join(", "));
+        }
+        for p in &an.properties {
+            use illume_scene::PropertyTarget as P;
+            let light = |l: illume_scene::LightId| scene.lights[l.index()].name.as_str();
+            let material = |m: illume_scene::MaterialId| scene.materials[m.index()].name.as_str();
+            let what = match p.target {
+                P::LightIntensity { light: l, .. } => format!("light '{}' intensity", light(l)),
+                P::LightColour { light: l, .. } => format!("light '{}' colour", light(l)),
+                P::SpotInnerCone { light: l } => format!("light '{}' inner cone", light(l)),
+                P::SpotOuterCone { light: l } => format!("light '{}' outer cone", light(l)),
+                P::BaseColour { material: m } => format!("material '{}' base colour", material(m)),
+                P::Emissive { material: m, .. } => format!("material '{}' emission", material(m)),
+                P::Metallic { material: m } => format!("material '{}' metallic", material(m)),
+                P::Roughness { material: m } => format!("material '{}' roughness", material(m)),
+            };
+            println!("               drives {what}");
+        }
     }
     let c = &scene.camera;
     let cp = c.world_from_camera.translation;

@@ -445,6 +445,8 @@ fn info_names_glossy_materials_and_the_photon_stream_caveat() {
         lambert.contains("all Lambertian") && lambert.contains("sky          none"),
         "{lambert}"
     );
+    // What each animation drives.
+    assert!(lambert.contains("moves sphere, spot_light"), "{lambert}");
     let sphere = illume_scene::shared_scenes_dir().join("cornell_box/CornellBox-Sphere.obj");
     let glossy = run(path(&sphere));
     assert!(

@@ -3,7 +3,7 @@
 //! (Hermite with in/out tangents) interpolation. Before the first key the first value
 //! holds; after the last key the last value holds.
 
-use crate::model::NodeId;
+use crate::model::{LightId, MaterialId, NodeId};
 use illume_core::{Affine3A, Quat, Vec3, Vec4};
 
 /// A transform as translation, rotation and (possibly non-uniform) scale; the matrix is
@@ -97,13 +97,164 @@ pub struct Channel {
     pub interpolation: Interpolation,
 }
 
+/// A light or material value an animation drives (glTF `KHR_animation_pointer`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PropertyTarget {
+    /// A light's scalar intensity; its radiometric quantity is `colour × value`.
+    LightIntensity {
+        /// Which light.
+        light: LightId,
+        /// The light's colour from the file.
+        colour: illume_core::Rgb,
+    },
+    /// A light's colour (RGB); its radiometric quantity is `value × intensity`.
+    LightColour {
+        /// Which light.
+        light: LightId,
+        /// The light's scalar intensity from the file.
+        intensity: f32,
+    },
+    /// A spot light's inner cone half-angle \[rad\].
+    SpotInnerCone {
+        /// Which light.
+        light: LightId,
+    },
+    /// A spot light's outer cone half-angle \[rad\].
+    SpotOuterCone {
+        /// Which light.
+        light: LightId,
+    },
+    /// A material's base colour (RGBA; alpha ignored).
+    BaseColour {
+        /// Which material.
+        material: MaterialId,
+    },
+    /// A material's emissive factor (RGB), times its emissive strength.
+    Emissive {
+        /// Which material.
+        material: MaterialId,
+        /// `KHR_materials_emissive_strength` from the file.
+        strength: f32,
+    },
+    /// A material's metallic factor.
+    Metallic {
+        /// Which material.
+        material: MaterialId,
+    },
+    /// A material's roughness factor.
+    Roughness {
+        /// Which material.
+        material: MaterialId,
+    },
+}
+
+impl PropertyTarget {
+    /// Components per key (1 scalar, 3 RGB, 4 RGBA).
+    pub fn components(&self) -> usize {
+        match self {
+            PropertyTarget::LightColour { .. } | PropertyTarget::Emissive { .. } => 3,
+            PropertyTarget::BaseColour { .. } => 4,
+            _ => 1,
+        }
+    }
+}
+
+/// One animated light or material value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PropertyChannel {
+    /// What it drives.
+    pub target: PropertyTarget,
+    /// Key times \[s\], strictly increasing.
+    pub times: Vec<f32>,
+    /// Key values, [`PropertyTarget::components`] per key (three keys' worth per key
+    /// for `CubicSpline`: in-tangent, value, out-tangent).
+    pub values: Vec<f32>,
+    /// How values between keys are found.
+    pub interpolation: Interpolation,
+}
+
+impl PropertyChannel {
+    /// The value at time `t` (components as [`PropertyTarget::components`], zero-padded).
+    pub fn sample(&self, t: f32) -> Vec4 {
+        let c = self.target.components();
+        let key = |k: usize| {
+            let mut v = [0.0f32; 4];
+            v[..c].copy_from_slice(&self.values[k * c..(k + 1) * c]);
+            Vec4::from_array(v)
+        };
+        let n = self.times.len();
+        let keys: Vec<Vec4> = (0..self.values.len() / c).map(key).collect();
+        debug_assert!(keys.len() >= n);
+        let (i, u, dt) = locate(&self.times, t);
+        let last = i + 1 >= n;
+        match self.interpolation {
+            Interpolation::CubicSpline => {
+                if last || u == 0.0 {
+                    keys[3 * i + 1]
+                } else {
+                    hermite(
+                        keys[3 * i + 1],
+                        keys[3 * i + 2],
+                        keys[3 * (i + 1) + 1],
+                        keys[3 * (i + 1)],
+                        u,
+                        dt,
+                    )
+                }
+            }
+            Interpolation::Step => keys[i],
+            Interpolation::Linear => {
+                if last {
+                    keys[i]
+                } else {
+                    keys[i].lerp(keys[i + 1], u)
+                }
+            }
+        }
+    }
+
+    /// Checks keys and values; the message says what is wrong.
+    pub fn validate(&self) -> Result<(), String> {
+        let n = self.times.len();
+        if n == 0 {
+            return Err("channel has no keys".into());
+        }
+        if self
+            .times
+            .windows(2)
+            .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+            || self.times.iter().any(|t| !t.is_finite())
+        {
+            return Err("key times are not finite and strictly increasing".into());
+        }
+        let per_key = if self.interpolation == Interpolation::CubicSpline {
+            3
+        } else {
+            1
+        };
+        let want = n * per_key * self.target.components();
+        if self.values.len() != want {
+            return Err(format!(
+                "{} output values for {n} keys (want {want})",
+                self.values.len()
+            ));
+        }
+        if self.values.iter().any(|v| !v.is_finite()) {
+            return Err("output values are not finite".into());
+        }
+        Ok(())
+    }
+}
+
 /// A named set of channels played together.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Animation {
     /// Name from the file.
     pub name: String,
-    /// Channels.
+    /// Channels driving node transforms.
     pub channels: Vec<Channel>,
+    /// Channels driving light and material values.
+    pub properties: Vec<PropertyChannel>,
 }
 
 impl Animation {
@@ -112,6 +263,7 @@ impl Animation {
         self.channels
             .iter()
             .filter_map(|c| c.times.last())
+            .chain(self.properties.iter().filter_map(|c| c.times.last()))
             .fold(0.0f32, |a, &b| a.max(b)) as f64
     }
 

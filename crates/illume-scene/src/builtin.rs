@@ -493,14 +493,17 @@ fn cornell_spot() -> Scene {
     b.animation(Animation {
         name: "move".into(),
         channels: vec![move_sphere.clone(), move_light.clone()],
+        properties: Vec::new(),
     });
     b.animation(Animation {
         name: "move_sphere".into(),
         channels: vec![move_sphere],
+        properties: Vec::new(),
     });
     b.animation(Animation {
         name: "move_light".into(),
         channels: vec![move_light],
+        properties: Vec::new(),
     });
     b.finish("builtin:cornell-spot")
 }
@@ -566,6 +569,7 @@ fn cube_in_box() -> Scene {
             &[0.0, 1.0, 2.0, 3.0, 4.0],
             &path,
         )],
+        properties: Vec::new(),
     });
     b.finish("builtin:cube-in-box")
 }

@@ -150,6 +150,14 @@ pub enum EditError {
     },
 }
 
+/// Sets a light's radiometric quantity (intensity or irradiance) to `value`.
+fn set_light_quantity(kind: &mut LightKind, value: illume_core::Rgb) {
+    match kind {
+        LightKind::Point { intensity } | LightKind::Spot { intensity, .. } => *intensity = value,
+        LightKind::Directional { irradiance } => *irradiance = value,
+    }
+}
+
 impl Scene {
     /// Recomputes every node's world transform from the local ones and refreshes the
     /// cached transforms of instances, lights and camera. Returns the changes.
@@ -202,14 +210,97 @@ impl Scene {
     /// scene's previous state. Nodes not driven by the animation keep their transforms.
     pub fn set_time(&mut self, t: f64) -> Vec<SceneChange> {
         self.time = t;
-        if let Some(a) = self.active_animation {
-            let mut locals: Vec<Trs> = self.nodes.iter().map(|n| n.local).collect();
-            self.animations[a].apply(t, &mut locals);
-            for (n, l) in self.nodes.iter_mut().zip(locals) {
-                n.local = l;
+        let Some(a) = self.active_animation else {
+            return self.update_world_transforms();
+        };
+        let mut locals: Vec<Trs> = self.nodes.iter().map(|n| n.local).collect();
+        self.animations[a].apply(t, &mut locals);
+        for (n, l) in self.nodes.iter_mut().zip(locals) {
+            n.local = l;
+        }
+        if self.animations[a].properties.is_empty() {
+            return self.update_world_transforms();
+        }
+        let lights_before = self.lights.clone();
+        let materials_before = self.materials.clone();
+        let mut changes = self.update_world_transforms();
+        self.apply_properties(a, t as f32);
+        // One LightChanged per light, from its state before this call.
+        for (i, before) in lights_before.into_iter().enumerate() {
+            let now = &self.lights[i];
+            if now.kind == before.kind {
+                continue;
+            }
+            let light = LightId(i as u32);
+            let existing = changes.iter_mut().find_map(|c| match c {
+                SceneChange::LightChanged { light: l, from, to } if *l == light => Some((from, to)),
+                _ => None,
+            });
+            match existing {
+                Some((from, to)) => {
+                    **from = before;
+                    **to = now.clone();
+                }
+                None => changes.push(SceneChange::LightChanged {
+                    light,
+                    from: Box::new(before),
+                    to: Box::new(now.clone()),
+                }),
             }
         }
-        self.update_world_transforms()
+        for (i, before) in materials_before.into_iter().enumerate() {
+            if self.materials[i] != before {
+                changes.push(SceneChange::MaterialChanged {
+                    material: MaterialId(i as u32),
+                    from: Box::new(before),
+                    to: Box::new(self.materials[i].clone()),
+                });
+            }
+        }
+        changes
+    }
+
+    /// Writes animation `a`'s light and material values at time `t`.
+    fn apply_properties(&mut self, a: usize, t: f32) {
+        use crate::animation::PropertyTarget as P;
+        for c in &self.animations[a].properties {
+            let v = c.sample(t);
+            let rgb = illume_core::Rgb::new(v.x, v.y, v.z).max(illume_core::Rgb::ZERO);
+            match c.target {
+                P::LightIntensity { light, colour } => {
+                    set_light_quantity(&mut self.lights[light.index()].kind, colour * v.x.max(0.0))
+                }
+                P::LightColour { light, intensity } => {
+                    set_light_quantity(&mut self.lights[light.index()].kind, rgb * intensity)
+                }
+                P::SpotInnerCone { light } => {
+                    if let LightKind::Spot { inner_cone_rad, .. } =
+                        &mut self.lights[light.index()].kind
+                    {
+                        *inner_cone_rad = v.x.clamp(0.0, std::f32::consts::FRAC_PI_2);
+                    }
+                }
+                P::SpotOuterCone { light } => {
+                    if let LightKind::Spot { outer_cone_rad, .. } =
+                        &mut self.lights[light.index()].kind
+                    {
+                        *outer_cone_rad = v.x.clamp(0.0, std::f32::consts::FRAC_PI_2);
+                    }
+                }
+                P::BaseColour { material } => {
+                    self.materials[material.index()].base_color = rgb.min(illume_core::Rgb::ONE)
+                }
+                P::Emissive { material, strength } => {
+                    self.materials[material.index()].emission = rgb * strength
+                }
+                P::Metallic { material } => {
+                    self.materials[material.index()].metallic = v.x.clamp(0.0, 1.0)
+                }
+                P::Roughness { material } => {
+                    self.materials[material.index()].roughness = v.x.clamp(0.0, 1.0)
+                }
+            }
+        }
     }
 
     /// Selects the animation named `name` as the active one.

@@ -25,7 +25,9 @@ pub mod load;
 pub mod model;
 pub mod timeline;
 
-pub use animation::{Animation, Channel, ChannelValues, Interpolation, Trs};
+pub use animation::{
+    Animation, Channel, ChannelValues, Interpolation, PropertyChannel, PropertyTarget, Trs,
+};
 pub use change::{Edit, SceneChange};
 pub use load::{LoadError, load_envmap, load_scene};
 pub use model::*;

@@ -1151,6 +1151,114 @@ fn gltf_sky_in_root_extras() {
     assert_eq!(map.texels[5], Vec3::new(0.5, 1.0, 1.5));
 }
 
+/// `KHR_animation_pointer`: a light's intensity and a material's base colour and
+/// roughness animated; `set_time` reports them as light and material changes.
+#[test]
+fn gltf_animation_pointer_drives_light_and_material_values() {
+    let (dir, doc) = cube_copy("gltf_pointer");
+    let mut d = doc.clone();
+    // times [0, 1]; intensity 1 → 5; base colour (1,1,1,1) → (0.2,0.4,0.6,1);
+    // roughness 1 → 0.5.
+    let floats: Vec<f32> = vec![
+        0.0, 1.0, 1.0, 5.0, 1.0, 1.0, 1.0, 1.0, 0.2, 0.4, 0.6, 1.0, 1.0, 0.5,
+    ];
+    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let buffer = d["buffers"].as_array().unwrap().len();
+    d["buffers"].as_array_mut().unwrap().push(json!({
+        "byteLength": bytes.len(),
+        "uri": format!("data:application/octet-stream;base64,{}", base64::encode(&bytes)),
+    }));
+    let views = d["bufferViews"].as_array().unwrap().len();
+    let accessors = d["accessors"].as_array().unwrap().len();
+    for (offset, count, ty) in [
+        (0, 2, "SCALAR"),
+        (8, 2, "SCALAR"),
+        (16, 2, "VEC4"),
+        (48, 2, "SCALAR"),
+    ] {
+        let len = count * 4 * if ty == "VEC4" { 4 } else { 1 };
+        d["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({"buffer": buffer, "byteOffset": offset, "byteLength": len}));
+        let v = d["bufferViews"].as_array().unwrap().len() - 1;
+        let mut acc = json!({"bufferView": v, "componentType": 5126, "count": count, "type": ty});
+        if offset == 0 {
+            acc["min"] = json!([0.0]);
+            acc["max"] = json!([1.0]);
+        }
+        d["accessors"].as_array_mut().unwrap().push(acc);
+    }
+    let _ = views;
+    let (t, i, c, r) = (accessors, accessors + 1, accessors + 2, accessors + 3);
+    let pointer = |sampler: usize, p: &str| json!({"sampler": sampler, "target": {"path": "pointer", "extensions": {"KHR_animation_pointer": {"pointer": p}}}});
+    d["animations"] = json!([{
+        "name": "dim",
+        "samplers": [
+            {"input": t, "output": i, "interpolation": "LINEAR"},
+            {"input": t, "output": c, "interpolation": "LINEAR"},
+            {"input": t, "output": r, "interpolation": "STEP"},
+        ],
+        "channels": [
+            pointer(0, "/extensions/KHR_lights_punctual/lights/0/intensity"),
+            pointer(1, "/materials/0/pbrMetallicRoughness/baseColorFactor"),
+            pointer(2, "/materials/0/pbrMetallicRoughness/roughnessFactor"),
+            pointer(0, "/cameras/0/perspective/yfov"),
+        ],
+    }]);
+    d["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_animation_pointer"]);
+    let mut s = load_scene(&write_json(&dir, "pointer.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("yfov") && w.contains("ignored")),
+        "{:?}",
+        s.warnings
+    );
+    assert_eq!(s.animations[0].properties.len(), 3);
+    s.select_animation("dim").unwrap();
+    s.set_time(0.0);
+    let changes = s.set_time(0.5);
+    let light = changes.iter().find_map(|c| match c {
+        illume_scene::SceneChange::LightChanged { to, .. } => Some(to.kind),
+        _ => None,
+    });
+    assert_eq!(
+        light,
+        Some(illume_scene::LightKind::Point {
+            intensity: Vec3::splat(3.0)
+        }),
+        "{changes:?}"
+    );
+    let material = changes.iter().find_map(|c| match c {
+        illume_scene::SceneChange::MaterialChanged { from, to, .. } => {
+            Some((from.clone(), to.clone()))
+        }
+        _ => None,
+    });
+    let (from, to) = material.expect("a material change");
+    assert_close(
+        to.base_color,
+        Vec3::new(0.6, 0.7, 0.8),
+        1e-6,
+        "halfway colour",
+    );
+    assert_eq!(from.roughness, 1.0);
+    assert_eq!(to.roughness, 1.0, "STEP holds the first key until t = 1");
+    s.set_time(1.0);
+    assert_eq!(s.materials[0].roughness, 0.5);
+    assert!(s.set_time(1.0).is_empty(), "same time, no change");
+    // A pointer at a light that does not exist is an error naming the channel.
+    let mut bad = d.clone();
+    bad["animations"][0]["channels"][0] =
+        pointer(0, "/extensions/KHR_lights_punctual/lights/7/intensity");
+    let msg = load_err(&write_json(&dir, "bad_pointer.gltf", &bad));
+    assert_contains(
+        &msg,
+        &["animation 0 'dim' channel 0", "lights/7", "does not exist"],
+    );
+}
+
 #[test]
 fn gltf_missing_texture_and_data_uri_texture() {
     let (dir, doc) = cube_copy("gltf_tex");

@@ -35,18 +35,25 @@
 //! * animations: translation/rotation/scale channels with `LINEAR`, `STEP` and
 //!   `CUBICSPLINE`, each checked with [`Channel::validate`]; morph-target weights are
 //!   ignored with a warning. The first animation is the active one.
+//!   `KHR_animation_pointer` channels (taken out of the JSON before the `gltf` crate
+//!   reads it) drive light intensity, colour and spot cone angles and material
+//!   `baseColorFactor`, `emissiveFactor`, `metallicFactor`, `roughnessFactor`
+//!   ([`PropertyChannel`]); other pointers are warnings.
 //!
-//! Any `extensionsRequired` entry other than `KHR_lights_punctual` and
-//! `KHR_materials_emissive_strength` is [`LoadError::Unsupported`]. Non-finite numbers
+//! Any `extensionsRequired` entry other than `KHR_lights_punctual`,
+//! `KHR_materials_emissive_strength` and `KHR_animation_pointer` is
+//! [`LoadError::Unsupported`]. Non-finite numbers
 //! in transforms, vertex data or key values are [`LoadError::Malformed`] naming the node
 //! or accessor. Skins, morph targets, sparse accessors and orthographic cameras are not
 //! supported (sparse accessors are an error, the rest warnings).
 
 use super::{LoadError, decode_texture, default_camera_for_bounds, read_file};
-use crate::animation::{Animation, Channel, ChannelValues, Interpolation, Trs};
+use crate::animation::{
+    Animation, Channel, ChannelValues, Interpolation, PropertyChannel, PropertyTarget, Trs,
+};
 use crate::builtin::SceneBuilder;
 use crate::model::{
-    LightKind, Material, MaterialId, Mesh, MeshId, NodeId, Scene, Sky, TextureId, WrapMode,
+    LightId, LightKind, Material, MaterialId, Mesh, MeshId, NodeId, Scene, Sky, TextureId, WrapMode,
 };
 use ::gltf::json;
 use illume_core::{Affine3A, Mat4, Quat, Rgb, Vec2, Vec3, Vec4};
@@ -55,8 +62,11 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// Extensions a file may list in `extensionsRequired`.
-pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] =
-    ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_animation_pointer",
+];
 
 /// Largest number of values (elements × components) of an accessor *without* a buffer
 /// view (all zeros) accepted: guards memory against absurd counts. Accessors with data
@@ -75,6 +85,90 @@ struct Ctx<'a> {
     textures: HashMap<(usize, u8, u8, bool), TextureId>,
     meshes: HashMap<usize, MeshId>,
     camera_set: bool,
+    /// `KHR_animation_pointer` channels, taken out of the document before `gltf-json`
+    /// reads it (it knows only node paths).
+    pointers: Vec<PointerChannel>,
+    /// The illume lights made from each `KHR_lights_punctual` light (one per node).
+    light_ids: HashMap<usize, Vec<LightId>>,
+}
+
+/// An animation channel whose target is a JSON pointer (`KHR_animation_pointer`).
+#[derive(Clone, Debug)]
+struct PointerChannel {
+    animation: usize,
+    channel: usize,
+    sampler: usize,
+    pointer: String,
+}
+
+/// Takes the `KHR_animation_pointer` channels (target path `"pointer"`) out of the
+/// document's JSON, returning the document without them (re-encoded, GLB container
+/// rebuilt) and the channels. A document without such channels comes back unchanged;
+/// one whose JSON does not parse too (the `gltf` crate reports that error).
+fn split_pointer_channels(bytes: Vec<u8>, is_glb: bool) -> (Vec<u8>, Vec<PointerChannel>) {
+    let word = |b: &[u8], at: usize| {
+        b.get(at..at + 4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize)
+    };
+    let json_range = if is_glb {
+        match (word(&bytes, 12), bytes.get(16..20)) {
+            (Some(len), Some(b"JSON")) if 20 + len <= bytes.len() => 20..20 + len,
+            _ => return (bytes, Vec::new()),
+        }
+    } else {
+        0..bytes.len()
+    };
+    let Ok(mut doc) = serde_json::from_slice::<serde_json::Value>(&bytes[json_range.clone()])
+    else {
+        return (bytes, Vec::new());
+    };
+    let mut found = Vec::new();
+    if let Some(animations) = doc.get_mut("animations").and_then(|a| a.as_array_mut()) {
+        for (ai, a) in animations.iter_mut().enumerate() {
+            let Some(channels) = a.get_mut("channels").and_then(|c| c.as_array_mut()) else {
+                continue;
+            };
+            let mut ci = 0;
+            channels.retain(|c| {
+                let target = &c["target"];
+                let keep = target["path"] != "pointer";
+                if !keep {
+                    found.push(PointerChannel {
+                        animation: ai,
+                        channel: ci,
+                        sampler: c["sampler"].as_u64().unwrap_or(u64::MAX) as usize,
+                        pointer: target["extensions"]["KHR_animation_pointer"]["pointer"]
+                            .as_str()
+                            .unwrap_or("")
+                            .to_owned(),
+                    });
+                }
+                ci += 1;
+                keep
+            });
+        }
+    }
+    if found.is_empty() {
+        return (bytes, found);
+    }
+    let Ok(mut json) = serde_json::to_vec(&doc) else {
+        return (bytes, Vec::new());
+    };
+    if !is_glb {
+        return (json, found);
+    }
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let rest = &bytes[json_range.end..];
+    let mut out = Vec::with_capacity(20 + json.len() + rest.len());
+    out.extend_from_slice(&bytes[0..8]);
+    out.extend_from_slice(&((20 + json.len() + rest.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&json);
+    out.extend_from_slice(rest);
+    (out, found)
 }
 
 pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
@@ -83,6 +177,7 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
     if is_glb {
         check_glb_header(path, &bytes)?;
     }
+    let (bytes, pointers) = split_pointer_channels(bytes, is_glb);
     let document = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
         LoadError::malformed(
             path,
@@ -154,6 +249,8 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         textures: HashMap::new(),
         meshes: HashMap::new(),
         camera_set: false,
+        pointers,
+        light_ids: HashMap::new(),
     };
     let sky = sky_from_extras(path, root)?;
     let mut scene = ctx.convert()?;
@@ -1021,7 +1118,8 @@ impl Ctx<'_> {
             Checked::Invalid => return Err(self.malformed(place, "invalid light type")),
         };
         let name = light.name.clone().unwrap_or_else(|| node_name.to_string());
-        self.builder.light(&name, kind, node);
+        let id = self.builder.light(&name, kind, node);
+        self.light_ids.entry(index).or_default().push(id);
         Ok(())
     }
 
@@ -1070,6 +1168,152 @@ impl Ctx<'_> {
     }
 
     /// Converts every animation; returns the illume nodes any channel targets.
+    /// The `KHR_animation_pointer` channels of animation `ai`: light intensity, colour and
+    /// spot cone angles, material base colour, emissive factor, metallic and roughness.
+    /// Other pointers are warnings (ignored); bad samplers and accessors are errors.
+    fn pointer_channels(
+        &mut self,
+        ai: usize,
+        name: &str,
+    ) -> Result<Vec<PropertyChannel>, LoadError> {
+        use json::animation::Interpolation as I;
+        let root = self.root;
+        let mut out = Vec::new();
+        let pointers: Vec<PointerChannel> = self
+            .pointers
+            .iter()
+            .filter(|p| p.animation == ai)
+            .cloned()
+            .collect();
+        for p in pointers {
+            let place = format!(
+                "animation {ai} '{name}' channel {} (pointer '{}')",
+                p.channel, p.pointer
+            );
+            let parts: Vec<&str> = p.pointer.trim_start_matches('/').split('/').collect();
+            let index = |s: &str| s.parse::<usize>().ok();
+            let lights = root
+                .extensions
+                .as_ref()
+                .and_then(|e| e.khr_lights_punctual.as_ref());
+            let mut targets = Vec::new();
+            match parts[..] {
+                [
+                    "extensions",
+                    "KHR_lights_punctual",
+                    "lights",
+                    i,
+                    ref rest @ ..,
+                ] => {
+                    let Some(l) = index(i).and_then(|i| lights.and_then(|ls| ls.lights.get(i)))
+                    else {
+                        return Err(self.malformed(place, "the light does not exist"));
+                    };
+                    let ids = self
+                        .light_ids
+                        .get(&index(i).unwrap_or(0))
+                        .cloned()
+                        .unwrap_or_default();
+                    for light in ids {
+                        match rest {
+                            ["intensity"] => targets.push(PropertyTarget::LightIntensity {
+                                light,
+                                colour: Rgb::from(l.color),
+                            }),
+                            ["color"] => targets.push(PropertyTarget::LightColour {
+                                light,
+                                intensity: l.intensity,
+                            }),
+                            ["spot", "innerConeAngle"] => {
+                                targets.push(PropertyTarget::SpotInnerCone { light })
+                            }
+                            ["spot", "outerConeAngle"] => {
+                                targets.push(PropertyTarget::SpotOuterCone { light })
+                            }
+                            _ => {}
+                        }
+                    }
+                    if !matches!(
+                        rest,
+                        ["intensity"]
+                            | ["color"]
+                            | ["spot", "innerConeAngle"]
+                            | ["spot", "outerConeAngle"]
+                    ) {
+                        self.warn(format!(
+                            "{place}: this light property is not animated; ignored"
+                        ));
+                        continue;
+                    }
+                }
+                ["materials", m, ref rest @ ..] => {
+                    let Some((gm, &material)) = index(m)
+                        .and_then(|m| Some((root.materials.get(m)?, self.materials.get(m)?)))
+                    else {
+                        return Err(self.malformed(place, "the material does not exist"));
+                    };
+                    let strength = gm
+                        .extensions
+                        .as_ref()
+                        .and_then(|e| e.emissive_strength.as_ref())
+                        .map(|s| s.emissive_strength.0)
+                        .unwrap_or(1.0);
+                    targets.push(match rest {
+                        ["pbrMetallicRoughness", "baseColorFactor"] => {
+                            PropertyTarget::BaseColour { material }
+                        }
+                        ["pbrMetallicRoughness", "metallicFactor"] => {
+                            PropertyTarget::Metallic { material }
+                        }
+                        ["pbrMetallicRoughness", "roughnessFactor"] => {
+                            PropertyTarget::Roughness { material }
+                        }
+                        ["emissiveFactor"] => PropertyTarget::Emissive { material, strength },
+                        _ => {
+                            self.warn(format!(
+                                "{place}: this material property is not animated; ignored"
+                            ));
+                            continue;
+                        }
+                    });
+                }
+                _ => {
+                    self.warn(format!("{place}: unsupported pointer target; ignored"));
+                    continue;
+                }
+            }
+            let a = &root.animations[ai];
+            let sampler = a.samplers.get(p.sampler).ok_or_else(|| {
+                self.malformed(&place, format!("sampler {} does not exist", p.sampler))
+            })?;
+            let interpolation = match sampler.interpolation {
+                Checked::Valid(I::Linear) => Interpolation::Linear,
+                Checked::Valid(I::Step) => Interpolation::Step,
+                Checked::Valid(I::CubicSpline) => Interpolation::CubicSpline,
+                Checked::Invalid => return Err(self.malformed(place, "invalid interpolation")),
+            };
+            let (input, output) = (sampler.input.value(), sampler.output.value());
+            let (times, comps) = self.read_accessor(input, &format!("{place} input"))?;
+            if comps != 1 {
+                return Err(self.malformed(&place, "key times must be SCALAR"));
+            }
+            let (values, _) = self.read_accessor(output, &format!("{place} output"))?;
+            for target in targets {
+                let channel = PropertyChannel {
+                    target,
+                    times: times.iter().map(|&t| t as f32).collect(),
+                    values: values.iter().map(|&v| v as f32).collect(),
+                    interpolation,
+                };
+                channel.validate().map_err(|m| {
+                    self.malformed(format!("{place} (accessors {input}/{output})"), m)
+                })?;
+                out.push(channel);
+            }
+        }
+        Ok(out)
+    }
+
     fn animations(&mut self, node_ids: &[Option<NodeId>]) -> Result<Vec<NodeId>, LoadError> {
         use json::animation::{Interpolation as I, Property as P};
         let root = self.root;
@@ -1148,13 +1392,18 @@ impl Ctx<'_> {
                 targeted.push(node);
                 channels.push(channel);
             }
-            if channels.is_empty() {
+            let properties = self.pointer_channels(ai, &name)?;
+            if channels.is_empty() && properties.is_empty() {
                 self.warn(format!(
                     "animation {ai} '{name}': no usable channel; skipped"
                 ));
                 continue;
             }
-            self.builder.animation(Animation { name, channels });
+            self.builder.animation(Animation {
+                name,
+                channels,
+                properties,
+            });
         }
         Ok(targeted)
     }
