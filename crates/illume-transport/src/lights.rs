@@ -124,28 +124,30 @@ pub struct LightSet {
     /// Photon-emission selection over the emitters then the sky (only with a sky; the
     /// NEE table serves emission otherwise).
     emission_table: Option<AliasTable>,
-    /// Texel selection of an environment map, by luminance × sinθ.
+    /// Texel selection of an environment map, by filtered luminance × sinθ.
     env_table: Option<AliasTable>,
 }
 
-/// Texel weights of `map` for importance sampling: the largest luminance in each texel's
-/// 3×3 neighbourhood (bilinear lookups spread a texel's radiance half a texel into its
-/// neighbours, which must keep a non-zero density) times sinθ of its row (texels shrink
-/// towards the poles).
+/// Texel weights of `map` for importance sampling: the mean luminance of the bilinear
+/// lookup over each texel's footprint — the separable [1, 6, 1]/8 filter of the texel and
+/// its neighbours, so the density is positive wherever a lookup can be (bilinear lookups
+/// spread a texel half a texel into its neighbours) and otherwise follows the radiance
+/// closely — times sinθ of its row (texels shrink towards the poles).
 fn env_weights(map: &illume_scene::EnvMap) -> Vec<f32> {
     let (w, h) = (map.width as i64, map.height as i64);
     let lum = |x: i64, y: i64| {
         let t = map.texels[(y.clamp(0, h - 1) * w + x.rem_euclid(w)) as usize];
         illume_core::luminance(t).max(0.0)
     };
+    const TAP: [f32; 3] = [0.125, 0.75, 0.125];
     let mut out = Vec::with_capacity((w * h) as usize);
     for y in 0..h {
         let sin = ((y as f32 + 0.5) / h as f32 * PI).sin();
         for x in 0..w {
             let mut m = 0f32;
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    m = m.max(lum(x + dx, y + dy));
+            for (dy, wy) in (-1..=1).zip(TAP) {
+                for (dx, wx) in (-1..=1).zip(TAP) {
+                    m += wx * wy * lum(x + dx, y + dy);
                 }
             }
             out.push(m * sin);
