@@ -309,10 +309,9 @@ impl LightSet {
         let Some(table) = &self.env_table else {
             return 0.0;
         };
-        let sin = (1.0 - wi.y * wi.y).max(0.0).sqrt();
-        if sin <= 1e-6 {
-            return 0.0;
-        }
+        // Clamped at the poles, where the Jacobian sinθ vanishes: the density there is
+        // large but finite, the same for sampling and for MIS.
+        let sin = (1.0 - wi.y * wi.y).max(0.0).sqrt().max(1e-6);
         let uv = map.uv(wi);
         let i = ((uv.x * map.width as f32) as u32).min(map.width - 1);
         let j = ((uv.y * map.height as f32) as u32).min(map.height - 1);
