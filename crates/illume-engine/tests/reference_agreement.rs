@@ -72,9 +72,32 @@ fn config(kind: TechniqueKind, sets: &[&str]) -> Config {
     c
 }
 
+/// The scenes every technique is compared on: `builtin:cornell-spot` as it is, and with
+/// a uniform sky (light entering through the open front; sky photons, sky NEE).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Lighting {
+    Spot,
+    SpotAndSky,
+}
+
+fn scene(lighting: Lighting) -> illume_scene::Scene {
+    let mut scene = illume_scene::builtin::load("cornell-spot").expect("built-in scene");
+    if lighting == Lighting::SpotAndSky {
+        scene.sky = Some(illume_scene::Sky::Uniform {
+            radiance: illume_core::Rgb::new(0.3, 0.4, 0.6),
+        });
+    }
+    scene
+}
+
 /// The technique's indirect image after `frames` frames at t = 0.
 fn indirect(kind: TechniqueKind, sets: &[&str], frames: u32) -> RgbImage {
-    let scene = illume_scene::builtin::load("cornell-spot").expect("built-in scene");
+    indirect_in(Lighting::Spot, kind, sets, frames)
+}
+
+/// [`indirect`] under `lighting`.
+fn indirect_in(lighting: Lighting, kind: TechniqueKind, sets: &[&str], frames: u32) -> RgbImage {
+    let scene = scene(lighting);
     let mut engine = Engine::new(scene, &config(kind, sets)).unwrap_or_else(|e| panic!("{e}"));
     engine
         .precompute(&mut Silent)
@@ -154,6 +177,19 @@ fn check(
     Err(format!("{summary} — wrote {}", written.join(", ")))
 }
 
+/// The reference's indirect light of the sky-lit box, 512 spp.
+fn sky_reference() -> &'static RgbImage {
+    static REFERENCE: OnceLock<RgbImage> = OnceLock::new();
+    REFERENCE.get_or_init(|| {
+        indirect_in(
+            Lighting::SpotAndSky,
+            TechniqueKind::Reference,
+            &["reference.spp_per_frame=256", "reference.seed=1"],
+            2,
+        )
+    })
+}
+
 fn output_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("reference_agreement")
 }
@@ -170,6 +206,31 @@ fn every_technique_agrees_with_the_reference_indirect_light() {
         let a = agreement(kind);
         let img = indirect(kind, a.sets, a.frames);
         match check(kind.name(), &img, reference, &a, &output_dir()) {
+            Ok(summary) => eprintln!("{summary}"),
+            Err(failure) => failures.push(failure),
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The same tolerances with a sky added: every technique carries sky light into its
+/// indirect image (photon_stream through sky photons).
+#[test]
+fn every_technique_agrees_with_the_reference_under_a_sky() {
+    let reference = sky_reference();
+    let dark = self::reference();
+    assert!(
+        reference.mean().element_sum() > 1.2 * dark.mean().element_sum(),
+        "the sky adds indirect light: {} vs {}",
+        reference.mean(),
+        dark.mean()
+    );
+    let mut failures = Vec::new();
+    for &kind in TechniqueKind::ALL {
+        let a = agreement(kind);
+        let img = indirect_in(Lighting::SpotAndSky, kind, a.sets, a.frames);
+        let name = format!("{}_sky", kind.name());
+        match check(&name, &img, reference, &a, &output_dir()) {
             Ok(summary) => eprintln!("{summary}"),
             Err(failure) => failures.push(failure),
         }
