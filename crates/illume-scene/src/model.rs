@@ -57,6 +57,9 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Texture coordinates per vertex, or empty.
     pub uvs: Vec<Vec2>,
+    /// Tangents per vertex for normal maps: xyz the unit tangent (direction of +u), w
+    /// the bitangent sign (bitangent = w · normal × tangent), or empty.
+    pub tangents: Vec<illume_core::Vec4>,
     /// Vertex indices of each triangle (counter-clockwise = front face).
     pub indices: Vec<[u32; 3]>,
     /// Material of each triangle (same length as `indices`).
@@ -104,6 +107,13 @@ impl Mesh {
         }
         if !self.uvs.is_empty() && self.uvs.len() != n {
             return Err(format!("{} UVs for {} positions", self.uvs.len(), n));
+        }
+        if !self.tangents.is_empty() && self.tangents.len() != n {
+            return Err(format!(
+                "{} tangents for {} positions",
+                self.tangents.len(),
+                n
+            ));
         }
         if self.triangle_materials.len() != self.indices.len() {
             return Err(format!(
@@ -247,6 +257,11 @@ pub struct Material {
     /// Optional glTF metallic-roughness texture (linear): its blue channel multiplies
     /// `metallic`, its green channel `roughness`.
     pub metallic_roughness_texture: Option<TextureId>,
+    /// Optional tangent-space normal map (linear, glTF convention: +x along +u, +y along
+    /// +v of the tangent frame, +z the surface normal), used where the mesh has tangents.
+    pub normal_texture: Option<TextureId>,
+    /// Scale of the normal map's x and y (glTF `normalTexture.scale`). Default 1.
+    pub normal_scale: f32,
     /// When false (glTF `doubleSided: false`), a back face neither reflects nor emits:
     /// light arriving there is absorbed.
     pub double_sided: bool,
@@ -262,6 +277,8 @@ impl Default for Material {
             metallic: 0.0,
             roughness: 1.0,
             metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
             double_sided: true,
         }
     }
@@ -732,6 +749,16 @@ impl Scene {
                         m.name
                     ));
                 }
+            }
+            if let Some(t) = m.normal_texture
+                && t.index() >= self.textures.len()
+            {
+                return Err(format!(
+                    "material {i} '{}': normal texture {} of {}",
+                    m.name,
+                    t.0,
+                    self.textures.len()
+                ));
             }
             if let Some(t) = m.metallic_roughness_texture
                 && t.index() >= self.textures.len()

@@ -1032,6 +1032,79 @@ fn obj_phong_materials_map_onto_metallic_roughness() {
     );
 }
 
+/// A normal-mapped glTF plane without TANGENT gets MikkTSpace tangents along +u, and
+/// its normal texture is decoded linearly with its scale.
+#[test]
+fn gltf_normal_map_gets_mikktspace_tangents() {
+    let dir = temp_dir("gltf_normal_map");
+    // Plane in y = 0 facing +y; u runs along +x, v along +z.
+    let pos: [[f32; 3]; 4] = [[-1., 0., -1.], [1., 0., -1.], [1., 0., 1.], [-1., 0., 1.]];
+    let nrm: [[f32; 3]; 4] = [[0., 1., 0.]; 4];
+    let uv: [[f32; 2]; 4] = [[0., 0.], [1., 0.], [1., 1.], [0., 1.]];
+    let idx: [u32; 6] = [0, 2, 1, 0, 3, 2];
+    let mut bin = Vec::new();
+    for v in pos.iter().chain(&nrm) {
+        for f in v {
+            bin.extend_from_slice(&f.to_le_bytes());
+        }
+    }
+    for v in &uv {
+        for f in v {
+            bin.extend_from_slice(&f.to_le_bytes());
+        }
+    }
+    for i in idx {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let mut png = Vec::new();
+    image::RgbImage::from_raw(1, 1, vec![191, 128, 238])
+        .unwrap()
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"metallicFactor": 0}, "normalTexture": {"index": 0, "scale": 0.5}}],
+        "textures": [{"source": 0}],
+        "images": [{"uri": format!("data:image/png;base64,{}", base64::encode(&png))}],
+        "buffers": [{"byteLength": bin.len(), "uri": format!("data:application/octet-stream;base64,{}", base64::encode(&bin))}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 96, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 128, "byteLength": 24},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, 0, -1], "max": [1, 0, 1]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 3, "componentType": 5125, "count": 6, "type": "SCALAR"},
+        ],
+    });
+    let s =
+        load_scene(&write_json(&dir, "normal_map.gltf", &doc)).unwrap_or_else(|e| panic!("{e}"));
+    let m = &s.materials[0];
+    assert_eq!(m.normal_scale, 0.5);
+    let t = &s.textures[m.normal_texture.expect("a normal texture").index()];
+    assert!(
+        (t.texels[0].x - 191.0 / 255.0).abs() < 1e-6,
+        "linear, not sRGB"
+    );
+    let mesh = &s.meshes[0];
+    assert_eq!(mesh.tangents.len(), 4);
+    for tg in &mesh.tangents {
+        assert!(
+            (tg.truncate() - Vec3::X).length() < 1e-4,
+            "tangent {tg} along +u = +x"
+        );
+        // v runs along +z = −(normal × tangent) (y × x = −z): bitangent sign −1, as
+        // glTF's bitangent = cross(normal, tangent.xyz) · w.
+        assert_eq!(tg.w, -1.0, "{tg}");
+    }
+}
+
 #[test]
 fn gltf_metallic_roughness_factors() {
     let (dir, doc) = cube_copy("gltf_mr");

@@ -76,9 +76,6 @@ impl SurfaceHit {
             let n = transform_normal(m, n);
             if n == Vec3::ZERO { geometric_normal } else { n }
         };
-        if shading_normal.dot(geometric_normal) < 0.0 {
-            shading_normal = -shading_normal;
-        }
         let uv = if mesh.uvs.is_empty() {
             Vec2::ZERO
         } else {
@@ -86,6 +83,30 @@ impl SurfaceHit {
         };
         let material = mesh.triangle_materials[t];
         let mat = &scene.materials[material.index()];
+        // A tangent-space normal map turns the interpolated normal (before it is flipped
+        // to the geometric side, so that the tangent frame keeps its handedness).
+        if let Some(tex) = mat.normal_texture
+            && !mesh.tangents.is_empty()
+            && !mesh.normals.is_empty()
+        {
+            let tg = mesh.tangents[i0] * b0 + mesh.tangents[i1] * b1 + mesh.tangents[i2] * b2;
+            let n = shading_normal.normalize_or(geometric_normal);
+            let t = m.transform_vector3(tg.truncate());
+            let t = (t - n * n.dot(t)).normalize_or_zero();
+            if t != Vec3::ZERO {
+                let sign = if mesh.tangents[i0].w < 0.0 { -1.0 } else { 1.0 };
+                let b = n.cross(t) * sign;
+                let c = scene.textures[tex.index()].sample(uv) * 2.0 - Vec3::ONE;
+                let local = Vec3::new(c.x * mat.normal_scale, c.y * mat.normal_scale, c.z);
+                let mapped = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
+                if mapped != Vec3::ZERO {
+                    shading_normal = mapped;
+                }
+            }
+        }
+        if shading_normal.dot(geometric_normal) < 0.0 {
+            shading_normal = -shading_normal;
+        }
         let reflects = front_face || mat.double_sided;
         let albedo = if reflects {
             scene.albedo(material, uv)

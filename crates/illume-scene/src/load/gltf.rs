@@ -25,7 +25,9 @@
 //!   `metallicFactor` and `roughnessFactor` (default 1 each, as the spec; outside
 //!   [0, 1] is an error), emitted radiance = `emissiveFactor` ×
 //!   `KHR_materials_emissive_strength`, `doubleSided`; `metallicRoughnessTexture`
-//!   (decoded linearly; blue × metallicFactor, green × roughnessFactor); primitives
+//!   (decoded linearly; blue × metallicFactor, green × roughnessFactor); `normalTexture`
+//!   (linear, with `scale`; MikkTSpace tangents are computed for its meshes, which need
+//!   NORMAL and TEXCOORD_0 — the file's TANGENT is not read); primitives
 //!   without a material get a grey (0.8) Lambertian default;
 //! * camera: the lowest-index scene node with a perspective camera (`yfov`); without
 //!   one, [`super::default_camera_for_bounds`];
@@ -845,9 +847,33 @@ impl Ctx<'_> {
             if m.emissive_texture.is_some() {
                 self.warn(format!("material {i} '{name}': emissiveTexture ignored (emission is emissiveFactor × strength)"));
             }
+            let (normal_texture, normal_scale) = match &m.normal_texture {
+                Some(info) => {
+                    if info.tex_coord != 0 {
+                        self.warn(format!("material {i} '{name}': normalTexture uses TEXCOORD_{}; TEXCOORD_0 is used", info.tex_coord));
+                    }
+                    if !info.scale.is_finite() {
+                        return Err(self.malformed(
+                            format!("material {i} '{name}'"),
+                            "normalTexture.scale is not finite",
+                        ));
+                    }
+                    (
+                        Some(self.texture(
+                            info.index.value(),
+                            &format!("material {i} '{name}'"),
+                            false,
+                        )?),
+                        info.scale,
+                    )
+                }
+                None => (None, 1.0),
+            };
             let material = Material {
                 name,
                 base_color: Rgb::new(r, g, b),
+                normal_texture,
+                normal_scale,
                 base_color_texture,
                 emission: Rgb::from(m.emissive_factor.0) * strength,
                 metallic,
@@ -1055,6 +1081,18 @@ impl Ctx<'_> {
             mesh.normals = prim_normals.into_iter().flatten().collect();
         } else if with_normals > 0 {
             self.warn(format!("mesh {index} '{name}': only some primitives have normals; normals dropped (flat shading)"));
+        }
+        let normal_mapped = mesh.triangle_materials.iter().any(|m| {
+            self.builder.scene().materials[m.index()]
+                .normal_texture
+                .is_some()
+        });
+        if normal_mapped {
+            if mesh.normals.is_empty() || mesh.uvs.is_empty() {
+                self.warn(format!("mesh {index} '{name}': a normal map needs normals and TEXCOORD_0; it is not applied"));
+            } else if !super::tangents::generate(&mut mesh) {
+                self.warn(format!("mesh {index} '{name}': MikkTSpace found no tangents; the normal map is not applied"));
+            }
         }
         let id = self.builder.mesh(mesh);
         self.meshes.insert(index, id);

@@ -16,6 +16,7 @@
 mod gltf;
 mod obj;
 mod ply;
+mod tangents;
 
 use crate::animation::Trs;
 use crate::model::{Camera, Node, NodeId, Scene, Texture, WrapMode};
