@@ -235,6 +235,34 @@ impl Texture {
     }
 }
 
+/// A texture-coordinate transform (glTF `KHR_texture_transform`):
+/// `uv' = offset + R(rotation) · (scale ⊙ uv)` with `R(θ)·(x, y) = (x cosθ − y sinθ,
+/// x sinθ + y cosθ)`, the extension's matrix.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    /// Offset of the UV origin.
+    pub offset: Vec2,
+    /// Rotation \[rad\].
+    pub rotation: f32,
+    /// Scale per component.
+    pub scale: Vec2,
+}
+
+impl UvTransform {
+    /// The transformed coordinates.
+    #[inline]
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        let s = uv * self.scale;
+        let (sin, cos) = self.rotation.sin_cos();
+        self.offset + Vec2::new(s.x * cos - s.y * sin, s.x * sin + s.y * cos)
+    }
+
+    /// True when every value is finite.
+    pub fn is_finite(&self) -> bool {
+        self.offset.is_finite() && self.rotation.is_finite() && self.scale.is_finite()
+    }
+}
+
 /// A surface material: the glTF 2.0 metallic-roughness model (its BRDF is
 /// `illume_transport::metal_rough`). `metallic = 0`, `roughness = 1` is exactly
 /// Lambertian with albedo `base_color` — the default, and every OBJ material.
@@ -248,6 +276,8 @@ pub struct Material {
     pub base_color: Rgb,
     /// Optional base-colour texture (linear after decoding), multiplied into `base_color`.
     pub base_color_texture: Option<TextureId>,
+    /// Transform of the texture coordinates the base-colour texture is read at.
+    pub base_color_transform: Option<UvTransform>,
     /// Emitted radiance Le [W/(m²·sr)], from the front face only.
     pub emission: Rgb,
     /// 0 = dielectric, 1 = metal (glTF `metallicFactor`), in [0, 1].
@@ -273,6 +303,7 @@ impl Default for Material {
             name: "default".into(),
             base_color: Rgb::splat(0.8),
             base_color_texture: None,
+            base_color_transform: None,
             emission: Rgb::ZERO,
             metallic: 0.0,
             roughness: 1.0,
@@ -289,6 +320,16 @@ impl Material {
     /// no metallic-roughness texture).
     pub fn is_lambertian(&self) -> bool {
         self.metallic <= 0.0 && self.roughness >= 1.0 && self.metallic_roughness_texture.is_none()
+    }
+
+    /// The texture coordinates the base-colour texture is read at for mesh coordinates
+    /// `uv` (unchanged without a transform).
+    #[inline]
+    pub fn base_color_uv(&self, uv: Vec2) -> Vec2 {
+        match &self.base_color_transform {
+            Some(t) => t.apply(uv),
+            None => uv,
+        }
     }
 
     /// True when the material emits light.
@@ -657,7 +698,7 @@ impl Scene {
     pub fn albedo(&self, material: MaterialId, uv: Vec2) -> Rgb {
         let m = &self.materials[material.index()];
         match m.base_color_texture {
-            Some(t) => m.base_color * self.textures[t.index()].sample(uv),
+            Some(t) => m.base_color * self.textures[t.index()].sample(m.base_color_uv(uv)),
             None => m.base_color,
         }
     }

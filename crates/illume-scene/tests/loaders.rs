@@ -1370,6 +1370,40 @@ fn gltf_missing_texture_and_data_uri_texture() {
     assert_contains(&msg, &["image 0", "cannot decode"]);
     let orange = s.materials.iter().find(|m| m.name == "orange").unwrap();
     assert_eq!(orange.base_color_texture.map(|t| t.index()), Some(0));
+
+    // KHR_texture_transform: an offset of half the texture reads the other texel.
+    let mut moved = d.clone();
+    moved["materials"][1]["pbrMetallicRoughness"]["baseColorTexture"] = json!({
+        "index": 0,
+        "extensions": {"KHR_texture_transform": {"offset": [0.5, 0.0]}},
+    });
+    moved["extensionsUsed"] = json!(["KHR_texture_transform"]);
+    let s2 = load_scene(&write_json(&dir, "transform_tex.gltf", &moved))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let id = illume_scene::MaterialId(
+        s2.materials
+            .iter()
+            .position(|m| m.name == "orange")
+            .unwrap() as u32,
+    );
+    let base = s2.materials[id.index()].base_color;
+    let at = |uv: illume_core::Vec2| s2.albedo(id, uv);
+    assert_close(
+        at(illume_core::Vec2::new(0.25, 0.5)),
+        base * 0.21586,
+        1e-4,
+        "offset to texel 1",
+    );
+    // Rotation is counter-clockwise in UV space: (1, 0) turns to (0, 1).
+    let r = illume_scene::UvTransform {
+        offset: illume_core::Vec2::ZERO,
+        rotation: std::f32::consts::FRAC_PI_2,
+        scale: illume_core::Vec2::new(2.0, 1.0),
+    };
+    assert!(
+        (r.apply(illume_core::Vec2::new(0.5, 0.0)) - illume_core::Vec2::new(0.0, 1.0)).length()
+            < 1e-6
+    );
 }
 
 // ---------------------------------------------------------------------------------------

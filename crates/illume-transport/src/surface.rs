@@ -281,6 +281,7 @@ impl PhotonHit {
                     let [i0, i1, i2] = corners();
                     mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2
                 };
+                let uv = mat.base_color_uv(uv);
                 let texel = if filtered_textures {
                     tables.sample_filtered(scene, texture, uv)
                 } else {

@@ -127,7 +127,7 @@ impl World {
     ) -> illume_core::Rgb {
         let m = &self.scene.materials[material.index()];
         match m.base_color_texture {
-            Some(t) => m.base_color * self.hit_tables.sample(&self.scene, t, uv),
+            Some(t) => m.base_color * self.hit_tables.sample(&self.scene, t, m.base_color_uv(uv)),
             None => m.base_color,
         }
     }

@@ -55,7 +55,8 @@ use crate::animation::{
 };
 use crate::builtin::SceneBuilder;
 use crate::model::{
-    LightId, LightKind, Material, MaterialId, Mesh, MeshId, NodeId, Scene, Sky, TextureId, WrapMode,
+    LightId, LightKind, Material, MaterialId, Mesh, MeshId, NodeId, Scene, Sky, TextureId,
+    UvTransform, WrapMode,
 };
 use ::gltf::json;
 use illume_core::{Affine3A, Mat4, Quat, Rgb, Vec2, Vec3, Vec4};
@@ -64,10 +65,11 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// Extensions a file may list in `extensionsRequired`.
-pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
+pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 4] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_animation_pointer",
+    "KHR_texture_transform",
 ];
 
 /// Largest number of values (elements × components) of an accessor *without* a buffer
@@ -821,6 +823,39 @@ impl Ctx<'_> {
                 }
                 None => None,
             };
+            let base_color_transform = match pbr
+                .base_color_texture
+                .as_ref()
+                .and_then(|info| info.extensions.as_ref())
+                .and_then(|e| e.texture_transform.as_ref())
+            {
+                Some(t) => {
+                    if t.tex_coord.is_some_and(|c| c != 0) {
+                        self.warn(format!("material {i} '{name}': KHR_texture_transform texCoord ignored; TEXCOORD_0 is used"));
+                    }
+                    let transform = UvTransform {
+                        offset: Vec2::from(t.offset.0),
+                        rotation: t.rotation.0,
+                        scale: Vec2::from(t.scale.0),
+                    };
+                    if !transform.is_finite() {
+                        return Err(self.malformed(
+                            format!("material {i} '{name}'"),
+                            "KHR_texture_transform values are not finite",
+                        ));
+                    }
+                    Some(transform)
+                }
+                None => None,
+            };
+            if pbr
+                .metallic_roughness_texture
+                .as_ref()
+                .and_then(|info| info.extensions.as_ref())
+                .is_some_and(|e| e.texture_transform.is_some())
+            {
+                self.warn(format!("material {i} '{name}': KHR_texture_transform on metallicRoughnessTexture ignored"));
+            }
             // glTF's defaults are 1 for both factors (a rough metal), as the spec says.
             let (metallic, roughness) = (pbr.metallic_factor.0, pbr.roughness_factor.0);
             for (field, v) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
@@ -872,6 +907,7 @@ impl Ctx<'_> {
             let material = Material {
                 name,
                 base_color: Rgb::new(r, g, b),
+                base_color_transform,
                 normal_texture,
                 normal_scale,
                 base_color_texture,
