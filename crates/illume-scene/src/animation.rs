@@ -216,22 +216,7 @@ impl PropertyChannel {
     /// Checks keys and values; the message says what is wrong.
     pub fn validate(&self) -> Result<(), String> {
         let n = self.times.len();
-        if n == 0 {
-            return Err("channel has no keys".into());
-        }
-        if self
-            .times
-            .windows(2)
-            .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
-            || self.times.iter().any(|t| !t.is_finite())
-        {
-            return Err("key times are not finite and strictly increasing".into());
-        }
-        let per_key = if self.interpolation == Interpolation::CubicSpline {
-            3
-        } else {
-            1
-        };
+        let per_key = check_keys(&self.times, self.interpolation)?;
         let want = n * per_key * self.target.components();
         if self.values.len() != want {
             return Err(format!(
@@ -274,6 +259,27 @@ impl Animation {
             c.apply(t as f32, trs);
         }
     }
+}
+
+/// Checks that `times` are keys (at least one, finite, strictly increasing) and returns
+/// the values per key of `interpolation` (3 for `CubicSpline`: in-tangent, value,
+/// out-tangent; else 1).
+fn check_keys(times: &[f32], interpolation: Interpolation) -> Result<usize, String> {
+    if times.is_empty() {
+        return Err("channel has no keys".into());
+    }
+    if times
+        .windows(2)
+        .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+        || times.iter().any(|t| !t.is_finite())
+    {
+        return Err("key times are not finite and strictly increasing".into());
+    }
+    Ok(if interpolation == Interpolation::CubicSpline {
+        3
+    } else {
+        1
+    })
 }
 
 /// Where `t` falls among the keys: `(i, u, dt)` with `t` between key `i` and `i + 1`,
@@ -387,22 +393,7 @@ impl Channel {
     /// Checks key counts and ordering; the message says what is wrong.
     pub fn validate(&self) -> Result<(), String> {
         let n = self.times.len();
-        if n == 0 {
-            return Err("channel has no keys".into());
-        }
-        if self
-            .times
-            .windows(2)
-            .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
-            || self.times.iter().any(|t| !t.is_finite())
-        {
-            return Err("key times are not finite and strictly increasing".into());
-        }
-        let per_key = if self.interpolation == Interpolation::CubicSpline {
-            3
-        } else {
-            1
-        };
+        let per_key = check_keys(&self.times, self.interpolation)?;
         let (len, finite) = match &self.values {
             ChannelValues::Translation(v) | ChannelValues::Scale(v) => {
                 (v.len(), v.iter().all(|x| x.is_finite()))

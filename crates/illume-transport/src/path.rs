@@ -114,8 +114,9 @@ pub fn continue_path(
         let frame = (!hit.is_lambertian()).then(|| Frame::from_normal(n));
         let brdf = hit.brdf();
         let f_lambert = hit.albedo * INV_PI;
-        // Next-event estimation: light reaching this vertex directly.
-        if let Some(ls) = world.lights.sample_incident(hit.position, sampler) {
+        // Light arriving along `ls` (a sample of an emitter or of the sky), weighted by
+        // MIS against BSDF sampling (delta lights, pdf 0, get weight 1).
+        let shade = |ls: crate::LightSample, out: &mut PathRadiance| {
             let cos = n.dot(ls.wi);
             if cos > 0.0 && ng.dot(ls.wi) > 0.0 && world.unoccluded(&hit, &ls) {
                 let (f, bsdf_pdf) = match &frame {
@@ -132,23 +133,17 @@ pub fn continue_path(
                 };
                 out.add(bounces + 1, throughput * f * ls.weight * (cos * w));
             }
+        };
+        // Next-event estimation: light reaching this vertex directly.
+        if let Some(ls) = world.lights.sample_incident(hit.position, sampler) {
+            shade(ls, out);
         }
-        // The sky, sampled on its own (cosine-weighted about the normal), MIS against
-        // BSDF sampling. Scenes without a sky draw no numbers here.
+        // The sky, sampled on its own (cosine-weighted about the normal, or by the
+        // environment map), MIS against BSDF sampling. Scenes without a sky draw no
+        // numbers here.
         let sky = world.lights.sky().is_some();
         if sky && let Some(ls) = world.lights.sample_sky(n, sampler) {
-            let cos = n.dot(ls.wi);
-            if cos > 0.0 && ng.dot(ls.wi) > 0.0 && world.unoccluded(&hit, &ls) {
-                let (f, bsdf_pdf) = match &frame {
-                    None => (f_lambert, lambert_pdf(n, ls.wi)),
-                    Some(fr) => {
-                        let (lo, li) = (fr.to_local(wo), fr.to_local(ls.wi));
-                        (brdf.eval(lo, li), brdf.pdf(lo, li))
-                    }
-                };
-                let w = power_heuristic(ls.pdf, bsdf_pdf);
-                out.add(bounces + 1, throughput * f * ls.weight * (cos * w));
-            }
+            shade(ls, out);
         }
         // BSDF sampling.
         let u_rr = sampler.next_1d();

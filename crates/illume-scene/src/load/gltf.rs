@@ -810,17 +810,15 @@ impl Ctx<'_> {
                 .and_then(|e| e.emissive_strength.as_ref())
                 .map(|s| s.emissive_strength.0)
                 .unwrap_or(1.0);
+            let user = format!("material {i} '{name}'");
             let base_color_texture = match &pbr.base_color_texture {
-                Some(info) => {
-                    if info.tex_coord != 0 {
-                        self.warn(format!("material {i} '{name}': baseColorTexture uses TEXCOORD_{}; TEXCOORD_0 is used", info.tex_coord));
-                    }
-                    Some(self.texture(
-                        info.index.value(),
-                        &format!("material {i} '{name}'"),
-                        true,
-                    )?)
-                }
+                Some(info) => Some(self.texture_slot(
+                    info.index.value(),
+                    info.tex_coord,
+                    &user,
+                    "baseColorTexture",
+                    true,
+                )?),
                 None => None,
             };
             let base_color_transform = match pbr
@@ -867,16 +865,13 @@ impl Ctx<'_> {
                 }
             }
             let metallic_roughness_texture = match &pbr.metallic_roughness_texture {
-                Some(info) => {
-                    if info.tex_coord != 0 {
-                        self.warn(format!("material {i} '{name}': metallicRoughnessTexture uses TEXCOORD_{}; TEXCOORD_0 is used", info.tex_coord));
-                    }
-                    Some(self.texture(
-                        info.index.value(),
-                        &format!("material {i} '{name}'"),
-                        false,
-                    )?)
-                }
+                Some(info) => Some(self.texture_slot(
+                    info.index.value(),
+                    info.tex_coord,
+                    &user,
+                    "metallicRoughnessTexture",
+                    false,
+                )?),
                 None => None,
             };
             if m.emissive_texture.is_some() {
@@ -884,19 +879,15 @@ impl Ctx<'_> {
             }
             let (normal_texture, normal_scale) = match &m.normal_texture {
                 Some(info) => {
-                    if info.tex_coord != 0 {
-                        self.warn(format!("material {i} '{name}': normalTexture uses TEXCOORD_{}; TEXCOORD_0 is used", info.tex_coord));
-                    }
                     if !info.scale.is_finite() {
-                        return Err(self.malformed(
-                            format!("material {i} '{name}'"),
-                            "normalTexture.scale is not finite",
-                        ));
+                        return Err(self.malformed(&user, "normalTexture.scale is not finite"));
                     }
                     (
-                        Some(self.texture(
+                        Some(self.texture_slot(
                             info.index.value(),
-                            &format!("material {i} '{name}'"),
+                            info.tex_coord,
+                            &user,
+                            "normalTexture",
                             false,
                         )?),
                         info.scale,
@@ -921,6 +912,24 @@ impl Ctx<'_> {
             self.materials.push(id);
         }
         Ok(())
+    }
+
+    /// [`Ctx::texture`] for a material's texture slot `slot` (`baseColorTexture`…), warning
+    /// when it asks for a texture coordinate set other than TEXCOORD_0 (the one read).
+    fn texture_slot(
+        &mut self,
+        index: usize,
+        tex_coord: u32,
+        user: &str,
+        slot: &str,
+        srgb: bool,
+    ) -> Result<TextureId, LoadError> {
+        if tex_coord != 0 {
+            self.warn(format!(
+                "{user}: {slot} uses TEXCOORD_{tex_coord}; TEXCOORD_0 is used"
+            ));
+        }
+        self.texture(index, user, srgb)
     }
 
     /// The illume texture for glTF texture `index` (image decoded once per wrap mode and
@@ -1242,6 +1251,30 @@ impl Ctx<'_> {
     }
 
     /// Converts every animation; returns the illume nodes any channel targets.
+    /// An animation sampler's interpolation and key times (its input accessor, SCALAR).
+    fn sampler_keys(
+        &self,
+        sampler: &json::animation::Sampler,
+        place: &str,
+    ) -> Result<(Interpolation, Vec<f32>), LoadError> {
+        use json::animation::Interpolation as I;
+        let interpolation = match sampler.interpolation {
+            Checked::Valid(I::Linear) => Interpolation::Linear,
+            Checked::Valid(I::Step) => Interpolation::Step,
+            Checked::Valid(I::CubicSpline) => Interpolation::CubicSpline,
+            Checked::Invalid => return Err(self.malformed(place, "invalid interpolation")),
+        };
+        let input = sampler.input.value();
+        let (times, comps) = self.read_accessor(input, &format!("{place} input"))?;
+        if comps != 1 {
+            return Err(self.malformed(
+                format!("accessor {input} ({place} input)"),
+                "key times must be SCALAR",
+            ));
+        }
+        Ok((interpolation, times.into_iter().map(|t| t as f32).collect()))
+    }
+
     /// The `KHR_animation_pointer` channels of animation `ai`: light intensity, colour and
     /// spot cone angles, material base colour, emissive factor, metallic and roughness.
     /// Other pointers are warnings (ignored); bad samplers and accessors are errors.
@@ -1250,7 +1283,6 @@ impl Ctx<'_> {
         ai: usize,
         name: &str,
     ) -> Result<Vec<PropertyChannel>, LoadError> {
-        use json::animation::Interpolation as I;
         let root = self.root;
         let mut out = Vec::new();
         let pointers: Vec<PointerChannel> = self
@@ -1360,22 +1392,13 @@ impl Ctx<'_> {
             let sampler = a.samplers.get(p.sampler).ok_or_else(|| {
                 self.malformed(&place, format!("sampler {} does not exist", p.sampler))
             })?;
-            let interpolation = match sampler.interpolation {
-                Checked::Valid(I::Linear) => Interpolation::Linear,
-                Checked::Valid(I::Step) => Interpolation::Step,
-                Checked::Valid(I::CubicSpline) => Interpolation::CubicSpline,
-                Checked::Invalid => return Err(self.malformed(place, "invalid interpolation")),
-            };
+            let (interpolation, times) = self.sampler_keys(sampler, &place)?;
             let (input, output) = (sampler.input.value(), sampler.output.value());
-            let (times, comps) = self.read_accessor(input, &format!("{place} input"))?;
-            if comps != 1 {
-                return Err(self.malformed(&place, "key times must be SCALAR"));
-            }
             let (values, _) = self.read_accessor(output, &format!("{place} output"))?;
             for target in targets {
                 let channel = PropertyChannel {
                     target,
-                    times: times.iter().map(|&t| t as f32).collect(),
+                    times: times.clone(),
                     values: values.iter().map(|&v| v as f32).collect(),
                     interpolation,
                 };
@@ -1389,7 +1412,7 @@ impl Ctx<'_> {
     }
 
     fn animations(&mut self, node_ids: &[Option<NodeId>]) -> Result<Vec<NodeId>, LoadError> {
-        use json::animation::{Interpolation as I, Property as P};
+        use json::animation::Property as P;
         let root = self.root;
         let mut targeted = Vec::new();
         for (ai, a) in root.animations.iter().enumerate() {
@@ -1417,21 +1440,8 @@ impl Ctx<'_> {
                     ));
                     continue;
                 };
-                let interpolation = match sampler.interpolation {
-                    Checked::Valid(I::Linear) => Interpolation::Linear,
-                    Checked::Valid(I::Step) => Interpolation::Step,
-                    Checked::Valid(I::CubicSpline) => Interpolation::CubicSpline,
-                    Checked::Invalid => return Err(self.malformed(place, "invalid interpolation")),
-                };
+                let (interpolation, times) = self.sampler_keys(sampler, &place)?;
                 let (input, output) = (sampler.input.value(), sampler.output.value());
-                let (times, comps) = self.read_accessor(input, &format!("{place} input"))?;
-                if comps != 1 {
-                    return Err(self.malformed(
-                        format!("accessor {input} ({place} input)"),
-                        "key times must be SCALAR",
-                    ));
-                }
-                let times: Vec<f32> = times.into_iter().map(|t| t as f32).collect();
                 let what = format!("{place} output");
                 let values = match property {
                     P::Translation => ChannelValues::Translation(
