@@ -280,6 +280,9 @@ pub struct Material {
     pub base_color_transform: Option<UvTransform>,
     /// Emitted radiance Le [W/(m²·sr)], from the front face only.
     pub emission: Rgb,
+    /// Optional emissive texture (linear after sRGB decoding), multiplied into
+    /// `emission`.
+    pub emissive_texture: Option<TextureId>,
     /// 0 = dielectric, 1 = metal (glTF `metallicFactor`), in [0, 1].
     pub metallic: f32,
     /// Perceptual roughness (glTF `roughnessFactor`), in [0, 1]; GGX α = roughness².
@@ -305,6 +308,7 @@ impl Default for Material {
             base_color_texture: None,
             base_color_transform: None,
             emission: Rgb::ZERO,
+            emissive_texture: None,
             metallic: 0.0,
             roughness: 1.0,
             metallic_roughness_texture: None,
@@ -703,6 +707,16 @@ impl Scene {
         }
     }
 
+    /// Emitted radiance of `material` at texture coordinates `uv` (factor × emissive
+    /// texture).
+    pub fn emission(&self, material: MaterialId, uv: Vec2) -> Rgb {
+        let m = &self.materials[material.index()];
+        match m.emissive_texture {
+            Some(t) => m.emission * self.textures[t.index()].sample(uv),
+            None => m.emission,
+        }
+    }
+
     /// `(metallic, roughness)` of `material` at texture coordinates `uv` (factors ×
     /// the metallic-roughness texture's blue and green channels).
     pub fn metal_rough(&self, material: MaterialId, uv: Vec2) -> (f32, f32) {
@@ -734,7 +748,11 @@ impl Scene {
                     let [a, b, c] = mesh
                         .triangle(t)
                         .map(|p| inst.world_from_object.transform_point3(p));
-                    total += mat.emission * PI * 0.5 * (b - a).cross(c - a).length();
+                    // A textured emitter counts with the texture's mean (an estimate).
+                    let texture = mat
+                        .emissive_texture
+                        .map_or(Rgb::ONE, |t| self.textures[t.index()].average());
+                    total += mat.emission * texture * PI * 0.5 * (b - a).cross(c - a).length();
                 }
             }
         }
@@ -790,6 +808,16 @@ impl Scene {
                         m.name
                     ));
                 }
+            }
+            if let Some(t) = m.emissive_texture
+                && t.index() >= self.textures.len()
+            {
+                return Err(format!(
+                    "material {i} '{}': emissive texture {} of {}",
+                    m.name,
+                    t.0,
+                    self.textures.len()
+                ));
             }
             if let Some(t) = m.normal_texture
                 && t.index() >= self.textures.len()

@@ -225,13 +225,12 @@ impl<'a> PrimarySurfaces<'a> {
         let (e1, e2) = (p1 - p0, p2 - p0);
         let n = e1.cross(e2);
         let nn = n.length_squared();
-        // Normal-mapped triangles take the exact per-pixel path (`SurfaceHit::new`
-        // through a BVH ray) rather than this setup's interpolation.
-        let normal_mapped = scene.materials[mesh.triangle_materials[t].index()]
-            .normal_texture
-            .is_some()
-            && !mesh.tangents.is_empty();
-        let usable = nn > 0.0 && nn.is_finite() && !normal_mapped;
+        // Normal-mapped and emission-textured triangles take the exact per-pixel path
+        // (`SurfaceHit::new` through a BVH ray) rather than this setup's interpolation.
+        let tm = &scene.materials[mesh.triangle_materials[t].index()];
+        let per_pixel = (tm.normal_texture.is_some() && !mesh.tangents.is_empty())
+            || tm.emissive_texture.is_some();
+        let usable = nn > 0.0 && nn.is_finite() && !per_pixel;
         let geometric_normal = n.normalize_or(Vec3::Y);
         let front_face = (p0 - origin).dot(geometric_normal) < 0.0;
         let frame = &self.frames[instance as usize];

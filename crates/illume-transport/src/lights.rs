@@ -73,6 +73,12 @@ pub enum Emitter {
         radiance: Rgb,
         /// Emits from both faces.
         double_sided: bool,
+        /// An emissive texture and the triangle's texture coordinates: the radiance at
+        /// a point is `radiance × texture(uv)`.
+        texture: Option<(
+            std::sync::Arc<illume_scene::Texture>,
+            [illume_core::Vec2; 3],
+        )>,
     },
 }
 
@@ -215,6 +221,14 @@ impl LightSet {
                 if area <= 0.0 {
                     continue;
                 }
+                let texture = mat.emissive_texture.map(|tex| {
+                    let uvs = if mesh.uvs.is_empty() {
+                        [illume_core::Vec2::ZERO; 3]
+                    } else {
+                        mesh.indices[t].map(|v| mesh.uvs[v as usize])
+                    };
+                    (scene.textures[tex.index()].clone(), uvs)
+                });
                 emitters.push(Emitter::Triangle {
                     instance: InstanceId(ii as u32),
                     triangle: t as u32,
@@ -223,6 +237,7 @@ impl LightSet {
                     area,
                     radiance: mat.emission,
                     double_sided: mat.double_sided,
+                    texture,
                 });
             }
         }
@@ -538,9 +553,11 @@ impl LightSet {
                 area,
                 radiance,
                 double_sided,
+                texture,
                 ..
             } => {
                 let b = uniform_triangle(u);
+                let radiance = &textured_radiance(*radiance, texture, b);
                 let q = corners[0] * (1.0 - b.x - b.y) + corners[1] * b.x + corners[2] * b.y;
                 let d = q - p;
                 let dist2 = d.length_squared();
@@ -602,6 +619,7 @@ impl LightSet {
             });
         }
         let power = self.powers[i];
+        let mut textured_flux = None;
         let ray = match &self.emitters[i] {
             Emitter::Point { position, .. } => Ray::new(*position, uniform_sphere(u_dir)),
             Emitter::Spot {
@@ -626,9 +644,20 @@ impl LightSet {
                 corners,
                 normal,
                 double_sided,
+                texture,
+                radiance,
+                area,
                 ..
             } => {
                 let b = uniform_triangle(u_pos);
+                if texture.is_some() {
+                    // The flux of this point's radiance (the selection used the mean).
+                    let point_power = textured_radiance(*radiance, texture, b)
+                        * PI
+                        * *area
+                        * if *double_sided { 2.0 } else { 1.0 };
+                    textured_flux = Some(point_power / pmf);
+                }
                 let q = corners[0] * (1.0 - b.x - b.y) + corners[1] * b.x + corners[2] * b.y;
                 let mut u = u_dir;
                 let mut n = *normal;
@@ -649,7 +678,7 @@ impl LightSet {
         };
         Some(EmissionSample {
             ray,
-            flux: power / pmf,
+            flux: textured_flux.unwrap_or(power / pmf),
         })
     }
 }
@@ -691,8 +720,34 @@ fn power(e: &Emitter, scene_radius: f32) -> Rgb {
             area,
             radiance,
             double_sided,
+            texture,
             ..
-        } => *radiance * PI * *area * if *double_sided { 2.0 } else { 1.0 },
+        } => {
+            // A textured emitter is selected by its texture's mean (exact power is not
+            // needed: NEE and photons use the radiance at the sampled point).
+            let mean = texture.as_ref().map_or(Rgb::ONE, |(t, _)| t.average());
+            *radiance * mean * PI * *area * if *double_sided { 2.0 } else { 1.0 }
+        }
+    }
+}
+
+/// `radiance` at barycentric point `b` (weights of the second and third corners) of a
+/// triangle emitter, times its emissive texture there.
+#[inline]
+fn textured_radiance(
+    radiance: Rgb,
+    texture: &Option<(
+        std::sync::Arc<illume_scene::Texture>,
+        [illume_core::Vec2; 3],
+    )>,
+    b: illume_core::Vec2,
+) -> Rgb {
+    match texture {
+        None => radiance,
+        Some((t, uv)) => {
+            let at = uv[0] * (1.0 - b.x - b.y) + uv[1] * b.x + uv[2] * b.y;
+            radiance * t.sample(at)
+        }
     }
 }
 

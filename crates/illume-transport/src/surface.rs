@@ -113,7 +113,11 @@ impl SurfaceHit {
         } else {
             Rgb::ZERO
         };
-        let emission = if reflects { mat.emission } else { Rgb::ZERO };
+        let emission = if reflects {
+            scene.emission(material, uv)
+        } else {
+            Rgb::ZERO
+        };
         let (metallic, roughness) = scene.metal_rough(material, uv);
         Self {
             position,

@@ -24,7 +24,8 @@
 //!   `baseColorTexture`, decoded sRGB → linear, wrap modes from its sampler),
 //!   `metallicFactor` and `roughnessFactor` (default 1 each, as the spec; outside
 //!   [0, 1] is an error), emitted radiance = `emissiveFactor` ×
-//!   `KHR_materials_emissive_strength`, `doubleSided`; `metallicRoughnessTexture`
+//!   `KHR_materials_emissive_strength` (× `emissiveTexture`, sRGB), `doubleSided`;
+//!   `metallicRoughnessTexture`
 //!   (decoded linearly; blue × metallicFactor, green × roughnessFactor); `normalTexture`
 //!   (linear, with `scale`; MikkTSpace tangents are computed for its meshes, which need
 //!   NORMAL and TEXCOORD_0 — the file's TANGENT is not read); primitives
@@ -874,9 +875,16 @@ impl Ctx<'_> {
                 )?),
                 None => None,
             };
-            if m.emissive_texture.is_some() {
-                self.warn(format!("material {i} '{name}': emissiveTexture ignored (emission is emissiveFactor × strength)"));
-            }
+            let emissive_texture = match &m.emissive_texture {
+                Some(info) => Some(self.texture_slot(
+                    info.index.value(),
+                    info.tex_coord,
+                    &user,
+                    "emissiveTexture",
+                    true,
+                )?),
+                None => None,
+            };
             let (normal_texture, normal_scale) = match &m.normal_texture {
                 Some(info) => {
                     if !info.scale.is_finite() {
@@ -903,6 +911,7 @@ impl Ctx<'_> {
                 normal_scale,
                 base_color_texture,
                 emission: Rgb::from(m.emissive_factor.0) * strength,
+                emissive_texture,
                 metallic,
                 roughness,
                 metallic_roughness_texture,
