@@ -53,8 +53,8 @@ pub struct AnimateArgs {
     /// Also write linear frame_NNNNN.exr.
     #[arg(long)]
     pub exr: bool,
-    /// Exposure for PNG and preview output [stops].
-    #[arg(long, default_value_t = 0.0)]
+    /// Exposure for PNG and preview output [stops], within ±64.
+    #[arg(long, default_value_t = 0.0, value_parser = crate::setup::exposure_stops, allow_hyphen_values = true)]
     pub exposure: f32,
 }
 

@@ -33,8 +33,8 @@ pub struct RenderArgs {
     /// Also write FILE_direct and FILE_indirect beside the output.
     #[arg(long)]
     pub split: bool,
-    /// Exposure for PNG output [stops].
-    #[arg(long, default_value_t = 0.0)]
+    /// Exposure for PNG output [stops], within ±64.
+    #[arg(long, default_value_t = 0.0, value_parser = crate::setup::exposure_stops, allow_hyphen_values = true)]
     pub exposure: f32,
     /// Random seed of the renderer and the technique.
     #[arg(long)]

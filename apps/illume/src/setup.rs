@@ -102,6 +102,16 @@ fn parse_radiance(s: &str) -> Result<Vec3, String> {
     Ok(v)
 }
 
+/// An exposure in stops: finite and within ±64 (2⁶⁴ already maps every representable
+/// radiance to black or white).
+pub fn exposure_stops(s: &str) -> Result<f32, String> {
+    let v = finite_f64(s)?;
+    if v.abs() > 64.0 {
+        return Err(format!("'{s}': exposure must be within ±64 stops"));
+    }
+    Ok(v as f32)
+}
+
 /// A finite number (NaN and ±inf are refused).
 pub fn finite_f64(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {

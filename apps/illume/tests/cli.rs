@@ -457,9 +457,24 @@ fn info_names_glossy_materials_and_the_photon_stream_caveat() {
     );
 }
 
-/// A non-finite `--time` is an error naming the flag, not a panic (issue 14, defect 1).
+/// A non-finite `--time`, or an exposure that is not a finite number of stops within
+/// ±64, is an error naming the flag, not a panic or a black image (issue 14, defects 1
+/// and 8).
 #[test]
 fn non_finite_time_is_refused() {
+    for arg in ["--exposure=NaN", "--exposure=1e30", "--exposure=-100"] {
+        let out = illume(&[
+            "render",
+            "builtin:cornell-spot",
+            arg,
+            "--width",
+            "8",
+            "--height",
+            "6",
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{arg}");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("--exposure"));
+    }
     for bad in ["NaN", "inf", "-inf"] {
         let arg = format!("--time={bad}");
         let out = illume(&[

@@ -379,6 +379,9 @@ impl Tracer {
         mask: u32,
         stack: &mut [StackEntry],
     ) -> Option<(Hit, u32, u32, u32)> {
+        if !usable_ray(ray) {
+            return None;
+        }
         let world_ray = PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min);
         let mut best = None;
         traverse::<true>(
@@ -418,6 +421,9 @@ impl Tracer {
 
     #[inline]
     fn occluded_with(&self, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> bool {
+        if !usable_ray(ray) {
+            return false;
+        }
         let world_ray = PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min);
         let mut hit = false;
         traverse::<true>(
@@ -455,6 +461,13 @@ fn object_ray(inst: &InstanceRecord, world_ray: &PreparedRay) -> PreparedRay {
         m.transform_vector3a(world_ray.dir),
         world_ray.t_min,
     )
+}
+
+/// False for a ray with a NaN or infinite origin or direction, or a NaN extent: such a
+/// ray hits nothing (a degenerate camera or transform upstream must not crash traversal).
+#[inline(always)]
+fn usable_ray(ray: &Ray) -> bool {
+    ray.origin.is_finite() && ray.dir.is_finite() && !ray.t_min.is_nan() && !ray.t_max.is_nan()
 }
 
 /// Widens a transformed box by the rounding the transform may have made.
@@ -501,5 +514,21 @@ mod tests {
         }
         assert!(differ > 0, "the sphere moved: some hits must differ");
         second.validate().unwrap();
+    }
+
+    #[test]
+    fn rays_with_nan_or_infinity_hit_nothing() {
+        let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+        let tracer = Tracer::new(&scene);
+        let mask = illume_scene::MASK_DEFAULT;
+        for ray in [
+            Ray::new(Vec3::new(f32::NAN, 1.0, 0.0), Vec3::NEG_Y),
+            Ray::new(Vec3::new(0.0, 1.0, 0.0), Vec3::new(f32::NAN, -1.0, 0.0)),
+            Ray::new(Vec3::new(0.0, f32::INFINITY, 0.0), Vec3::NEG_Y),
+            Ray::segment(Vec3::new(0.0, 1.0, 0.0), Vec3::NEG_Y, f32::NAN),
+        ] {
+            assert_eq!(tracer.intersect(&ray, mask), None);
+            assert!(!tracer.occluded(&ray, mask));
+        }
     }
 }

@@ -787,6 +787,29 @@ impl Scene {
         if let Some(sky) = &self.sky {
             sky.validate()?;
         }
+        let cam = &self.camera.world_from_camera;
+        let det = cam.matrix3.determinant();
+        if !illume_core::affine_is_finite(cam) || !det.is_finite() || det.abs() < 1e-12 {
+            let node = self
+                .nodes
+                .get(self.camera.node.index())
+                .map_or(String::new(), |n| {
+                    format!(" (node {} '{}')", self.camera.node.0, n.name)
+                });
+            return Err(format!(
+                "camera '{}'{node}: its transform is degenerate (zero scale or not finite)",
+                self.camera.name
+            ));
+        }
+        if !(self.camera.yfov_rad.is_finite()
+            && self.camera.yfov_rad > 0.0
+            && self.camera.yfov_rad < PI)
+        {
+            return Err(format!(
+                "camera '{}': vertical field of view {} rad is not in (0, π)",
+                self.camera.name, self.camera.yfov_rad
+            ));
+        }
         for (i, m) in self.meshes.iter().enumerate() {
             m.validate(self.materials.len())
                 .map_err(|e| format!("mesh {i} '{}': {e}", m.name))?;

@@ -1105,6 +1105,31 @@ fn gltf_normal_map_gets_mikktspace_tangents() {
     }
 }
 
+/// A camera node scaled to zero is a load error naming the camera and its node (issue 14,
+/// defect 2: it used to produce NaN rays).
+#[test]
+fn gltf_degenerate_camera_is_an_error_naming_the_node() {
+    let (dir, doc) = cube_copy("gltf_camera_scale");
+    let mut d = doc.clone();
+    let node = d["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n.get("camera").is_some())
+        .expect("a camera node");
+    d["nodes"][node]["scale"] = json!([0.0, 0.0, 0.0]);
+    let msg = load_err(&write_json(&dir, "flat_camera.gltf", &d));
+    assert_contains(
+        &msg,
+        &[
+            "flat_camera.gltf",
+            "camera",
+            &format!("node {node}"),
+            "degenerate",
+        ],
+    );
+}
+
 #[test]
 fn gltf_metallic_roughness_factors() {
     let (dir, doc) = cube_copy("gltf_mr");
