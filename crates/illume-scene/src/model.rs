@@ -452,6 +452,10 @@ pub struct Node {
     pub world_from_node: Affine3A,
 }
 
+/// Largest light power accepted per channel \[W\] (a scene is refused beyond it): far
+/// above any physical source, low enough that the transport's products stay finite.
+pub const MAX_POWER_W: f32 = 1e30;
+
 /// Bit in [`Instance::mask`] that every ordinary instance carries.
 pub const MASK_DEFAULT: u32 = 1;
 
@@ -898,6 +902,24 @@ impl Scene {
             if l.node.index() >= self.nodes.len() {
                 return Err(format!("light {i} '{}': node out of range", l.name));
             }
+        }
+        // Powers are bounded so that every product of the transport (power × pdf ratios
+        // × throughput, summed over pixels) stays finite in f32.
+        let radius = self.bounds().bounding_radius();
+        for (i, l) in self.lights.iter().enumerate() {
+            let p = l.power(if radius.is_finite() { radius } else { 0.0 });
+            if !p.is_finite() || p.min_element() < 0.0 || p.max_element() > MAX_POWER_W {
+                return Err(format!(
+                    "light {i} '{}': its power {p} W is not finite, non-negative and at most {MAX_POWER_W:e} W",
+                    l.name
+                ));
+            }
+        }
+        let total = self.total_power();
+        if !total.is_finite() || total.max_element() > MAX_POWER_W {
+            return Err(format!(
+                "the scene's total light power {total} W exceeds {MAX_POWER_W:e} W (lights, emissive surfaces and sky together)"
+            ));
         }
         for (i, a) in self.animations.iter().enumerate() {
             for c in &a.channels {

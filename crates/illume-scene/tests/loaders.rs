@@ -1130,6 +1130,16 @@ fn gltf_degenerate_camera_is_an_error_naming_the_node() {
     );
 }
 
+/// A light whose power overflows f32 is a load error naming it (issue 14, defect 7).
+#[test]
+fn gltf_overflowing_light_power_is_an_error() {
+    let (dir, doc) = cube_copy("gltf_light_overflow");
+    let mut d = doc.clone();
+    d["extensions"]["KHR_lights_punctual"]["lights"][0]["intensity"] = json!(2e37);
+    let msg = load_err(&write_json(&dir, "bright.gltf", &d));
+    assert_contains(&msg, &["bright.gltf", "light 0 'point'", "at most 1e30 W"]);
+}
+
 #[test]
 fn gltf_metallic_roughness_factors() {
     let (dir, doc) = cube_copy("gltf_mr");
