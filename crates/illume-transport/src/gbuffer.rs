@@ -231,7 +231,9 @@ impl<'a> PrimarySurfaces<'a> {
         let per_pixel = (tm.normal_texture.is_some() && !mesh.tangents.is_empty())
             || tm.emissive_texture.is_some();
         let usable = nn > 0.0 && nn.is_finite() && !per_pixel;
-        let geometric_normal = n.normalize_or(Vec3::Y);
+        // A mirroring instance keeps its object-space front (see `SurfaceHit::new`); the
+        // duals below stay on the unflipped cross product.
+        let geometric_normal = (n * self.frames[instance as usize].det_sign).normalize_or(Vec3::Y);
         let front_face = (p0 - origin).dot(geometric_normal) < 0.0;
         let frame = &self.frames[instance as usize];
         let normals =

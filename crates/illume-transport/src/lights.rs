@@ -216,7 +216,13 @@ impl LightSet {
                 let corners = mesh
                     .triangle(t)
                     .map(|p| inst.world_from_object.transform_point3(p));
-                let c = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+                // A mirroring instance keeps its object-space front (glTF winding rule).
+                let mirror = if inst.world_from_object.matrix3.determinant() < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                };
+                let c = (corners[1] - corners[0]).cross(corners[2] - corners[0]) * mirror;
                 let area = 0.5 * c.length();
                 if area <= 0.0 {
                     continue;

@@ -67,7 +67,15 @@ impl SurfaceHit {
         let p1 = m.transform_point3(mesh.positions[i1]);
         let p2 = m.transform_point3(mesh.positions[i2]);
         let position = p0 * b0 + p1 * b1 + p2 * b2;
-        let geometric_normal = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Y);
+        // Counter-clockwise is the front in object space; a mirroring transform
+        // (determinant < 0) reverses the winding, so the world cross product is flipped
+        // back (glTF: the determinant's sign defines the winding order).
+        let mirror = if m.matrix3.determinant() < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        let geometric_normal = ((p1 - p0).cross(p2 - p0) * mirror).normalize_or(Vec3::Y);
         let front_face = ray.dir.dot(geometric_normal) < 0.0;
         let mut shading_normal = if mesh.normals.is_empty() {
             geometric_normal
@@ -255,7 +263,8 @@ impl PhotonHit {
         let normal_object = geometry.normal_object;
         let position = frame.world_from_object.transform_point3(position_object);
         // (M·a)×(M·b) = cof(M)·(a×b): the world cross product without moving the corners.
-        let geometric_normal = frame.normal(normal_object).normalize_or(Vec3::Y);
+        // (Mirroring transforms: the sign restores the object-space front, as above.)
+        let geometric_normal = (frame.normal(normal_object) * frame.det_sign).normalize_or(Vec3::Y);
         let front_face = ray.dir.dot(geometric_normal) < 0.0;
         // Vertex indices only when attributes need them: with the tracer's geometry, a
         // mesh without normals and texture coordinates is never read here.
