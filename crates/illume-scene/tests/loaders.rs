@@ -1140,6 +1140,44 @@ fn gltf_overflowing_light_power_is_an_error() {
     assert_contains(&msg, &["bright.gltf", "light 0 'point'", "at most 1e30 W"]);
 }
 
+/// A mesh whose primitives differ in attributes keeps each primitive's own: smooth
+/// normals where given, flat (zero normals) where not (issue 14, defect 13).
+#[test]
+fn gltf_primitives_keep_their_own_normals() {
+    let (dir, doc) = cube_copy("gltf_mixed_normals");
+    let mut d = doc.clone();
+    let mesh = d["meshes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|m| m["primitives"][0]["attributes"].get("NORMAL").is_some())
+        .expect("a mesh with normals");
+    let mut flat = d["meshes"][mesh]["primitives"][0].clone();
+    flat["attributes"].as_object_mut().unwrap().remove("NORMAL");
+    d["meshes"][mesh]["primitives"]
+        .as_array_mut()
+        .unwrap()
+        .push(flat);
+    let s = load_scene(&write_json(&dir, "mixed.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    let m = s
+        .meshes
+        .iter()
+        .find(|m| m.normals.contains(&Vec3::ZERO))
+        .expect("the mixed mesh keeps normals");
+    let half = m.normals.len() / 2;
+    assert!(
+        m.normals[..half]
+            .iter()
+            .all(|n| (n.length() - 1.0).abs() < 1e-5)
+    );
+    assert!(m.normals[half..].iter().all(|n| *n == Vec3::ZERO));
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("normals dropped")),
+        "{:?}",
+        s.warnings
+    );
+}
+
 #[test]
 fn gltf_metallic_roughness_factors() {
     let (dir, doc) = cube_copy("gltf_mr");

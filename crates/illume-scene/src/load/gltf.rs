@@ -18,8 +18,9 @@
 //!   animation channel;
 //! * one illume [`Mesh`] per glTF mesh (shared by every node that uses it): its primitives
 //!   are concatenated with per-triangle materials; only `TRIANGLES` primitives, indexed
-//!   or not; `POSITION`, `NORMAL` (dropped with a warning when only some primitives have
-//!   it) and `TEXCOORD_0` (zero-filled for primitives without it);
+//!   or not; `POSITION`, `NORMAL` (per primitive: a primitive without it is shaded flat,
+//!   its vertices getting zero normals, which select the geometric normal) and
+//!   `TEXCOORD_0` (zero-filled for primitives without it);
 //! * materials (metallic-roughness): base colour = `baseColorFactor` rgb (×
 //!   `baseColorTexture`, decoded sRGB → linear, wrap modes from its sampler),
 //!   `metallicFactor` and `roughnessFactor` (default 1 each, as the spec; outside
@@ -1066,7 +1067,9 @@ impl Ctx<'_> {
                     with_normals += 1;
                     v
                 }
-                None => Vec::new(),
+                // Zero normals mark flat shading (the geometric normal is used where the
+                // interpolated normal is zero), used when another primitive has normals.
+                None => vec![Vec3::ZERO; n],
             };
             let uvs: Vec<Vec2> = match attr(Semantic::TexCoords(0)) {
                 Some(a) => {
@@ -1131,10 +1134,10 @@ impl Ctx<'_> {
                 mesh.triangle_materials.push(material);
             }
         }
-        if with_normals == prim_normals.len() {
+        // Each primitive keeps its own attributes: with normals smooth, without flat
+        // (zero normals select the geometric normal).
+        if with_normals > 0 {
             mesh.normals = prim_normals.into_iter().flatten().collect();
-        } else if with_normals > 0 {
-            self.warn(format!("mesh {index} '{name}': only some primitives have normals; normals dropped (flat shading)"));
         }
         let normal_mapped = mesh.triangle_materials.iter().any(|m| {
             self.builder.scene().materials[m.index()]
