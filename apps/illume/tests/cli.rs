@@ -495,3 +495,25 @@ fn non_finite_time_is_refused() {
         assert!(err.contains("--time") && !err.contains("panicked"), "{err}");
     }
 }
+
+/// A named pipe given as a scene is refused at once instead of blocking (issue 14,
+/// defect 10).
+#[test]
+fn a_pipe_as_scene_is_refused_without_hanging() {
+    let dir = scratch("fifo");
+    let fifo = dir.join("scene.obj");
+    let made = Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success(), "mkfifo failed");
+    let start = std::time::Instant::now();
+    let out = illume(&["info", path(&fifo)]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("scene.obj") && err.contains("not a regular file"),
+        "{err}"
+    );
+    assert!(start.elapsed().as_secs() < 10, "took {:?}", start.elapsed());
+}

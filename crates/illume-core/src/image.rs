@@ -273,13 +273,38 @@ pub fn write_exr(img: &RgbImage, path: &Path) -> Result<(), ImageError> {
         encoding,
         channels,
     );
-    Image::from_layer(layer)
-        .write()
-        .to_file(path)
-        .map_err(|e| ImageError::Write {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })
+    write_atomically(path, |tmp| {
+        Image::from_layer(layer)
+            .write()
+            .to_file(tmp)
+            .map_err(|e| e.to_string())
+    })
+}
+
+/// Writes `path` through `write` into a temporary file in the same folder, renamed over
+/// `path` only once complete: a failed write leaves the previous file intact and no
+/// partial file behind.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), ImageError> {
+    let error = |message: String| ImageError::Write {
+        path: path.to_owned(),
+        message,
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| error("not a file name".into()))?
+        .to_string_lossy();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    if let Err(message) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(error(message));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        error(e.to_string())
+    })
 }
 
 /// Reads a Radiance RGBE (`.hdr`) file as linear RGB.
@@ -322,11 +347,16 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
 /// Writes tone-mapped, sRGB-encoded 8-bit PNG.
 pub fn write_png(img: &RgbImage, path: &Path, tone: &ToneMap) -> Result<(), ImageError> {
     let bytes = to_srgb8(img, tone);
-    image::save_buffer(path, &bytes, img.width, img.height, image::ColorType::Rgb8).map_err(|e| {
-        ImageError::Write {
-            path: path.to_owned(),
-            message: e.to_string(),
-        }
+    write_atomically(path, |tmp| {
+        image::save_buffer_with_format(
+            tmp,
+            &bytes,
+            img.width,
+            img.height,
+            image::ColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| e.to_string())
     })
 }
 
@@ -369,6 +399,36 @@ pub fn read_ldr(path: &Path) -> Result<RgbImage, ImageError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Writes go through a temporary file renamed into place: success leaves only the
+    /// file, a failure leaves what was there and no partial file.
+    #[test]
+    fn writes_are_atomic() {
+        let dir = std::env::temp_dir().join(format!("illume-atomic-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let img = RgbImage::filled(4, 3, Rgb::splat(0.5));
+        let png = dir.join("a.png");
+        write_png(&img, &png, &ToneMap::default()).unwrap();
+        write_exr(&img, &dir.join("a.exr")).unwrap();
+        let names = |d: &Path| {
+            let mut v: Vec<String> = std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(names(&dir), ["a.exr", "a.png"]);
+        // The target is a non-empty folder: the rename fails, the folder stays, and no
+        // temporary file is left.
+        let blocked = dir.join("b.png");
+        std::fs::create_dir_all(blocked.join("inside")).unwrap();
+        assert!(write_png(&img, &blocked, &ToneMap::default()).is_err());
+        assert!(blocked.join("inside").is_dir());
+        assert_eq!(names(&dir), ["a.exr", "a.png", "b.png"]);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn exr_round_trip_is_exact() {

@@ -184,11 +184,44 @@ pub fn load_envmap(path: &Path, scale: f32, rotation_deg: f32) -> Result<crate::
     Ok(crate::Sky::Equirect(std::sync::Arc::new(map)))
 }
 
+/// Largest file illume reads as a scene, buffer or texture \[bytes\].
+pub const MAX_FILE_BYTES: u64 = 4 << 30;
+
+/// Reads a whole file: only regular files (a pipe would block, a device never ends) of
+/// at most [`MAX_FILE_BYTES`].
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, LoadError> {
+    check_regular_file(path)?;
     std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.into(),
         source,
     })
+}
+
+/// `Ok` for a regular file of at most [`MAX_FILE_BYTES`]; otherwise an error naming it.
+pub(crate) fn check_regular_file(path: &Path) -> Result<(), LoadError> {
+    let meta = std::fs::metadata(path).map_err(|source| LoadError::Io {
+        path: path.into(),
+        source,
+    })?;
+    if !meta.is_file() {
+        return Err(LoadError::malformed(
+            path,
+            "file",
+            "not a regular file (a folder, pipe or device)",
+        ));
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(LoadError::malformed(
+            path,
+            "file",
+            format!(
+                "{} bytes is more than the {} bytes illume reads",
+                meta.len(),
+                MAX_FILE_BYTES
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Vertical field of view of [`default_camera_for_bounds`]'s camera, in degrees.
