@@ -118,6 +118,12 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         exposure_ev: a.exposure,
         ..Default::default()
     };
+    if (duration * a.fps).round() >= 1e6 {
+        bail!(
+            "--duration {duration} s at --fps {} gives more than 1000000 frames",
+            a.fps
+        );
+    }
     let planned = (duration * a.fps).round() as u64 + 1;
     // Every frame's scene time, in rendering order: the timeline handed to techniques
     // that need the future (in real time, the frames' nominal times).

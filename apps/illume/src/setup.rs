@@ -2,7 +2,7 @@
 //! layers (preset, file, `--set`), camera placement. No technique's fields here: a
 //! technique is reached through its name, its presets and its settings table.
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use illume_core::Vec3;
@@ -159,13 +159,8 @@ impl SetupArgs {
         if let Some(h) = self.height {
             config.render.height = h;
         }
-        if config.render.width == 0 || config.render.height == 0 {
-            bail!(
-                "image size must be at least 1×1, got {}×{}",
-                config.render.width,
-                config.render.height
-            );
-        }
+        illume_render::check_image_size(config.render.width, config.render.height)
+            .map_err(|m| anyhow::anyhow!("--width/--height: {m}"))?;
         Ok(config)
     }
 

@@ -517,3 +517,42 @@ fn a_pipe_as_scene_is_refused_without_hanging() {
     );
     assert!(start.elapsed().as_secs() < 10, "took {:?}", start.elapsed());
 }
+
+/// Sizes and counts beyond what can be allocated are refused before anything is
+/// allocated, naming the setting and the limit (issue 14, defect 6).
+#[test]
+fn huge_sizes_and_counts_are_refused_up_front() {
+    let start = std::time::Instant::now();
+    let out = illume(&[
+        "render",
+        "builtin:cornell-spot",
+        "--width",
+        "100000",
+        "--height",
+        "100000",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--width/--height") && err.contains("16384"),
+        "{err}"
+    );
+    let dir = scratch("huge");
+    let out = illume(&[
+        "animate",
+        "builtin:cornell-spot",
+        "--duration",
+        "1e9",
+        "--fps",
+        "1000",
+        "-o",
+        path(&dir),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--duration") && err.contains("1000000 frames"),
+        "{err}"
+    );
+    assert!(start.elapsed().as_secs() < 20, "took {:?}", start.elapsed());
+}

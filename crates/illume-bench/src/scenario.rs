@@ -33,6 +33,10 @@ use illume_scene::{Edit, InstanceId, LightId, MaterialId, Scene};
 use illume_transport::Budget;
 use std::path::{Path, PathBuf};
 
+/// Most frames one run may have (a scenario with more is refused before anything is
+/// rendered).
+pub const MAX_FRAMES: usize = 1_000_000;
+
 /// A benchmark scenario (one `.toml` file). Every field but `scene` and `[[technique]]`
 /// has a default.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -404,8 +408,8 @@ impl Scenario {
         if self.scene.is_empty() {
             return Err(self.invalid("scene", "required (builtin:NAME or a scene file)"));
         }
-        if self.width == 0 || self.height == 0 {
-            return Err(self.invalid("width/height", "must be at least 1×1"));
+        if let Err(m) = illume_render::check_image_size(self.width, self.height) {
+            return Err(self.invalid("width/height", m));
         }
         if self.reference.spp == 0 {
             return Err(self.invalid("reference.spp", "must be ≥ 1"));
@@ -487,6 +491,15 @@ impl Scenario {
                 if times.is_empty() {
                     return Err(self.invalid("times_s", "is empty"));
                 }
+                if times.len() > MAX_FRAMES {
+                    return Err(self.invalid(
+                        "times_s",
+                        format!(
+                            "has {} frames, more than the {MAX_FRAMES} a run may have",
+                            times.len()
+                        ),
+                    ));
+                }
                 if let Some(i) = times.iter().position(|t| !t.is_finite() || *t < 0.0) {
                     return Err(self.invalid(
                         "times_s",
@@ -518,6 +531,15 @@ impl Scenario {
                 }
                 if (duration * fps).round() < 1.0 {
                     return Err(self.invalid("duration_s", "gives no frame at this fps"));
+                }
+                if (duration * fps).round() > MAX_FRAMES as f64 {
+                    return Err(self.invalid(
+                        "duration_s/fps",
+                        format!(
+                            "give {} frames, more than the {MAX_FRAMES} a run may have",
+                            (duration * fps).round()
+                        ),
+                    ));
                 }
                 Ok(())
             }

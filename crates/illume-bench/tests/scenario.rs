@@ -231,3 +231,17 @@ fn shipped_scenarios_parse() {
         }
     }
 }
+
+/// A scenario whose frame count or image size cannot be rendered is refused, naming
+/// the key (issue 14, defect 6).
+#[test]
+fn huge_frame_counts_and_sizes_name_the_key() {
+    let e = error(
+        "scene = \"builtin:cornell-spot\"\nduration_s = 1e9\nfps = 1e9\n[[technique]]\nname = \"reference\"\n",
+    );
+    assert!(e.contains("duration_s/fps") && e.contains("1000000"), "{e}");
+    let e = error(
+        "scene = \"builtin:cornell-spot\"\nwidth = 100000\nheight = 100000\ntimes_s = [0.0]\n[[technique]]\nname = \"reference\"\n",
+    );
+    assert!(e.contains("width/height") && e.contains("16384"), "{e}");
+}

@@ -129,6 +129,50 @@ impl RenderSettings {
     }
 }
 
+/// Largest image side \[pixels\]: the rasterizer's fixed-point edge functions are exact
+/// up to 2¹⁴ pixels a side (`illume_transport::raster::GUARD_BAND`).
+pub const MAX_IMAGE_SIDE: u32 = 1 << 14;
+
+/// Memory a frame needs per pixel \[bytes\]: the G-buffer (≈ 100) and the direct,
+/// indirect and full images with the technique's working images, rounded up.
+pub const FRAME_BYTES_PER_PIXEL: u64 = 256;
+
+/// Checks a `width × height` image before anything is allocated: each side in
+/// 1..=[`MAX_IMAGE_SIDE`], and a frame's memory ([`FRAME_BYTES_PER_PIXEL`] per pixel)
+/// within the memory the system reports available (`/proc/meminfo` `MemAvailable`;
+/// unchecked where that is unknown). The message names the limit.
+pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
+    if width == 0 || height == 0 {
+        return Err(format!(
+            "image size must be at least 1×1, got {width}×{height}"
+        ));
+    }
+    if width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
+        return Err(format!(
+            "image size {width}×{height}: each side must be at most {MAX_IMAGE_SIDE} pixels"
+        ));
+    }
+    let need = u64::from(width) * u64::from(height) * FRAME_BYTES_PER_PIXEL;
+    if let Some(available) = available_memory_bytes()
+        && need > available
+    {
+        return Err(format!(
+            "image size {width}×{height} needs about {} MiB per frame, more than the {} MiB available",
+            need >> 20,
+            available >> 20
+        ));
+    }
+    Ok(())
+}
+
+/// `MemAvailable` of `/proc/meminfo` in bytes, where the system reports it.
+pub fn available_memory_bytes() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
 /// Wall-clock time of a frame's stages \[ms\].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameTimings {
