@@ -554,5 +554,23 @@ fn huge_sizes_and_counts_are_refused_up_front() {
         err.contains("--duration") && err.contains("1000000 frames"),
         "{err}"
     );
+    let out = illume(&[
+        "render",
+        "builtin:cornell-spot",
+        "--set",
+        "photon_stream.vsl_count=4000000000",
+        "--width",
+        "8",
+        "--height",
+        "6",
+        "-o",
+        path(&dir.join("x.png")),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("vsl_count") && err.contains("1000000"),
+        "{err}"
+    );
     assert!(start.elapsed().as_secs() < 20, "took {:?}", start.elapsed());
 }

@@ -174,6 +174,13 @@ impl Default for PhotonStreamSettings {
     }
 }
 
+/// Most VSLs accepted (`vsl_count`): placement is O(n log n) in memory and shading
+/// O(n) per pixel, so far more would not finish; a larger value is an error.
+pub const MAX_VSLS: u32 = 1_000_000;
+
+/// Most pooled impacts accepted (`pool_size`): 32 bytes each, 3.2 GB at this limit.
+pub const MAX_POOL_IMPACTS: u32 = 100_000_000;
+
 impl PhotonStreamSettings {
     /// Preset for tests and reproducible animations: deterministic shooting, the
     /// paper's other defaults.
@@ -230,8 +237,17 @@ impl PhotonStreamSettings {
         let bad = |field: &'static str, reason: String| {
             Err(crate::PhotonStreamError::InvalidSetting { field, reason })
         };
-        if self.vsl_count == 0 {
-            return bad("vsl_count", "must be at least 1".into());
+        if self.vsl_count == 0 || self.vsl_count > MAX_VSLS {
+            return bad(
+                "vsl_count",
+                format!("{} is not in 1..={MAX_VSLS}", self.vsl_count),
+            );
+        }
+        if self.pool_size > MAX_POOL_IMPACTS {
+            return bad(
+                "pool_size",
+                format!("{} is more than {MAX_POOL_IMPACTS} impacts", self.pool_size),
+            );
         }
         if !(self.oversampling >= 0.0 && self.oversampling <= 10.0) {
             return bad(
