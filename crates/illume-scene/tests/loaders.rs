@@ -1950,3 +1950,29 @@ fn glb_header_with_tiny_length_is_an_error() {
     std::fs::write(&p, &bytes).unwrap();
     assert_contains(&load_err(&p), &["GLB header", "length 4"]);
 }
+
+/// Binary junk named `.obj` is an error, and a huge token is quoted as a short excerpt
+/// (issue 14, defect 9).
+#[test]
+fn obj_binary_input_and_huge_tokens_give_short_errors() {
+    let dir = temp_dir("obj_binary");
+    let mut junk = Vec::with_capacity(65536);
+    let mut x = 12345u32;
+    for _ in 0..65536 {
+        x = x.wrapping_mul(1_103_515_245).wrapping_add(12345);
+        junk.push((x >> 16) as u8);
+    }
+    let p = dir.join("junk.obj");
+    std::fs::write(&p, &junk).unwrap();
+    let msg = load_err(&p);
+    assert!(msg.contains("junk.obj") && msg.len() < 300, "{msg}");
+    let p = dir.join("long.obj");
+    let token = "9".repeat(1000) + "x" + &"9".repeat(5_000_000);
+    std::fs::write(&p, format!("v 1 2 {token}\n")).unwrap();
+    let msg = load_err(&p);
+    assert!(
+        msg.contains("long.obj") && msg.contains('…') && msg.len() < 300,
+        "{} bytes",
+        msg.len()
+    );
+}

@@ -74,8 +74,35 @@ struct ObjReader<'a> {
     unknown_materials: BTreeSet<String>,
 }
 
+/// `text` as quoted in an error message: at most 40 characters, then `…`.
+pub(crate) fn excerpt(text: &str) -> String {
+    const MAX: usize = 40;
+    match text.char_indices().nth(MAX) {
+        Some((end, _)) => format!("{}…", &text[..end]),
+        None => text.to_owned(),
+    }
+}
+
 pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
     let bytes = read_file(path)?;
+    // A text format: a NUL byte or a run of non-text bytes means binary data.
+    if let Some(at) = bytes.iter().position(|&b| b == 0) {
+        return Err(LoadError::malformed(
+            path,
+            format!("byte {at}"),
+            "binary data (a NUL byte) in what should be a text OBJ file",
+        ));
+    }
+    if std::str::from_utf8(&bytes).is_err() {
+        let bad = bytes.iter().filter(|&&b| b >= 0x80).count();
+        if bad * 10 > bytes.len() {
+            return Err(LoadError::malformed(
+                path,
+                "file",
+                "mostly non-text bytes: not a text OBJ file",
+            ));
+        }
+    }
     let text = String::from_utf8_lossy(&bytes);
     let mut r = ObjReader {
         path,
@@ -155,9 +182,9 @@ fn floats<const N: usize>(
             Some(t) => {
                 let x: f32 = t
                     .parse()
-                    .map_err(|_| format!("{what}: '{t}' is not a number"))?;
+                    .map_err(|_| format!("{what}: '{}' is not a number", excerpt(t)))?;
                 if !x.is_finite() {
-                    return Err(format!("{what}: value '{t}' is not finite"));
+                    return Err(format!("{what}: value '{}' is not finite", excerpt(t)));
                 }
                 *slot = x;
             }
@@ -173,7 +200,7 @@ fn floats<const N: usize>(
 fn resolve(token: &str, count: usize, what: &str) -> Result<u32, String> {
     let i: i64 = token
         .parse()
-        .map_err(|_| format!("face {what} index '{token}' is not an integer"))?;
+        .map_err(|_| format!("face {what} index '{}' is not an integer", excerpt(token)))?;
     let resolved = if i > 0 { i - 1 } else { count as i64 + i };
     if i == 0 || resolved < 0 || resolved >= count as i64 {
         return Err(format!(
