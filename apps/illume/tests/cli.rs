@@ -574,3 +574,13 @@ fn huge_sizes_and_counts_are_refused_up_front() {
     );
     assert!(start.elapsed().as_secs() < 20, "took {:?}", start.elapsed());
 }
+
+/// An OS error is printed once (issue 14, item 14).
+#[test]
+fn os_errors_are_printed_once() {
+    let out = illume(&["info", "/nonexistent/scene.obj"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+    assert!(err.contains("/nonexistent/scene.obj"), "{err}");
+}
