@@ -10,7 +10,6 @@ use illume_engine::{Engine, TechniqueKind};
 use illume_scene::Timeline;
 use illume_scene::timeline::ping_pong_time;
 use illume_transport::Pacing;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -203,8 +202,8 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         }
     }
     let csv_path = a.output.join("frames.csv");
-    let mut csv = std::fs::File::create(&csv_path)
-        .with_context(|| format!("{}: cannot create", csv_path.display()))?;
+    use std::fmt::Write as _;
+    let mut csv = String::new();
     let header = csv_header.unwrap_or_default();
     writeln!(
         csv,
@@ -214,6 +213,8 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     for r in &csv_rows {
         writeln!(csv, "{r}")?;
     }
+    illume_core::atomic::write_file(&csv_path, csv)
+        .with_context(|| format!("{}: cannot write", csv_path.display()))?;
     let preview = write_preview(
         &a.output,
         &stored,
@@ -292,9 +293,8 @@ fn write_preview(dir: &Path, frames: &[StoredFrame], w: u32, h: u32, fps: f64) -
         eprintln!("warning: ffmpeg failed ({status}); writing a GIF instead");
     }
     let out = dir.join("preview.gif");
-    let file =
-        std::fs::File::create(&out).with_context(|| format!("{}: cannot create", out.display()))?;
-    let mut enc = image::codecs::gif::GifEncoder::new_with_speed(std::io::BufWriter::new(file), 30);
+    let mut gif = Vec::new();
+    let mut enc = image::codecs::gif::GifEncoder::new_with_speed(&mut gif, 30);
     enc.set_repeat(image::codecs::gif::Repeat::Infinite)?;
     let (pw, ph) = ((w / 2).max(1), (h / 2).max(1));
     let delay = image::Delay::from_numer_denom_ms((1000.0 / fps.max(1.0)) as u32, 1);
@@ -304,6 +304,9 @@ fn write_preview(dir: &Path, frames: &[StoredFrame], w: u32, h: u32, fps: f64) -
         let rgba = image::DynamicImage::ImageRgb8(small).to_rgba8();
         enc.encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))?;
     }
+    drop(enc);
+    illume_core::atomic::write_file(&out, gif)
+        .with_context(|| format!("{}: cannot write", out.display()))?;
     Ok(out)
 }
 

@@ -141,7 +141,8 @@ impl ReferenceCache {
         // Image first, key last: a key file present means a complete image.
         image.write(&path, &Default::default())?;
         let key_file = self.dir.join(format!("{}.key.txt", key.hex()));
-        std::fs::write(&key_file, &key.text).map_err(|e| BenchError::io(&key_file, e))?;
+        illume_core::atomic::write_file(&key_file, &key.text)
+            .map_err(|e| BenchError::io(&key_file, e))?;
         self.renders += 1;
         Ok(image)
     }

@@ -315,7 +315,7 @@ pub fn write_report(
 
     let report_md = dir.join("report.md");
     let md = markdown(scenario, outcome, options, &plot_md);
-    std::fs::write(&report_md, md).map_err(|e| BenchError::io(&report_md, e))?;
+    illume_core::atomic::write_file(&report_md, md).map_err(|e| BenchError::io(&report_md, e))?;
     Ok(ReportFiles {
         report_md,
         results_csv,

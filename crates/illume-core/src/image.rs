@@ -288,22 +288,12 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> Result<(), String>,
 ) -> Result<(), ImageError> {
-    let error = |message: String| ImageError::Write {
+    crate::atomic::write_with(path, write).map_err(|e| ImageError::Write {
         path: path.to_owned(),
-        message,
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| error("not a file name".into()))?
-        .to_string_lossy();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    if let Err(message) = write(&tmp) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(error(message));
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        error(e.to_string())
+        message: match e {
+            crate::atomic::AtomicWriteError::Write(m) => m,
+            crate::atomic::AtomicWriteError::Rename(e) => e.to_string(),
+        },
     })
 }
 

@@ -13,6 +13,7 @@
 //! assert_eq!(a.next_1d(), b.next_1d()); // same seed and stream ⇒ same numbers
 //! ```
 
+pub mod atomic;
 pub mod counters;
 pub mod image;
 pub mod math;

@@ -197,7 +197,7 @@ pub fn csv_line<S: AsRef<str>>(fields: &[S]) -> String {
 
 /// Writes `table` as CSV to `path`.
 pub fn write_csv(path: &Path, table: &Table) -> Result<(), MetricsError> {
-    std::fs::write(path, table.to_csv()).map_err(|e| MetricsError::io(path, e))
+    illume_core::atomic::write_file(path, table.to_csv()).map_err(|e| MetricsError::io(path, e))
 }
 
 /// Reads a CSV file written by [`write_csv`] (RFC 4180 quoting; first line is the
@@ -428,7 +428,7 @@ pub fn write_report(dir: &Path, report: &BenchReport) -> Result<ReportFiles, Met
         plots.push(path);
     }
     let report_md = dir.join("report.md");
-    std::fs::write(&report_md, md).map_err(|e| MetricsError::io(&report_md, e))?;
+    illume_core::atomic::write_file(&report_md, md).map_err(|e| MetricsError::io(&report_md, e))?;
     Ok(ReportFiles {
         results_csv,
         report_md,
