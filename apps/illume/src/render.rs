@@ -100,6 +100,31 @@ pub fn run(a: RenderArgs) -> Result<()> {
     // A still wants the converged look, not the interactive one, and the same image on
     // every run: the technique's `still` preset, when it has one and neither --preset
     // nor --config says otherwise.
+    // The output must be writable as asked before minutes of rendering: a known format
+    // in a folder that exists (created here if need be).
+    match a
+        .output
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("exr") | Some("png") => {}
+        _ => anyhow::bail!(
+            "-o {}: the output must be .exr (linear) or .png (tone-mapped)",
+            a.output.display()
+        ),
+    }
+    if let Some(parent) = a.output.parent()
+        && !parent.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(parent).with_context(|| {
+            format!(
+                "-o {}: cannot create the folder {}",
+                a.output.display(),
+                parent.display()
+            )
+        })?;
+    }
     let mut config = a.setup.config(Some("still"))?;
     if let Some(s) = a.spp
         && !config.technique_settings_mut().set_samples_per_pixel(s)

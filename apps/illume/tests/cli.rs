@@ -584,3 +584,34 @@ fn os_errors_are_printed_once() {
     assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
     assert!(err.contains("/nonexistent/scene.obj"), "{err}");
 }
+
+/// An output that cannot be written is refused before rendering (issue 14, defect 12).
+#[test]
+fn unwritable_outputs_fail_before_rendering() {
+    let dir = scratch("bad_output");
+    std::fs::write(dir.join("file.txt"), "a file, not a folder").unwrap();
+    for (out, words) in [
+        (dir.join("x.jpg"), ".exr (linear) or .png"),
+        (dir.join("file.txt/x.png"), "cannot create the folder"),
+    ] {
+        let start = std::time::Instant::now();
+        let run = illume(&[
+            "render",
+            "builtin:cornell-spot",
+            "--technique",
+            "reference",
+            "--spp",
+            "100000",
+            "-o",
+            path(&out),
+        ]);
+        assert!(!run.status.success());
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains(words), "{err}");
+        assert!(
+            start.elapsed().as_secs() < 5,
+            "rendered first: {:?}",
+            start.elapsed()
+        );
+    }
+}
