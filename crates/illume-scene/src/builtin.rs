@@ -310,19 +310,30 @@ pub const SPONZA_ATRIUM_VIEW: (Vec3, Vec3) = (Vec3::new(-14.0, 2.0, 0.0), Vec3::
 
 /// Points `scene`'s camera from `eye` at `target` (+Y up), keeping its field of view —
 /// for scene files without a camera, whose default view from outside the bounds sees
-/// only the outer walls of an interior like Sponza. Errors on non-finite points, `eye`
-/// on `target`, or a vertical view direction.
+/// only the outer walls of an interior like Sponza. +Y is up (−Z when looking straight
+/// down, +Z straight up). Errors on non-finite points or `eye` on `target`.
 pub fn look_from(scene: &mut Scene, eye: Vec3, target: Vec3) -> Result<(), String> {
     let forward = target - eye;
     if !eye.is_finite() || !target.is_finite() {
         return Err(format!("camera points {eye} and {target} must be finite"));
     }
-    if forward.length() < 1e-6 || forward.normalize().cross(Vec3::Y).length() < 1e-4 {
+    let length = forward.length();
+    if !(length.is_finite() && length >= 1e-6 * (1.0 + eye.abs().max_element())) {
         return Err(format!(
-            "the camera cannot look from {eye} at {target} (same point, or straight up or down)"
+            "the camera cannot look from {eye} at {target}: the points are the same or too far apart"
         ));
     }
-    let world_from_camera = Affine3A::look_at_rh(eye, target, Vec3::Y).inverse();
+    // +Y is up, except when looking straight up or down: then the image's up is −Z
+    // (looking down, +X is to the right) or +Z (looking up).
+    let dir = forward / length;
+    let up = if dir.cross(Vec3::Y).length() >= 1e-4 {
+        Vec3::Y
+    } else if dir.y < 0.0 {
+        -Vec3::Z
+    } else {
+        Vec3::Z
+    };
+    let world_from_camera = Affine3A::look_at_rh(eye, target, up).inverse();
     scene
         .apply_edit(&crate::Edit::SetCameraTransform { world_from_camera })
         .map_err(|e| e.to_string())?;
@@ -584,7 +595,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn look_from_places_the_camera_and_rejects_impossible_views() {
+    fn look_from_places_the_camera_looks_down_and_rejects_impossible_views() {
         let mut scene = load("cornell-spot").unwrap();
         let (eye, target) = (Vec3::new(0.5, 1.2, 0.8), Vec3::new(-0.3, 0.4, -0.9));
         look_from(&mut scene, eye, target).unwrap();
@@ -597,10 +608,25 @@ mod tests {
         );
         // The image stays upright: camera +Y has a positive world Y component.
         assert!(m.transform_vector3(Vec3::Y).y > 0.0);
-        for (e, t) in [(eye, eye), (eye, eye + Vec3::Y), (Vec3::NAN, target)] {
+        for (e, t) in [
+            (eye, eye),
+            (Vec3::NAN, target),
+            (Vec3::splat(3e38), Vec3::splat(-3e38)),
+        ] {
             assert!(look_from(&mut scene, e, t).is_err(), "{e} → {t}");
         }
         assert!((scene.camera.world_from_camera.translation - m.translation).length() == 0.0);
+        // Straight down: −Z is up in the image, +X to the right (issue 14, first use).
+        look_from(&mut scene, Vec3::new(0.0, 3.0, 0.0), Vec3::ZERO).unwrap();
+        let m = scene.camera.world_from_camera;
+        assert!((m.transform_vector3(-Vec3::Z) + Vec3::Y).length() < 1e-5);
+        assert!((m.transform_vector3(Vec3::Y) + Vec3::Z).length() < 1e-5);
+        assert!((m.transform_vector3(Vec3::X) - Vec3::X).length() < 1e-5);
+        // Straight up works too.
+        look_from(&mut scene, Vec3::ZERO, Vec3::Y).unwrap();
+        assert!(
+            (scene.camera.world_from_camera.transform_vector3(-Vec3::Z) - Vec3::Y).length() < 1e-5
+        );
     }
 
     #[test]
