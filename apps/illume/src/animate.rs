@@ -134,7 +134,13 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     let mut bars = progress::Bars::default();
     let precompute_ms = engine.precompute(&mut bars)?;
     bars.finish();
-    let pb = progress::bar(planned, if a.realtime { "real time" } else { "frames" });
+    // In real time the bar counts tenths of a second of the sequence (the frame count is
+    // not known in advance); otherwise frames.
+    let pb = if a.realtime {
+        progress::bar((duration * 10.0).ceil().max(1.0) as u64, "0.1 s")
+    } else {
+        progress::bar(planned, "frames")
+    };
     let mut csv_header: Option<Vec<String>> = None;
     let mut csv_rows: Vec<String> = Vec::new();
     let mut stored: Vec<StoredFrame> = Vec::new();
@@ -189,7 +195,11 @@ pub fn run(a: AnimateArgs) -> Result<()> {
             });
         }
         index += 1;
-        pb.set_position(index.min(planned));
+        if a.realtime {
+            pb.set_position((t * 10.0) as u64);
+        } else {
+            pb.set_position(index.min(planned));
+        }
         if a.realtime && t >= duration {
             break;
         }
