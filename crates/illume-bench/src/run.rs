@@ -800,7 +800,18 @@ fn summarize(
             Ok(SeriesSummary {
                 series: name.to_owned(),
                 technique: rs[0].technique.clone(),
-                median_frame_ms: median(frame_ms),
+                // The equal-time path tracer renders whole passes on some frames and
+                // nothing on others: its typical frame is the mean over the run (≈ the
+                // technique's frame time by construction), not the median of mostly
+                // empty frames.
+                median_frame_ms: if rs
+                    .iter()
+                    .any(|r| r.counters.get("equal_time.budget_ms").is_some())
+                {
+                    frame_ms.iter().sum::<f64>() / frame_ms.len().max(1) as f64
+                } else {
+                    median(frame_ms)
+                },
                 precompute_ms: rs
                     .iter()
                     .filter_map(|r| r.counters.get("engine.precompute_ms"))
@@ -956,6 +967,42 @@ mod tests {
         assert_eq!((metric, max), (Metric::Flip, 0.5));
         assert!((mean - 1.45 / 6.0).abs() < 1e-12, "{mean}");
         assert_eq!(s[0].flicker, Some((0.01, 0.01)));
+    }
+
+    /// The equal-time series reports its mean frame time: most of its frames render no
+    /// pass and cost nothing (issue 14 item 14: it reported "9787 fps").
+    #[test]
+    fn equal_time_series_reports_its_mean_frame_time() {
+        let scenario = Scenario {
+            metrics: vec![Metric::Flip],
+            ..Scenario::default()
+        };
+        let times = [0.0, 0.5, 1.0, 1.5];
+        let records: Vec<FrameRecord> = [10.0, 0.1, 0.1, 10.0]
+            .iter()
+            .enumerate()
+            .map(|(i, &ms)| {
+                let mut counters = Counters::for_technique("equal_time");
+                counters.set("budget_ms", 5.0);
+                FrameRecord {
+                    series: "reference (equal time to x)".into(),
+                    technique: "reference".into(),
+                    frame: i,
+                    time_s: times[i],
+                    frame_ms: ms,
+                    metrics: vec![(Metric::Flip, 0.05)],
+                    own_metrics: Vec::new(),
+                    flicker: None,
+                    counters,
+                }
+            })
+            .collect();
+        let s = summarize(&scenario, &records, &times, &[], &[true; 4]).unwrap();
+        assert!(
+            (s[0].median_frame_ms - 5.05).abs() < 1e-12,
+            "{}",
+            s[0].median_frame_ms
+        );
     }
 
     #[test]
