@@ -102,6 +102,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         a.animation.as_deref(),
         0.0,
         a.setup.spot_from_above,
+        a.setup.strict,
     )?;
     a.setup.place_camera(&mut scene)?;
     let animation_s = scene.animation_duration();

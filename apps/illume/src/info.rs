@@ -15,7 +15,7 @@ pub struct InfoArgs {
 
 /// Runs `illume info`.
 pub fn run(a: InfoArgs) -> Result<()> {
-    let scene = crate::render::load_scene(&a.scene, None, 0.0, false)?;
+    let scene = crate::render::load_scene(&a.scene, None, 0.0, false, false)?;
     let b = scene.bounds();
     println!("scene        {}", scene.source);
     println!(
@@ -58,6 +58,26 @@ pub fn run(a: InfoArgs) -> Result<()> {
             "             note: photon_stream carries indirect light on the Lambertian albedo only \
              (glossy interreflections are approximated); the reference renders them"
         );
+    }
+    let cut: Vec<String> = scene
+        .materials
+        .iter()
+        .filter_map(|m| Some(format!("{} (cutoff {})", m.name, m.alpha_cutoff?)))
+        .collect();
+    if !cut.is_empty() {
+        println!(
+            "cut-outs     {} alpha-masked: {}",
+            cut.len(),
+            cut.join(", ")
+        );
+    }
+    let bumped = scene
+        .materials
+        .iter()
+        .filter(|m| m.normal_texture.is_some())
+        .count();
+    if bumped > 0 {
+        println!("normal maps  {bumped} materials");
     }
     match &scene.sky {
         None => println!("sky          none (escaping rays see black)"),

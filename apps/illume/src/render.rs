@@ -49,9 +49,10 @@ pub fn load_scene(
     animation: Option<&str>,
     time: f64,
     spot_from_above: bool,
+    strict: bool,
 ) -> Result<illume_scene::Scene> {
     let t0 = Instant::now();
-    let mut scene = illume_scene::load_scene(path)?;
+    let mut scene = illume_scene::load_scene_with(path, &illume_scene::LoadOptions { strict })?;
     if spot_from_above {
         scene = illume_scene::builtin::spot_from_above(scene);
     }
@@ -62,12 +63,6 @@ pub fn load_scene(
         scene.select_animation(name).map_err(anyhow::Error::msg)?;
     }
     scene.set_time(time);
-    if scene.lights.is_empty() && scene.materials.iter().all(|m| !m.is_emissive()) {
-        eprintln!(
-            "warning: {}: the scene has no lights and no emissive materials; it will render black (--spot-from-above adds a spot light)",
-            path.display()
-        );
-    }
     let dt = t0.elapsed().as_secs_f64();
     if dt > 0.5 {
         eprintln!("loaded {} in {dt:.2} s", path.display());
@@ -146,6 +141,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         a.animation.as_deref(),
         a.time,
         a.setup.spot_from_above,
+        a.setup.strict,
     )?;
     a.setup.place_camera(&mut scene)?;
     let t0 = Instant::now();

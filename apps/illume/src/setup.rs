@@ -60,6 +60,10 @@ pub struct SetupArgs {
     /// lights, such as Sponza, the bunny and the dragon).
     #[arg(long)]
     pub spot_from_above: bool,
+    /// A texture file that is missing or cannot be decoded is an error (by default a
+    /// warning naming it, and the material is rendered with its factors alone).
+    #[arg(long)]
+    pub strict: bool,
     /// Camera position X,Y,Z [m] (with --look-at): replaces the scene's camera placement.
     #[arg(long, value_parser = parse_point, requires = "look_at", allow_hyphen_values = true)]
     pub look_from: Option<Vec3>,
@@ -164,7 +168,8 @@ impl SetupArgs {
         Ok(config)
     }
 
-    /// Applies --look-from/--look-at and --sky/--envmap to a loaded scene.
+    /// Applies --look-from/--look-at and --sky/--envmap to a loaded scene, and warns when
+    /// the result has no light at all.
     pub fn place_camera(&self, scene: &mut illume_scene::Scene) -> Result<()> {
         if let (Some(eye), Some(target)) = (self.look_from, self.look_at) {
             illume_scene::builtin::look_from(scene, eye, target).map_err(anyhow::Error::msg)?;
@@ -178,6 +183,16 @@ impl SetupArgs {
                 self.envmap_scale,
                 self.envmap_rotation,
             )?);
+        }
+        let sky_lit = scene
+            .sky
+            .as_ref()
+            .is_some_and(|sky| sky.integral().max_element() > 0.0);
+        if scene.lights.is_empty() && scene.materials.iter().all(|m| !m.is_emissive()) && !sky_lit {
+            eprintln!(
+                "warning: {}: the scene has no lights, no emissive materials and no sky; it will render black (--spot-from-above adds a spot light, --sky a sky)",
+                scene.source
+            );
         }
         Ok(())
     }

@@ -205,6 +205,9 @@ fn a_scene_without_lights_is_lit_by_spot_from_above_and_seen_from_look_from() {
     assert!(err.contains("--spot-from-above"), "{err}");
     let (lit, _) = render("lit.exr", &["--spot-from-above"]);
     assert!(lit > 0.01, "lit bunny mean {lit}");
+    // A sky lights it too: no warning then.
+    let (sky, err) = render("sky.exr", &["--sky", "1,1,1"]);
+    assert!(sky > 0.1 && !err.contains("render black"), "{sky}: {err}");
     let (away, _) = render(
         "away.exr",
         &[
@@ -614,4 +617,53 @@ fn unwritable_outputs_fail_before_rendering() {
             start.elapsed()
         );
     }
+}
+
+#[test]
+fn a_missing_texture_is_a_warning_unless_strict() {
+    let dir = scratch("strict");
+    std::fs::write(
+        dir.join("t.mtl"),
+        "newmtl red\nKd 0.8 0.1 0.1\nmap_Kd gone.png\n",
+    )
+    .unwrap();
+    let obj = dir.join("t.obj");
+    std::fs::write(
+        &obj,
+        "mtllib t.mtl\nv -1 0 -1\nv 1 0 -1\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl red\nf 1/1 3/3 2/2\n",
+    )
+    .unwrap();
+    let exr = dir.join("t.exr");
+    let args = [
+        "render",
+        path(&obj),
+        "--sky",
+        "1,1,1",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--preset",
+        "deterministic",
+        "-o",
+        path(&exr),
+    ];
+    let out = illume(&args);
+    ok(&out);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning") && err.contains("gone.png") && err.contains("t.mtl line 3"),
+        "{err}"
+    );
+    let _ = std::fs::remove_file(&exr);
+    let mut strict = args.to_vec();
+    strict.push("--strict");
+    let out = illume(&strict);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("gone.png") && err.contains("t.mtl line 3"),
+        "{err}"
+    );
+    assert!(!exr.exists(), "no image is written when loading fails");
 }

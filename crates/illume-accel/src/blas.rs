@@ -6,7 +6,7 @@ use crate::BvhSettings;
 use crate::build::{BuildParams, build_binary};
 use crate::wide::{Bvh4, MAX_LEAF, PreparedRay, StackEntry, traverse};
 use illume_core::{Aabb, Vec2, Vec3, Vec4};
-use illume_scene::Mesh;
+use illume_scene::{Mesh, MeshCutout};
 
 /// Up to four triangles ready for Möller–Trumbore, tested together in 4-lane arithmetic:
 /// corners `v0`, edges `e1 = v1 − v0` and `e2 = v2 − v0` (structure of arrays), and each
@@ -112,11 +112,15 @@ pub(crate) struct Blas {
     pub packets: Vec<TrianglePacket>,
     /// Number of mesh triangles.
     pub triangle_count: usize,
+    /// Holes of the mesh's alpha-masked triangles, `None` when it has none: a hit in a
+    /// hole is no hit.
+    pub cutout: Option<MeshCutout>,
 }
 
 impl Blas {
-    /// Builds the BVH of `mesh` (binned SAH, then collapsed to four-wide nodes).
-    pub fn build(mesh: &Mesh, settings: &BvhSettings) -> Blas {
+    /// Builds the BVH of `mesh` (binned SAH, then collapsed to four-wide nodes), whose
+    /// alpha-masked triangles have the holes of `cutout`.
+    pub fn build(mesh: &Mesh, cutout: Option<MeshCutout>, settings: &BvhSettings) -> Blas {
         let boxes: Vec<Aabb> = (0..mesh.triangle_count())
             .map(|t| Aabb::from_points(mesh.triangle(t)))
             .collect();
@@ -144,6 +148,7 @@ impl Blas {
             bvh,
             packets,
             triangle_count: mesh.triangle_count(),
+            cutout,
         }
     }
 
@@ -178,10 +183,29 @@ impl Blas {
         t_max: f32,
         stack: &mut [StackEntry],
     ) -> Option<(f32, u32, Vec2, u32, u32)> {
+        // Meshes without holes pay nothing for them: the test is compiled out.
+        if self.cutout.is_some() {
+            self.intersect_with::<true>(ray, t_max, stack)
+        } else {
+            self.intersect_with::<false>(ray, t_max, stack)
+        }
+    }
+
+    /// [`Blas::intersect`], testing alpha-mask holes when `CUT`.
+    #[inline(always)]
+    fn intersect_with<const CUT: bool>(
+        &self,
+        ray: &PreparedRay,
+        t_max: f32,
+        stack: &mut [StackEntry],
+    ) -> Option<(f32, u32, Vec2, u32, u32)> {
         let mut best = None;
         traverse::<false>(&self.bvh, ray, t_max, u32::MAX, stack, |range, t_max, _| {
             for (k, packet) in self.packets[range.clone()].iter().enumerate() {
                 let (t, b1, b2, mut bits) = packet.intersect(ray, *t_max);
+                if CUT && bits != 0 {
+                    bits = self.keep_lanes(packet, bits, b1, b2);
+                }
                 if bits != 0 {
                     let t = t.to_array();
                     let mut lane = bits.trailing_zeros() as usize;
@@ -208,14 +232,55 @@ impl Blas {
         best
     }
 
+    /// The lanes of `bits` (hits of `packet` at barycentrics `b1`, `b2`) that are not in
+    /// a hole of the cut-out.
+    #[cold]
+    fn keep_lanes(&self, packet: &TrianglePacket, mut bits: u32, b1: Vec4, b2: Vec4) -> u32 {
+        let Some(cutout) = &self.cutout else {
+            return bits;
+        };
+        let (b1, b2) = (b1.to_array(), b2.to_array());
+        let mut rest = bits;
+        while rest != 0 {
+            let lane = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let triangle = packet.index[lane];
+            if cutout.is_tested(triangle) && !cutout.keeps(triangle, Vec2::new(b1[lane], b2[lane]))
+            {
+                bits &= !(1 << lane);
+            }
+        }
+        bits
+    }
+
     /// True when any triangle is hit with `t < t_max`.
     #[inline]
     pub fn occluded(&self, ray: &PreparedRay, t_max: f32, stack: &mut [StackEntry]) -> bool {
+        if self.cutout.is_some() {
+            self.occluded_with::<true>(ray, t_max, stack)
+        } else {
+            self.occluded_with::<false>(ray, t_max, stack)
+        }
+    }
+
+    /// [`Blas::occluded`], testing alpha-mask holes when `CUT`.
+    #[inline(always)]
+    fn occluded_with<const CUT: bool>(
+        &self,
+        ray: &PreparedRay,
+        t_max: f32,
+        stack: &mut [StackEntry],
+    ) -> bool {
         let mut hit = false;
         traverse::<false>(&self.bvh, ray, t_max, u32::MAX, stack, |range, t_max, _| {
-            hit = self.packets[range]
-                .iter()
-                .any(|p| p.intersect(ray, *t_max).3 != 0);
+            hit = self.packets[range].iter().any(|p| {
+                let (_, b1, b2, bits) = p.intersect(ray, *t_max);
+                if CUT && bits != 0 {
+                    self.keep_lanes(p, bits, b1, b2) != 0
+                } else {
+                    bits != 0
+                }
+            });
             hit
         });
         hit

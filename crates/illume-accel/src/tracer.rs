@@ -6,7 +6,7 @@ use crate::build::{BuildParams, build_binary};
 use crate::wide::{Bvh4, Item, PreparedRay, StackEntry, traverse, with_stack};
 use crate::{Hit, HitGeometry};
 use illume_core::{Aabb, Affine3A, Mat3A, Ray, Vec3, Vec3A};
-use illume_scene::{InstanceId, Scene};
+use illume_scene::{InstanceId, MeshCutout, MeshId, Scene};
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
@@ -162,9 +162,14 @@ impl Tracer {
     pub fn update(&mut self, scene: &Scene) {
         if scene.meshes.len() > self.blases.len() {
             let start = Instant::now();
-            let new: Vec<Arc<Blas>> = scene.meshes[self.blases.len()..]
+            let first = self.blases.len();
+            let new: Vec<Arc<Blas>> = scene.meshes[first..]
                 .par_iter()
-                .map(|m| Arc::new(Blas::build(m, &self.settings)))
+                .enumerate()
+                .map(|(k, m)| {
+                    let cutout = MeshCutout::new(scene, MeshId((first + k) as u32));
+                    Arc::new(Blas::build(m, cutout, &self.settings))
+                })
                 .collect();
             self.stats.mesh_builds += new.len() as u64;
             self.blases.extend(new);
@@ -292,7 +297,8 @@ impl Tracer {
     /// Möller–Trumbore of [`triangle::intersect_triangle`]), so when the closest hit of
     /// `ray` is this triangle, the two results are equal bit for bit. `None` when the ray
     /// misses the triangle within `(ray.t_min, ray.t_max)` or the instance is not in the
-    /// tracer (unknown id, empty mesh, singular transform). Masks are not consulted.
+    /// tracer (unknown id, empty mesh, singular transform). Masks and alpha-mask holes are not
+    /// consulted (the caller has chosen the triangle).
     pub fn intersect_instance_triangle(
         &self,
         ray: &Ray,

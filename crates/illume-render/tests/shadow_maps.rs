@@ -127,6 +127,17 @@ fn plane_scene(kind: LightKind, light_at: Trs, occluder: bool) -> World {
 /// of the occluder's outline are the penumbra band and skipped; the others must be 0 in
 /// shadow and within 1e-3 relative of `value` when lit.
 fn check_plane_with_occluder(world: &World, expected: impl Fn(Vec3) -> (Rgb, Vec3), margin: f32) {
+    check_plane_with_shape(world, expected, margin, |q| q.x.abs().max(q.z.abs()) - 0.2);
+}
+
+/// [`check_plane_with_occluder`] for an occluder whose signed distance (in its plane,
+/// negative inside) at crossing `q` is `outside(q)`.
+fn check_plane_with_shape(
+    world: &World,
+    expected: impl Fn(Vec3) -> (Rgb, Vec3),
+    margin: f32,
+    outside: impl Fn(Vec3) -> f32,
+) {
     let (w, h) = (160, 120);
     let (g, rays, maps) = rays_and_maps(world, w, h);
     let (mut lit, mut shadowed) = (0, 0);
@@ -136,7 +147,7 @@ fn check_plane_with_occluder(world: &World, expected: impl Fn(Vec3) -> (Rgb, Vec
             continue; // the occluder itself
         }
         let (value, q) = expected(hit.position);
-        let outside = q.x.abs().max(q.z.abs()) - 0.2;
+        let outside = outside(q);
         if outside.abs() < margin {
             continue;
         }
@@ -182,6 +193,52 @@ fn point_light_map_gives_analytic_light_and_exact_shadow() {
             (value, p + d * ((0.5 - p.y) / d.y))
         },
         0.01,
+    );
+}
+
+/// An alpha-masked occluder casts the shadow of its opaque half only, with maps (spot
+/// light: perspective map; directional: orthographic) as with rays.
+#[test]
+fn cut_out_occluder_casts_the_shadow_of_its_opaque_half() {
+    let e = Rgb::new(2.0, 1.5, 1.0);
+    let sun = Trs {
+        rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2 + 30f32.to_radians()),
+        ..Trs::IDENTITY
+    };
+    let mut scene =
+        illume_scene::builtin::lit_plane(LightKind::Directional { irradiance: e }, sun, RHO, true);
+    illume_scene::builtin::cut_half_of_occluder(&mut scene);
+    let world = World::new(scene);
+    let to_sun = -world.scene.lights[0].direction();
+    // Only x ∈ [−0.2, 0.2], z ∈ [0, 0.2] remains of the occluder.
+    let half = |q: Vec3| (q.x.abs() - 0.2).max((q.z - 0.1).abs() - 0.1);
+    check_plane_with_shape(
+        &world,
+        |p| {
+            let value = e * (RHO / PI) * to_sun.y;
+            (value, p + to_sun * ((0.5 - p.y) / to_sun.y))
+        },
+        0.04,
+        half,
+    );
+    let intensity = Rgb::new(2.0, 1.0, 0.5);
+    let light = Vec3::new(0.3, 1.0, -0.2);
+    let mut scene = illume_scene::builtin::lit_plane(
+        LightKind::Point { intensity },
+        Trs::from_translation(light),
+        RHO,
+        true,
+    );
+    illume_scene::builtin::cut_half_of_occluder(&mut scene);
+    check_plane_with_shape(
+        &World::new(scene),
+        |p| {
+            let d = light - p;
+            let value = intensity * (RHO / PI) * d.normalize().y / d.length_squared();
+            (value, p + d * ((0.5 - p.y) / d.y))
+        },
+        0.01,
+        half,
     );
 }
 

@@ -302,6 +302,34 @@ pub fn lit_plane(kind: LightKind, light_at: Trs, rho: f32, occluder: bool) -> Sc
     b.finish("builtin:lit-plane")
 }
 
+/// Makes [`lit_plane`]'s occluder (instance 1) a cut-out: a material of its own with an
+/// alpha mask (cutoff ½) from a clamped 2×1 texture, transparent on its left texel and
+/// opaque on its right, so only the occluder's half with z ≥ 0 remains (texture u runs
+/// along +z there). For tests of alpha masks in rays, rasterization and shadows.
+pub fn cut_half_of_occluder(scene: &mut Scene) {
+    scene.textures.push(std::sync::Arc::new(Texture {
+        name: "half".into(),
+        width: 2,
+        height: 1,
+        texels: vec![Rgb::ONE; 2],
+        wrap_u: WrapMode::Clamp,
+        wrap_v: WrapMode::Clamp,
+        alpha: vec![0, 255],
+    }));
+    let texture = TextureId(scene.textures.len() as u32 - 1);
+    let occluder = scene.instances[1].mesh;
+    let mut material =
+        scene.materials[scene.meshes[occluder.index()].triangle_materials[0].index()].clone();
+    material.name = "cut-out".into();
+    material.alpha_texture = Some(texture);
+    material.alpha_cutoff = Some(0.5);
+    scene.materials.push(material);
+    let id = MaterialId(scene.materials.len() as u32 - 1);
+    let mut mesh = (*scene.meshes[occluder.index()]).clone();
+    mesh.triangle_materials.fill(id);
+    scene.meshes[occluder.index()] = std::sync::Arc::new(mesh);
+}
+
 /// The view benchmarks and tests use for the shared Dabrovic Sponza
 /// (`dabrovic_sponza/sponza.obj`, which has no camera): from one end of the atrium at
 /// head height towards the far end and up, as in the photon-streaming paper's figures

@@ -21,6 +21,7 @@
 pub mod animation;
 pub mod builtin;
 pub mod change;
+pub mod cutout;
 pub mod load;
 pub mod model;
 pub mod timeline;
@@ -29,7 +30,8 @@ pub use animation::{
     Animation, Channel, ChannelValues, Interpolation, PropertyChannel, PropertyTarget, Trs,
 };
 pub use change::{Edit, SceneChange};
-pub use load::{LoadError, load_envmap, load_scene};
+pub use cutout::MeshCutout;
+pub use load::{LoadError, LoadOptions, load_envmap, load_scene, load_scene_with};
 pub use model::*;
 pub use timeline::{Timeline, TimelineError};
 

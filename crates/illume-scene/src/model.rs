@@ -203,9 +203,33 @@ pub struct Texture {
     pub wrap_u: WrapMode,
     /// Wrapping in v.
     pub wrap_v: WrapMode,
+    /// Row-major opacity per texel, 0 = transparent … 255 = opaque, laid out like
+    /// `texels`; empty when the image has no alpha channel or is opaque everywhere.
+    /// Read by alpha-mask (cut-out) materials only.
+    pub alpha: Vec<u8>,
 }
 
 impl Texture {
+    /// Bilinear lookup of the opacity in [0, 1] at `uv` (1 for a texture without alpha).
+    pub fn sample_alpha(&self, uv: Vec2) -> f32 {
+        if self.alpha.len() != self.texels.len() || self.alpha.is_empty() {
+            return 1.0;
+        }
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = uv.y * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let t = |ix: i64, iy: i64| {
+            let cx = self.wrap_u.wrap(ix, self.width);
+            let cy = self.wrap_v.wrap(iy, self.height);
+            f32::from(self.alpha[cy * self.width as usize + cx])
+        };
+        let (ix, iy) = (x0 as i64, y0 as i64);
+        let top = t(ix, iy) * (1.0 - fx) + t(ix + 1, iy) * fx;
+        let bottom = t(ix, iy + 1) * (1.0 - fx) + t(ix + 1, iy + 1) * fx;
+        (top * (1.0 - fy) + bottom * fy) / 255.0
+    }
+
     /// Bilinear lookup at `uv` (glTF convention: v = 0 at the top row).
     pub fn sample(&self, uv: Vec2) -> Rgb {
         if self.texels.is_empty() {
@@ -257,6 +281,15 @@ impl UvTransform {
         self.offset + Vec2::new(s.x * cos - s.y * sin, s.x * sin + s.y * cos)
     }
 
+    /// `uv` through `transform`, unchanged for `None`.
+    #[inline]
+    pub fn apply_opt(transform: &Option<UvTransform>, uv: Vec2) -> Vec2 {
+        match transform {
+            Some(t) => t.apply(uv),
+            None => uv,
+        }
+    }
+
     /// True when every value is finite.
     pub fn is_finite(&self) -> bool {
         self.offset.is_finite() && self.rotation.is_finite() && self.scale.is_finite()
@@ -278,6 +311,12 @@ pub struct Material {
     pub base_color_texture: Option<TextureId>,
     /// Transform of the texture coordinates the base-colour texture is read at.
     pub base_color_transform: Option<UvTransform>,
+    /// Transform of the texture coordinates the metallic-roughness texture is read at.
+    pub metallic_roughness_transform: Option<UvTransform>,
+    /// Transform of the texture coordinates the normal map is read at.
+    pub normal_transform: Option<UvTransform>,
+    /// Transform of the texture coordinates the emissive texture is read at.
+    pub emissive_transform: Option<UvTransform>,
     /// Emitted radiance Le [W/(m²·sr)], from the front face only.
     pub emission: Rgb,
     /// Optional emissive texture (linear after sRGB decoding), multiplied into
@@ -298,6 +337,18 @@ pub struct Material {
     /// When false (glTF `doubleSided: false`), a back face neither reflects nor emits:
     /// light arriving there is absorbed.
     pub double_sided: bool,
+    /// Opacity factor (glTF `baseColorFactor`'s alpha, MTL `d`), in [0, 1]; read only
+    /// when `alpha_cutoff` is set.
+    pub alpha: f32,
+    /// Texture whose alpha channel multiplies `alpha` (glTF: the base-colour texture,
+    /// read at its coordinates; MTL: `map_d`), read only when `alpha_cutoff` is set.
+    pub alpha_texture: Option<TextureId>,
+    /// Alpha mask (glTF `alphaMode: MASK`, `alphaCutoff`): where the opacity is below
+    /// the cutoff the surface is not there at all: rays, shadows, photons and the
+    /// rasterizer pass through it (a cut-out: leaves, chains, fences). `None`: opaque.
+    /// Cut-outs are fixed when the tracer builds a mesh's BVH (animating `alpha` has no
+    /// effect on them).
+    pub alpha_cutoff: Option<f32>,
 }
 
 impl Default for Material {
@@ -307,6 +358,9 @@ impl Default for Material {
             base_color: Rgb::splat(0.8),
             base_color_texture: None,
             base_color_transform: None,
+            metallic_roughness_transform: None,
+            normal_transform: None,
+            emissive_transform: None,
             emission: Rgb::ZERO,
             emissive_texture: None,
             metallic: 0.0,
@@ -315,6 +369,9 @@ impl Default for Material {
             normal_texture: None,
             normal_scale: 1.0,
             double_sided: true,
+            alpha: 1.0,
+            alpha_texture: None,
+            alpha_cutoff: None,
         }
     }
 }
@@ -330,10 +387,25 @@ impl Material {
     /// `uv` (unchanged without a transform).
     #[inline]
     pub fn base_color_uv(&self, uv: Vec2) -> Vec2 {
-        match &self.base_color_transform {
-            Some(t) => t.apply(uv),
-            None => uv,
-        }
+        UvTransform::apply_opt(&self.base_color_transform, uv)
+    }
+
+    /// The texture coordinates the metallic-roughness texture is read at.
+    #[inline]
+    pub fn metallic_roughness_uv(&self, uv: Vec2) -> Vec2 {
+        UvTransform::apply_opt(&self.metallic_roughness_transform, uv)
+    }
+
+    /// The texture coordinates the normal map is read at.
+    #[inline]
+    pub fn normal_uv(&self, uv: Vec2) -> Vec2 {
+        UvTransform::apply_opt(&self.normal_transform, uv)
+    }
+
+    /// The texture coordinates the emissive texture is read at.
+    #[inline]
+    pub fn emissive_uv(&self, uv: Vec2) -> Vec2 {
+        UvTransform::apply_opt(&self.emissive_transform, uv)
     }
 
     /// True when the material emits light.
@@ -716,7 +788,7 @@ impl Scene {
     pub fn emission(&self, material: MaterialId, uv: Vec2) -> Rgb {
         let m = &self.materials[material.index()];
         match m.emissive_texture {
-            Some(t) => m.emission * self.textures[t.index()].sample(uv),
+            Some(t) => m.emission * self.textures[t.index()].sample(m.emissive_uv(uv)),
             None => m.emission,
         }
     }
@@ -727,7 +799,7 @@ impl Scene {
         let m = &self.materials[material.index()];
         match m.metallic_roughness_texture {
             Some(t) => {
-                let texel = self.textures[t.index()].sample(uv);
+                let texel = self.textures[t.index()].sample(m.metallic_roughness_uv(uv));
                 (m.metallic * texel.z, m.roughness * texel.y)
             }
             None => (m.metallic, m.roughness),
@@ -836,44 +908,30 @@ impl Scene {
                     ));
                 }
             }
-            if let Some(t) = m.emissive_texture
-                && t.index() >= self.textures.len()
-            {
-                return Err(format!(
-                    "material {i} '{}': emissive texture {} of {}",
-                    m.name,
-                    t.0,
-                    self.textures.len()
-                ));
+            for (slot, texture) in [
+                ("base-colour", m.base_color_texture),
+                ("emissive", m.emissive_texture),
+                ("normal", m.normal_texture),
+                ("metallic-roughness", m.metallic_roughness_texture),
+                ("alpha", m.alpha_texture),
+            ] {
+                if let Some(t) = texture
+                    && t.index() >= self.textures.len()
+                {
+                    return Err(format!(
+                        "material {i} '{}': {slot} texture {} of {}",
+                        m.name,
+                        t.0,
+                        self.textures.len()
+                    ));
+                }
             }
-            if let Some(t) = m.normal_texture
-                && t.index() >= self.textures.len()
+            if let Some(c) = m.alpha_cutoff
+                && !(c.is_finite() && (0.0..=1.0).contains(&m.alpha))
             {
                 return Err(format!(
-                    "material {i} '{}': normal texture {} of {}",
-                    m.name,
-                    t.0,
-                    self.textures.len()
-                ));
-            }
-            if let Some(t) = m.metallic_roughness_texture
-                && t.index() >= self.textures.len()
-            {
-                return Err(format!(
-                    "material {i} '{}': metallic-roughness texture {} of {}",
-                    m.name,
-                    t.0,
-                    self.textures.len()
-                ));
-            }
-            if let Some(t) = m.base_color_texture
-                && t.index() >= self.textures.len()
-            {
-                return Err(format!(
-                    "material {i} '{}': texture {} of {}",
-                    m.name,
-                    t.0,
-                    self.textures.len()
+                    "material {i} '{}': alpha {} or alpha cutoff {c} not finite or alpha outside [0, 1]",
+                    m.name, m.alpha
                 ));
             }
         }

@@ -278,9 +278,8 @@ fn dabrovic_sponza_loads_with_textures() {
         0.006,
         "sponza",
     );
-    // 17 images are referenced by the MTL: 12 distinct map_Kd base-colour images plus
-    // 5 bump-only images; illume loads the base-colour ones (bump maps are ignored with a
-    // warning).
+    // The MTL references 12 distinct map_Kd base-colour images and 11 distinct bump
+    // images (`bump` / `map_bump`, some also used as colour); each use is decoded once.
     let mtl = std::fs::read_to_string(scenes_dir().join("dabrovic_sponza/sponza.mtl")).unwrap();
     let mut kd_files: Vec<&str> = mtl
         .lines()
@@ -290,7 +289,19 @@ fn dabrovic_sponza_loads_with_textures() {
     kd_files.sort_unstable();
     kd_files.dedup();
     assert_eq!(kd_files.len(), 12);
-    assert_eq!(s.textures.len(), kd_files.len());
+    let mut bump_files: Vec<&str> = mtl
+        .lines()
+        .filter_map(|l| {
+            let l = l.trim();
+            l.strip_prefix("map_bump ")
+                .or_else(|| l.strip_prefix("bump "))
+        })
+        .map(str::trim)
+        .collect();
+    bump_files.sort_unstable();
+    bump_files.dedup();
+    assert_eq!(bump_files.len(), 11);
+    assert_eq!(s.textures.len(), kd_files.len() + bump_files.len());
     for f in &kd_files {
         let t = s
             .textures
@@ -316,8 +327,22 @@ fn dabrovic_sponza_loads_with_textures() {
             .count()
     );
     assert_eq!(s.meshes[0].uvs.len(), s.meshes[0].positions.len());
+    // Bump maps become normal maps; the OBJ has no `vn`, so corners carry face normals
+    // and MikkTSpace gives the tangents.
+    let bumped = s
+        .materials
+        .iter()
+        .filter(|m| m.normal_texture.is_some())
+        .count();
+    let with_bump = mtl
+        .split("newmtl")
+        .filter(|block| block.contains("bump "))
+        .count();
+    assert_eq!(bumped, with_bump);
+    assert_eq!(s.meshes[0].normals.len(), s.meshes[0].positions.len());
+    assert_eq!(s.meshes[0].tangents.len(), s.meshes[0].positions.len());
     assert!(
-        s.warnings.iter().any(|w| w.contains("bump")),
+        !s.warnings.iter().any(|w| w.contains("bump")),
         "{:?}",
         s.warnings
     );
@@ -1412,7 +1437,21 @@ fn gltf_missing_texture_and_data_uri_texture() {
     d["images"] = json!([{"uri": "nowhere.png"}]);
     d["textures"] = json!([{"source": 0}]);
     d["materials"][1]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
-    let msg = load_err(&write_json(&dir, "missing_tex.gltf", &d));
+    // A missing image is a warning naming it (the material keeps its factor), an error
+    // when loading is strict.
+    let missing = write_json(&dir, "missing_tex.gltf", &d);
+    let s = load_scene(&missing).unwrap_or_else(|e| panic!("{e}"));
+    let warning = s
+        .warnings
+        .iter()
+        .find(|w| w.contains("nowhere.png"))
+        .unwrap_or_else(|| panic!("no warning names the missing image: {:?}", s.warnings));
+    assert_contains(warning, &["image 0", "without it"]);
+    assert!(s.materials.iter().all(|m| m.base_color_texture.is_none()));
+    let strict = illume_scene::LoadOptions { strict: true };
+    let msg = illume_scene::load_scene_with(&missing, &strict)
+        .expect_err("strict loading refuses a missing image")
+        .to_string();
     assert_contains(&msg, &["image 0", "nowhere.png"]);
 
     // A 2×1 PNG: sRGB 255 and 128 → linear 1 and ≈ 0.2159; CLAMP_TO_EDGE / MIRRORED_REPEAT.
@@ -1439,7 +1478,19 @@ fn gltf_missing_texture_and_data_uri_texture() {
     // A truncated PNG: a located decode error.
     let mut bad = d.clone();
     bad["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64::encode(&png[..png.len() / 2]))}]);
-    let msg = load_err(&write_json(&dir, "bad_png.gltf", &bad));
+    let bad_path = write_json(&dir, "bad_png.gltf", &bad);
+    let lenient = load_scene(&bad_path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        lenient
+            .warnings
+            .iter()
+            .any(|w| w.contains("image 0") && w.contains("cannot decode")),
+        "{:?}",
+        lenient.warnings
+    );
+    let msg = illume_scene::load_scene_with(&bad_path, &strict)
+        .expect_err("strict loading refuses an undecodable image")
+        .to_string();
     assert_contains(&msg, &["image 0", "cannot decode"]);
     let orange = s.materials.iter().find(|m| m.name == "orange").unwrap();
     assert_eq!(orange.base_color_texture.map(|t| t.index()), Some(0));
@@ -1550,7 +1601,8 @@ fn obj_materials_textures_and_missing_files() {
         s.warnings
     );
 
-    // Missing texture: an error naming the texture and the MTL line.
+    // Missing texture: a warning naming the texture and the MTL line (the material keeps
+    // its Kd), an error when loading is strict.
     std::fs::write(
         dir.join("tex.mtl"),
         "newmtl red\nKd 1 0 0\nmap_Kd missing.png\n",
@@ -1562,7 +1614,19 @@ fn obj_materials_textures_and_missing_files() {
         "mtllib tex.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
     )
     .unwrap();
-    assert_contains(&load_err(&p), &["tex.mtl line 3 (map_Kd)", "missing.png"]);
+    let s = load_scene(&p).unwrap_or_else(|e| panic!("{e}"));
+    let w = s.warnings.iter().find(|w| w.contains("missing.png"));
+    assert_contains(
+        w.expect("a warning names missing.png"),
+        &["tex.mtl line 3 (map_Kd)"],
+    );
+    assert_eq!(s.materials[0].base_color, Vec3::new(1.0, 0.0, 0.0));
+    assert!(s.materials[0].base_color_texture.is_none());
+    let strict = illume_scene::LoadOptions { strict: true };
+    let msg = illume_scene::load_scene_with(&p, &strict)
+        .expect_err("strict loading refuses a missing texture")
+        .to_string();
+    assert_contains(&msg, &["tex.mtl line 3 (map_Kd)", "missing.png"]);
     // A malformed MTL value: located in the MTL, reported against the OBJ.
     std::fs::write(dir.join("bad.mtl"), "newmtl red\n\nKd 1 x 0\n").unwrap();
     let p = dir.join("bad_mtl.obj");
@@ -1975,4 +2039,265 @@ fn obj_binary_input_and_huge_tokens_give_short_errors() {
         "{} bytes",
         msg.len()
     );
+}
+
+#[test]
+fn gltf_alpha_modes() {
+    let (dir, doc) = cube_copy("gltf_alpha");
+    // A 2×1 RGBA PNG: left texel opaque, right texel transparent.
+    let mut png = Vec::new();
+    let img = image::RgbaImage::from_raw(2, 1, vec![255, 255, 255, 255, 255, 255, 255, 0]).unwrap();
+    img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let mut d = doc.clone();
+    d["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64::encode(&png))}]);
+    d["textures"] = json!([{"source": 0}]);
+    d["materials"][1]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    d["materials"][1]["pbrMetallicRoughness"]["baseColorFactor"] = json!([1.0, 0.5, 0.0, 0.75]);
+    d["materials"][1]["alphaMode"] = json!("MASK");
+    d["materials"][1]["alphaCutoff"] = json!(0.3);
+    let s = load_scene(&write_json(&dir, "mask.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    let m = s.materials.iter().find(|m| m.name == "orange").unwrap();
+    assert_eq!(m.alpha_cutoff, Some(0.3));
+    assert_eq!(m.alpha, 0.75);
+    assert_eq!(m.alpha_texture, m.base_color_texture);
+    let t = &s.textures[m.alpha_texture.unwrap().index()];
+    assert_eq!(t.alpha, vec![255, 0], "the alpha channel is kept");
+    // 0.75 × texture alpha: kept where the alpha texel is opaque, cut where it is not.
+    let mesh = s
+        .meshes
+        .iter()
+        .position(|mesh| {
+            mesh.triangle_materials
+                .iter()
+                .any(|id| s.materials[id.index()].name == "orange")
+        })
+        .unwrap();
+    let cut = illume_scene::MeshCutout::new(&s, illume_scene::MeshId(mesh as u32))
+        .expect("the orange mesh has holes");
+    assert!((0..s.meshes[mesh].triangle_count() as u32).any(|t| cut.is_tested(t)));
+
+    // BLEND is a mask at 0.5, with a warning; an unknown mode and a bad alpha are errors.
+    d["materials"][1]["alphaMode"] = json!("BLEND");
+    let s = load_scene(&write_json(&dir, "blend.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    let m = s.materials.iter().find(|m| m.name == "orange").unwrap();
+    assert_eq!(m.alpha_cutoff, Some(0.5));
+    assert!(
+        s.warnings.iter().any(|w| w.contains("BLEND")),
+        "{:?}",
+        s.warnings
+    );
+    d["materials"][1]["alphaMode"] = json!("SOMETIMES");
+    let msg = load_err(&write_json(&dir, "bad_mode.gltf", &d));
+    assert_contains(&msg, &["materials[1]", "alphaMode"]);
+    d["materials"][1]["alphaMode"] = json!("MASK");
+    d["materials"][1]["alphaCutoff"] = json!(-1.0);
+    let msg = load_err(&write_json(&dir, "bad_cutoff.gltf", &d));
+    assert_contains(&msg, &["material 1", "alphaCutoff"]);
+}
+
+#[test]
+fn obj_opacity_specular_maps_and_bump() {
+    let dir = temp_dir("obj_maps");
+    let png = |name: &str, img: image::DynamicImage| {
+        img.save(dir.join(name)).unwrap();
+    };
+    // Grey 2×1 coverage: left 255 (opaque), right 0.
+    png(
+        "d.png",
+        image::DynamicImage::ImageLuma8(image::GrayImage::from_raw(2, 1, vec![255, 0]).unwrap()),
+    );
+    // map_Ns: left 1 (keeps Ns), right 0 (Ns 0: roughest).
+    png(
+        "ns.png",
+        image::DynamicImage::ImageLuma8(image::GrayImage::from_raw(2, 1, vec![255, 0]).unwrap()),
+    );
+    // A height ramp rising along +u: the normal tilts toward −u.
+    png(
+        "h.png",
+        image::DynamicImage::ImageLuma8(
+            image::GrayImage::from_raw(4, 1, vec![0, 64, 128, 192]).unwrap(),
+        ),
+    );
+    std::fs::write(
+        dir.join("m.mtl"),
+        "newmtl leaf\nKd 0.5 0.5 0.5\nmap_d d.png\n\
+         newmtl ghost\nKd 0.5 0.5 0.5\nd 0.25\n\
+         newmtl shiny\nKd 0.3 0.3 0.3\nKs 0.2 0.2 0.2\nNs 100\nmap_Ns ns.png\n\
+         newmtl rough\nKd 0.5 0.5 0.5\nbump -bm 0.5 h.png\n",
+    )
+    .unwrap();
+    let p = dir.join("m.obj");
+    std::fs::write(
+        &p,
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\n\
+         usemtl leaf\nf 1/1/1 2/2/1 3/3/1\nusemtl ghost\nf 1/1/1 2/2/1 3/3/1\n\
+         usemtl shiny\nf 1/1/1 2/2/1 3/3/1\nusemtl rough\nf 1/1/1 2/2/1 3/3/1\n",
+    )
+    .unwrap();
+    let s = load_scene(&p).unwrap_or_else(|e| panic!("{e}"));
+    let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap();
+    // map_d: a mask at ½ from the grey image; d = 0.25: a mask that removes it all.
+    let leaf = m("leaf");
+    assert_eq!(leaf.alpha_cutoff, Some(0.5));
+    assert_eq!(
+        s.textures[leaf.alpha_texture.unwrap().index()].alpha,
+        vec![255, 0]
+    );
+    let ghost = m("ghost");
+    assert_eq!((ghost.alpha, ghost.alpha_cutoff), (0.25, Some(0.5)));
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("ghost") && w.contains("invisible"))
+    );
+    let cut = illume_scene::MeshCutout::new(&s, illume_scene::MeshId(0)).expect("holes");
+    let b = illume_core::Vec2::new(0.05, 0.05); // near corner 1: u ≈ 0.05, left texel
+    assert!(cut.keeps(0, b), "leaf kept over its opaque texel");
+    assert!(
+        !cut.keeps(0, illume_core::Vec2::new(0.9, 0.05)),
+        "leaf cut over its clear texel"
+    );
+    assert!(!cut.keeps(1, b), "ghost cut everywhere");
+    assert!(!cut.is_tested(2));
+    // map_Ns baked into the metallic-roughness texture: roughness of Ns·t per texel.
+    let shiny = m("shiny");
+    let mr = &s.textures[shiny.metallic_roughness_texture.expect("baked").index()];
+    let rough = |ns: f32| (2.0 / (ns + 2.0)).sqrt().sqrt();
+    assert!((mr.texels[0].y - rough(100.0)).abs() < 1e-6);
+    assert!((mr.texels[1].y - rough(0.0)).abs() < 1e-6);
+    // metallic = lum(Ks)/lum(Kd + Ks) = 0.2/0.5 on both texels (no map_Ks).
+    assert!((mr.texels[0].z - 0.4).abs() < 1e-5 && (mr.texels[1].z - 0.4).abs() < 1e-5);
+    assert_eq!((shiny.metallic, shiny.roughness), (1.0, 1.0));
+    // bump with -bm 0.5: slope 0.25 (per texel, white = 1) × 2 texels × 0.5 = 0.25 in
+    // the interior: n ∝ (−0.25, 0, 1).
+    let rough_m = m("rough");
+    let n = &s.textures[rough_m
+        .normal_texture
+        .expect("normal map from heights")
+        .index()];
+    let texel = n.texels[1] * 2.0 - Vec3::ONE;
+    let slope = 0.5 * (128.0 - 0.0) / 255.0 * 2.0 * 0.5;
+    let expect = Vec3::new(-slope, 0.0, 1.0).normalize();
+    assert_close(texel, expect, 1e-5, "normal from heights");
+    assert_eq!(s.meshes[0].tangents.len(), s.meshes[0].positions.len());
+}
+
+#[test]
+fn gltf_texture_coordinate_sets_and_transforms_on_every_slot() {
+    let (dir, doc) = cube_copy("gltf_uv_sets");
+    let mut d = doc.clone();
+    // The cube (24 vertices) gets TEXCOORD_0 = (0.25, 0.5) (texel 0) and TEXCOORD_1 =
+    // (0.75, 0.5) (texel 1) everywhere, from data-URI buffers.
+    let uv_buffer = |u: f32, v: f32| {
+        let bytes: Vec<u8> = (0..24)
+            .flat_map(|_| [u, v])
+            .flat_map(f32::to_le_bytes)
+            .collect();
+        json!({"byteLength": bytes.len(), "uri": format!("data:application/octet-stream;base64,{}", base64::encode(&bytes))})
+    };
+    let buffers = d["buffers"].as_array_mut().unwrap();
+    buffers.push(uv_buffer(0.25, 0.5));
+    buffers.push(uv_buffer(0.75, 0.5));
+    let views = d["bufferViews"].as_array_mut().unwrap();
+    let first_view = views.len();
+    views.push(json!({"buffer": 1, "byteLength": 192}));
+    views.push(json!({"buffer": 2, "byteLength": 192}));
+    let accessors = d["accessors"].as_array_mut().unwrap();
+    let first_accessor = accessors.len();
+    for k in 0..2 {
+        accessors.push(json!({"bufferView": first_view + k, "componentType": 5126, "count": 24, "type": "VEC2"}));
+    }
+    d["meshes"][1]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(first_accessor);
+    d["meshes"][1]["primitives"][0]["attributes"]["TEXCOORD_1"] = json!(first_accessor + 1);
+    // A 2×1 PNG: texel 0 code 255, texel 1 code 128.
+    let mut png = Vec::new();
+    image::RgbImage::from_raw(2, 1, vec![255, 255, 255, 128, 128, 128])
+        .unwrap()
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    d["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64::encode(&png))}]);
+    d["samplers"] = json!([{"wrapS": 33071, "wrapT": 33071}]);
+    d["textures"] = json!([{"source": 0, "sampler": 0}]);
+    d["extensionsUsed"] = json!(["KHR_texture_transform"]);
+    let orange = |s: &Scene| {
+        illume_scene::MaterialId(s.materials.iter().position(|m| m.name == "orange").unwrap() as u32)
+    };
+    let cube_uv = |s: &Scene| s.meshes[1].uvs[0];
+
+    // Every slot on set 1: the mesh's coordinates are TEXCOORD_1.
+    let pbr = &mut d["materials"][1]["pbrMetallicRoughness"];
+    pbr["baseColorTexture"] = json!({"index": 0, "texCoord": 1});
+    pbr["metallicRoughnessTexture"] = json!({"index": 0, "texCoord": 1});
+    let s = load_scene(&write_json(&dir, "set1.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(cube_uv(&s), illume_core::Vec2::new(0.75, 0.5));
+    let id = orange(&s);
+    let base = s.materials[id.index()].base_color;
+    assert_close(
+        s.albedo(id, cube_uv(&s)),
+        base * 0.21586,
+        1e-4,
+        "texel 1 through TEXCOORD_1",
+    );
+    assert!(
+        s.warnings.iter().all(|w| !w.contains("TEXCOORD")),
+        "{:?}",
+        s.warnings
+    );
+
+    // Slots that disagree: a warning, the first slot's set is read.
+    d["materials"][1]["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({"index": 0});
+    let s = load_scene(&write_json(&dir, "mixed.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(cube_uv(&s), illume_core::Vec2::new(0.75, 0.5));
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("TEXCOORD_0") && w.contains("TEXCOORD_1")),
+        "{:?}",
+        s.warnings
+    );
+
+    // Transforms on the metallic-roughness, normal and emissive slots (set 0): an offset of
+    // half the texture reads texel 1 from TEXCOORD_0's texel 0.
+    let half = json!({"KHR_texture_transform": {"offset": [0.5, 0.0]}});
+    let pbr = &mut d["materials"][1]["pbrMetallicRoughness"];
+    pbr["baseColorTexture"] = json!({"index": 0});
+    pbr["metallicRoughnessTexture"] = json!({"index": 0, "extensions": half.clone()});
+    d["materials"][1]["emissiveTexture"] = json!({"index": 0, "extensions": half.clone()});
+    d["materials"][1]["emissiveFactor"] = json!([1.0, 1.0, 1.0]);
+    d["materials"][1]["normalTexture"] = json!({"index": 0, "extensions": half.clone()});
+    let s = load_scene(&write_json(&dir, "transforms.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    let id = orange(&s);
+    let uv = cube_uv(&s);
+    assert_eq!(uv, illume_core::Vec2::new(0.25, 0.5));
+    let (_, roughness) = s.metal_rough(id, uv);
+    assert!(
+        (roughness - 128.0 / 255.0).abs() < 1e-5,
+        "roughness {roughness}"
+    );
+    assert_close(
+        s.emission(id, uv),
+        Vec3::splat(0.21586),
+        1e-4,
+        "emission from texel 1",
+    );
+    let m = &s.materials[id.index()];
+    assert_eq!(m.normal_uv(uv), illume_core::Vec2::new(0.75, 0.5));
+    assert_eq!(m.base_color_uv(uv), uv);
+    // A texCoord override inside the transform selects the set too.
+    d["materials"][1]["emissiveTexture"] =
+        json!({"index": 0, "extensions": {"KHR_texture_transform": {"texCoord": 1}}});
+    let s = load_scene(&write_json(&dir, "override.gltf", &d)).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("emissiveTexture uses TEXCOORD_1")),
+        "{:?}",
+        s.warnings
+    );
+    // Non-finite transform values are errors naming the slot.
+    d["materials"][1]["normalTexture"] =
+        json!({"index": 0, "extensions": {"KHR_texture_transform": {"rotation": 1e39}}});
+    let msg = load_err(&write_json(&dir, "bad_transform.gltf", &d));
+    assert_contains(&msg, &["material 1", "normalTexture"]);
 }

@@ -169,6 +169,8 @@ pub(crate) struct TriangleSetup {
     /// World shading normals at the corners (not normalised), `None` without normals.
     normals: Option<[Vec3; 3]>,
     uvs: Option<[Vec2; 3]>,
+    /// The normal map and its tangent frame, for normal-mapped triangles.
+    normal_map: Option<NormalMap>,
     material: illume_scene::MaterialId,
     /// The camera sees the front face.
     front_face: bool,
@@ -183,6 +185,15 @@ pub(crate) struct TriangleSetup {
     emission: Rgb,
     /// False for degenerate triangles (pixels then take a BVH ray).
     usable: bool,
+}
+
+/// A triangle's normal map: the texture, world tangents at the corners (not
+/// normalised) and the bitangent sign.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct NormalMap {
+    texture: illume_scene::TextureId,
+    tangents: [Vec3; 3],
+    sign: f32,
 }
 
 impl<'a> PrimarySurfaces<'a> {
@@ -225,11 +236,10 @@ impl<'a> PrimarySurfaces<'a> {
         let (e1, e2) = (p1 - p0, p2 - p0);
         let n = e1.cross(e2);
         let nn = n.length_squared();
-        // Normal-mapped and emission-textured triangles take the exact per-pixel path
-        // (`SurfaceHit::new` through a BVH ray) rather than this setup's interpolation.
+        // Emission-textured triangles take the exact per-pixel path (`SurfaceHit::new`
+        // through a BVH ray) rather than this setup's interpolation.
         let tm = &scene.materials[mesh.triangle_materials[t].index()];
-        let per_pixel = (tm.normal_texture.is_some() && !mesh.tangents.is_empty())
-            || tm.emissive_texture.is_some();
+        let per_pixel = tm.emissive_texture.is_some();
         let usable = nn > 0.0 && nn.is_finite() && !per_pixel;
         // A mirroring instance keeps its object-space front (see `SurfaceHit::new`); the
         // duals below stay on the unflipped cross product.
@@ -239,6 +249,20 @@ impl<'a> PrimarySurfaces<'a> {
         let normals =
             (!mesh.normals.is_empty()).then(|| idx.map(|i| frame.normal(mesh.normals[i])));
         let uvs = (!mesh.uvs.is_empty()).then(|| idx.map(|i| mesh.uvs[i]));
+        // World tangents (a linear map: transforming the corners transforms every
+        // interpolated tangent) for normal maps, as `SurfaceHit::new` reads them.
+        let normal_map = match tm.normal_texture {
+            Some(tex) if !mesh.tangents.is_empty() && normals.is_some() => Some(NormalMap {
+                texture: tex,
+                tangents: idx.map(|i| m.transform_vector3(mesh.tangents[i].truncate())),
+                sign: if mesh.tangents[idx[0]].w < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                },
+            }),
+            _ => None,
+        };
         let material = mesh.triangle_materials[t];
         let mat = &scene.materials[material.index()];
         let reflects = front_face || mat.double_sided;
@@ -255,6 +279,7 @@ impl<'a> PrimarySurfaces<'a> {
             p0,
             normals,
             uvs,
+            normal_map,
             material,
             front_face,
             reflects,
@@ -320,13 +345,25 @@ impl<'a> PrimarySurfaces<'a> {
             }
             None => ng,
         };
-        if shading_normal.dot(ng) < 0.0 {
-            shading_normal = -shading_normal;
-        }
         let uv = match tri.uvs {
             Some([u0, u1, u2]) => u0 * b0 + u1 * b1 + u2 * b2,
             None => Vec2::ZERO,
         };
+        if let Some(map) = &tri.normal_map {
+            let [t0, t1, t2] = map.tangents;
+            shading_normal = crate::surface::normal_mapped(
+                &self.world.scene,
+                map.texture,
+                &self.world.scene.materials[tri.material.index()],
+                shading_normal,
+                t0 * b0 + t1 * b1 + t2 * b2,
+                map.sign,
+                uv,
+            );
+        }
+        if shading_normal.dot(ng) < 0.0 {
+            shading_normal = -shading_normal;
+        }
         let albedo = if tri.textured {
             self.world.albedo(tri.material, uv)
         } else {
@@ -376,7 +413,7 @@ impl GBuffer {
     ///
     /// Each pixel intersects its centre ray with the plane of the triangle the rasterizer
     /// found, in world space, and interpolates that triangle's attributes (set up once per
-    /// run of pixels seeing the same triangle): the [`SurfaceHit`](crate::SurfaceHit)
+    /// run of pixels seeing the same triangle): the [`SurfaceHit`]
     /// [`GBuffer::render`] builds for the same triangle, up to f32 rounding. Where the ray
     /// misses the chosen triangle (an edge moved by snapping, an edge-on triangle), and on
     /// empty pixels next to covered ones (silhouettes against the background), a full BVH

@@ -46,7 +46,7 @@ impl InstanceFrame {
     }
 }
 
-/// Tables derived from a scene that make [`PhotonHit`]s cheap: each instance's
+/// Tables derived from a scene that make [`PhotonHit`](crate::surface::PhotonHit)s cheap: each instance's
 /// [`InstanceFrame`] (no cofactor matrix per hit), and each base-colour texture packed
 /// as one 8-bit index per channel into its 256 decoded sRGB values (a quarter of the
 /// memory of `f32` texels, so far fewer cache misses for scattered photon lookups)
@@ -343,6 +343,7 @@ mod tests {
                 .collect(),
             wrap_u: WrapMode::Repeat,
             wrap_v: WrapMode::Repeat,
+            alpha: vec![],
         }
     }
 
@@ -497,6 +498,7 @@ mod tests {
                     .collect(),
                 wrap_u,
                 wrap_v,
+                alpha: vec![],
             };
             let packed = PackedTexture::new(&texture).expect("8-bit sRGB texels pack");
             for _ in 0..5000 {
@@ -516,6 +518,7 @@ mod tests {
             texels: vec![Rgb::splat(0.123_456_7)],
             wrap_u: WrapMode::Repeat,
             wrap_v: WrapMode::Repeat,
+            alpha: vec![],
         };
         assert!(PackedTexture::new(&odd).is_none());
     }

@@ -231,7 +231,9 @@ impl LightSet {
                     let uvs = if mesh.uvs.is_empty() {
                         [illume_core::Vec2::ZERO; 3]
                     } else {
-                        mesh.indices[t].map(|v| mesh.uvs[v as usize])
+                        // The transform is affine: transforming the corners transforms
+                        // every interpolated point.
+                        mesh.indices[t].map(|v| mat.emissive_uv(mesh.uvs[v as usize]))
                     };
                     (scene.textures[tex.index()].clone(), uvs)
                 });

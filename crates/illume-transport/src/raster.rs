@@ -44,7 +44,7 @@
 //! orthographically, a plane of world position.
 
 use glam::{Affine3A, DVec4, Vec3, Vec4};
-use illume_scene::{InstanceId, MASK_DEFAULT, Scene};
+use illume_scene::{InstanceId, MASK_DEFAULT, MeshCutout, MeshId, Scene};
 use rayon::prelude::*;
 
 /// Nearest view depth drawn \[m\]: geometry closer to the camera plane than this is clipped
@@ -143,9 +143,10 @@ impl VisibilityBuffer {
             return;
         }
         let viewport = Viewport::for_camera(scene, width, height);
-        let triangles = setup_scene(scene, &viewport);
+        let setup = setup_scene(scene, &viewport);
+        let triangles = &setup.triangles;
         let strips = height.div_ceil(STRIP_ROWS) as usize;
-        let bins = bin_by_strip(&triangles, strips);
+        let bins = bin_by_strip(triangles, strips);
         self.pixels
             .par_chunks_mut((width * STRIP_ROWS) as usize)
             .enumerate()
@@ -156,7 +157,7 @@ impl VisibilityBuffer {
                     let tri = &triangles[t as usize];
                     tri.rasterize(rows.clone(), |x, y, z| {
                         let px = &mut out[((y - rows.start) as u32 * width + x as u32) as usize];
-                        if z > px.inverse_depth {
+                        if z > px.inverse_depth && (!tri.cut || setup.keeps(tri, x, y)) {
                             *px = VisibilitySample {
                                 inverse_depth: z,
                                 instance: tri.instance,
@@ -275,6 +276,9 @@ struct ScreenTriangle {
     /// Scene instance and mesh triangle.
     instance: u32,
     triangle: u32,
+    /// True when the triangle's material has alpha-mask holes: each covered pixel
+    /// centre is then tested ([`SceneSetup::keeps`]).
+    cut: bool,
 }
 
 impl ScreenTriangle {
@@ -349,6 +353,7 @@ impl ScreenTriangle {
             dzdy: dzdy as f32,
             instance,
             triangle,
+            cut: false,
         })
     }
 
@@ -460,9 +465,58 @@ impl ScreenTriangle {
     }
 }
 
+/// Every screen triangle of a view, and what testing alpha-mask holes needs.
+struct SceneSetup<'s> {
+    /// Screen triangles in scene order (instance, then triangle).
+    triangles: Vec<ScreenTriangle>,
+    /// The scene.
+    scene: &'s Scene,
+    /// Clip points `(x, y, w, z)` of each scene instance's vertices (empty when the
+    /// instance is not drawn or has no holes).
+    clip_of_instance: Vec<Vec<Vec4>>,
+    /// Alpha-mask holes of each scene mesh (`None`: none).
+    cutouts: Vec<Option<MeshCutout>>,
+    /// Image size in pixels.
+    width: f64,
+    height: f64,
+}
+
+impl SceneSetup<'_> {
+    /// True when the surface of cut triangle `tri` is there at the centre of pixel
+    /// (x, y): the point of the (unclipped) triangle that projects there, found by solving
+    /// for its barycentrics in clip space (`x − sx·w = 0`, `y − sy·w = 0` hold for the
+    /// affine combination of the corners), which holds for perspective and orthographic
+    /// views alike.
+    fn keeps(&self, tri: &ScreenTriangle, x: i32, y: i32) -> bool {
+        let instance = &self.scene.instances[tri.instance as usize];
+        let Some(cutout) = &self.cutouts[instance.mesh.index()] else {
+            return true;
+        };
+        let clip = &self.clip_of_instance[tri.instance as usize];
+        let mesh = &self.scene.meshes[instance.mesh.index()];
+        let [c0, c1, c2] = mesh.indices[tri.triangle as usize].map(|v| clip[v as usize].as_dvec4());
+        let sx = (x as f64 + 0.5) / self.width * 2.0 - 1.0;
+        let sy = 1.0 - (y as f64 + 0.5) / self.height * 2.0;
+        let a = [c0, c1, c2].map(|c| c.x - sx * c.z);
+        let b = [c0, c1, c2].map(|c| c.y - sy * c.z);
+        let (a1, a2) = (a[1] - a[0], a[2] - a[0]);
+        let (b1, b2) = (b[1] - b[0], b[2] - b[0]);
+        let det = a1 * b2 - a2 * b1;
+        if det == 0.0 {
+            return true;
+        }
+        let l1 = (-a[0] * b2 + a2 * b[0]) / det;
+        let l2 = (-a1 * b[0] + a[0] * b1) / det;
+        cutout.keeps(tri.triangle, glam::Vec2::new(l1 as f32, l2 as f32))
+    }
+}
+
 /// Clip-space corners of every triangle of `scene`'s default-mask instances, set up for
 /// rasterization, in scene order.
-fn setup_scene(scene: &Scene, viewport: &Viewport) -> Vec<ScreenTriangle> {
+fn setup_scene<'s>(scene: &'s Scene, viewport: &Viewport) -> SceneSetup<'s> {
+    let cutouts: Vec<Option<MeshCutout>> = (0..scene.meshes.len())
+        .map(|m| MeshCutout::new(scene, MeshId(m as u32)))
+        .collect();
     let instances: Vec<(usize, Vec<Vec4>)> = scene
         .instances
         .iter()
@@ -509,16 +563,37 @@ fn setup_scene(scene: &Scene, viewport: &Viewport) -> Vec<ScreenTriangle> {
         .par_iter()
         .map(|(k, range)| {
             let (i, clip) = &instances[*k];
-            let mesh = &scene.meshes[scene.instances[*i].mesh.index()];
+            let mesh_id = scene.instances[*i].mesh.index();
+            let mesh = &scene.meshes[mesh_id];
+            let cutout = cutouts[mesh_id].as_ref();
             let mut out = Vec::new();
             for t in range.clone() {
                 let [a, b, c] = mesh.indices[t].map(|v| clip[v as usize]);
+                let first = out.len();
                 setup_triangle([a, b, c], viewport, *i as u32, t as u32, &mut out);
+                if cutout.is_some_and(|c| c.is_tested(t as u32)) {
+                    for tri in &mut out[first..] {
+                        tri.cut = true;
+                    }
+                }
             }
             out
         })
         .collect();
-    per_job.concat()
+    let mut clip_of_instance = vec![Vec::new(); scene.instances.len()];
+    for (i, clip) in instances {
+        if cutouts[scene.instances[i].mesh.index()].is_some() {
+            clip_of_instance[i] = clip;
+        }
+    }
+    SceneSetup {
+        triangles: per_job.concat(),
+        scene,
+        clip_of_instance,
+        cutouts,
+        width: viewport.width as f64,
+        height: viewport.height as f64,
+    }
 }
 
 /// Clips clip-space triangle `clip` (points `(x, y, w, z)`, `z/w` the depth attribute)
@@ -700,9 +775,10 @@ pub(crate) fn rasterize_depth(
     if width == 0 || height == 0 {
         return;
     }
-    let triangles = setup_scene(scene, viewport);
+    let setup = setup_scene(scene, viewport);
+    let triangles = &setup.triangles;
     let strips = height.div_ceil(STRIP_ROWS) as usize;
-    let bins = bin_by_strip(&triangles, strips);
+    let bins = bin_by_strip(triangles, strips);
     depth
         .par_chunks_mut((width * STRIP_ROWS) as usize)
         .enumerate()
@@ -717,8 +793,17 @@ pub(crate) fn rasterize_depth(
                     let (start, end) = (*xs.start() as usize, *xs.end() as usize);
                     // A plain slice loop: the compiler vectorizes it.
                     let z_start = z_row + tri.dzdx * (start as i32 - tri.x0) as f32;
-                    for (i, texel) in out[row + start..=row + end].iter_mut().enumerate() {
-                        *texel = texel.max(z_start + tri.dzdx * i as f32);
+                    let texels = out[row + start..=row + end].iter_mut().enumerate();
+                    if tri.cut {
+                        for (i, texel) in texels {
+                            if setup.keeps(tri, start as i32 + i as i32, y) {
+                                *texel = texel.max(z_start + tri.dzdx * i as f32);
+                            }
+                        }
+                    } else {
+                        for (i, texel) in texels {
+                            *texel = texel.max(z_start + tri.dzdx * i as f32);
+                        }
                     }
                 });
             }

@@ -98,19 +98,16 @@ impl SurfaceHit {
             && !mesh.normals.is_empty()
         {
             let tg = mesh.tangents[i0] * b0 + mesh.tangents[i1] * b1 + mesh.tangents[i2] * b2;
-            let n = shading_normal.normalize_or(geometric_normal);
-            let t = m.transform_vector3(tg.truncate());
-            let t = (t - n * n.dot(t)).normalize_or_zero();
-            if t != Vec3::ZERO {
-                let sign = if mesh.tangents[i0].w < 0.0 { -1.0 } else { 1.0 };
-                let b = n.cross(t) * sign;
-                let c = scene.textures[tex.index()].sample(uv) * 2.0 - Vec3::ONE;
-                let local = Vec3::new(c.x * mat.normal_scale, c.y * mat.normal_scale, c.z);
-                let mapped = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
-                if mapped != Vec3::ZERO {
-                    shading_normal = mapped;
-                }
-            }
+            let sign = if mesh.tangents[i0].w < 0.0 { -1.0 } else { 1.0 };
+            shading_normal = normal_mapped(
+                scene,
+                tex,
+                mat,
+                shading_normal.normalize_or(geometric_normal),
+                m.transform_vector3(tg.truncate()),
+                sign,
+                uv,
+            );
         }
         if shading_normal.dot(geometric_normal) < 0.0 {
             shading_normal = -shading_normal;
@@ -346,6 +343,32 @@ pub fn mesh_hit_geometry(scene: &Scene, hit: &Hit) -> HitGeometry {
         position_object: p0 * (1.0 - b1 - b2) + p1 * b1 + p2 * b2,
         normal_object: (p1 - p0).cross(p2 - p0),
     }
+}
+
+/// The normal-map lookup shared by hits and the rasterized G-buffer: unit interpolated
+/// shading normal `n` (not yet flipped to the geometric side, so that the tangent frame
+/// keeps its handedness), world tangent `tangent` (interpolated, any length), bitangent
+/// sign `sign`, texture coordinates `uv`. Returns `n` itself where the frame or the
+/// mapped normal degenerates.
+#[inline]
+pub(crate) fn normal_mapped(
+    scene: &illume_scene::Scene,
+    texture: illume_scene::TextureId,
+    mat: &illume_scene::Material,
+    n: Vec3,
+    tangent: Vec3,
+    sign: f32,
+    uv: Vec2,
+) -> Vec3 {
+    let t = (tangent - n * n.dot(tangent)).normalize_or_zero();
+    if t == Vec3::ZERO {
+        return n;
+    }
+    let b = n.cross(t) * sign;
+    let c = scene.textures[texture.index()].sample(mat.normal_uv(uv)) * 2.0 - Vec3::ONE;
+    let local = Vec3::new(c.x * mat.normal_scale, c.y * mat.normal_scale, c.z);
+    let mapped = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
+    if mapped == Vec3::ZERO { n } else { mapped }
 }
 
 #[cfg(test)]

@@ -20,6 +20,7 @@ fn world() -> World {
         texels: vec![Rgb::splat(1.0), Rgb::splat(0.1)],
         wrap_u: WrapMode::Clamp,
         wrap_v: WrapMode::Clamp,
+        alpha: vec![],
     });
     let light = b.material(Material {
         base_color: Rgb::ZERO,

@@ -19,6 +19,7 @@ fn plane(tilt_deg: f32, world_from_object: Trs) -> World {
         texels: vec![Rgb::new(0.5 * s + 0.5, 0.5, 0.5 * c + 0.5)],
         wrap_u: WrapMode::Repeat,
         wrap_v: WrapMode::Repeat,
+        alpha: vec![],
     });
     let m = b.material(Material {
         base_color: Rgb::splat(0.5),

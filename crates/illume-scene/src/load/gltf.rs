@@ -19,8 +19,10 @@
 //! * one illume [`Mesh`] per glTF mesh (shared by every node that uses it): its primitives
 //!   are concatenated with per-triangle materials; only `TRIANGLES` primitives, indexed
 //!   or not; `POSITION`, `NORMAL` (per primitive: a primitive without it is shaded flat,
-//!   its vertices getting zero normals, which select the geometric normal) and
-//!   `TEXCOORD_0` (zero-filled for primitives without it);
+//!   its vertices getting zero normals, which select the geometric normal) and one
+//!   texture coordinate set, the one the primitive's material's textures ask for
+//!   (`texCoord`, or `KHR_texture_transform`'s override; when slots disagree, the first
+//!   slot's set is read with a warning; zero-filled when the primitive lacks it);
 //! * materials (metallic-roughness): base colour = `baseColorFactor` rgb (×
 //!   `baseColorTexture`, decoded sRGB → linear, wrap modes from its sampler),
 //!   `metallicFactor` and `roughnessFactor` (default 1 each, as the spec; outside
@@ -29,7 +31,12 @@
 //!   `metallicRoughnessTexture`
 //!   (decoded linearly; blue × metallicFactor, green × roughnessFactor); `normalTexture`
 //!   (linear, with `scale`; MikkTSpace tangents are computed for its meshes, which need
-//!   NORMAL and TEXCOORD_0 — the file's TANGENT is not read); primitives
+//!   NORMAL and texture coordinates — the file's TANGENT is not read);
+//!   `KHR_texture_transform` on each of these slots; `alphaMode` MASK with `alphaCutoff`
+//!   (cut-outs: [`crate::MeshCutout`]) and BLEND as MASK at 0.5 with a warning, the
+//!   opacity being `baseColorFactor`'s alpha × the base-colour texture's; an image file
+//!   that is missing or does not decode is a warning (the slot is dropped) unless loading
+//!   is strict ([`crate::LoadOptions`]); primitives
 //!   without a material get a grey (0.8) Lambertian default;
 //! * camera: the lowest-index scene node with a perspective camera (`yfov`); without
 //!   one, [`super::default_camera_for_bounds`];
@@ -62,6 +69,7 @@ use crate::model::{
 };
 use ::gltf::json;
 use illume_core::{Affine3A, Mat4, Quat, Rgb, Vec2, Vec3, Vec4};
+use json::extensions::texture::TextureTransform;
 use json::validation::{Checked, Validate};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -89,6 +97,11 @@ struct Ctx<'a> {
     materials: Vec<MaterialId>,
     default_material: Option<MaterialId>,
     textures: HashMap<(usize, u8, u8, bool), TextureId>,
+    /// Missing or undecodable images are errors rather than warnings.
+    strict: bool,
+    /// The texture coordinate set each material (by glTF index) reads, for those with
+    /// textures.
+    uv_sets: HashMap<usize, u32>,
     meshes: HashMap<usize, MeshId>,
     camera_set: bool,
     /// `KHR_animation_pointer` channels, taken out of the document before `gltf-json`
@@ -96,6 +109,29 @@ struct Ctx<'a> {
     pointers: Vec<PointerChannel>,
     /// The illume lights made from each `KHR_lights_punctual` light (one per node).
     light_ids: HashMap<usize, Vec<LightId>>,
+}
+
+/// A `KHR_texture_transform` as illume's [`UvTransform`] and its `texCoord` override.
+fn transform_of(t: Option<&TextureTransform>) -> (Option<UvTransform>, Option<u32>) {
+    match t {
+        Some(t) => (
+            Some(UvTransform {
+                offset: Vec2::from(t.offset.0),
+                rotation: t.rotation.0,
+                scale: Vec2::from(t.scale.0),
+            }),
+            t.tex_coord,
+        ),
+        None => (None, None),
+    }
+}
+
+/// Why a texture could not be made.
+enum ImageFailure {
+    /// The document is wrong (a missing texture or image index, a bad data URI): an error.
+    Document(LoadError),
+    /// The image file is missing or does not decode: a warning unless loading is strict.
+    Image(LoadError),
 }
 
 /// An animation channel whose target is a JSON pointer (`KHR_animation_pointer`).
@@ -177,7 +213,7 @@ fn split_pointer_channels(bytes: Vec<u8>, is_glb: bool) -> (Vec<u8>, Vec<Pointer
     (out, found)
 }
 
-pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
+pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
     let bytes = read_file(path)?;
     let is_glb = bytes.starts_with(b"glTF");
     if is_glb {
@@ -253,6 +289,8 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         materials: Vec::new(),
         default_material: None,
         textures: HashMap::new(),
+        strict,
+        uv_sets: HashMap::new(),
         meshes: HashMap::new(),
         camera_set: false,
         pointers,
@@ -805,7 +843,7 @@ impl Ctx<'_> {
         for (i, m) in self.root.materials.iter().enumerate() {
             let name = m.name.clone().unwrap_or_else(|| format!("material {i}"));
             let pbr = &m.pbr_metallic_roughness;
-            let [r, g, b, _] = pbr.base_color_factor.0;
+            let [r, g, b, alpha] = pbr.base_color_factor.0;
             let strength = m
                 .extensions
                 .as_ref()
@@ -813,49 +851,12 @@ impl Ctx<'_> {
                 .map(|s| s.emissive_strength.0)
                 .unwrap_or(1.0);
             let user = format!("material {i} '{name}'");
-            let base_color_texture = match &pbr.base_color_texture {
-                Some(info) => Some(self.texture_slot(
-                    info.index.value(),
-                    info.tex_coord,
-                    &user,
-                    "baseColorTexture",
-                    true,
-                )?),
-                None => None,
-            };
-            let base_color_transform = match pbr
-                .base_color_texture
-                .as_ref()
-                .and_then(|info| info.extensions.as_ref())
-                .and_then(|e| e.texture_transform.as_ref())
-            {
-                Some(t) => {
-                    if t.tex_coord.is_some_and(|c| c != 0) {
-                        self.warn(format!("material {i} '{name}': KHR_texture_transform texCoord ignored; TEXCOORD_0 is used"));
-                    }
-                    let transform = UvTransform {
-                        offset: Vec2::from(t.offset.0),
-                        rotation: t.rotation.0,
-                        scale: Vec2::from(t.scale.0),
-                    };
-                    if !transform.is_finite() {
-                        return Err(self.malformed(
-                            format!("material {i} '{name}'"),
-                            "KHR_texture_transform values are not finite",
-                        ));
-                    }
-                    Some(transform)
-                }
-                None => None,
-            };
-            if pbr
-                .metallic_roughness_texture
-                .as_ref()
-                .and_then(|info| info.extensions.as_ref())
-                .is_some_and(|e| e.texture_transform.is_some())
-            {
-                self.warn(format!("material {i} '{name}': KHR_texture_transform on metallicRoughnessTexture ignored"));
-            }
+            let (base_color_texture, base_color_transform) = self.info_slot(
+                pbr.base_color_texture.as_ref(),
+                &user,
+                "baseColorTexture",
+                true,
+            )?;
             // glTF's defaults are 1 for both factors (a rough metal), as the spec says.
             let (metallic, roughness) = (pbr.metallic_factor.0, pbr.roughness_factor.0);
             for (field, v) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
@@ -866,48 +867,85 @@ impl Ctx<'_> {
                     ));
                 }
             }
-            let metallic_roughness_texture = match &pbr.metallic_roughness_texture {
-                Some(info) => Some(self.texture_slot(
-                    info.index.value(),
-                    info.tex_coord,
-                    &user,
-                    "metallicRoughnessTexture",
-                    false,
-                )?),
-                None => None,
-            };
-            let emissive_texture = match &m.emissive_texture {
-                Some(info) => Some(self.texture_slot(
-                    info.index.value(),
-                    info.tex_coord,
-                    &user,
-                    "emissiveTexture",
-                    true,
-                )?),
-                None => None,
-            };
-            let (normal_texture, normal_scale) = match &m.normal_texture {
+            let (metallic_roughness_texture, metallic_roughness_transform) = self.info_slot(
+                pbr.metallic_roughness_texture.as_ref(),
+                &user,
+                "metallicRoughnessTexture",
+                false,
+            )?;
+            let (emissive_texture, emissive_transform) =
+                self.info_slot(m.emissive_texture.as_ref(), &user, "emissiveTexture", true)?;
+            let (normal_texture, normal_transform, normal_scale) = match &m.normal_texture {
                 Some(info) => {
                     if !info.scale.is_finite() {
                         return Err(self.malformed(&user, "normalTexture.scale is not finite"));
                     }
-                    (
-                        Some(self.texture_slot(
-                            info.index.value(),
-                            info.tex_coord,
-                            &user,
-                            "normalTexture",
-                            false,
-                        )?),
-                        info.scale,
-                    )
+                    // `gltf` types this slot's extensions as an open map.
+                    let parsed = info
+                        .extensions
+                        .as_ref()
+                        .and_then(|e| e.others.get("KHR_texture_transform"))
+                        .map(|v| serde_json::from_value::<TextureTransform>(v.clone()));
+                    let parsed = match parsed {
+                        Some(Ok(t)) => Some(t),
+                        Some(Err(e)) => {
+                            return Err(self.malformed(
+                                &user,
+                                format!("normalTexture KHR_texture_transform: {e}"),
+                            ));
+                        }
+                        None => None,
+                    };
+                    let (texture, transform) = self.texture_slot(
+                        info.index.value(),
+                        info.tex_coord,
+                        transform_of(parsed.as_ref()),
+                        &user,
+                        "normalTexture",
+                        false,
+                    )?;
+                    (texture, transform, info.scale)
                 }
-                None => (None, 1.0),
+                None => (None, None, 1.0),
             };
+            let alpha_cutoff = match m.alpha_mode {
+                Checked::Valid(json::material::AlphaMode::Opaque) => None,
+                Checked::Valid(json::material::AlphaMode::Mask) => {
+                    let cutoff = m.alpha_cutoff.map_or(0.5, |c| c.0);
+                    if !(cutoff.is_finite() && cutoff >= 0.0) {
+                        return Err(self.malformed(
+                            &user,
+                            format!("alphaCutoff {cutoff} is not a finite number ≥ 0"),
+                        ));
+                    }
+                    Some(cutoff)
+                }
+                Checked::Valid(json::material::AlphaMode::Blend) => {
+                    self.warn(format!(
+                        "{user}: alphaMode BLEND is rendered as MASK with alphaCutoff 0.5 (no partial transparency)"
+                    ));
+                    Some(0.5)
+                }
+                Checked::Invalid => {
+                    return Err(self.malformed(&user, "alphaMode is not OPAQUE, MASK or BLEND"));
+                }
+            };
+            if !(alpha.is_finite() && (0.0..=1.0).contains(&alpha)) {
+                return Err(self.malformed(
+                    &user,
+                    format!("baseColorFactor alpha {alpha} is not in [0, 1]"),
+                ));
+            }
             let material = Material {
                 name,
+                alpha,
+                alpha_texture: base_color_texture,
+                alpha_cutoff,
                 base_color: Rgb::new(r, g, b),
                 base_color_transform,
+                metallic_roughness_transform,
+                normal_transform,
+                emissive_transform,
                 normal_texture,
                 normal_scale,
                 base_color_texture,
@@ -924,32 +962,100 @@ impl Ctx<'_> {
         Ok(())
     }
 
-    /// [`Ctx::texture`] for a material's texture slot `slot` (`baseColorTexture`…), warning
-    /// when it asks for a texture coordinate set other than TEXCOORD_0 (the one read).
+    /// [`Ctx::texture_slot`] for a slot given as a glTF texture info (all but the normal
+    /// map), `(None, None)` without one.
+    fn info_slot(
+        &mut self,
+        info: Option<&json::texture::Info>,
+        user: &str,
+        slot: &str,
+        srgb: bool,
+    ) -> Result<(Option<TextureId>, Option<UvTransform>), LoadError> {
+        let Some(info) = info else {
+            return Ok((None, None));
+        };
+        let transform = transform_of(
+            info.extensions
+                .as_ref()
+                .and_then(|e| e.texture_transform.as_ref()),
+        );
+        self.texture_slot(
+            info.index.value(),
+            info.tex_coord,
+            transform,
+            user,
+            slot,
+            srgb,
+        )
+    }
+
+    /// [`Ctx::texture`] for a material's texture slot `slot` (`baseColorTexture`…) read at
+    /// texture coordinate set `tex_coord` with `KHR_texture_transform` `transform`
+    /// (`(transform, its texCoord override)`), checked: the transform's values must be
+    /// finite. Records the set the material reads ([`Ctx::uv_sets`]), warning when its
+    /// slots ask for different sets (the first one asked for is read for all).
+    #[allow(clippy::too_many_arguments)]
     fn texture_slot(
         &mut self,
         index: usize,
         tex_coord: u32,
+        transform: (Option<UvTransform>, Option<u32>),
         user: &str,
         slot: &str,
         srgb: bool,
-    ) -> Result<TextureId, LoadError> {
-        if tex_coord != 0 {
-            self.warn(format!(
-                "{user}: {slot} uses TEXCOORD_{tex_coord}; TEXCOORD_0 is used"
+    ) -> Result<(Option<TextureId>, Option<UvTransform>), LoadError> {
+        let (transform, set_override) = transform;
+        if transform.is_some_and(|t| !t.is_finite()) {
+            return Err(self.malformed(
+                user,
+                format!("{slot}: KHR_texture_transform values are not finite"),
             ));
         }
-        self.texture(index, user, srgb)
+        let set = set_override.unwrap_or(tex_coord);
+        let material = self.materials.len();
+        match self.uv_sets.get(&material) {
+            Some(&first) if first != set => self.warn(format!(
+                "{user}: {slot} uses TEXCOORD_{set} but another texture TEXCOORD_{first}; TEXCOORD_{first} is read for all"
+            )),
+            Some(_) => {}
+            None => {
+                self.uv_sets.insert(material, set);
+            }
+        }
+        Ok((self.texture(index, user, srgb)?, transform))
     }
 
     /// The illume texture for glTF texture `index` (image decoded once per wrap mode and
-    /// colour space: `srgb` for colours, linear for data).
-    fn texture(&mut self, index: usize, user: &str, srgb: bool) -> Result<TextureId, LoadError> {
+    /// colour space: `srgb` for colours, linear for data). An image file that is missing
+    /// or cannot be decoded is a warning and `None` (the material keeps its factors), or
+    /// with `strict` an error.
+    fn texture(
+        &mut self,
+        index: usize,
+        user: &str,
+        srgb: bool,
+    ) -> Result<Option<TextureId>, LoadError> {
+        match self.decoded_texture(index, user, srgb) {
+            Ok(id) => Ok(Some(id)),
+            Err(ImageFailure::Image(e)) if !self.strict => {
+                self.warn(format!("{e} (the material is rendered without it)"));
+                Ok(None)
+            }
+            Err(ImageFailure::Image(e) | ImageFailure::Document(e)) => Err(e),
+        }
+    }
+
+    /// [`Ctx::texture`], failing on any problem.
+    fn decoded_texture(
+        &mut self,
+        index: usize,
+        user: &str,
+        srgb: bool,
+    ) -> Result<TextureId, ImageFailure> {
         let root = self.root;
-        let texture = root
-            .textures
-            .get(index)
-            .ok_or_else(|| self.malformed(user, format!("texture {index} does not exist")))?;
+        let texture = root.textures.get(index).ok_or_else(|| {
+            ImageFailure::Document(self.malformed(user, format!("texture {index} does not exist")))
+        })?;
         let (wrap_u, wrap_v) = match texture.sampler.and_then(|s| root.samplers.get(s.value())) {
             Some(s) => (wrap_mode(&s.wrap_s), wrap_mode(&s.wrap_t)),
             None => (WrapMode::Repeat, WrapMode::Repeat),
@@ -965,30 +1071,40 @@ impl Ctx<'_> {
         let image = root
             .images
             .get(image_index)
-            .ok_or_else(|| self.malformed(&place, "does not exist"))?;
+            .ok_or_else(|| ImageFailure::Document(self.malformed(&place, "does not exist")))?;
         let (bytes, name) = match (&image.buffer_view, image.uri.as_deref()) {
             (Some(view), _) => (
-                self.view_bytes(view.value())?.to_vec(),
+                self.view_bytes(view.value())
+                    .map_err(ImageFailure::Document)?
+                    .to_vec(),
                 image.name.clone().unwrap_or_else(|| place.clone()),
             ),
             (None, Some(uri)) if uri.starts_with("data:") => (
-                decode_data_uri(uri).map_err(|m| self.malformed(&place, m))?,
+                decode_data_uri(uri)
+                    .map_err(|m| ImageFailure::Document(self.malformed(&place, m)))?,
                 image.name.clone().unwrap_or_else(|| place.clone()),
             ),
             (None, Some(uri)) => {
                 let file = self.folder.join(decode_uri_path(uri));
-                let bytes = std::fs::read(&file).map_err(|source| LoadError::MissingFile {
-                    path: self.path.into(),
-                    place: place.clone(),
-                    file: file.clone(),
-                    source,
+                let bytes = std::fs::read(&file).map_err(|source| {
+                    ImageFailure::Image(LoadError::MissingFile {
+                        path: self.path.into(),
+                        place: place.clone(),
+                        file: file.clone(),
+                        source,
+                    })
                 })?;
                 (bytes, file.to_string_lossy().into_owned())
             }
-            (None, None) => return Err(self.malformed(place, "neither uri nor bufferView")),
+            (None, None) => {
+                return Err(ImageFailure::Document(
+                    self.malformed(place, "neither uri nor bufferView"),
+                ));
+            }
         };
-        let tex = decode_texture(&bytes, name, wrap_u, wrap_v, srgb)
-            .map_err(|e| self.malformed(&place, format!("cannot decode: {e}")))?;
+        let tex = decode_texture(&bytes, name.clone(), wrap_u, wrap_v, srgb).map_err(|e| {
+            ImageFailure::Image(self.malformed(&place, format!("cannot decode '{name}': {e}")))
+        })?;
         let id = self.builder.texture(tex);
         self.textures
             .insert((image_index, wrap_u as u8, wrap_v as u8, srgb), id);
@@ -1071,16 +1187,21 @@ impl Ctx<'_> {
                 // interpolated normal is zero), used when another primitive has normals.
                 None => vec![Vec3::ZERO; n],
             };
-            let uvs: Vec<Vec2> = match attr(Semantic::TexCoords(0)) {
+            // The set the primitive's material reads its textures at.
+            let set = prim
+                .material
+                .and_then(|m| self.uv_sets.get(&m.value()).copied())
+                .unwrap_or(0);
+            let uvs: Vec<Vec2> = match attr(Semantic::TexCoords(set)) {
                 Some(a) => {
                     let v: Vec<Vec2> = self
-                        .read_vecs::<2>(a, &format!("{place} TEXCOORD_0"))?
+                        .read_vecs::<2>(a, &format!("{place} TEXCOORD_{set}"))?
                         .into_iter()
                         .map(Vec2::from)
                         .collect();
                     if v.len() != n {
                         return Err(self.malformed(
-                            format!("accessor {a} ({place} TEXCOORD_0)"),
+                            format!("accessor {a} ({place} TEXCOORD_{set})"),
                             format!("{} UVs for {n} positions", v.len()),
                         ));
                     }

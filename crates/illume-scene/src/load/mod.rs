@@ -110,6 +110,20 @@ impl LoadError {
 /// [`Scene::source`] is `path`; it has passed [`Scene::validate`] (a failure is reported
 /// as [`LoadError::Malformed`] at place `scene`).
 pub fn load_scene(path: &Path) -> Result<Scene, LoadError> {
+    load_scene_with(path, &LoadOptions::default())
+}
+
+/// How lenient loading is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// A texture file that is missing or cannot be decoded is an error. By default it is
+    /// a warning naming the file (in [`Scene::warnings`]) and the material is rendered
+    /// with its factors alone.
+    pub strict: bool,
+}
+
+/// [`load_scene`] with options.
+pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<Scene, LoadError> {
     let s = path.to_string_lossy();
     if let Some(name) = s.strip_prefix("builtin:") {
         return crate::builtin::load(name).map_err(|_| LoadError::Malformed {
@@ -126,8 +140,8 @@ pub fn load_scene(path: &Path) -> Result<Scene, LoadError> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let mut scene = match ext.as_str() {
-        "gltf" | "glb" => gltf::load(path)?,
-        "obj" => obj::load(path)?,
+        "gltf" | "glb" => gltf::load(path, options.strict)?,
+        "obj" => obj::load(path, options.strict)?,
         "ply" => ply::load(path)?,
         _ => return Err(LoadError::UnknownFormat { path: path.into() }),
     };
@@ -264,19 +278,65 @@ pub fn default_camera_for_bounds(scene: &mut Scene) {
     scene.update_world_transforms();
 }
 
-/// Decodes an 8-bit sRGB-encoded image (PNG, JPEG or GIF; the alpha channel is
-/// dropped) into a linear-RGB [`Texture`]. The message of an error is the decoder's.
-pub(crate) fn decode_srgb_texture(
+/// An image read as a coverage (opacity) map, MTL `map_d`: its alpha channel when it
+/// has one, else its first channel (a grey image), 8-bit codes divided by 255, into
+/// [`Texture::alpha`]; the colour texels are 1.
+pub(crate) fn decode_coverage_texture(
     bytes: &[u8],
     name: String,
     wrap_u: WrapMode,
     wrap_v: WrapMode,
 ) -> Result<Texture, String> {
-    decode_texture(bytes, name, wrap_u, wrap_v, true)
+    let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+    let channel = if decoded.color().has_alpha() { 3 } else { 0 };
+    let alpha: Vec<u8> = decoded.to_rgba8().pixels().map(|p| p[channel]).collect();
+    Ok(Texture {
+        name,
+        width: decoded.width(),
+        height: decoded.height(),
+        texels: vec![Rgb::ONE; alpha.len()],
+        wrap_u,
+        wrap_v,
+        alpha,
+    })
 }
 
-/// [`decode_srgb_texture`], or with `srgb` false an image of linear data (glTF's
-/// metallic-roughness texture): 8-bit codes divided by 255.
+/// A tangent-space normal map (glTF encoding, texel = n·½ + ½, +x along +u, +y along
+/// +v) from a height map (MTL `bump`): heights are the texels' luminance in [0, 1]
+/// times `texels_per_unit` texels, slopes central differences between neighbouring
+/// texels (wrapping as the texture does), n = normalize(−∂h/∂u, −∂h/∂v, 1) per texel.
+pub(crate) fn normal_map_from_height(height: &Texture, texels_per_unit: f32) -> Texture {
+    let (w, h) = (height.width as i64, height.height as i64);
+    let at = |x: i64, y: i64| {
+        let cx = height.wrap_u.wrap(x, height.width);
+        let cy = height.wrap_v.wrap(y, height.height);
+        illume_core::luminance(height.texels[cy * height.width as usize + cx]) * texels_per_unit
+    };
+    let mut texels = Vec::with_capacity((w * h) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            let du = 0.5 * (at(x + 1, y) - at(x - 1, y));
+            let dv = 0.5 * (at(x, y + 1) - at(x, y - 1));
+            let n = illume_core::Vec3::new(-du, -dv, 1.0).normalize();
+            texels.push(n * 0.5 + illume_core::Vec3::splat(0.5));
+        }
+    }
+    Texture {
+        name: format!("{} (normals from heights)", height.name),
+        width: height.width,
+        height: height.height,
+        texels,
+        wrap_u: height.wrap_u,
+        wrap_v: height.wrap_v,
+        alpha: Vec::new(),
+    }
+}
+
+/// Decodes an image (any format the `image` crate reads: PNG, JPEG, TGA, BMP, GIF…) into a
+/// linear-RGB [`Texture`]: with `srgb` 8-bit sRGB codes are decoded, without it (data:
+/// glTF's metallic-roughness and normal textures) codes are divided by 255. An alpha
+/// channel that is not opaque everywhere is kept in [`Texture::alpha`]. The message of an
+/// error is the decoder's.
 pub(crate) fn decode_texture(
     bytes: &[u8],
     name: String,
@@ -284,9 +344,18 @@ pub(crate) fn decode_texture(
     wrap_v: WrapMode,
     srgb: bool,
 ) -> Result<Texture, String> {
-    let img = image::load_from_memory(bytes)
-        .map_err(|e| e.to_string())?
-        .to_rgb8();
+    let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+    let alpha = if decoded.color().has_alpha() {
+        let a: Vec<u8> = decoded.to_rgba8().pixels().map(|p| p[3]).collect();
+        if a.iter().all(|&v| v == 255) {
+            Vec::new()
+        } else {
+            a
+        }
+    } else {
+        Vec::new()
+    };
+    let img = decoded.to_rgb8();
     let lut: [f32; 256] = std::array::from_fn(|i| {
         if srgb {
             srgb_decode(i as f32 / 255.0)
@@ -305,5 +374,6 @@ pub(crate) fn decode_texture(
         texels,
         wrap_u,
         wrap_v,
+        alpha,
     })
 }

@@ -22,12 +22,18 @@
 //!   GGX α = √(2/(Ns + 2)), roughness = √α; Kd + Ks > 1 is scaled down with a warning;
 //!   transmission (`illum` 4, 6, 7, 9) is rendered opaque with a warning), `map_Kd` (an sRGB image
 //!   relative to the MTL's folder, multiplied by `Kd` as the MTL spec says; `-clamp on`
-//!   selects clamped wrapping, other options are skipped). **A `map_Kd` file that cannot
-//!   be read or decoded is an error** (not a warning: a scene silently rendered without
-//!   its textures is worse than a clear failure) naming the OBJ, the MTL and its line,
-//!   and the texture file.
-//!   `map_bump`/`bump` are ignored with one warning per library (illume has no bump
-//!   mapping); other keywords are ignored.
+//!   selects clamped wrapping, other options are skipped), `map_Ks` (sRGB, × `Ks`) and
+//!   `map_Ns` (linear, × `Ns`) baked per texel into a metallic-roughness texture with
+//!   the formulas above (the base colour keeps the untextured Kd + Ks, with a warning),
+//!   `d` (or `Tr` = 1 − d) and `map_d` (its alpha channel, else its first channel) as an
+//!   alpha mask with cutoff ½ (`d` < 1 alone warns: there is no partial transparency),
+//!   `bump`/`map_bump` (with `-bm`) turned into a tangent-space normal map by central
+//!   differences (a white texel [`BUMP_TEXELS`] texels above a black one; meshes without
+//!   `vn` then get face normals per corner, MikkTSpace the tangents). Images are any
+//!   format the `image` crate reads (PNG, JPEG, TGA, BMP, GIF, WebP, PNM). A texture file
+//!   that cannot be read or decoded is a warning naming the OBJ, the MTL and its line,
+//!   and the file (the material keeps its factors), an error when loading is strict
+//!   ([`crate::LoadOptions`]); other keywords are ignored.
 //!
 //! Result: **one illume [`Mesh`] per OBJ file** (groups `o`/`g` are not split; each
 //! triangle keeps its own material), placed once by a root node at the identity, every
@@ -38,10 +44,13 @@
 //! top-row convention (v' = 1 − v). Points/lines (`p`, `l`) and free-form geometry are
 //! ignored with a warning. Line continuations (`\`) are not supported.
 
-use super::{LoadError, decode_srgb_texture, default_camera_for_bounds, read_file};
+use super::{
+    LoadError, decode_coverage_texture, decode_texture, default_camera_for_bounds,
+    normal_map_from_height, read_file,
+};
 use crate::animation::Trs;
 use crate::builtin::SceneBuilder;
-use crate::model::{Material, MaterialId, Mesh, Scene, TextureId, WrapMode};
+use crate::model::{Material, MaterialId, Mesh, Scene, Texture, TextureId, WrapMode};
 use illume_core::{Rgb, Vec2, Vec3};
 use std::collections::{BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
@@ -67,7 +76,10 @@ struct ObjReader<'a> {
     triangles: Vec<[Corner; 3]>,
     triangle_materials: Vec<MaterialId>,
     materials: HashMap<String, MaterialId>,
-    textures: HashMap<PathBuf, TextureId>,
+    /// Decoded textures by file and use.
+    textures: HashMap<(PathBuf, TextureUse), TextureId>,
+    /// Missing or undecodable textures are errors rather than warnings.
+    strict: bool,
     default_material: Option<MaterialId>,
     current: Option<MaterialId>,
     ignored: BTreeSet<String>,
@@ -83,7 +95,7 @@ pub(crate) fn excerpt(text: &str) -> String {
     }
 }
 
-pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
+pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
     let bytes = read_file(path)?;
     // A text format: a NUL byte or a run of non-text bytes means binary data.
     if let Some(at) = bytes.iter().position(|&b| b == 0) {
@@ -114,6 +126,7 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         triangle_materials: Vec::new(),
         materials: HashMap::new(),
         textures: HashMap::new(),
+        strict,
         default_material: None,
         current: None,
         ignored: BTreeSet::new(),
@@ -145,9 +158,28 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "obj".into());
-    let mesh = r.build_mesh(&name);
+    let bumped = r.triangle_materials.iter().any(|m| {
+        r.builder.scene().materials[m.index()]
+            .normal_texture
+            .is_some()
+    });
+    // Bump maps need a shading frame: without `vn`, every corner gets its face's normal.
+    let mut mesh = r.build_mesh(&name, bumped);
     if mesh.indices.is_empty() {
         r.builder.warn(format!("{}: no faces", path.display()));
+    }
+    if bumped {
+        if mesh.uvs.is_empty() {
+            r.builder.warn(format!(
+                "{}: bump maps need texture coordinates (vt); not applied",
+                path.display()
+            ));
+        } else if !super::tangents::generate(&mut mesh) {
+            r.builder.warn(format!(
+                "{}: MikkTSpace found no tangents; bump maps are not applied",
+                path.display()
+            ));
+        }
     }
     let mut b = r.builder;
     let mesh = b.mesh(mesh);
@@ -338,7 +370,6 @@ impl ObjReader<'_> {
         let mut current: Option<Material> = None;
         // `Ks`, `Ns` and whether it transmits (`illum`) of `current`.
         let mut phong = Phong::default();
-        let mut bump_ignored = false;
         let mut finished: Vec<(Material, Phong)> = Vec::new();
         for (i, raw) in text.split('\n').enumerate() {
             let n = i + 1;
@@ -409,31 +440,57 @@ impl ObjReader<'_> {
                         phong.transmits = matches!(i, 4 | 6 | 7 | 9);
                     }
                 }
-                "map_kd" => {
-                    let (file, wrap) = texture_file(tokens);
-                    if file.is_empty() {
-                        return Err(err(n, "map_Kd without a file name".into()));
+                "d" | "tr" => {
+                    let [v] = floats::<1>(&mut tokens, 1, &keyword).map_err(|e| err(n, e))?;
+                    if !(0.0..=1.0).contains(&v) {
+                        return Err(err(n, format!("{keyword} {v} is not in [0, 1]")));
+                    }
+                    // `Tr` is the transparency 1 − d (some exporters write it instead).
+                    phong.d = Some(if keyword == "d" { v } else { 1.0 - v });
+                }
+                "map_kd" | "map_ks" | "map_ns" | "map_d" | "map_bump" | "bump" => {
+                    let spec = texture_file(tokens);
+                    if spec.file.is_empty() {
+                        return Err(err(n, format!("{keyword} without a file name")));
                     }
                     let folder = mtl_path.parent().unwrap_or(Path::new("."));
-                    let tex_path = folder.join(file.replace('\\', "/"));
-                    let id = self.texture(mtl_path, n, &tex_path, wrap)?;
-                    m.base_color_texture = Some(id);
+                    let tex_path = folder.join(spec.file.replace('\\', "/"));
+                    let usage = match keyword.as_str() {
+                        "map_kd" | "map_ks" => TextureUse::Colour,
+                        "map_ns" => TextureUse::Scalar,
+                        "map_d" => TextureUse::Coverage,
+                        _ => TextureUse::Bump(spec.bump_multiplier.to_bits()),
+                    };
+                    // Named as written (`map_Kd`), not lower-cased.
+                    let written = text.split_whitespace().next().unwrap_or(&keyword);
+                    let id = self.texture(mtl_path, n, written, &tex_path, spec.wrap, usage)?;
+                    match keyword.as_str() {
+                        "map_kd" => m.base_color_texture = id,
+                        "map_ks" => phong.ks_texture = id,
+                        "map_ns" => phong.ns_texture = id,
+                        "map_d" => phong.d_texture = id,
+                        _ => m.normal_texture = id,
+                    }
                 }
-                "map_bump" | "bump" => bump_ignored = true,
                 _ => {}
             }
         }
         if let Some(m) = current.take() {
             finished.push((m, phong));
         }
-        if bump_ignored {
-            self.builder.warn(format!(
-                "{}: bump maps ignored (illume has no bump mapping)",
-                mtl_path.display()
-            ));
-        }
         for (mut m, phong) in finished {
-            if let Some(warning) = phong.apply(&mut m) {
+            let textures = &self.builder.scene().textures;
+            let texture =
+                |t: Option<TextureId>| t.map(|t| std::sync::Arc::clone(&textures[t.index()]));
+            let (warning, baked) = phong.apply(
+                &mut m,
+                texture(phong.ks_texture).as_deref(),
+                texture(phong.ns_texture).as_deref(),
+            );
+            if let Some(baked) = baked {
+                m.metallic_roughness_texture = Some(self.builder.texture(baked));
+            }
+            if let Some(warning) = warning {
                 self.builder.warn(format!(
                     "{}: material '{}': {warning}",
                     mtl_path.display(),
@@ -448,42 +505,69 @@ impl ObjReader<'_> {
         Ok(())
     }
 
-    /// The texture at `tex_path` (decoded once per file), referenced from `mtl_path`
-    /// line `line`.
+    /// The texture at `tex_path` read for `usage` (decoded once per file and use),
+    /// named by statement `keyword` of `mtl_path` line `line`. A file that cannot be read
+    /// or decoded is a warning and `None` (the material keeps its factors), or with
+    /// `strict` an error; both name the OBJ, the MTL line and the file.
     fn texture(
         &mut self,
         mtl_path: &Path,
         line: usize,
+        keyword: &str,
         tex_path: &Path,
         wrap: WrapMode,
-    ) -> Result<TextureId, LoadError> {
-        if let Some(&id) = self.textures.get(tex_path) {
-            return Ok(id);
+        usage: TextureUse,
+    ) -> Result<Option<TextureId>, LoadError> {
+        if let Some(&id) = self.textures.get(&(tex_path.into(), usage)) {
+            return Ok(Some(id));
         }
-        let place = format!("{} (map_Kd)", mtl_place(mtl_path, line));
-        let bytes = std::fs::read(tex_path).map_err(|source| LoadError::MissingFile {
-            path: self.path.into(),
-            place: place.clone(),
-            file: tex_path.into(),
-            source,
-        })?;
-        let name = tex_path.to_string_lossy().into_owned();
-        let texture = decode_srgb_texture(&bytes, name, wrap, wrap).map_err(|e| {
-            LoadError::malformed(
-                self.path,
-                place,
-                format!("texture '{}' cannot be decoded: {e}", tex_path.display()),
-            )
-        })?;
-        let id = self.builder.texture(texture);
-        self.textures.insert(tex_path.into(), id);
-        Ok(id)
+        let place = format!("{} ({keyword})", mtl_place(mtl_path, line));
+        let decoded = match std::fs::read(tex_path) {
+            Err(source) => Err(LoadError::MissingFile {
+                path: self.path.into(),
+                place: place.clone(),
+                file: tex_path.into(),
+                source,
+            }),
+            Ok(bytes) => {
+                let name = tex_path.to_string_lossy().into_owned();
+                match usage {
+                    TextureUse::Colour => decode_texture(&bytes, name, wrap, wrap, true),
+                    TextureUse::Scalar => decode_texture(&bytes, name, wrap, wrap, false),
+                    TextureUse::Coverage => decode_coverage_texture(&bytes, name, wrap, wrap),
+                    TextureUse::Bump(bm) => decode_texture(&bytes, name, wrap, wrap, false)
+                        .map(|h| normal_map_from_height(&h, BUMP_TEXELS * f32::from_bits(bm))),
+                }
+                .map_err(|e| {
+                    LoadError::malformed(
+                        self.path,
+                        place.clone(),
+                        format!("texture '{}' cannot be decoded: {e}", tex_path.display()),
+                    )
+                })
+            }
+        };
+        match decoded {
+            Ok(texture) => {
+                let id = self.builder.texture(texture);
+                self.textures.insert((tex_path.into(), usage), id);
+                Ok(Some(id))
+            }
+            Err(e) if self.strict => Err(e),
+            Err(e) => {
+                self.builder
+                    .warn(format!("{e} (the material is rendered without it)"));
+                Ok(None)
+            }
+        }
     }
 
     /// Turns the triangles into one mesh, sharing vertices with equal `v/vt/vn`.
-    fn build_mesh(&self, name: &str) -> Mesh {
+    /// With `normals`, the mesh has normals even when no corner has one (then each
+    /// corner carries its face's normal).
+    fn build_mesh(&self, name: &str, normals: bool) -> Mesh {
         let has_uv = self.triangles.iter().flatten().any(|c| c.vt != NONE);
-        let has_normal = self.triangles.iter().flatten().any(|c| c.vn != NONE);
+        let has_normal = normals || self.triangles.iter().flatten().any(|c| c.vn != NONE);
         let mut mesh = Mesh {
             name: name.into(),
             ..Default::default()
@@ -537,9 +621,10 @@ fn mtl_place(mtl_path: &Path, line: usize) -> String {
 /// Splits the arguments of a `map_*` statement into the file name (the tokens left
 /// after the options, joined by single spaces) and the wrap mode (`-clamp on` →
 /// [`WrapMode::Clamp`]).
-fn texture_file(tokens: std::str::SplitWhitespace<'_>) -> (String, WrapMode) {
+fn texture_file(tokens: std::str::SplitWhitespace<'_>) -> TextureSpec {
     let tokens: Vec<&str> = tokens.collect();
     let mut wrap = WrapMode::Repeat;
+    let mut bump_multiplier = 1.0f32;
     let mut rest = Vec::new();
     let mut i = 0;
     while i < tokens.len() {
@@ -553,6 +638,12 @@ fn texture_file(tokens: std::str::SplitWhitespace<'_>) -> (String, WrapMode) {
             {
                 wrap = WrapMode::Clamp;
             }
+            if t.eq_ignore_ascii_case("-bm")
+                && let Some(v) = tokens.get(i + 1).and_then(|a| a.parse::<f32>().ok())
+                && v.is_finite()
+            {
+                bump_multiplier = v;
+            }
             i += 1;
             while i < tokens.len() && i + 1 < tokens.len() && is_option_argument(tokens[i]) {
                 i += 1;
@@ -562,8 +653,42 @@ fn texture_file(tokens: std::str::SplitWhitespace<'_>) -> (String, WrapMode) {
         rest.push(t);
         i += 1;
     }
-    (rest.join(" "), wrap)
+    TextureSpec {
+        file: rest.join(" "),
+        wrap,
+        bump_multiplier,
+    }
 }
+
+/// A texture statement's file and the options illume reads.
+struct TextureSpec {
+    /// File name (relative to the MTL's folder).
+    file: String,
+    /// `-clamp on` → clamped, else repeating.
+    wrap: WrapMode,
+    /// `-bm` bump multiplier (1 by default).
+    bump_multiplier: f32,
+}
+
+/// How an MTL texture file is decoded (a file used two ways is decoded twice).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum TextureUse {
+    /// sRGB colour (`map_Kd`, `map_Ks`).
+    Colour,
+    /// Linear scalar data (`map_Ns`).
+    Scalar,
+    /// Opacity (`map_d`): the alpha channel, else the first channel.
+    Coverage,
+    /// Heights (`bump`, `map_bump`) turned into a normal map; the bits of the `-bm`
+    /// multiplier.
+    Bump(u32),
+}
+
+/// Height of a white bump-map texel over a black one, in texels (times `-bm`): a step
+/// from black to white between neighbouring texels tilts the normal by
+/// atan(BUMP_TEXELS / 2) ≈ 45°. MTL gives bump heights no unit; this choice renders
+/// Dabrovic Sponza's bump maps as visible relief without exaggerating them.
+const BUMP_TEXELS: f32 = 2.0;
 
 /// True for option arguments (`0.5`, `on`, `off`, a channel letter of `-imfchan`).
 fn is_option_argument(t: &str) -> bool {
@@ -583,6 +708,17 @@ struct Phong {
     ns: Option<f32>,
     /// The material asks for transmission (`illum` 4, 6, 7 or 9), which illume lacks.
     transmits: bool,
+    /// Opacity `d` (or 1 − `Tr`).
+    d: Option<f32>,
+    /// `map_Ks`, `map_Ns`, `map_d`.
+    ks_texture: Option<TextureId>,
+    ns_texture: Option<TextureId>,
+    d_texture: Option<TextureId>,
+}
+
+/// GGX roughness √α for Phong exponent `ns`, with α = √(2/(Ns + 2)).
+fn roughness_of_exponent(ns: f32) -> f32 {
+    (2.0 / (ns.max(0.0) + 2.0)).sqrt().sqrt().clamp(0.0, 1.0)
 }
 
 impl Phong {
@@ -591,15 +727,37 @@ impl Phong {
     /// part (1 − m)·base and specular part m·base match `Kd` and `Ks`:
     /// base = Kd + Ks, metallic m = lum(Ks)/lum(Kd + Ks); the Phong exponent becomes GGX
     /// α = √(2/(Ns + 2)) (Walter et al. 2007's Phong–Beckmann correspondence), roughness
-    /// = √α. Kd + Ks above 1 is scaled down to 1. Returns a warning for what was
-    /// approximated.
-    fn apply(&self, m: &mut Material) -> Option<String> {
-        if self.ks.max_element() <= 0.0 {
-            return self.transmits.then(|| {
-                "transmission (illum 4, 6, 7, 9) is not supported: rendered opaque".into()
-            });
-        }
+    /// = √α. Kd + Ks above 1 is scaled down to 1. `map_Ks` (`ks_map`) and `map_Ns`
+    /// (`ns_map`, multiplying Ns) are baked, per texel of `map_Ns` (else of `map_Ks`),
+    /// into a metallic-roughness texture with the same formulas (the base colour keeps
+    /// the untextured Kd + Ks: an approximation, warned). `d` < 1 or `map_d` make an alpha
+    /// mask with cutoff ½. Returns a warning for what was approximated, and the baked
+    /// texture.
+    fn apply(
+        &self,
+        m: &mut Material,
+        ks_map: Option<&Texture>,
+        ns_map: Option<&Texture>,
+    ) -> (Option<String>, Option<Texture>) {
         let mut warnings = Vec::new();
+        let d = self.d.unwrap_or(1.0);
+        if self.transmits {
+            warnings
+                .push("transmission (illum 4, 6, 7, 9) is not supported: rendered opaque".into());
+        } else if self.d_texture.is_some() || d < 1.0 {
+            m.alpha = d;
+            m.alpha_texture = self.d_texture;
+            m.alpha_cutoff = Some(0.5);
+            if self.d_texture.is_none() {
+                let what = if d >= 0.5 { "opaque" } else { "invisible" };
+                warnings.push(format!(
+                    "d = {d} (partial transparency) is rendered as an alpha mask with cutoff 0.5: {what}"
+                ));
+            }
+        }
+        if self.ks.max_element() <= 0.0 {
+            return ((!warnings.is_empty()).then(|| warnings.join("; ")), None);
+        }
         let mut sum = m.base_color + self.ks;
         let mut ks = self.ks;
         if sum.max_element() > 1.0 {
@@ -608,20 +766,48 @@ impl Phong {
             sum *= k;
             ks *= k;
         }
-        let ns = self.ns.unwrap_or(0.0);
-        let alpha = (2.0 / (ns + 2.0)).sqrt();
-        m.base_color = sum.clamp(Rgb::ZERO, Rgb::ONE);
-        let total = illume_core::luminance(sum);
-        m.metallic = if total > 0.0 {
-            (illume_core::luminance(ks) / total).clamp(0.0, 1.0)
-        } else {
-            0.0
+        let kd = sum - ks;
+        let metallic_of = |ks: Rgb| {
+            let total = illume_core::luminance(kd + ks);
+            if total > 0.0 {
+                (illume_core::luminance(ks) / total).clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
         };
-        m.roughness = alpha.sqrt().clamp(0.0, 1.0);
-        if self.transmits {
-            warnings
-                .push("transmission (illum 4, 6, 7, 9) is not supported: rendered opaque".into());
-        }
-        (!warnings.is_empty()).then(|| warnings.join("; "))
+        let ns = self.ns.unwrap_or(0.0);
+        m.base_color = sum.clamp(Rgb::ZERO, Rgb::ONE);
+        m.metallic = metallic_of(ks);
+        m.roughness = roughness_of_exponent(ns);
+        let baked = ns_map.or(ks_map).map(|grid| {
+            if ks_map.is_some() {
+                warnings.push(
+                    "map_Ks varies the metallic part only (the base colour keeps Kd + Ks)".into(),
+                );
+            }
+            let (w, h) = (grid.width, grid.height);
+            let texels = (0..h)
+                .flat_map(|y| (0..w).map(move |x| (x, y)))
+                .map(|(x, y)| {
+                    let uv = Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+                    let ks_here = ks_map.map_or(ks, |t| ks * t.sample(uv));
+                    let ns_here = ns_map.map_or(ns, |t| ns * t.sample(uv).x);
+                    Rgb::new(0.0, roughness_of_exponent(ns_here), metallic_of(ks_here))
+                })
+                .collect();
+            // The texture carries the values: factors of 1.
+            m.metallic = 1.0;
+            m.roughness = 1.0;
+            Texture {
+                name: format!("{} (metallic-roughness from map_Ks/map_Ns)", grid.name),
+                width: w,
+                height: h,
+                texels,
+                wrap_u: grid.wrap_u,
+                wrap_v: grid.wrap_v,
+                alpha: Vec::new(),
+            }
+        });
+        ((!warnings.is_empty()).then(|| warnings.join("; ")), baked)
     }
 }
