@@ -2113,6 +2113,11 @@ fn obj_opacity_specular_maps_and_bump() {
         image::DynamicImage::ImageLuma8(image::GrayImage::from_raw(2, 1, vec![255, 0]).unwrap()),
     );
     // A height ramp rising along +u: the normal tilts toward −u.
+    // A TGA colour map (Crytek Sponza's format): decoded like any image.
+    png(
+        "kd.tga",
+        image::DynamicImage::ImageRgb8(image::RgbImage::from_raw(1, 1, vec![255, 0, 0]).unwrap()),
+    );
     png(
         "h.png",
         image::DynamicImage::ImageLuma8(
@@ -2121,7 +2126,7 @@ fn obj_opacity_specular_maps_and_bump() {
     );
     std::fs::write(
         dir.join("m.mtl"),
-        "newmtl leaf\nKd 0.5 0.5 0.5\nmap_d d.png\n\
+        "newmtl leaf\nKd 0.5 0.5 0.5\nmap_d d.png\nmap_Kd kd.tga\n\
          newmtl ghost\nKd 0.5 0.5 0.5\nd 0.25\n\
          newmtl shiny\nKd 0.3 0.3 0.3\nKs 0.2 0.2 0.2\nNs 100\nmap_Ns ns.png\n\
          newmtl rough\nKd 0.5 0.5 0.5\nbump -bm 0.5 h.png\n",
@@ -2139,6 +2144,11 @@ fn obj_opacity_specular_maps_and_bump() {
     let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap();
     // map_d: a mask at ½ from the grey image; d = 0.25: a mask that removes it all.
     let leaf = m("leaf");
+    let kd = &s.textures[leaf
+        .base_color_texture
+        .unwrap_or_else(|| panic!("the TGA decodes: {:?}", s.warnings))
+        .index()];
+    assert_eq!(kd.texels, vec![Vec3::new(1.0, 0.0, 0.0)]);
     assert_eq!(leaf.alpha_cutoff, Some(0.5));
     assert_eq!(
         s.textures[leaf.alpha_texture.unwrap().index()].alpha,

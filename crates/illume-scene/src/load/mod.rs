@@ -278,6 +278,20 @@ pub fn default_camera_for_bounds(scene: &mut Scene) {
     scene.update_world_transforms();
 }
 
+/// Decodes image bytes, the format found from their content or, for formats without a
+/// signature (TGA), from the extension of `name`.
+fn decode_image(bytes: &[u8], name: &str) -> Result<image::DynamicImage, String> {
+    match image::load_from_memory(bytes) {
+        Ok(decoded) => Ok(decoded),
+        Err(e) => match image::ImageFormat::from_path(name) {
+            Ok(format) => {
+                image::load_from_memory_with_format(bytes, format).map_err(|e| e.to_string())
+            }
+            Err(_) => Err(e.to_string()),
+        },
+    }
+}
+
 /// An image read as a coverage (opacity) map, MTL `map_d`: its alpha channel when it
 /// has one, else its first channel (a grey image), 8-bit codes divided by 255, into
 /// [`Texture::alpha`]; the colour texels are 1.
@@ -287,7 +301,7 @@ pub(crate) fn decode_coverage_texture(
     wrap_u: WrapMode,
     wrap_v: WrapMode,
 ) -> Result<Texture, String> {
-    let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+    let decoded = decode_image(bytes, &name)?;
     let channel = if decoded.color().has_alpha() { 3 } else { 0 };
     let alpha: Vec<u8> = decoded.to_rgba8().pixels().map(|p| p[channel]).collect();
     Ok(Texture {
@@ -344,7 +358,7 @@ pub(crate) fn decode_texture(
     wrap_v: WrapMode,
     srgb: bool,
 ) -> Result<Texture, String> {
-    let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+    let decoded = decode_image(bytes, &name)?;
     let alpha = if decoded.color().has_alpha() {
         let a: Vec<u8> = decoded.to_rgba8().pixels().map(|p| p[3]).collect();
         if a.iter().all(|&v| v == 255) {
