@@ -79,6 +79,9 @@ pub enum Emitter {
             std::sync::Arc<illume_scene::Texture>,
             [illume_core::Vec2; 3],
         )>,
+        /// The mesh's alpha-mask holes when this triangle has them: nothing is emitted
+        /// from a hole.
+        cutout: Option<std::sync::Arc<illume_scene::MeshCutout>>,
     },
 }
 
@@ -201,6 +204,9 @@ impl LightSet {
                 },
             });
         }
+        // Holes of alpha-masked emitters, per mesh (built when first needed).
+        let mut cutouts: Vec<Option<Option<std::sync::Arc<illume_scene::MeshCutout>>>> =
+            vec![None; scene.meshes.len()];
         for (ii, inst) in scene.instances.iter().enumerate() {
             // Emitters are what ordinary rays see: removed instances (mask 0) and
             // technique-only copies (phantoms) emit nothing.
@@ -237,6 +243,12 @@ impl LightSet {
                     };
                     (scene.textures[tex.index()].clone(), uvs)
                 });
+                let cutout = cutouts[inst.mesh.index()]
+                    .get_or_insert_with(|| {
+                        illume_scene::MeshCutout::new(scene, inst.mesh).map(std::sync::Arc::new)
+                    })
+                    .clone()
+                    .filter(|c| c.is_tested(t as u32));
                 emitters.push(Emitter::Triangle {
                     instance: InstanceId(ii as u32),
                     triangle: t as u32,
@@ -246,6 +258,7 @@ impl LightSet {
                     radiance: mat.emission,
                     double_sided: mat.double_sided,
                     texture,
+                    cutout,
                 });
             }
         }
@@ -562,10 +575,12 @@ impl LightSet {
                 radiance,
                 double_sided,
                 texture,
+                cutout,
+                triangle,
                 ..
             } => {
                 let b = uniform_triangle(u);
-                let radiance = &textured_radiance(*radiance, texture, b);
+                let radiance = &textured_radiance(*radiance, texture, cutout, *triangle, b);
                 let q = corners[0] * (1.0 - b.x - b.y) + corners[1] * b.x + corners[2] * b.y;
                 let d = q - p;
                 let dist2 = d.length_squared();
@@ -653,14 +668,16 @@ impl LightSet {
                 normal,
                 double_sided,
                 texture,
+                cutout,
+                triangle,
                 radiance,
                 area,
                 ..
             } => {
                 let b = uniform_triangle(u_pos);
-                if texture.is_some() {
+                if texture.is_some() || cutout.is_some() {
                     // The flux of this point's radiance (the selection used the mean).
-                    let point_power = textured_radiance(*radiance, texture, b)
+                    let point_power = textured_radiance(*radiance, texture, cutout, *triangle, b)
                         * PI
                         * *area
                         * if *double_sided { 2.0 } else { 1.0 };
@@ -739,8 +756,9 @@ fn power(e: &Emitter, scene_radius: f32) -> Rgb {
     }
 }
 
-/// `radiance` at barycentric point `b` (weights of the second and third corners) of a
-/// triangle emitter, times its emissive texture there.
+/// `radiance` at barycentric point `b` (weights of the second and third corners) of
+/// triangle emitter `triangle`, times its emissive texture there; 0 in a hole of its
+/// alpha mask.
 #[inline]
 fn textured_radiance(
     radiance: Rgb,
@@ -748,8 +766,13 @@ fn textured_radiance(
         std::sync::Arc<illume_scene::Texture>,
         [illume_core::Vec2; 3],
     )>,
+    cutout: &Option<std::sync::Arc<illume_scene::MeshCutout>>,
+    triangle: u32,
     b: illume_core::Vec2,
 ) -> Rgb {
+    if cutout.as_ref().is_some_and(|c| !c.keeps(triangle, b)) {
+        return Rgb::ZERO;
+    }
     match texture {
         None => radiance,
         Some((t, uv)) => {

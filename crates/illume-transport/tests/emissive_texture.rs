@@ -12,6 +12,11 @@ const LE: f32 = 3.0;
 /// A 1 m² light facing down at y = 1 whose texture is bright on its u < ½ half (1.0)
 /// and dim on the other (0.1), over a floor.
 fn world() -> World {
+    world_with(false)
+}
+
+/// [`world`], with the dim half cut away by an alpha mask when `cut`.
+fn world_with(cut: bool) -> World {
     let mut b = SceneBuilder::new();
     let tex = b.texture(Texture {
         name: "halves".into(),
@@ -20,12 +25,14 @@ fn world() -> World {
         texels: vec![Rgb::splat(1.0), Rgb::splat(0.1)],
         wrap_u: WrapMode::Clamp,
         wrap_v: WrapMode::Clamp,
-        alpha: vec![],
+        alpha: if cut { vec![255, 0] } else { vec![] },
     });
     let light = b.material(Material {
         base_color: Rgb::ZERO,
         emission: Rgb::splat(LE),
         emissive_texture: Some(tex),
+        alpha_texture: cut.then_some(tex),
+        alpha_cutoff: cut.then_some(0.5),
         double_sided: false,
         ..Default::default()
     });
@@ -51,15 +58,15 @@ fn world() -> World {
     World::new(scene)
 }
 
-/// Radiance of the lamp at world point (x, 1, z) by the quad's UV layout.
+/// Radiance of the lamp at world point (x, 1, z) by the quad's UV layout (0 where a ray
+/// passes through it).
 fn le_at(world: &World, x: f32, z: f32) -> f32 {
-    let hit = world
+    world
         .trace(
             &Ray::new(Vec3::new(x, 0.5, z), Vec3::Y),
             illume_scene::MASK_DEFAULT,
         )
-        .expect("the lamp");
-    hit.emission.x
+        .map_or(0.0, |hit| hit.emission.x)
 }
 
 #[test]
@@ -73,7 +80,22 @@ fn rays_see_the_textured_radiance() {
 
 #[test]
 fn nee_and_photons_are_unbiased_with_a_texture() {
-    let w = world();
+    nee_and_photons_match_quadrature(&world());
+}
+
+/// An alpha-masked emitter emits nothing from its holes: NEE and photons agree with
+/// what rays see (the lamp's bright half only).
+#[test]
+fn nee_and_photons_skip_the_holes_of_a_cut_out_emitter() {
+    let w = world_with(true);
+    assert_eq!(le_at(&w, 0.3, 0.0), 0.0, "rays pass through the cut half");
+    assert!(le_at(&w, -0.3, 0.0) > 0.0);
+    nee_and_photons_match_quadrature(&w);
+}
+
+/// NEE irradiance at the origin and the photons' mean flux against quadratures of what
+/// rays see of the lamp.
+fn nee_and_photons_match_quadrature(w: &World) {
     // Quadrature of the irradiance at the origin and of the power, from what rays see.
     let n = 400;
     let (mut e, mut power) = (0f64, 0f64);
@@ -83,7 +105,7 @@ fn nee_and_photons_are_unbiased_with_a_texture() {
                 (i as f32 + 0.5) / n as f32 - 0.5,
                 (j as f32 + 0.5) / n as f32 - 0.5,
             );
-            let le = le_at(&w, x, z) as f64;
+            let le = le_at(w, x, z) as f64;
             let d = Vec3::new(x, 1.0, z);
             let r2 = d.length_squared() as f64;
             let cos = 1.0 / r2.sqrt();
