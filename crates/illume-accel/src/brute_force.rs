@@ -3,7 +3,7 @@
 
 use crate::{Hit, triangle::intersect_triangle};
 use illume_core::{Ray, Vec3};
-use illume_scene::{InstanceId, MeshCutout, MeshId, Scene};
+use illume_scene::{InstanceId, MeshCutout, Scene};
 
 /// World-space triangles of a scene.
 pub struct BruteForce {
@@ -17,9 +17,7 @@ impl BruteForce {
     /// Transforms every instance's triangles to world space.
     pub fn new(scene: &Scene) -> Self {
         let mut tris = Vec::new();
-        let cutouts = (0..scene.meshes.len())
-            .map(|m| MeshCutout::new(scene, MeshId(m as u32)))
-            .collect();
+        let cutouts = MeshCutout::all(scene);
         for (i, inst) in scene.instances.iter().enumerate() {
             let mesh = &scene.meshes[inst.mesh.index()];
             for t in 0..mesh.triangle_count() {

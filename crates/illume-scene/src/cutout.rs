@@ -47,7 +47,6 @@ impl MeshCutout {
     /// alone passes and that has no texture with alpha).
     pub fn new(scene: &Scene, mesh: MeshId) -> Option<Self> {
         let mesh = scene.meshes.get(mesh.index())?;
-        // Cheap for scenes without cut-outs: the rasterizer asks once per mesh per view.
         scene.materials.iter().find(|m| m.alpha_cutoff.is_some())?;
         let mut test_of_material = vec![None::<u32>; scene.materials.len()];
         let mut tests = Vec::new();
@@ -79,6 +78,17 @@ impl MeshCutout {
             test_of_triangle,
             tests,
         })
+    }
+
+    /// [`MeshCutout::new`] for every mesh of `scene`, indexed like `scene.meshes`; one
+    /// pass over the materials when none cuts out (the rasterizer asks once per view).
+    pub fn all(scene: &Scene) -> Vec<Option<Self>> {
+        if scene.materials.iter().all(|m| m.alpha_cutoff.is_none()) {
+            return vec![None; scene.meshes.len()];
+        }
+        (0..scene.meshes.len())
+            .map(|m| Self::new(scene, MeshId(m as u32)))
+            .collect()
     }
 
     /// True when triangle `triangle` may have holes (its material cuts out).

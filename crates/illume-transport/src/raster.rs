@@ -44,7 +44,7 @@
 //! orthographically, a plane of world position.
 
 use glam::{Affine3A, DVec4, Vec3, Vec4};
-use illume_scene::{InstanceId, MASK_DEFAULT, MeshCutout, MeshId, Scene};
+use illume_scene::{InstanceId, MASK_DEFAULT, MeshCutout, Scene};
 use rayon::prelude::*;
 
 /// Nearest view depth drawn \[m\]: geometry closer to the camera plane than this is clipped
@@ -514,9 +514,7 @@ impl SceneSetup<'_> {
 /// Clip-space corners of every triangle of `scene`'s default-mask instances, set up for
 /// rasterization, in scene order.
 fn setup_scene<'s>(scene: &'s Scene, viewport: &Viewport) -> SceneSetup<'s> {
-    let cutouts: Vec<Option<MeshCutout>> = (0..scene.meshes.len())
-        .map(|m| MeshCutout::new(scene, MeshId(m as u32)))
-        .collect();
+    let cutouts = MeshCutout::all(scene);
     let instances: Vec<(usize, Vec<Vec4>)> = scene
         .instances
         .iter()
