@@ -213,22 +213,31 @@ impl<'a> HaltonStream<'a> {
     }
 }
 
-impl SampleStream for HaltonStream<'_> {
-    fn next_1d(&mut self) -> f32 {
+impl HaltonStream<'_> {
+    /// The next dimension's value in `[0, 1)` at `f64` precision (what
+    /// [`SampleStream::next_1d`] rounds to `f32`): the first digits of the radical
+    /// inverse are exact, so a technique can tell which `base^-k` cell the point lies in
+    /// (selective photon tracing's light choice).
+    pub fn next_f64(&mut self) -> f64 {
         let d = self.dim;
         self.dim += 1;
         if d < PRIMES.len() {
-            let v = match self.scramble {
+            match self.scramble {
                 Some(s) => scrambled_radical_inverse(PRIMES[d], self.index, &s.perms[d]),
                 None => radical_inverse(PRIMES[d], self.index),
-            };
-            (v as f32).min(ONE_MINUS_EPSILON)
+            }
         } else {
             let index = self.index;
             self.tail
                 .get_or_insert_with(|| Pcg32::new(mix64(index), 0x48616c74))
-                .next_1d()
+                .next_1d() as f64
         }
+    }
+}
+
+impl SampleStream for HaltonStream<'_> {
+    fn next_1d(&mut self) -> f32 {
+        (self.next_f64() as f32).min(ONE_MINUS_EPSILON)
     }
 }
 

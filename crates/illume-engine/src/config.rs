@@ -22,6 +22,7 @@ use crate::TechniqueKind;
 use illume_photon_stream::PhotonStreamSettings;
 use illume_reference::ReferenceSettings;
 use illume_render::RenderSettings;
+use illume_selective::SelectiveSettings;
 use illume_transport::{Budget, Pacing, TechniqueSettings};
 use std::path::{Path, PathBuf};
 
@@ -37,6 +38,8 @@ pub struct Config {
     pub reference: ReferenceSettings,
     /// Photon streaming with VSLs (`[photon_stream]`).
     pub photon_stream: PhotonStreamSettings,
+    /// Selective photon tracing (`[selective]`).
+    pub selective: SelectiveSettings,
 }
 
 /// Why a configuration was rejected.
@@ -212,6 +215,7 @@ impl Config {
         match self.technique {
             TechniqueKind::Reference => &self.reference,
             TechniqueKind::PhotonStream => &self.photon_stream,
+            TechniqueKind::Selective => &self.selective,
         }
     }
 
@@ -220,6 +224,7 @@ impl Config {
         match self.technique {
             TechniqueKind::Reference => &mut self.reference,
             TechniqueKind::PhotonStream => &mut self.photon_stream,
+            TechniqueKind::Selective => &mut self.selective,
         }
     }
 

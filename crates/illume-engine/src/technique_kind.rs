@@ -6,6 +6,7 @@ use crate::{Config, EngineError};
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
 use illume_reference::{ReferenceSettings, ReferenceTechnique};
 use illume_scene::Timeline;
+use illume_selective::{Selective, SelectiveSettings};
 use illume_transport::{SharedWorld, Technique, TechniqueError, TechniqueSettings};
 
 /// Every technique illume implements; the name is the same everywhere (module, TOML
@@ -19,18 +20,25 @@ pub enum TechniqueKind {
     /// illume's default technique.
     #[default]
     PhotonStream,
+    /// Selective photon tracing with Halton pilot and corrective groups (Dmitriev et al.
+    /// 2002).
+    Selective,
 }
 
 impl TechniqueKind {
     /// All techniques.
-    pub const ALL: &'static [TechniqueKind] =
-        &[TechniqueKind::Reference, TechniqueKind::PhotonStream];
+    pub const ALL: &'static [TechniqueKind] = &[
+        TechniqueKind::Reference,
+        TechniqueKind::PhotonStream,
+        TechniqueKind::Selective,
+    ];
 
     /// The technique's one name (its crate's `NAME`).
     pub fn name(self) -> &'static str {
         match self {
             TechniqueKind::Reference => illume_reference::NAME,
             TechniqueKind::PhotonStream => illume_photon_stream::NAME,
+            TechniqueKind::Selective => illume_selective::NAME,
         }
     }
 
@@ -39,6 +47,7 @@ impl TechniqueKind {
         match self {
             TechniqueKind::Reference => ReferenceSettings::presets(),
             TechniqueKind::PhotonStream => PhotonStreamSettings::presets(),
+            TechniqueKind::Selective => SelectiveSettings::presets(),
         }
     }
 
@@ -51,6 +60,7 @@ impl TechniqueKind {
         match self {
             TechniqueKind::Reference => table::<ReferenceSettings>(name),
             TechniqueKind::PhotonStream => table::<PhotonStreamSettings>(name),
+            TechniqueKind::Selective => table::<SelectiveSettings>(name),
         }
     }
 
@@ -60,6 +70,7 @@ impl TechniqueKind {
         match self {
             TechniqueKind::Reference => ReferenceSettings::WORK_UNIT,
             TechniqueKind::PhotonStream => PhotonStreamSettings::WORK_UNIT,
+            TechniqueKind::Selective => SelectiveSettings::WORK_UNIT,
         }
     }
 
@@ -67,7 +78,9 @@ impl TechniqueKind {
     /// [`Timeline`] of the sequence. Interactive techniques never receive it.
     pub fn needs_timeline(self) -> bool {
         match self {
-            TechniqueKind::Reference | TechniqueKind::PhotonStream => false,
+            TechniqueKind::Reference | TechniqueKind::PhotonStream | TechniqueKind::Selective => {
+                false
+            }
         }
     }
 
@@ -91,6 +104,9 @@ impl TechniqueKind {
             TechniqueKind::PhotonStream => Box::new(
                 PhotonStream::new(world, config.photon_stream.clone())
                     .map_err(|e| wrap(e.into()))?,
+            ),
+            TechniqueKind::Selective => Box::new(
+                Selective::new(world, config.selective.clone()).map_err(|e| wrap(e.into()))?,
             ),
         })
     }

@@ -619,6 +619,41 @@ impl LightSet {
         };
         let u_pos = sampler.next_2d();
         let u_dir = sampler.next_2d();
+        self.emit_from(i, pmf, u_pos, u_dir, sampler)
+    }
+
+    /// Which emission coordinates emitter `i` reads (`i` = [`LightSet::emitters`]'s
+    /// length is the sky): `(position, direction)`. Point and spot lights read only a
+    /// direction, directional lights only a position on the disk facing them; area lights
+    /// and the sky read both (an environment map two more numbers from the sampler).
+    /// Techniques that map sample dimensions to Halton bases draw only these.
+    pub fn emission_coordinates(&self, i: usize) -> (bool, bool) {
+        match self.emitters.get(i) {
+            Some(Emitter::Point { .. } | Emitter::Spot { .. }) => (false, true),
+            Some(Emitter::Directional { .. }) => (true, false),
+            Some(Emitter::Triangle { .. }) | None => (true, true),
+        }
+    }
+
+    /// The sky's photon-emission power \[W\] (zero without a sky).
+    pub fn sky_power(&self) -> Rgb {
+        self.sky_power
+    }
+
+    /// A photon leaving emitter `i` (`i` = [`LightSet::emitters`]'s length: the sky),
+    /// chosen with probability `pmf`, from the emission coordinates `u_pos` (a point on
+    /// an area light or on the disk a directional light or the sky crosses) and `u_dir`
+    /// (a direction); an environment-mapped sky draws two more numbers from `sampler`.
+    /// [`LightSet::sample_emission`] is this after choosing `i` by power. The flux is
+    /// the emitter's power over `pmf` (textured emitters: the sampled point's).
+    pub fn emit_from(
+        &self,
+        i: usize,
+        pmf: f32,
+        u_pos: illume_core::Vec2,
+        u_dir: illume_core::Vec2,
+        sampler: &mut impl SampleStream,
+    ) -> Option<EmissionSample> {
         if i == self.emitters.len() {
             // The sky: a direction the light comes from (uniform over the sphere, or by
             // the environment map's texel table), an origin uniform on the disk of the

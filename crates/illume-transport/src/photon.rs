@@ -7,9 +7,10 @@
 //! the thread count or order — selective photon tracing re-traces paths to subtract
 //! their old energy.
 
+use crate::lights::EmissionSample;
 use crate::surface::PhotonHit;
 use crate::world::World;
-use illume_core::sampling::{SampleStream, cosine_hemisphere};
+use illume_core::sampling::{ONE_MINUS_EPSILON, SampleStream, cosine_hemisphere};
 use illume_core::{Frame, Ray, Rgb, Vec2, Vec3, channel_mean};
 
 /// Settings of photon paths.
@@ -28,6 +29,12 @@ pub struct PhotonPathSettings {
     /// costing a cache miss per impact. False (default): full resolution, the albedo
     /// the renderer sees.
     pub filtered_textures: bool,
+    /// Reuse the Russian-roulette number as the first coordinate of the bounce direction
+    /// (Shirley et al.'s remapping, as selective photon tracing's §4.1 does: a surviving
+    /// `u < p` continues as `u / p`), so each bounce reads two sample dimensions instead
+    /// of three. Quasi-random paths then keep one more bounce coherent for the same
+    /// Halton bases. False (default): three dimensions per bounce.
+    pub remap_roulette: bool,
 }
 
 impl Default for PhotonPathSettings {
@@ -36,6 +43,7 @@ impl Default for PhotonPathSettings {
             max_bounces: 32,
             mask: illume_scene::MASK_DEFAULT,
             filtered_textures: false,
+            remap_roulette: false,
         }
     }
 }
@@ -63,6 +71,137 @@ pub struct PhotonPathStats {
     pub rays: u32,
 }
 
+/// A photon path in flight, resumable: the ray of its next segment, the flux it carries
+/// and the bounces it has made. With the sampler's state, it is everything the rest of
+/// the path depends on, so a copy (and a copy of the sampler) can continue in another
+/// world — selective photon tracing traces a path's shared prefix once, then continues
+/// it twice from the first segment that met a change, with negative energy in the old
+/// scene and positive energy in the new one.
+///
+/// [`trace_photon`] is [`PhotonPath::emit`] followed by [`PhotonPath::run`].
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonPath {
+    /// The next segment (origin, unit direction).
+    pub ray: Ray,
+    /// Flux the photon carries \[W\] (per photon out of one).
+    pub flux: Rgb,
+    /// Impacts made so far (the next impact's [`PhotonImpact::bounce`]).
+    pub bounce: u32,
+}
+
+impl PhotonPath {
+    /// A path leaving a light along `emission`.
+    #[inline]
+    pub fn emitted(emission: EmissionSample) -> Self {
+        Self {
+            ray: emission.ray,
+            flux: emission.flux,
+            bounce: 0,
+        }
+    }
+
+    /// A photon leaving a light of `world` chosen by power (sample dimensions 0–4, see
+    /// [`LightSet::sample_emission`](crate::lights::LightSet::sample_emission)); None
+    /// when the world has no light.
+    #[inline]
+    pub fn emit(world: &World, sampler: &mut impl SampleStream) -> Option<Self> {
+        world.lights.sample_emission(sampler).map(Self::emitted)
+    }
+
+    /// True while the path may trace another segment (`bounce ≤ max_bounces`).
+    #[inline]
+    pub fn alive(&self, settings: &PhotonPathSettings) -> bool {
+        self.bounce <= settings.max_bounces
+    }
+
+    /// The surface the next segment ends on, among instances visible to `mask`, traced
+    /// with `tracer` (`world`'s, [`Tracer::scoped`](illume_accel::Tracer::scoped)). None
+    /// when it escapes. The hit may be on a side that does not reflect (the path then
+    /// ends there, absorbed).
+    #[inline]
+    pub fn trace(
+        &self,
+        world: &World,
+        tracer: &mut illume_accel::ScopedTracer<'_>,
+        mask: u32,
+        settings: &PhotonPathSettings,
+    ) -> Option<PhotonHit> {
+        world.trace_photon_hit(tracer, &self.ray, mask, settings.filtered_textures)
+    }
+
+    /// The impact at `hit` (which must reflect), and the path moved on past it: Russian
+    /// roulette on the mean albedo (survival probability `p`, flux scaled by ρ/p), then a
+    /// cosine-distributed direction. Returns the impact and whether the path continues.
+    #[inline]
+    pub fn scatter(
+        &mut self,
+        hit: PhotonHit,
+        sampler: &mut impl SampleStream,
+        settings: &PhotonPathSettings,
+    ) -> (PhotonImpact, bool) {
+        let impact = PhotonImpact {
+            hit,
+            incoming: self.ray.dir,
+            flux: self.flux,
+            bounce: self.bounce,
+        };
+        let u_rr = sampler.next_1d();
+        let p = channel_mean(hit.albedo).min(1.0);
+        let survives = p > 0.0 && u_rr < p;
+        let u_dir = if !settings.remap_roulette {
+            sampler.next_2d()
+        } else if survives {
+            Vec2::new((u_rr / p).min(ONE_MINUS_EPSILON), sampler.next_1d())
+        } else {
+            Vec2::ZERO
+        };
+        let next = survives
+            .then(|| diffuse_direction(hit.facing_normal(), u_dir))
+            // Below the geometric surface (a shading-normal artefact): absorbed.
+            .filter(|wi| wi.dot(hit.facing_geometric_normal()) > 0.0);
+        self.bounce += 1;
+        if let Some(wi) = next {
+            // Lambertian reflection sampled by cosine: the path weight f·cosθ/pdf is ρ.
+            self.flux *= hit.albedo / p;
+            self.ray = Ray::new(hit.spawn_origin(wi), wi);
+        }
+        (impact, next.is_some())
+    }
+
+    /// Follows the path to its end in `world` (visible instances: `settings.mask`),
+    /// calling `on_impact` for every impact on a reflecting side and counting into
+    /// `stats`.
+    #[inline]
+    pub fn run(
+        mut self,
+        world: &World,
+        tracer: &mut illume_accel::ScopedTracer<'_>,
+        sampler: &mut impl SampleStream,
+        settings: &PhotonPathSettings,
+        stats: &mut PhotonPathStats,
+        mut on_impact: impl FnMut(&PhotonImpact),
+    ) {
+        while self.alive(settings) {
+            stats.rays += 1;
+            let Some(hit) = self.trace(world, tracer, settings.mask, settings) else {
+                break;
+            };
+            if !hit.reflects {
+                break;
+            }
+            stats.impacts += 1;
+            // The next ray first, the caller's bookkeeping after: the path is one chain
+            // of dependent work, and the impact's bookkeeping (independent of it) then
+            // overlaps the next traversal instead of delaying its start.
+            let (impact, continues) = self.scatter(hit, sampler, settings);
+            on_impact(&impact);
+            if !continues {
+                break;
+            }
+        }
+    }
+}
+
 /// Traces one photon: emission from a light chosen by power, then diffuse bounces with
 /// Russian roulette on the surface albedo (survival probability = mean albedo, flux
 /// scaled by ρ/p, so photons keep near-equal power). Calls `on_impact` for every impact
@@ -75,54 +214,16 @@ pub fn trace_photon(
     world: &World,
     sampler: &mut impl SampleStream,
     settings: &PhotonPathSettings,
-    mut on_impact: impl FnMut(&PhotonImpact),
+    on_impact: impl FnMut(&PhotonImpact),
 ) -> PhotonPathStats {
     let mut stats = PhotonPathStats::default();
-    let Some(emission) = world.lights.sample_emission(sampler) else {
+    let Some(path) = PhotonPath::emit(world, sampler) else {
         return stats;
     };
-    let mut ray: Ray = emission.ray;
-    let mut flux = emission.flux;
     // One traversal stack for the whole path.
-    world.tracer.scoped(|tracer| {
-        for bounce in 0..=settings.max_bounces {
-            stats.rays += 1;
-            let Some(hit) =
-                world.trace_photon_hit(tracer, &ray, settings.mask, settings.filtered_textures)
-            else {
-                break;
-            };
-            if !hit.reflects {
-                break;
-            }
-            stats.impacts += 1;
-            let impact = PhotonImpact {
-                hit,
-                incoming: ray.dir,
-                flux,
-                bounce,
-            };
-            // The next ray first, the caller's bookkeeping after: the path is one chain
-            // of dependent work, and the impact's bookkeeping (independent of it) then
-            // overlaps the next traversal instead of delaying its start.
-            let u_rr = sampler.next_1d();
-            let u_dir = sampler.next_2d();
-            let p = channel_mean(hit.albedo).min(1.0);
-            let next = (p > 0.0 && u_rr < p)
-                .then(|| diffuse_direction(hit.facing_normal(), u_dir))
-                // Below the geometric surface (a shading-normal artefact): absorbed.
-                .filter(|wi| wi.dot(hit.facing_geometric_normal()) > 0.0);
-            if let Some(wi) = next {
-                // Lambertian reflection sampled by cosine: the path weight f·cosθ/pdf is ρ.
-                flux *= hit.albedo / p;
-                ray = Ray::new(hit.spawn_origin(wi), wi);
-            }
-            on_impact(&impact);
-            if next.is_none() {
-                break;
-            }
-        }
-    });
+    world
+        .tracer
+        .scoped(|tracer| path.run(world, tracer, sampler, settings, &mut stats, on_impact));
     stats
 }
 

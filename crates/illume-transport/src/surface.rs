@@ -223,11 +223,55 @@ pub struct PhotonHit {
     pub instance: InstanceId,
     /// Triangle within the instance's mesh.
     pub triangle: u32,
+    /// Barycentrics `(b1, b2)` of the hit in its triangle (see
+    /// [`Hit::barycentrics`](illume_accel::Hit)).
+    pub barycentrics: Vec2,
     /// True when the ray arrived on the front face.
     pub front_face: bool,
     /// True when the surface reflects light arriving on this side (front face, or a
     /// double-sided material).
     pub reflects: bool,
+}
+
+/// A photon's albedo and sidedness at barycentrics `b` of triangle `t` of `mesh` with
+/// material `mat`, arriving on the front face or not (see [`PhotonHit::new`]): the one
+/// formula [`PhotonHit::new`] and [`World::photon_albedo`](crate::World::photon_albedo)
+/// share, so a path re-traced with another material state gets bit-identical albedos.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) fn photon_albedo(
+    scene: &Scene,
+    tables: &HitTables,
+    mesh: &illume_scene::Mesh,
+    t: usize,
+    b: Vec2,
+    front_face: bool,
+    mat: &illume_scene::Material,
+    filtered_textures: bool,
+) -> (Rgb, bool) {
+    let reflects = front_face || mat.double_sided;
+    let albedo = match (reflects, mat.base_color_texture) {
+        (false, _) => Rgb::ZERO,
+        (true, None) => mat.base_color,
+        (true, Some(texture)) => {
+            let (b1, b2) = (b.x, b.y);
+            let b0 = 1.0 - b1 - b2;
+            let uv = if mesh.uvs.is_empty() {
+                Vec2::ZERO
+            } else {
+                let [i0, i1, i2] = mesh.indices[t].map(|i| i as usize);
+                mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2
+            };
+            let uv = mat.base_color_uv(uv);
+            let texel = if filtered_textures {
+                tables.sample_filtered(scene, texture, uv)
+            } else {
+                tables.sample(scene, texture, uv)
+            };
+            mat.base_color * texel
+        }
+    };
+    (albedo, reflects)
 }
 
 impl PhotonHit {
@@ -280,26 +324,16 @@ impl PhotonHit {
         }
         let material = mesh.triangle_materials[t];
         let mat = &scene.materials[material.index()];
-        let reflects = front_face || mat.double_sided;
-        let albedo = match (reflects, mat.base_color_texture) {
-            (false, _) => Rgb::ZERO,
-            (true, None) => mat.base_color,
-            (true, Some(texture)) => {
-                let uv = if mesh.uvs.is_empty() {
-                    Vec2::ZERO
-                } else {
-                    let [i0, i1, i2] = corners();
-                    mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2
-                };
-                let uv = mat.base_color_uv(uv);
-                let texel = if filtered_textures {
-                    tables.sample_filtered(scene, texture, uv)
-                } else {
-                    tables.sample(scene, texture, uv)
-                };
-                mat.base_color * texel
-            }
-        };
+        let (albedo, reflects) = photon_albedo(
+            scene,
+            tables,
+            mesh,
+            t,
+            hit.barycentrics,
+            front_face,
+            mat,
+            filtered_textures,
+        );
         Self {
             position,
             position_object,
@@ -308,6 +342,7 @@ impl PhotonHit {
             albedo,
             instance: hit.instance,
             triangle: hit.triangle,
+            barycentrics: hit.barycentrics,
             front_face,
             reflects,
         }

@@ -139,6 +139,31 @@ impl World {
         PhotonHit::new(&self.scene, &self.hit_tables, ray, hit, &geometry, false)
     }
 
+    /// The albedo and sidedness `hit` would have with material `material` instead of
+    /// the scene's (the same formula as [`PhotonHit::new`], bit for bit): selective
+    /// photon tracing re-traces old paths with the materials of their time.
+    /// `filtered_textures` as for [`World::trace_photon_hit`]. Returns `(albedo,
+    /// reflects)`.
+    pub fn photon_albedo(
+        &self,
+        hit: &PhotonHit,
+        material: &illume_scene::Material,
+        filtered_textures: bool,
+    ) -> (illume_core::Rgb, bool) {
+        let inst = &self.scene.instances[hit.instance.index()];
+        let mesh = &self.scene.meshes[inst.mesh.index()];
+        crate::surface::photon_albedo(
+            &self.scene,
+            &self.hit_tables,
+            mesh,
+            hit.triangle as usize,
+            hit.barycentrics,
+            hit.front_face,
+            material,
+            filtered_textures,
+        )
+    }
+
     /// Closest hit of `ray` among instances visible to `mask`, as a [`PhotonHit`], traced
     /// with `tracer` (this world's tracer, [`Tracer::scoped`]). The hit point and normal
     /// come from the tracer's copy of the triangle, still in cache, so the next photon

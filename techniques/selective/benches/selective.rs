@@ -1,0 +1,235 @@
+//! Selective photon tracing's headline measurements in kind of the paper's §7, printed
+//! as tables (recorded in BENCHMARKS.md):
+//!
+//! * `fig5` — relevant photons (those whose path changed) found as groups are
+//!   re-traced after the sphere of `builtin:cornell-spot` moves, for N_g = 72 (this
+//!   one-light scene's default) and 10 080, the sphere lit directly (in the spot's
+//!   cone) or only indirectly (outside it), priority order beside random order;
+//! * `fig7` — the same for R = 8, 16, 32, 64 at an equal pool;
+//! * `costs` — pool fill, full update after the move, restart vs re-trace after a light
+//!   move, memory per element.
+//!
+//! `cargo bench -p illume-selective [-- fig5|fig7|costs]`
+
+use illume_core::{Affine3A, Vec3};
+use illume_scene::{Edit, InstanceId, LightId};
+use illume_selective::{GroupOrder, Selective, SelectiveSettings};
+use illume_transport::{Technique, World};
+use std::time::Instant;
+
+fn sphere(world: &World) -> InstanceId {
+    InstanceId(
+        world
+            .scene
+            .instances
+            .iter()
+            .position(|i| i.name == "sphere")
+            .expect("cornell-spot has a sphere") as u32,
+    )
+}
+
+fn base(factors: Vec<[u32; 2]>, pilots: u32, ratio: u32, order: GroupOrder) -> SelectiveSettings {
+    SelectiveSettings {
+        group_factors: factors,
+        pilots_per_group: pilots,
+        ratio,
+        order,
+        warm_up: false,
+        ..SelectiveSettings::deterministic()
+    }
+}
+
+/// The sphere moved from `from` to `to` (world offsets from its place in the scene).
+fn moved_world(from: Vec3, to: Vec3) -> (World, World, Vec<illume_scene::SceneChange>) {
+    let mut old = World::new(illume_scene::builtin::load("cornell-spot").unwrap());
+    let s = sphere(&old);
+    let at = old.scene.instances[s.index()].world_from_object;
+    old.apply_edit(&Edit::SetInstanceTransform {
+        instance: s,
+        world_from_object: Affine3A::from_translation(from) * at,
+    })
+    .unwrap();
+    let mut new = old.with_scene(old.scene.clone());
+    let changes = new
+        .apply_edit(&Edit::SetInstanceTransform {
+            instance: s,
+            world_from_object: Affine3A::from_translation(to) * at,
+        })
+        .unwrap();
+    (old, new, changes)
+}
+
+/// Fraction of all relevant photons found after 10, 25, 50 % of the groups, the
+/// seconds to find 90 % of them, and the relevant total.
+fn recovery(settings: &SelectiveSettings, from: Vec3, to: Vec3) -> ([f64; 3], f64, u64) {
+    let (old, new, changes) = moved_world(from, to);
+    let mut sel = Selective::for_world(&old, settings.clone()).unwrap();
+    sel.converge(&old);
+    sel.scene_changed(&new, &changes);
+    let n_g = sel.layout().groups;
+    let mut found = Vec::with_capacity(n_g as usize);
+    let mut times = Vec::with_capacity(n_g as usize);
+    let t0 = Instant::now();
+    let start = sel.counters().photons_invalid;
+    while sel.stale_groups() > 0 {
+        sel.step(&new);
+        found.push(sel.counters().photons_invalid - start);
+        times.push(t0.elapsed().as_secs_f64());
+    }
+    let total = *found.last().unwrap_or(&0);
+    let at = |f: f64| {
+        let k = ((n_g as f64 * f).ceil() as usize).clamp(1, found.len()) - 1;
+        found[k] as f64 / total.max(1) as f64
+    };
+    let t90 = found
+        .iter()
+        .position(|&f| f as f64 >= 0.9 * total as f64)
+        .map_or(f64::NAN, |k| times[k]);
+    ([at(0.10), at(0.25), at(0.50)], t90, total)
+}
+
+fn fig5() {
+    println!(
+        "\n## fig5: relevant photons found vs groups re-traced (cornell-spot, sphere moved 0.3 m)"
+    );
+    println!(
+        "| N_g | sphere | order | found @10 % | @25 % | @50 % of groups | s to 90 % | relevant |"
+    );
+    println!("|---|---|---|---:|---:|---:|---:|---:|");
+    // Under the spot (lit directly) and in the corner away from the cone (indirectly).
+    let cases = [
+        ("direct", Vec3::ZERO, Vec3::new(0.3, 0.0, 0.0)),
+        (
+            "indirect",
+            Vec3::new(-0.55, 0.0, 0.6),
+            Vec3::new(-0.55, 0.0, 0.3),
+        ),
+    ];
+    for (name, factors) in [
+        ("72 (2^3·3^2)", vec![[2, 3], [3, 2]]),
+        ("10 080", vec![[2, 5], [3, 2], [5, 1], [7, 1]]),
+    ] {
+        // Equal pools: 1.15 M photons.
+        let pilots = if factors.len() == 2 { 1000 } else { 8 };
+        for (lit, from, to) in cases {
+            for order in [GroupOrder::Priority, GroupOrder::Random] {
+                let s = base(factors.clone(), pilots, 16, order);
+                let (f, t90, total) = recovery(&s, from, to);
+                println!(
+                    "| {name} | {lit} | {order:?} | {:.2} | {:.2} | {:.2} | {t90:.2} | {total} |",
+                    f[0], f[1], f[2]
+                );
+            }
+        }
+    }
+}
+
+fn fig7() {
+    println!(
+        "\n## fig7: pilot ratio R at an equal pool (N_g = 72, N = 1 152 000, sphere lit directly)"
+    );
+    println!("| R | N_p | pilots | found @10 % | @25 % | @50 % of groups | s to 90 % |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|");
+    for ratio in [8u32, 16, 32, 64] {
+        let pilots = 16_000 / ratio;
+        let s = base(vec![[2, 3], [3, 2]], pilots, ratio, GroupOrder::Priority);
+        let (f, t90, _) = recovery(&s, Vec3::ZERO, Vec3::new(0.3, 0.0, 0.0));
+        println!(
+            "| {ratio} | {pilots} | {:.2} % | {:.2} | {:.2} | {:.2} | {t90:.2} |",
+            100.0 / ratio as f64,
+            f[0],
+            f[1],
+            f[2]
+        );
+    }
+}
+
+fn costs() {
+    println!(
+        "\n## costs (cornell-spot, N_g = 72, N_p = 1000, R = 16: 1 152 000 photons, 12 400 elements)"
+    );
+    let s = base(Vec::new(), 1000, 16, GroupOrder::Priority);
+    let (old, new, changes) = moved_world(Vec3::ZERO, Vec3::new(0.3, 0.0, 0.0));
+    let t = Instant::now();
+    let mut sel = Selective::for_world(&old, s.clone()).unwrap();
+    sel.converge(&old);
+    let fill = t.elapsed().as_secs_f64();
+    let rays_fill = sel.counters().rays;
+    sel.scene_changed(&new, &changes);
+    let before = sel.counters();
+    let t = Instant::now();
+    sel.converge(&new);
+    let update = t.elapsed().as_secs_f64();
+    let after = sel.counters();
+    let invalid = after.photons_invalid - before.photons_invalid;
+    let per_photon_fill = rays_fill as f64 / sel.layout().pool() as f64;
+    println!("| what | value |");
+    println!("|---|---:|");
+    println!(
+        "| fill the pool | {fill:.3} s ({:.2} M photons/s) |",
+        sel.layout().pool() as f64 / fill / 1e6
+    );
+    println!(
+        "| update after the sphere move (all {} groups) | {update:.3} s = {:.2} × a fill |",
+        sel.layout().groups,
+        update / fill
+    );
+    println!(
+        "| photons found invalid | {invalid} ({:.2} %) |",
+        100.0 * invalid as f64 / sel.layout().pool() as f64
+    );
+    println!(
+        "| rays per pool photon: fill / update | {per_photon_fill:.2} / {:.2} |",
+        (after.rays - before.rays) as f64 / sel.layout().pool() as f64
+    );
+    println!(
+        "| memory: accumulators per element | {} B (+ display grid) |",
+        2 * std::mem::size_of::<illume_transport::flux::Quanta>()
+    );
+    // Light move: re-trace (restart_fraction 1) vs restart (default).
+    for (name, fraction) in [("re-trace", 1.0f32), ("restart", 0.5)] {
+        let settings = SelectiveSettings {
+            restart_fraction: fraction,
+            ..s.clone()
+        };
+        let mut w = World::new(illume_scene::builtin::load("cornell-spot").unwrap());
+        let mut sel = Selective::for_world(&w, settings).unwrap();
+        sel.converge(&w);
+        let node = w.scene.lights[0].node;
+        let at = w.scene.nodes[node.index()].world_from_node;
+        let changes = w
+            .apply_edit(&Edit::SetLightTransform {
+                light: LightId(0),
+                world_from_light: Affine3A::from_translation(Vec3::new(0.2, 0.0, 0.0)) * at,
+            })
+            .unwrap();
+        let t = Instant::now();
+        sel.scene_changed(&w, &changes);
+        sel.converge(&w);
+        println!(
+            "| light moved, {name} until current | {:.3} s |",
+            t.elapsed().as_secs_f64()
+        );
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let want = |name: &str| args.is_empty() || args.iter().any(|a| a == name);
+    println!(
+        "machine: {} threads available",
+        std::thread::available_parallelism().map_or(0, |n| n.get())
+    );
+    if want("fig5") {
+        fig5();
+    }
+    if want("fig7") {
+        fig7();
+    }
+    if want("costs") {
+        costs();
+    }
+}

@@ -1,0 +1,358 @@
+//! Mesh elements: the buckets photons are counted in (§1, §3) and the Gouraud display
+//! of their irradiance (§6).
+//!
+//! Every triangle is split into a k×k barycentric grid of k² equal sub-triangles (k
+//! from its object-space area, so the scene holds about `element_count` elements, at
+//! least one per triangle). A grid cell `(i, j)` (i along b₁, j along b₂, i + j < k)
+//! holds a lower sub-triangle and, when i + j < k − 1, an upper one; element `e =
+//! j(2k − j) + 2i + upper` within the triangle. Instances of one mesh share its grid but
+//! each has its own accumulators (elements live in object space and move with their
+//! object).
+//!
+//! **Display.** Element-grid vertices of one mesh at the same object-space point whose
+//! triangles' normals lie within `smoothing_angle_deg` are welded into one display
+//! vertex; its irradiance is the area-weighted mean of the elements around it,
+//! Σ Φ / (N·Σ A), and a pixel interpolates its element's three corners (the paper's
+//! Gouraud shading of the mesh).
+
+use illume_core::{Affine3A, Rgb, Vec2, Vec3};
+use illume_scene::{Mesh, Scene};
+use illume_transport::flux::Quanta;
+use std::collections::HashMap;
+
+/// Largest grid side k per triangle (k² elements).
+pub const MAX_K: u32 = 256;
+
+/// Elements and display vertices of one mesh.
+#[derive(Clone, Debug, Default)]
+pub struct MeshGrid {
+    /// Grid side per triangle.
+    pub k: Vec<u32>,
+    /// First element of each triangle (prefix sums of k²), then the total.
+    pub first_element: Vec<u32>,
+    /// First grid vertex of each triangle in `vertex_ids` ((k+1)(k+2)/2 each).
+    first_grid_vertex: Vec<u32>,
+    /// Welded display vertex of every triangle's grid vertex.
+    vertex_ids: Vec<u32>,
+    /// Display vertices.
+    pub vertex_count: u32,
+}
+
+/// Index of grid vertex `(a, b)` (a along b₁, b along b₂, a + b ≤ k) in its triangle.
+#[inline]
+fn grid_vertex(k: u32, a: u32, b: u32) -> u32 {
+    b * (k + 1) - b * (b.saturating_sub(1)) / 2 + a
+}
+
+/// The element of barycentrics `b = (b₁, b₂)` in a k-grid, and the point's weights on
+/// the element's three grid corners with their `(a, b)` coordinates.
+#[inline]
+pub fn locate(k: u32, b: Vec2) -> (u32, [(u32, u32, f32); 3]) {
+    let kf = k as f32;
+    let x = (b.x * kf).clamp(0.0, kf);
+    let y = (b.y * kf).clamp(0.0, kf);
+    let j = (y as u32).min(k - 1);
+    let i = (x as u32).min(k - 1 - j);
+    let fx = x - i as f32;
+    let fy = y - j as f32;
+    let upper = fx + fy > 1.0 && i + j + 1 < k;
+    let e = j * (2 * k - j) + 2 * i + upper as u32;
+    let corners = if upper {
+        [
+            (i + 1, j, 1.0 - fy),
+            (i + 1, j + 1, fx + fy - 1.0),
+            (i, j + 1, 1.0 - fx),
+        ]
+    } else {
+        [(i, j, 1.0 - fx - fy), (i + 1, j, fx), (i, j + 1, fy)]
+    };
+    (e, corners)
+}
+
+/// The barycentric centre of element `e` of a k-grid (the inverse of [`locate`]).
+pub fn element_centre(k: u32, e: u32) -> Vec2 {
+    // Row j holds 2(k − j) − 1 elements starting at j(2k − j).
+    let mut j = 0;
+    while j + 1 < k && (j + 1) * (2 * k - (j + 1)) <= e {
+        j += 1;
+    }
+    let r = e - j * (2 * k - j);
+    let (i, upper) = (r / 2, r % 2 == 1);
+    let kf = k as f32;
+    if upper {
+        Vec2::new((i as f32 + 2.0 / 3.0) / kf, (j as f32 + 2.0 / 3.0) / kf)
+    } else {
+        Vec2::new((i as f32 + 1.0 / 3.0) / kf, (j as f32 + 1.0 / 3.0) / kf)
+    }
+}
+
+/// The three grid corners of element `e` of a k-grid.
+fn element_corners(k: u32, e: u32) -> [(u32, u32); 3] {
+    let c = element_centre(k, e);
+    let (_, corners) = locate(k, c);
+    corners.map(|(a, b, _)| (a, b))
+}
+
+fn object_area(mesh: &Mesh, t: usize) -> f32 {
+    let [a, b, c] = mesh.indices[t].map(|i| mesh.positions[i as usize]);
+    0.5 * (b - a).cross(c - a).length()
+}
+
+impl MeshGrid {
+    /// The grid of `mesh` for a target element area `target` (object space), with
+    /// display vertices welded within `cos_smooth`.
+    fn new(mesh: &Mesh, target: f64, cos_smooth: f32) -> Self {
+        let n = mesh.indices.len();
+        let mut k = Vec::with_capacity(n);
+        let mut first_element = Vec::with_capacity(n + 1);
+        let mut first_grid_vertex = Vec::with_capacity(n + 1);
+        let (mut elements, mut grid) = (0u32, 0u32);
+        for t in 0..n {
+            let a = object_area(mesh, t) as f64;
+            let side = if target > 0.0 && a > 0.0 {
+                ((a / target).sqrt().round() as u32).clamp(1, MAX_K)
+            } else {
+                1
+            };
+            k.push(side);
+            first_element.push(elements);
+            first_grid_vertex.push(grid);
+            elements = elements.saturating_add(side * side);
+            grid = grid.saturating_add((side + 1) * (side + 2) / 2);
+        }
+        first_element.push(elements);
+        first_grid_vertex.push(grid);
+        // Weld grid vertices: quantized object-space position, then normal clusters.
+        let (lo, hi) = mesh.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(l, h), p| (l.min(*p), h.max(*p)),
+        );
+        let cell = ((hi - lo).length() as f64 * 1e-5).max(1e-12);
+        let mut clusters: HashMap<[i64; 3], Vec<(u32, Vec3)>> = HashMap::new();
+        let mut vertex_ids = Vec::with_capacity(grid as usize);
+        let mut vertex_count = 0u32;
+        for (tri, &side) in mesh.indices.iter().zip(&k) {
+            let [p0, p1, p2] = tri.map(|i| mesh.positions[i as usize]);
+            let normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+            for b in 0..=side {
+                for a in 0..=(side - b) {
+                    let p = p0
+                        + (p1 - p0) * (a as f32 / side as f32)
+                        + (p2 - p0) * (b as f32 / side as f32);
+                    let key = [p.x, p.y, p.z].map(|c| (c as f64 / cell).round() as i64);
+                    let list = clusters.entry(key).or_default();
+                    let found = if normal == Vec3::ZERO {
+                        None
+                    } else {
+                        list.iter()
+                            .find(|(_, n)| n.dot(normal) >= cos_smooth)
+                            .map(|c| c.0)
+                    };
+                    let id = found.unwrap_or_else(|| {
+                        let id = vertex_count;
+                        vertex_count += 1;
+                        list.push((id, normal));
+                        id
+                    });
+                    vertex_ids.push(id);
+                }
+            }
+        }
+        Self {
+            k,
+            first_element,
+            first_grid_vertex,
+            vertex_ids,
+            vertex_count,
+        }
+    }
+
+    /// Elements of the mesh.
+    pub fn element_count(&self) -> u32 {
+        *self.first_element.last().unwrap_or(&0)
+    }
+
+    /// Display vertex of grid vertex `(a, b)` of triangle `t`.
+    #[inline]
+    fn vertex(&self, t: usize, a: u32, b: u32) -> u32 {
+        self.vertex_ids[(self.first_grid_vertex[t] + grid_vertex(self.k[t], a, b)) as usize]
+    }
+}
+
+/// Every mesh's grid and every instance's accumulator range.
+#[derive(Clone, Debug)]
+pub struct Elements {
+    /// Per mesh.
+    pub grids: Vec<MeshGrid>,
+    /// First accumulator of each instance, then the total.
+    pub instance_first: Vec<u32>,
+    /// First display vertex of each instance, then the total.
+    instance_first_vertex: Vec<u32>,
+}
+
+impl Elements {
+    /// Grids for about `element_count` elements over the scene's instances (by object
+    /// space area), display vertices welded within `smoothing_angle_deg`.
+    pub fn new(scene: &Scene, element_count: u32, smoothing_angle_deg: f32) -> Self {
+        let mesh_area: Vec<f64> = scene
+            .meshes
+            .iter()
+            .map(|m| (0..m.indices.len()).map(|t| object_area(m, t) as f64).sum())
+            .collect();
+        let total: f64 = scene
+            .instances
+            .iter()
+            .map(|i| mesh_area[i.mesh.index()])
+            .sum();
+        let target = total / element_count.max(1) as f64;
+        let cos_smooth = smoothing_angle_deg.to_radians().cos() - 1e-6;
+        let grids: Vec<MeshGrid> = scene
+            .meshes
+            .iter()
+            .map(|m| MeshGrid::new(m, target, cos_smooth))
+            .collect();
+        let mut instance_first = Vec::with_capacity(scene.instances.len() + 1);
+        let mut instance_first_vertex = Vec::with_capacity(scene.instances.len() + 1);
+        let (mut e, mut v) = (0u32, 0u32);
+        for inst in &scene.instances {
+            instance_first.push(e);
+            instance_first_vertex.push(v);
+            let g = &grids[inst.mesh.index()];
+            e = e.saturating_add(g.element_count());
+            v = v.saturating_add(g.vertex_count);
+        }
+        instance_first.push(e);
+        instance_first_vertex.push(v);
+        Self {
+            grids,
+            instance_first,
+            instance_first_vertex,
+        }
+    }
+
+    /// Total elements (accumulators hold a front and a back side each).
+    pub fn len(&self) -> usize {
+        *self.instance_first.last().unwrap_or(&0) as usize
+    }
+
+    /// True without elements.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Instances the elements were built for.
+    pub fn instances(&self) -> usize {
+        self.instance_first.len() - 1
+    }
+
+    /// The accumulator of the point at barycentrics `b` of triangle `t` of `instance`
+    /// (whose mesh is `mesh`).
+    #[inline]
+    pub fn element(&self, instance: usize, mesh: usize, t: usize, b: Vec2) -> u32 {
+        let g = &self.grids[mesh];
+        let (e, _) = locate(g.k[t], b);
+        self.instance_first[instance] + g.first_element[t] + e
+    }
+
+    /// Per-vertex irradiance of every instance from the accumulators (`front`/`back`
+    /// per element, in quanta of `quantum_w` watts) for `photons` photons.
+    pub fn display(
+        &self,
+        scene: &Scene,
+        accumulators: &[[Quanta; 2]],
+        quantum_w: f64,
+        photons: u64,
+    ) -> Display {
+        let vertices = *self.instance_first_vertex.last().unwrap_or(&0) as usize;
+        let mut flux = vec![[[0.0f64; 3]; 2]; vertices];
+        let mut area = vec![0.0f64; vertices];
+        let scale = if photons > 0 {
+            quantum_w / photons as f64
+        } else {
+            0.0
+        };
+        for (ii, inst) in scene.instances.iter().enumerate().take(self.instances()) {
+            if inst.mask == 0 {
+                continue;
+            }
+            let mesh = &scene.meshes[inst.mesh.index()];
+            let g = &self.grids[inst.mesh.index()];
+            let v0 = self.instance_first_vertex[ii] as usize;
+            let a0 = self.instance_first[ii] as usize;
+            for t in 0..mesh.indices.len() {
+                let k = g.k[t];
+                let elems = k * k;
+                let a_e = world_area(mesh, t, &inst.world_from_object) as f64 / elems as f64;
+                for e in 0..elems {
+                    let acc = &accumulators[a0 + (g.first_element[t] + e) as usize];
+                    for (a, b) in element_corners(k, e) {
+                        let v = v0 + g.vertex(t, a, b) as usize;
+                        area[v] += a_e;
+                        for (f, q) in flux[v].iter_mut().zip(acc) {
+                            for (fc, qc) in f.iter_mut().zip(q.0) {
+                                *fc += qc as f64 * scale;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let irradiance = flux
+            .iter()
+            .zip(&area)
+            .map(|(f, &a)| {
+                let e = |s: usize| {
+                    if a > 0.0 {
+                        Rgb::new(
+                            (f[s][0] / a) as f32,
+                            (f[s][1] / a) as f32,
+                            (f[s][2] / a) as f32,
+                        )
+                    } else {
+                        Rgb::ZERO
+                    }
+                };
+                [e(0), e(1)]
+            })
+            .collect();
+        Display { irradiance }
+    }
+
+    /// Irradiance \[W/m²\] at barycentrics `b` of triangle `t` of `instance` (mesh `mesh`)
+    /// on its front (`front`) or back side, interpolated from `display`.
+    #[inline]
+    pub fn irradiance(
+        &self,
+        display: &Display,
+        instance: usize,
+        mesh: usize,
+        t: usize,
+        b: Vec2,
+        front: bool,
+    ) -> Rgb {
+        if instance >= self.instances() {
+            return Rgb::ZERO;
+        }
+        let g = &self.grids[mesh];
+        let (_, corners) = locate(g.k[t], b);
+        let v0 = self.instance_first_vertex[instance] as usize;
+        let side = if front { 0 } else { 1 };
+        corners.iter().fold(Rgb::ZERO, |acc, &(a, bb, w)| {
+            acc + display.irradiance[v0 + g.vertex(t, a, bb) as usize][side] * w
+        })
+    }
+}
+
+/// World-space area of triangle `t` of `mesh` placed by `world_from_object`.
+pub fn world_area(mesh: &Mesh, t: usize, world_from_object: &Affine3A) -> f32 {
+    let [a, b, c] =
+        mesh.indices[t].map(|i| world_from_object.transform_point3(mesh.positions[i as usize]));
+    0.5 * (b - a).cross(c - a).length()
+}
+
+/// Per display vertex, front and back irradiance \[W/m²\].
+#[derive(Clone, Debug, Default)]
+pub struct Display {
+    /// `[front, back]` per vertex, instances one after another.
+    pub irradiance: Vec<[Rgb; 2]>,
+}

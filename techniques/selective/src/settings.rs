@@ -1,0 +1,328 @@
+//! Settings of selective photon tracing (`[selective]` table), written as a tuning guide.
+//!
+//! Defaults are the paper's values where it gives one (§5.1, §7).
+
+use illume_transport::{Budget, Pacing, TechniqueSettings};
+use serde::{Deserialize, Serialize};
+
+/// The order in which stale photon groups are re-traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum GroupOrder {
+    /// §5.3: the stale group with the highest V·P (pilot hits on changed objects, times
+    /// pilot hits in the view frustum) first; ties in index order after the last group.
+    #[default]
+    Priority,
+    /// Stale groups in a random order (the baseline of the paper's Figures 5 and 7).
+    Random,
+    /// Stale groups in index order.
+    Index,
+}
+
+/// How the simulation is paced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SelectiveMode {
+    /// Groups re-traced between frames within a wall-clock budget per frame
+    /// ([`SelectiveSettings::frame_budget_ms`] or the frame loop's `Budget::time_ms`), on
+    /// the frame thread and rayon: the paper's progressive refinement, frames show the
+    /// partly updated state.
+    #[default]
+    Timed,
+    /// Groups re-traced between frames until [`SelectiveSettings::photons_per_frame`]
+    /// photons (or the frame loop's `Budget::work`) were traced: the same settings give
+    /// the same frames bit for bit.
+    Deterministic,
+}
+
+/// Selective photon tracing settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SelectiveSettings {
+    /// N_g as `[base, exponent]` pairs, N_g = Π base^exponent (§4.2 Eq. 5): corrective
+    /// photons of one group agree to within base^−exponent in the Halton dimension of
+    /// that base (Eq. 3). Bases are the primes of the dimensions photons read, in order:
+    /// 2 light choice (remapped into the first emission coordinate), 3 the second
+    /// emission coordinate, 5 and 7 the first bounce's roulette-and-direction, … (§4.1).
+    /// Higher exponents: more, smaller, more coherent groups (a change is found in fewer
+    /// photons), at the cost of more groups to cycle through after a change (N_g groups
+    /// until every photon is current). Empty (default): 2^(3+⌈log₂ L⌉)·3² for L lights,
+    /// an emissive object counting as one (§7: 4 lights → 288, 2 → 144). `[[2, 5], [3,
+    /// 2], [5, 1], [7, 1]]` (10 080) also keeps the first bounce coherent (Fig. 5).
+    pub group_factors: Vec<[u32; 2]>,
+    /// N_p, pilot photons per group (§5.1). Pilots sample the whole photon space and
+    /// find the groups a change concerns; higher: a more reliable priority, at the cost
+    /// of photons shot in no particular order. ≥ 2, default 250 (§7, ROOM).
+    pub pilots_per_group: u32,
+    /// R, photons per group over pilots per group (§5.1): pool size N = N_g·N_p·R,
+    /// 1/R of it pilots. The paper finds 16 (6.25 % pilots) near optimal and 32 not
+    /// robust (Fig. 7). ≥ 2, default 16.
+    pub ratio: u32,
+    /// Mesh elements to bucket photons in, about (§1, §3): each triangle is split into
+    /// a k×k barycentric grid of equal sub-triangles, k chosen by its area, at least one
+    /// element per triangle. Higher: sharper indirect light, at the cost of more noise
+    /// per element (photons are shared among more buckets) and memory (48 B per
+    /// element side pair). Default 12 400 (§7, ROOM).
+    pub element_count: u32,
+    /// Element-grid vertices of one object within this angle of each other's face
+    /// normal \[degrees\] are one display vertex (Gouraud smoothing across triangles,
+    /// §6). Higher: smoother across creases, at the cost of light bleeding around
+    /// corners. 0–180, default 45.
+    pub smoothing_angle_deg: f32,
+    /// Order of re-tracing stale groups (§5.3). Default [`GroupOrder::Priority`].
+    pub order: GroupOrder,
+    /// Pilot photons shot since the last camera move before the view-frustum factor V
+    /// counts (§5.3, "sufficient for its robust estimate"); until then V = 1. Higher:
+    /// a steadier V, at the cost of a longer time blind to the view. Default 2000.
+    pub visibility_min_pilots: u32,
+    /// Priority given to the view frustum (§5.3): a stale group's V is 1 + this ×
+    /// (its pilot hits in the frustum) / (its pilots shot). 0 ignores the view. Default 4.
+    pub visibility_weight: f32,
+    /// Fraction of the scene's power carried by changed lights above which a light
+    /// change restarts the solution (photons in index order, shown normalised by the
+    /// photons traced) instead of re-tracing every photon of those lights with negative
+    /// and positive energy, which costs twice a fresh trace (beyond the paper, which
+    /// supports no light changes). In [0, 1]; 0 restarts on any light change, 1 never
+    /// restarts. Default 0.5: moving the only light restarts.
+    pub restart_fraction: f32,
+    /// Pacing: wall-clock budget per frame, or photons per frame. Default
+    /// [`SelectiveMode::Timed`].
+    pub mode: SelectiveMode,
+    /// Wall-clock budget for re-tracing between two frames in [`SelectiveMode::Timed`]
+    /// when the frame loop gives none \[ms\]. Higher: faster recovery after a change, at
+    /// the cost of frame rate. Groups are atomic, so a frame may overrun by one group.
+    /// Default 25.
+    pub frame_budget_ms: f64,
+    /// Photons traced between two frames in [`SelectiveMode::Deterministic`] when the
+    /// frame loop's budget does not say (whole groups, so a frame may overrun by one
+    /// group). Default 100 000.
+    pub photons_per_frame: u64,
+    /// Trace the whole pool before the first frame. False: frames start dark and
+    /// brighten as photons are traced in index order (shown normalised by the photons
+    /// traced). Default true.
+    pub warm_up: bool,
+    /// Longest photon path in bounces, a safety net behind Russian roulette. Default 32.
+    pub max_bounces: u32,
+    /// Photons read base-colour textures through box-filtered copies (see
+    /// `photon_stream.filtered_textures`): element buckets are far larger than a
+    /// filtered texel. Default true.
+    pub filtered_textures: bool,
+    /// Seed of the Halton digit scrambling (scrambling keeps Eq. 3). Default 0.
+    pub seed: u64,
+}
+
+impl Default for SelectiveSettings {
+    fn default() -> Self {
+        Self {
+            group_factors: Vec::new(),
+            pilots_per_group: 250,
+            ratio: 16,
+            element_count: 12_400,
+            smoothing_angle_deg: 45.0,
+            order: GroupOrder::Priority,
+            visibility_min_pilots: 2000,
+            visibility_weight: 4.0,
+            restart_fraction: 0.5,
+            mode: SelectiveMode::Timed,
+            frame_budget_ms: 25.0,
+            photons_per_frame: 100_000,
+            warm_up: true,
+            max_bounces: 32,
+            filtered_textures: true,
+            seed: 0,
+        }
+    }
+}
+
+/// Largest N_g accepted (2²⁰): group bookkeeping is per group, and larger N_g leave
+/// too few correctives per group to be worth a pilot pass.
+pub const MAX_GROUPS: u64 = 1 << 20;
+
+/// Largest pool accepted (N_g·N_p·R photons): 2³² photons take hours to trace once.
+pub const MAX_POOL: u64 = 1 << 32;
+
+/// Most mesh elements accepted (`element_count`): 48 B each plus the display grid.
+pub const MAX_ELEMENTS: u32 = 50_000_000;
+
+impl SelectiveSettings {
+    /// Preset for tests and reproducible animations: photons per frame instead of a
+    /// wall-clock budget.
+    pub fn deterministic() -> Self {
+        Self {
+            mode: SelectiveMode::Deterministic,
+            ..Self::default()
+        }
+    }
+
+    /// Preset for stills: 4× the pool (R = 16, N_p = 1000) and 4× the elements,
+    /// deterministic.
+    pub fn quality() -> Self {
+        Self {
+            pilots_per_group: 1000,
+            element_count: 50_000,
+            mode: SelectiveMode::Deterministic,
+            ..Self::default()
+        }
+    }
+
+    /// The photon paths these settings ask for (roulette remapped, §4.1).
+    pub fn photon_path(&self) -> illume_transport::photon::PhotonPathSettings {
+        illume_transport::photon::PhotonPathSettings {
+            max_bounces: self.max_bounces,
+            filtered_textures: self.filtered_textures,
+            remap_roulette: true,
+            ..Default::default()
+        }
+    }
+
+    /// Checks every value; the error names the field.
+    pub fn validate(&self) -> Result<(), crate::SelectiveError> {
+        let bad = |field: &'static str, reason: String| {
+            Err(crate::SelectiveError::InvalidSetting { field, reason })
+        };
+        if self.pilots_per_group < 2 {
+            return bad(
+                "pilots_per_group",
+                format!("{} is less than 2", self.pilots_per_group),
+            );
+        }
+        if self.ratio < 2 {
+            return bad("ratio", format!("{} is less than 2", self.ratio));
+        }
+        let mut n_g: u64 = 1;
+        for &[base, exponent] in &self.group_factors {
+            let Some(dim) = illume_core::sampling::PRIMES
+                .iter()
+                .take(crate::qmc::MAPPED_DIMENSIONS)
+                .position(|&p| p == base)
+            else {
+                return bad(
+                    "group_factors",
+                    format!(
+                        "base {base} is not one of the mapped Halton bases {:?}",
+                        &illume_core::sampling::PRIMES[..crate::qmc::MAPPED_DIMENSIONS]
+                    ),
+                );
+            };
+            let _ = dim;
+            for _ in 0..exponent {
+                n_g = n_g.saturating_mul(base as u64);
+                if n_g > MAX_GROUPS {
+                    return bad(
+                        "group_factors",
+                        format!("N_g exceeds 2^20 = {MAX_GROUPS} groups"),
+                    );
+                }
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        if let Some(&[base, _]) = self.group_factors.iter().find(|f| !seen.insert(f[0])) {
+            return bad("group_factors", format!("base {base} appears twice"));
+        }
+        let pool = n_g
+            .saturating_mul(self.pilots_per_group as u64)
+            .saturating_mul(self.ratio as u64);
+        if pool > MAX_POOL {
+            return bad(
+                "pilots_per_group",
+                format!("N_g·N_p·R = {pool} photons exceeds {MAX_POOL}"),
+            );
+        }
+        if self.element_count == 0 || self.element_count > MAX_ELEMENTS {
+            return bad(
+                "element_count",
+                format!("{} is not in 1..={MAX_ELEMENTS}", self.element_count),
+            );
+        }
+        if !(0.0..=180.0).contains(&self.smoothing_angle_deg) {
+            return bad(
+                "smoothing_angle_deg",
+                format!("{} is not in [0, 180]", self.smoothing_angle_deg),
+            );
+        }
+        if !(self.visibility_weight >= 0.0 && self.visibility_weight.is_finite()) {
+            return bad(
+                "visibility_weight",
+                format!("{} is not a finite number ≥ 0", self.visibility_weight),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.restart_fraction) {
+            return bad(
+                "restart_fraction",
+                format!("{} is not in [0, 1]", self.restart_fraction),
+            );
+        }
+        if !(self.frame_budget_ms > 0.0 && self.frame_budget_ms <= 3.6e6) {
+            return bad(
+                "frame_budget_ms",
+                format!("{} is not in (0, 3 600 000]", self.frame_budget_ms),
+            );
+        }
+        if self.photons_per_frame == 0 {
+            return bad("photons_per_frame", "must be at least 1".into());
+        }
+        Ok(())
+    }
+}
+
+impl TechniqueSettings for SelectiveSettings {
+    const NAME: &'static str = crate::NAME;
+    const WORK_UNIT: &'static str = "photons";
+
+    fn presets() -> &'static [(&'static str, &'static str)] {
+        &[
+            (
+                "default",
+                "the paper's values: N_p = 250, R = 16, 12 400 elements, 25 ms of re-tracing per frame",
+            ),
+            (
+                "deterministic",
+                "the defaults, 100 000 photons per frame: reproducible frames",
+            ),
+            (
+                "quality",
+                "N_p = 1000 (4× the pool), 50 000 elements, deterministic: `render`'s default",
+            ),
+        ]
+    }
+
+    fn preset(name: &str) -> Option<Self> {
+        match name {
+            "default" => Some(Self::default()),
+            "deterministic" => Some(Self::deterministic()),
+            "quality" | "still" => Some(Self::quality()),
+            _ => None,
+        }
+    }
+
+    /// Real time: [`SelectiveMode::Timed`]. A fixed amount of work:
+    /// [`SelectiveMode::Deterministic`], `work_per_frame` photons between frames.
+    fn pace(&mut self, pacing: Pacing) {
+        match pacing {
+            Pacing::RealTime => self.mode = SelectiveMode::Timed,
+            Pacing::FixedWork { work_per_frame } => {
+                self.mode = SelectiveMode::Deterministic;
+                if let Some(n) = work_per_frame {
+                    self.photons_per_frame = n;
+                }
+            }
+        }
+    }
+
+    fn default_budget(&self) -> Budget {
+        match self.mode {
+            SelectiveMode::Timed => Budget {
+                work: None,
+                time_ms: Some(self.frame_budget_ms),
+            },
+            SelectiveMode::Deterministic => Budget {
+                work: Some(self.photons_per_frame),
+                time_ms: None,
+            },
+        }
+    }
+
+    fn set_seed(&mut self, seed: u64) {
+        self.seed = seed;
+    }
+}

@@ -1,0 +1,74 @@
+//! Scene changes → invalidation (§5.2, and light changes beyond the paper).
+//!
+//! * `InstanceMoved`, `InstanceRemoved`, `MaterialChanged` (the paper's BSDF phantom),
+//!   `LightChanged`: a new current snapshot; every group shot in an older one is stale
+//!   and will be re-traced (selectively, most important first).
+//! * A light change whose changed lights carry at least `restart_fraction` of the
+//!   scene's power: re-tracing costs twice a fresh pool, so the solution restarts (all
+//!   accumulators cleared, photons traced again in index order).
+//! * `CameraMoved`: only the view-frustum factor V is reset (§5.3).
+//! * `InstanceAdded`: a rebuild — mesh elements are laid out once for the instances
+//!   present at construction.
+
+use crate::retrace::Snapshot;
+use illume_scene::SceneChange;
+
+/// What a list of changes asks of the technique.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Invalidation {
+    /// Nothing photons see changed.
+    None,
+    /// Only the camera moved: reset V.
+    Camera,
+    /// Photons may have changed: a new snapshot.
+    Lighting,
+    /// Build anew.
+    Rebuild(&'static str),
+}
+
+/// Classifies `changes`.
+pub fn classify(changes: &[SceneChange]) -> Invalidation {
+    if changes
+        .iter()
+        .any(|c| matches!(c, SceneChange::InstanceAdded { .. }))
+    {
+        return Invalidation::Rebuild("an added object has no mesh elements (laid out at start)");
+    }
+    if changes
+        .iter()
+        .any(|c| !matches!(c, SceneChange::CameraMoved { .. }))
+    {
+        return Invalidation::Lighting;
+    }
+    if changes.is_empty() {
+        Invalidation::None
+    } else {
+        Invalidation::Camera
+    }
+}
+
+/// The fraction of `new`'s light power carried by lights that differ from `old`
+/// (added, changed or moved; lights that vanished count with their old power over the
+/// larger total). 0 when no light changed.
+pub fn changed_light_fraction(old: &Snapshot, new: &Snapshot) -> f64 {
+    let total_new: f64 = new.cells.units().iter().map(|u| u.power).sum();
+    let total_old: f64 = old.cells.units().iter().map(|u| u.power).sum();
+    let mut changed = 0.0;
+    for u in new.cells.units() {
+        match old.cells.units().iter().find(|o| o.key == u.key) {
+            Some(o) if o.signature == u.signature => {}
+            _ => changed += u.power,
+        }
+    }
+    for o in old.cells.units() {
+        if !new.cells.units().iter().any(|u| u.key == o.key) {
+            changed += o.power;
+        }
+    }
+    let total = total_new.max(total_old);
+    if total > 0.0 {
+        (changed / total).min(1.0)
+    } else {
+        0.0
+    }
+}
