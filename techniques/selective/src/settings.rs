@@ -281,8 +281,9 @@ impl TechniqueSettings for SelectiveSettings {
             ),
             (
                 "quality",
-                "N_p = 1000 (4× the pool), 50 000 elements, deterministic: `render`'s default",
+                "N_p = 1000 (4× the pool), 50 000 elements, deterministic",
             ),
+            ("still", "quality: `render`'s default"),
         ]
     }
 
@@ -324,5 +325,87 @@ impl TechniqueSettings for SelectiveSettings {
 
     fn set_seed(&mut self, seed: u64) {
         self.seed = seed;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invalid_settings_name_their_key() {
+        let cases: Vec<(SelectiveSettings, &str)> = vec![
+            (
+                SelectiveSettings {
+                    pilots_per_group: 1,
+                    ..Default::default()
+                },
+                "selective.pilots_per_group",
+            ),
+            (
+                SelectiveSettings {
+                    ratio: 1,
+                    ..Default::default()
+                },
+                "selective.ratio",
+            ),
+            (
+                SelectiveSettings {
+                    group_factors: vec![[2, 21]],
+                    ..Default::default()
+                },
+                "selective.group_factors: N_g exceeds 2^20",
+            ),
+            (
+                SelectiveSettings {
+                    group_factors: vec![[4, 1]],
+                    ..Default::default()
+                },
+                "selective.group_factors: base 4",
+            ),
+            (
+                SelectiveSettings {
+                    group_factors: vec![[331, 1]],
+                    ..Default::default()
+                },
+                "selective.group_factors: base 331",
+            ),
+            (
+                SelectiveSettings {
+                    element_count: 0,
+                    ..Default::default()
+                },
+                "selective.element_count",
+            ),
+            (
+                SelectiveSettings {
+                    restart_fraction: 1.5,
+                    ..Default::default()
+                },
+                "selective.restart_fraction",
+            ),
+            (
+                SelectiveSettings {
+                    restart_fraction: f32::NAN,
+                    ..Default::default()
+                },
+                "selective.restart_fraction",
+            ),
+            (
+                SelectiveSettings {
+                    frame_budget_ms: 0.0,
+                    ..Default::default()
+                },
+                "selective.frame_budget_ms",
+            ),
+        ];
+        for (s, want) in cases {
+            let e = s.validate().expect_err(want).to_string();
+            assert!(e.starts_with(want), "{e} should start with {want}");
+        }
+        SelectiveSettings::default().validate().unwrap();
+        for (name, _) in SelectiveSettings::presets() {
+            SelectiveSettings::preset(name).unwrap().validate().unwrap();
+        }
     }
 }
