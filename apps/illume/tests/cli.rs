@@ -667,3 +667,78 @@ fn a_missing_texture_is_a_warning_unless_strict() {
     );
     assert!(!exr.exists(), "no image is written when loading fails");
 }
+
+/// The value of `column` in the last row of a frames.csv.
+fn last_csv_value(csv: &str, column: &str) -> Option<f64> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next()?.split(',').collect();
+    let k = header.iter().position(|h| *h == column)?;
+    lines.last()?.split(',').nth(k)?.parse().ok()
+}
+
+#[test]
+fn selective_runs_on_its_thread_in_real_time_and_on_the_frame_thread_with_fixed_work() {
+    let small = [
+        "--set",
+        "selective.pilots_per_group=8",
+        "--set",
+        "selective.ratio=4",
+        "--set",
+        "selective.element_count=2000",
+    ];
+    let realtime = scratch("selective-realtime");
+    let mut args = vec![
+        "animate",
+        "builtin:cornell-spot",
+        "--technique",
+        "selective",
+        "--animation",
+        "move_sphere",
+        "--realtime",
+        "--duration",
+        "0.5",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--output",
+        path(&realtime),
+    ];
+    args.extend(small);
+    ok(&illume(&args));
+    let csv = std::fs::read_to_string(realtime.join("frames.csv")).unwrap();
+    let steps = last_csv_value(&csv, "selective.thread_steps");
+    assert!(
+        steps.is_some_and(|s| s > 0.0),
+        "--realtime: the streaming thread took no step ({steps:?}):\n{csv}"
+    );
+
+    let fixed = scratch("selective-fixed");
+    let mut args = vec![
+        "animate",
+        "builtin:cornell-spot",
+        "--technique",
+        "selective",
+        "--duration",
+        "0.2",
+        "--fps",
+        "10",
+        "--work-per-frame",
+        "1000",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--output",
+        path(&fixed),
+    ];
+    args.extend(small);
+    ok(&illume(&args));
+    let csv = std::fs::read_to_string(fixed.join("frames.csv")).unwrap();
+    assert_eq!(
+        last_csv_value(&csv, "selective.thread_steps"),
+        None,
+        "--work-per-frame runs no thread:\n{csv}"
+    );
+    assert!(last_csv_value(&csv, "selective.photons_traced").is_some_and(|p| p > 0.0));
+}

@@ -6,7 +6,7 @@ use crate::{Config, EngineError};
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
 use illume_reference::{ReferenceSettings, ReferenceTechnique};
 use illume_scene::Timeline;
-use illume_selective::{Selective, SelectiveSettings};
+use illume_selective::SelectiveSettings;
 use illume_transport::{SharedWorld, Technique, TechniqueError, TechniqueSettings};
 
 /// Every technique illume implements; the name is the same everywhere (module, TOML
@@ -105,9 +105,8 @@ impl TechniqueKind {
                 PhotonStream::new(world, config.photon_stream.clone())
                     .map_err(|e| wrap(e.into()))?,
             ),
-            TechniqueKind::Selective => Box::new(
-                Selective::new(world, config.selective.clone()).map_err(|e| wrap(e.into()))?,
-            ),
+            TechniqueKind::Selective => illume_selective::build(world, config.selective.clone())
+                .map_err(|e| wrap(e.into()))?,
         })
     }
 }

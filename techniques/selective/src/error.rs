@@ -17,6 +17,9 @@ pub enum SelectiveError {
         /// The scene's source (file or builtin name).
         scene: String,
     },
+    /// The streaming thread could not be started.
+    #[error("selective: cannot start the streaming thread: {0}")]
+    Thread(#[source] std::io::Error),
     /// The shared world's lock was poisoned by a panic elsewhere.
     #[error("the shared world's lock is poisoned")]
     PoisonedWorld,

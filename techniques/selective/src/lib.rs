@@ -22,6 +22,7 @@
 //! | §1, §3, §6: mesh elements, Gouraud display | [`elements`], [`shade`] |
 //! | §5.2 (BSDF changes), light changes (beyond the paper) | [`update`] |
 //! | the [`Technique`](illume_transport::Technique) the renderer drives | [`state`] |
+//! | §6: the solution on its own thread beside the frame loop | [`stream`] |
 //! | settings (a tuning guide) and presets | [`settings`] |
 //!
 //! **Failure modes.** (1) Element-scale blur and leaks at contacts: irradiance is
@@ -62,11 +63,13 @@ pub mod retrace;
 pub mod settings;
 pub mod shade;
 pub mod state;
+pub mod stream;
 pub mod update;
 
 pub use error::SelectiveError;
 pub use settings::{GroupOrder, SelectiveMode, SelectiveSettings};
 pub use state::Selective;
+pub use stream::{Streaming, build};
 
 /// The technique's one name: CLI value, settings table, counter and error prefix.
 pub const NAME: &str = "selective";

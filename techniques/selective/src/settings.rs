@@ -23,11 +23,16 @@ pub enum GroupOrder {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum SelectiveMode {
+    /// The paper's parallel thread (§6: "both parts run in parallel"): one long-lived
+    /// thread re-traces stale groups, most important first, then continues the
+    /// index-order fill, while frames are rendered from whatever state the solution is in
+    /// (partly updated). Frames never wait for more than one group. The frame loop's
+    /// budget is ignored. Not reproducible frame for frame.
+    #[default]
+    Streaming,
     /// Groups re-traced between frames within a wall-clock budget per frame
     /// ([`SelectiveSettings::frame_budget_ms`] or the frame loop's `Budget::time_ms`), on
-    /// the frame thread and rayon: the paper's progressive refinement, frames show the
-    /// partly updated state.
-    #[default]
+    /// the frame thread and rayon: progressive refinement without a second thread.
     Timed,
     /// Groups re-traced between frames until [`SelectiveSettings::photons_per_frame`]
     /// photons (or the frame loop's `Budget::work`) were traced: the same settings give
@@ -85,11 +90,14 @@ pub struct SelectiveSettings {
     /// supports no light changes). In [0, 1]; 0 restarts on any light change, 1 never
     /// restarts. Default 0.5: moving the only light restarts.
     pub restart_fraction: f32,
-    /// Pacing: wall-clock budget per frame, or photons per frame. Default
-    /// [`SelectiveMode::Timed`].
+    /// Pacing: a background thread, a wall-clock budget per frame, or photons per
+    /// frame. Default [`SelectiveMode::Streaming`] (`animate --realtime` also picks it;
+    /// `--work-per-frame` picks [`SelectiveMode::Deterministic`]).
     pub mode: SelectiveMode,
     /// Wall-clock budget for re-tracing between two frames in [`SelectiveMode::Timed`]
-    /// when the frame loop gives none \[ms\]. Higher: faster recovery after a change, at
+    /// (and in [`SelectiveMode::Streaming`] when no thread runs the solution, e.g.
+    /// [`Selective::for_world`](crate::Selective::for_world)) when the frame loop gives
+    /// none \[ms\]. Higher: faster recovery after a change, at
     /// the cost of frame rate. Groups are atomic, so a frame may overrun by one group.
     /// Default 25.
     pub frame_budget_ms: f64,
@@ -97,6 +105,14 @@ pub struct SelectiveSettings {
     /// frame loop's budget does not say (whole groups, so a frame may overrun by one
     /// group). Default 100 000.
     pub photons_per_frame: u64,
+    /// Beyond the paper: while nothing is stale (a static scene), the pool grows by
+    /// rounds of N_p correctives per group (R + 1 each round, so groups keep their
+    /// shape) up to this many photons, and the image keeps converging; the display
+    /// normalises by the photons traced. Higher: less element noise in still scenes, at
+    /// the cost of a longer update after the next change (every group holds more
+    /// photons to re-trace) and a slower restart. 0 (default) or at most N_g·N_p·R:
+    /// the pool stays at N_g·N_p·R, as in the paper.
+    pub max_photons: u64,
     /// Trace the whole pool before the first frame. False: frames start dark and
     /// brighten as photons are traced in index order (shown normalised by the photons
     /// traced). Default true.
@@ -123,9 +139,10 @@ impl Default for SelectiveSettings {
             visibility_min_pilots: 2000,
             visibility_weight: 4.0,
             restart_fraction: 0.5,
-            mode: SelectiveMode::Timed,
+            mode: SelectiveMode::Streaming,
             frame_budget_ms: 25.0,
             photons_per_frame: 100_000,
+            max_photons: 0,
             warm_up: true,
             max_bounces: 32,
             filtered_textures: true,
@@ -258,6 +275,12 @@ impl SelectiveSettings {
                 format!("{} is not in (0, 3 600 000]", self.frame_budget_ms),
             );
         }
+        if self.max_photons > MAX_POOL {
+            return bad(
+                "max_photons",
+                format!("{} exceeds {MAX_POOL}", self.max_photons),
+            );
+        }
         if self.photons_per_frame == 0 {
             return bad("photons_per_frame", "must be at least 1".into());
         }
@@ -273,7 +296,7 @@ impl TechniqueSettings for SelectiveSettings {
         &[
             (
                 "default",
-                "the paper's values: N_p = 250, R = 16, 12 400 elements, 25 ms of re-tracing per frame",
+                "the paper's values: N_p = 250, R = 16, 12 400 elements, re-tracing on a background thread",
             ),
             (
                 "deterministic",
@@ -296,11 +319,11 @@ impl TechniqueSettings for SelectiveSettings {
         }
     }
 
-    /// Real time: [`SelectiveMode::Timed`]. A fixed amount of work:
+    /// Real time: [`SelectiveMode::Streaming`]. A fixed amount of work:
     /// [`SelectiveMode::Deterministic`], `work_per_frame` photons between frames.
     fn pace(&mut self, pacing: Pacing) {
         match pacing {
-            Pacing::RealTime => self.mode = SelectiveMode::Timed,
+            Pacing::RealTime => self.mode = SelectiveMode::Streaming,
             Pacing::FixedWork { work_per_frame } => {
                 self.mode = SelectiveMode::Deterministic;
                 if let Some(n) = work_per_frame {
@@ -312,7 +335,7 @@ impl TechniqueSettings for SelectiveSettings {
 
     fn default_budget(&self) -> Budget {
         match self.mode {
-            SelectiveMode::Timed => Budget {
+            SelectiveMode::Timed | SelectiveMode::Streaming => Budget {
                 work: None,
                 time_ms: Some(self.frame_budget_ms),
             },
@@ -390,6 +413,13 @@ mod tests {
                     ..Default::default()
                 },
                 "selective.restart_fraction",
+            ),
+            (
+                SelectiveSettings {
+                    max_photons: u64::MAX,
+                    ..Default::default()
+                },
+                "selective.max_photons",
             ),
             (
                 SelectiveSettings {

@@ -39,6 +39,8 @@ pub struct SelectiveCounters {
     pub groups_retraced: u64,
     /// Restarts after light changes.
     pub restarts: u64,
+    /// Rounds of N_p correctives per group added to the pool (`max_photons`).
+    pub growth_rounds: u64,
     /// Seconds spent tracing.
     pub trace_s: f64,
 }
@@ -49,7 +51,7 @@ pub struct Selective {
     factors: GroupFactors,
     layout: GroupLayout,
     scramble: HaltonScramble,
-    elements: Elements,
+    elements: Arc<Elements>,
     accumulators: Vec<[Quanta; 2]>,
     quantum_w: f64,
     current: Arc<Snapshot>,
@@ -123,7 +125,7 @@ impl Selective {
             settings,
             factors,
             layout,
-            elements,
+            elements: Arc::new(elements),
             quantum_w,
             current,
             next_snapshot: 1,
@@ -158,6 +160,12 @@ impl Selective {
     /// The mesh elements.
     pub fn elements(&self) -> &Elements {
         &self.elements
+    }
+
+    /// The mesh elements, shared (they never change after construction): the streaming
+    /// technique shades with them outside the solution's lock.
+    pub fn shared_elements(&self) -> Arc<Elements> {
+        Arc::clone(&self.elements)
     }
 
     /// Front and back accumulators per element, in quanta of [`Selective::quantum_w`].
@@ -369,21 +377,54 @@ impl Selective {
         self.counters.restarts += 1;
     }
 
-    /// One step of work: a stale group, else a fill chunk. Returns photons traced, or
-    /// None when everything is current.
+    /// One step of work: a stale group, else a fill chunk, else (with
+    /// [`SelectiveSettings::max_photons`]) a fill chunk of a new round of N_p correctives
+    /// per group. Returns photons traced, or None when everything is current and the pool
+    /// is as large as it may grow.
     pub fn step(&mut self, world: &World) -> Option<u64> {
         if let Some(g) = self.next_group() {
             return Some(self.retrace_group(world, g));
         }
-        if self.filled < self.layout.pool() {
-            return Some(self.fill(world, self.layout.per_group().max(4096)));
+        if self.filled >= self.layout.pool() && !self.grow() {
+            return None;
         }
-        None
+        Some(self.fill(world, self.layout.per_group().max(4096)))
     }
 
-    /// Works until nothing is stale and the pool is full.
+    /// Grows the pool by one round of N_p correctives per group (R + 1: the indices
+    /// N_g·N_p·R … N_g·N_p·(R + 1) − 1, N_p more per residue, so every group keeps its
+    /// shape) if that stays within `max_photons`. Only called with every group current
+    /// and the pool full: a static scene.
+    fn grow(&mut self) -> bool {
+        let round = self.layout.groups * self.layout.pilots;
+        if self.layout.pool() + round > self.settings.max_photons {
+            return false;
+        }
+        self.layout.ratio += 1;
+        self.counters.growth_rounds += 1;
+        true
+    }
+
+    /// Works until nothing is stale and the pool is full (grown to `max_photons` when
+    /// that is set).
     pub fn converge(&mut self, world: &World) {
         while self.step(world).is_some() {}
+    }
+
+    /// The frames' width over height, for the view frustum pilots test (§5.3's V).
+    pub fn set_aspect(&mut self, width: u32, height: u32) {
+        if height > 0 && width > 0 {
+            self.aspect = width as f32 / height as f32;
+        }
+    }
+
+    /// With `warm_up`, fills the whole pool the first time it is called (unless
+    /// [`Technique::precompute`] already did); otherwise nothing.
+    pub fn warm_up(&mut self, world: &World) {
+        if self.settings.warm_up && !self.warmed_up {
+            self.fill_all(world, &mut illume_core::progress::Silent);
+            self.warmed_up = true;
+        }
     }
 
     /// Irradiance display for `world`'s transforms.
@@ -458,19 +499,18 @@ impl Technique for Selective {
     /// First call with `warm_up` and no precompute: fills the pool. Then re-traces stale
     /// groups (most important first) and continues an index-order fill, within the
     /// budget: `work` photons ([`SelectiveMode::Deterministic`]) or `time_ms`
-    /// ([`SelectiveMode::Timed`]); whole groups, so one group may overrun.
+    /// ([`SelectiveMode::Timed`], and [`SelectiveMode::Streaming`] when no thread runs
+    /// this solution, as for [`Selective::for_world`]); whole groups, so one group may
+    /// overrun.
     fn advance(&mut self, world: &World, budget: &Budget) {
-        if self.settings.warm_up && !self.warmed_up {
-            self.fill_all(world, &mut illume_core::progress::Silent);
-            self.warmed_up = true;
-        }
+        self.warm_up(world);
         let t0 = Instant::now();
         let (work, time_ms) = match self.settings.mode {
             SelectiveMode::Deterministic => (
                 Some(budget.work.unwrap_or(self.settings.photons_per_frame)),
                 budget.time_ms,
             ),
-            SelectiveMode::Timed => (
+            SelectiveMode::Timed | SelectiveMode::Streaming => (
                 budget.work,
                 Some(budget.time_ms.unwrap_or(self.settings.frame_budget_ms)),
             ),
@@ -491,9 +531,7 @@ impl Technique for Selective {
 
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
         let t0 = Instant::now();
-        if gbuffer.height > 0 {
-            self.aspect = gbuffer.width as f32 / gbuffer.height as f32;
-        }
+        self.set_aspect(gbuffer.width, gbuffer.height);
         let display = self.display(world);
         let img = shade::shade(world, gbuffer, &self.elements, &display);
         self.last_shade_ms = t0.elapsed().as_secs_f64() * 1e3;
@@ -516,6 +554,7 @@ impl Technique for Selective {
             ("photons_invalid", c.photons_invalid as f64),
             ("groups_retraced", c.groups_retraced as f64),
             ("restarts", c.restarts as f64),
+            ("growth_rounds", c.growth_rounds as f64),
             (
                 "photons_per_s",
                 if c.trace_s > 0.0 {

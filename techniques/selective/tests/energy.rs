@@ -147,3 +147,49 @@ fn retracing_matches_a_from_scratch_trace_exactly_with_restart() {
     let (_, restarts) = run(GroupOrder::Random, 0.5);
     assert_eq!(restarts, 1, "the moved light restarts the solution");
 }
+
+/// Beyond the paper: a static scene's pool grows by rounds of N_p correctives per group
+/// up to `max_photons`; the grown pool equals a fresh pool of the larger R exactly, and
+/// stays exact through a change made after growing.
+#[test]
+fn a_grown_pool_equals_a_fresh_pool_of_the_larger_ratio() {
+    let mut world = World::new(illume_scene::builtin::load("cornell-spot").unwrap());
+    let base = small(GroupOrder::Priority, 0.5);
+    let round = {
+        let s = Selective::for_world(&world, base.clone()).unwrap();
+        s.layout().groups * s.layout().pilots
+    };
+    let pool = round * base.ratio as u64;
+    let grown_settings = SelectiveSettings {
+        // Two and a half rounds of head room: two rounds fit, the third does not.
+        max_photons: pool + 2 * round + round / 2,
+        ..base.clone()
+    };
+    let mut sel = Selective::for_world(&world, grown_settings).unwrap();
+    sel.converge(&world);
+    assert_eq!(sel.layout().ratio, base.ratio as u64 + 2);
+    assert_eq!(sel.filled(), pool + 2 * round);
+    assert_eq!(sel.counters().growth_rounds, 2);
+    let larger = SelectiveSettings {
+        ratio: base.ratio + 2,
+        ..base.clone()
+    };
+    assert!(sel.accumulators() == from_scratch(&world, &larger).accumulators());
+
+    // A change after growing: the grown pool is updated as a whole.
+    let sphere = instance(&world, "sphere");
+    let moved = Affine3A::from_translation(Vec3::new(0.2, 0.0, -0.3))
+        * world.scene.instances[sphere.index()].world_from_object;
+    apply(
+        &mut world,
+        &mut sel,
+        Edit::SetInstanceTransform {
+            instance: sphere,
+            world_from_object: moved,
+        },
+    );
+    sel.converge(&world);
+    assert!(sel.accumulators() == from_scratch(&world, &larger).accumulators());
+    // Without max_photons the pool stays at N_g·N_p·R.
+    assert_eq!(from_scratch(&world, &base).filled(), pool);
+}

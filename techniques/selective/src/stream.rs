@@ -1,0 +1,214 @@
+//! The paper's parallel thread (§6: the software part computing indirect light and the
+//! display "run in parallel using multi-threading, and are synchronized by the
+//! important events"): [`Streaming`] runs the [`Selective`] solution on one long-lived
+//! thread while the frame loop renders.
+//!
+//! The thread repeats [`Selective::step`] — the most important stale group, else the
+//! next chunk of the index-order fill — each under a read lock of the shared world and
+//! the solution's mutex, so a group's negative and positive deposits are applied
+//! together and a frame never sees half a group. The frame loop takes the same mutex for
+//! scene changes and to copy the display values (shading runs outside it), so it waits
+//! for at most the group in flight. A frame that is waiting for the mutex holds the
+//! thread back from starting its next step (std's mutex is not fair), and std's
+//! `RwLock` lets no new reader in ahead of a waiting writer, so a scene update waits for
+//! one step at most too. With nothing stale and the pool full the thread sleeps until
+//! the next scene change.
+
+use crate::elements::Elements;
+use crate::state::Selective;
+use crate::{SelectiveError, SelectiveSettings, shade};
+use illume_core::image::RgbImage;
+use illume_core::{Counters, Progress};
+use illume_scene::SceneChange;
+use illume_transport::{Budget, ChangeResponse, GBuffer, SharedWorld, Technique, World};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// How long the idle thread sleeps before looking for work again when no scene change
+/// wakes it (a change always wakes it at once).
+const IDLE_WAIT: Duration = Duration::from_millis(50);
+
+/// What the technique and its thread share.
+struct Shared {
+    solution: Mutex<Selective>,
+    /// Frame-loop calls waiting for the mutex: the thread starts no step meanwhile.
+    frame_waiting: AtomicU32,
+    stop: AtomicBool,
+    /// Steps the thread has taken (groups and fill chunks).
+    steps: AtomicU64,
+}
+
+impl Shared {
+    /// Locks the solution for the thread (a poisoned lock is recovered: a group's
+    /// deposits are applied in one loop that does not panic, so the accumulators hold a
+    /// whole number of groups).
+    fn lock(&self) -> MutexGuard<'_, Selective> {
+        self.solution.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Locks the solution for the frame loop, ahead of the thread's next step.
+    fn lock_for_frame(&self) -> MutexGuard<'_, Selective> {
+        self.frame_waiting.fetch_add(1, Ordering::AcqRel);
+        let guard = self.lock();
+        self.frame_waiting.fetch_sub(1, Ordering::AcqRel);
+        guard
+    }
+}
+
+/// Selective photon tracing with its solution on a background thread
+/// ([`SelectiveMode::Streaming`](crate::SelectiveMode::Streaming)).
+pub struct Streaming {
+    shared: Arc<Shared>,
+    elements: Arc<Elements>,
+    thread: Option<JoinHandle<()>>,
+    last_shade_ms: f64,
+}
+
+impl Streaming {
+    /// Lays out the solution for `world`'s scene (as [`Selective::new`]) and starts its
+    /// thread. With `warm_up` the pool is filled by [`Technique::precompute`] or the first
+    /// [`Technique::advance`]; without it the thread fills it in index order.
+    pub fn new(world: &SharedWorld, settings: SelectiveSettings) -> Result<Self, SelectiveError> {
+        let solution = Selective::new(world, settings)?;
+        let elements = solution.shared_elements();
+        let shared = Arc::new(Shared {
+            solution: Mutex::new(solution),
+            frame_waiting: AtomicU32::new(0),
+            stop: AtomicBool::new(false),
+            steps: AtomicU64::new(0),
+        });
+        let thread =
+            spawn(Arc::clone(world), Arc::clone(&shared)).map_err(SelectiveError::Thread)?;
+        Ok(Self {
+            shared,
+            elements,
+            thread: Some(thread),
+            last_shade_ms: 0.0,
+        })
+    }
+
+    /// Runs `f` on the solution under its lock (tests and tools: counters, stale groups,
+    /// accumulators as the thread left them).
+    pub fn with_solution<T>(&self, f: impl FnOnce(&mut Selective) -> T) -> T {
+        f(&mut self.shared.lock_for_frame())
+    }
+
+    /// Steps the thread has taken since it started (groups re-traced and fill chunks).
+    pub fn thread_steps(&self) -> u64 {
+        self.shared.steps.load(Ordering::Acquire)
+    }
+
+    fn wake(&self) {
+        if let Some(t) = &self.thread {
+            t.thread().unpark();
+        }
+    }
+}
+
+/// The thread's loop: one step at a time until asked to stop.
+fn spawn(world: SharedWorld, shared: Arc<Shared>) -> std::io::Result<JoinHandle<()>> {
+    std::thread::Builder::new()
+        .name("selective".into())
+        .spawn(move || {
+            while !shared.stop.load(Ordering::Acquire) {
+                if shared.frame_waiting.load(Ordering::Acquire) > 0 {
+                    std::thread::yield_now();
+                    continue;
+                }
+                let worked = {
+                    let w = world.read().unwrap_or_else(|e| e.into_inner());
+                    let mut solution = shared.lock();
+                    solution.step(&w).is_some()
+                };
+                if worked {
+                    shared.steps.fetch_add(1, Ordering::AcqRel);
+                } else {
+                    std::thread::park_timeout(IDLE_WAIT);
+                }
+            }
+        })
+}
+
+impl Drop for Streaming {
+    fn drop(&mut self) {
+        self.shared.stop.store(true, Ordering::Release);
+        self.wake();
+        if let Some(t) = self.thread.take() {
+            // A panicked thread has nothing left to clean up.
+            let _ = t.join();
+        }
+    }
+}
+
+impl Technique for Streaming {
+    fn name(&self) -> &'static str {
+        crate::NAME
+    }
+
+    fn precompute(
+        &mut self,
+        world: &World,
+        progress: &mut dyn Progress,
+    ) -> Result<(), illume_transport::TechniqueError> {
+        self.shared.lock_for_frame().precompute(world, progress)
+    }
+
+    fn scene_changed(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        let response = self.shared.lock_for_frame().scene_changed(world, changes);
+        self.wake();
+        response
+    }
+
+    /// With `warm_up`, the first call fills the pool (unless precompute did). The
+    /// thread does the rest; `budget` is ignored.
+    fn advance(&mut self, world: &World, _budget: &Budget) {
+        self.shared.lock_for_frame().warm_up(world);
+    }
+
+    /// The display values are copied under the solution's lock; shading runs outside it.
+    fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
+        let t0 = Instant::now();
+        let display = {
+            let mut solution = self.shared.lock_for_frame();
+            solution.set_aspect(gbuffer.width, gbuffer.height);
+            solution.display(world)
+        };
+        let img = shade::shade(world, gbuffer, &self.elements, &display);
+        self.last_shade_ms = t0.elapsed().as_secs_f64() * 1e3;
+        img
+    }
+
+    fn stats(&self) -> Counters {
+        let mut c = self.shared.lock_for_frame().stats();
+        c.set("shading_ms", self.last_shade_ms);
+        c.set("thread_steps", self.thread_steps() as f64);
+        c
+    }
+
+    fn reset(&mut self) {
+        self.shared.lock_for_frame().reset();
+        self.wake();
+    }
+
+    /// Direct light with shadows is the renderer's (the paper's hardware pass, §6.1).
+    fn interactive(&self) -> bool {
+        true
+    }
+}
+
+/// Builds the technique the settings ask for: [`Streaming`] (a background thread) in
+/// [`SelectiveMode::Streaming`](crate::SelectiveMode::Streaming), else [`Selective`]
+/// working on the frame thread.
+pub fn build(
+    world: &SharedWorld,
+    settings: SelectiveSettings,
+) -> Result<Box<dyn Technique>, SelectiveError> {
+    Ok(match settings.mode {
+        crate::SelectiveMode::Streaming => Box::new(Streaming::new(world, settings)?),
+        crate::SelectiveMode::Timed | crate::SelectiveMode::Deterministic => {
+            Box::new(Selective::new(world, settings)?)
+        }
+    })
+}

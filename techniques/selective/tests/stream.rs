@@ -1,0 +1,138 @@
+//! The streaming thread (§6, the default mode): it fills the pool by itself, brings every
+//! group up to date after scene changes made while it runs, and leaves exactly the
+//! accumulators a from-scratch trace of the final scene gives; frames rendered meanwhile
+//! see whole groups only.
+
+use illume_core::{Affine3A, Vec3};
+use illume_scene::{Edit, InstanceId};
+use illume_selective::{GroupOrder, Selective, SelectiveMode, SelectiveSettings, Streaming};
+use illume_transport::{Budget, ChangeResponse, GBuffer, SharedWorld, Technique, World};
+use std::time::{Duration, Instant};
+
+fn settings() -> SelectiveSettings {
+    SelectiveSettings {
+        pilots_per_group: 12,
+        ratio: 4,
+        element_count: 1500,
+        warm_up: false,
+        order: GroupOrder::Priority,
+        mode: SelectiveMode::Streaming,
+        ..SelectiveSettings::default()
+    }
+}
+
+/// Polls `done` on the solution until it holds; fails after a minute naming `what`.
+fn wait_for(sel: &Streaming, what: &str, done: impl Fn(&Selective) -> bool) {
+    let t0 = Instant::now();
+    while !sel.with_solution(|s| done(s)) {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "the streaming thread did not {what} within 60 s"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+fn move_sphere(world: &SharedWorld, sel: &mut Streaming, by: Vec3) {
+    sel.before_world_write();
+    let mut w = world.write().unwrap();
+    let sphere = InstanceId(
+        w.scene
+            .instances
+            .iter()
+            .position(|i| i.name == "sphere")
+            .expect("cornell-spot has a sphere") as u32,
+    );
+    let world_from_object =
+        Affine3A::from_translation(by) * w.scene.instances[sphere.index()].world_from_object;
+    let changes = w
+        .apply_edit(&Edit::SetInstanceTransform {
+            instance: sphere,
+            world_from_object,
+        })
+        .unwrap();
+    drop(w);
+    let r = sel.scene_changed(&world.read().unwrap(), &changes);
+    assert_eq!(r, ChangeResponse::Updated);
+}
+
+#[test]
+fn the_thread_fills_the_pool_and_follows_changes_to_the_exact_solution() {
+    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
+    let mut sel = Streaming::new(&world, settings()).unwrap();
+    let pool = sel.with_solution(|s| s.layout().pool());
+    // No warm-up: the thread fills the pool in index order by itself, with no advance.
+    wait_for(&sel, "fill the pool", |s| s.filled() == pool);
+    assert!(sel.thread_steps() > 0);
+
+    // Two moves while the thread works, frames rendered in between.
+    let budget = Budget::default();
+    move_sphere(&world, &mut sel, Vec3::new(0.3, 0.0, 0.2));
+    let g = GBuffer::render(
+        &world.read().unwrap(),
+        16,
+        12,
+        illume_core::Vec2::splat(0.5),
+    );
+    sel.advance(&world.read().unwrap(), &budget);
+    let img = sel.indirect(&world.read().unwrap(), &g);
+    assert!(img.mean().x.is_finite() && img.mean().x > 0.0);
+    move_sphere(&world, &mut sel, Vec3::new(-0.5, 0.1, 0.0));
+    let steps_before = sel.thread_steps();
+    wait_for(&sel, "bring every group up to date", |s| {
+        s.stale_groups() == 0
+    });
+    assert!(
+        sel.thread_steps() > steps_before,
+        "the thread re-traced nothing"
+    );
+
+    // Exactly a from-scratch trace of the final scene.
+    let w = world.read().unwrap();
+    let mut oracle = Selective::for_world(
+        &w,
+        SelectiveSettings {
+            mode: SelectiveMode::Deterministic,
+            ..settings()
+        },
+    )
+    .unwrap();
+    oracle.converge(&w);
+    let ours = sel.with_solution(|s| s.accumulators().to_vec());
+    assert_eq!(ours.len(), oracle.accumulators().len());
+    let differing = ours
+        .iter()
+        .zip(oracle.accumulators())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(
+        differing, 0,
+        "{differing} elements differ from a fresh trace"
+    );
+    assert!(sel.with_solution(|s| s.counters().photons_invalid) > 0);
+}
+
+#[test]
+fn the_engine_builds_the_streaming_technique_by_default() {
+    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
+    assert_eq!(SelectiveSettings::default().mode, SelectiveMode::Streaming);
+    let technique = illume_selective::build(&world, settings()).unwrap();
+    // Only the streaming technique reports its thread's steps.
+    let t0 = Instant::now();
+    while technique.stats().get("thread_steps").unwrap_or(0.0) == 0.0 {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "no thread step in 60 s"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let deterministic = illume_selective::build(
+        &world,
+        SelectiveSettings {
+            mode: SelectiveMode::Deterministic,
+            ..settings()
+        },
+    )
+    .unwrap();
+    assert_eq!(deterministic.stats().get("thread_steps"), None);
+}
