@@ -6,10 +6,11 @@
 //!   one-light scene's default) and 10 080, the sphere lit directly (in the spot's
 //!   cone) or only indirectly (outside it), priority order beside random order;
 //! * `fig7` — the same for R = 8, 16, 32, 64 at an equal pool;
+//! * `pool` — recovery against pool size (N_p = 125 … 2000 at N_g = 72, R = 16);
 //! * `costs` — pool fill, full update after the move, restart vs re-trace after a light
 //!   move, memory per element.
 //!
-//! `cargo bench -p illume-selective [-- fig5|fig7|costs]`
+//! `cargo bench -p illume-selective [-- fig5|fig7|pool|costs]`
 
 use illume_core::{Affine3A, Vec3};
 use illume_scene::{Edit, InstanceId, LightId};
@@ -59,9 +60,17 @@ fn moved_world(from: Vec3, to: Vec3) -> (World, World, Vec<illume_scene::SceneCh
     (old, new, changes)
 }
 
-/// Fraction of all relevant photons found after 10, 25, 50 % of the groups, the
-/// seconds to find 90 % of them, and the relevant total.
-fn recovery(settings: &SelectiveSettings, from: Vec3, to: Vec3) -> ([f64; 3], f64, u64) {
+/// How an update went: the fraction of all relevant photons found after 10, 25, 50 %
+/// of the groups, the seconds to find 90 % of them, the relevant total, and the curve
+/// (seconds since the edit, fraction found) after each group.
+struct Recovery {
+    at: [f64; 3],
+    t90: f64,
+    total: u64,
+    curve: Vec<(f64, f64)>,
+}
+
+fn recovery(settings: &SelectiveSettings, from: Vec3, to: Vec3) -> Recovery {
     let (old, new, changes) = moved_world(from, to);
     let mut sel = Selective::for_world(&old, settings.clone()).unwrap();
     sel.converge(&old);
@@ -77,15 +86,44 @@ fn recovery(settings: &SelectiveSettings, from: Vec3, to: Vec3) -> ([f64; 3], f6
         times.push(t0.elapsed().as_secs_f64());
     }
     let total = *found.last().unwrap_or(&0);
+    let fraction = |f: u64| f as f64 / total.max(1) as f64;
     let at = |f: f64| {
         let k = ((n_g as f64 * f).ceil() as usize).clamp(1, found.len()) - 1;
-        found[k] as f64 / total.max(1) as f64
+        fraction(found[k])
     };
     let t90 = found
         .iter()
         .position(|&f| f as f64 >= 0.9 * total as f64)
         .map_or(f64::NAN, |k| times[k]);
-    ([at(0.10), at(0.25), at(0.50)], t90, total)
+    let curve = std::iter::once((0.0, 0.0))
+        .chain(times.iter().zip(&found).map(|(&t, &f)| (t, fraction(f))))
+        .collect();
+    Recovery {
+        at: [at(0.10), at(0.25), at(0.50)],
+        t90,
+        total,
+        curve,
+    }
+}
+
+/// Where the recovery plots go: `target/selective-bench/` of the workspace.
+fn plot_dir() -> std::path::PathBuf {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/selective-bench");
+    std::fs::create_dir_all(&dir).expect("the plot folder can be made");
+    dir
+}
+
+fn plot(name: &str, title: &str, series: Vec<illume_metrics::report::Series>) {
+    let path = plot_dir().join(name);
+    illume_metrics::report::plot_lines(
+        &path,
+        title,
+        "seconds since the edit (2 threads)",
+        "fraction of relevant photons re-traced",
+        &series,
+    )
+    .expect("the plot is written");
+    println!("(plot: {})", path.display());
 }
 
 fn fig5() {
@@ -105,22 +143,32 @@ fn fig5() {
             Vec3::new(-0.55, 0.0, 0.3),
         ),
     ];
-    for (name, factors) in [
-        ("72 (2^3·3^2)", vec![[2, 3], [3, 2]]),
-        ("10 080", vec![[2, 5], [3, 2], [5, 1], [7, 1]]),
-    ] {
-        // Equal pools: 1.15 M photons.
-        let pilots = if factors.len() == 2 { 1000 } else { 8 };
-        for (lit, from, to) in cases {
+    for (lit, from, to) in cases {
+        let mut series = Vec::new();
+        for (name, factors) in [
+            ("72 (2^3·3^2)", vec![[2, 3], [3, 2]]),
+            ("10 080", vec![[2, 5], [3, 2], [5, 1], [7, 1]]),
+        ] {
+            // Equal pools: 1.15 M photons.
+            let pilots = if factors.len() == 2 { 1000 } else { 8 };
             for order in [GroupOrder::Priority, GroupOrder::Random] {
                 let s = base(factors.clone(), pilots, 16, order);
-                let (f, t90, total) = recovery(&s, from, to);
+                let r = recovery(&s, from, to);
                 println!(
-                    "| {name} | {lit} | {order:?} | {:.2} | {:.2} | {:.2} | {t90:.2} | {total} |",
-                    f[0], f[1], f[2]
+                    "| {name} | {lit} | {order:?} | {:.2} | {:.2} | {:.2} | {:.2} | {} |",
+                    r.at[0], r.at[1], r.at[2], r.t90, r.total
                 );
+                series.push(illume_metrics::report::Series {
+                    name: format!("N_g = {name}, {order:?}"),
+                    points: r.curve,
+                });
             }
         }
+        plot(
+            &format!("fig5_{lit}.svg"),
+            &format!("Fig. 5 in kind: sphere lit {lit}ly, moved 0.3 m"),
+            series,
+        );
     }
 }
 
@@ -130,16 +178,56 @@ fn fig7() {
     );
     println!("| R | N_p | pilots | found @10 % | @25 % | @50 % of groups | s to 90 % |");
     println!("|---:|---:|---:|---:|---:|---:|---:|");
+    let mut series = Vec::new();
     for ratio in [8u32, 16, 32, 64] {
         let pilots = 16_000 / ratio;
         let s = base(vec![[2, 3], [3, 2]], pilots, ratio, GroupOrder::Priority);
-        let (f, t90, _) = recovery(&s, Vec3::ZERO, Vec3::new(0.3, 0.0, 0.0));
+        let r = recovery(&s, Vec3::ZERO, Vec3::new(0.3, 0.0, 0.0));
         println!(
-            "| {ratio} | {pilots} | {:.2} % | {:.2} | {:.2} | {:.2} | {t90:.2} |",
+            "| {ratio} | {pilots} | {:.2} % | {:.2} | {:.2} | {:.2} | {:.2} |",
             100.0 / ratio as f64,
-            f[0],
-            f[1],
-            f[2]
+            r.at[0],
+            r.at[1],
+            r.at[2],
+            r.t90
+        );
+        series.push(illume_metrics::report::Series {
+            name: format!("R = {ratio} ({:.2} % pilots)", 100.0 / ratio as f64),
+            points: r.curve,
+        });
+    }
+    plot(
+        "fig7.svg",
+        "Fig. 7 in kind: pilot ratio at an equal pool (N = 1 152 000)",
+        series,
+    );
+}
+
+fn pool() {
+    println!(
+        "\n## pool: recovery against pool size (N_g = 72, R = 16, sphere moved 0.3 m, lit directly)"
+    );
+    println!("| N_p | pool | fill [s] | s to 90 % | all groups current [s] | relevant |");
+    println!("|---:|---:|---:|---:|---:|---:|");
+    for pilots in [125u32, 250, 500, 1000, 2000] {
+        let s = base(Vec::new(), pilots, 16, GroupOrder::Priority);
+        let (old, new, changes) = moved_world(Vec3::ZERO, Vec3::new(0.3, 0.0, 0.0));
+        let mut sel = Selective::for_world(&old, s.clone()).unwrap();
+        let t = Instant::now();
+        sel.converge(&old);
+        let fill = t.elapsed().as_secs_f64();
+        drop(sel);
+        let r = recovery(&s, Vec3::ZERO, Vec3::new(0.3, 0.0, 0.0));
+        let (t90, total) = (r.t90, r.total);
+        let mut sel = Selective::for_world(&old, s).unwrap();
+        sel.converge(&old);
+        sel.scene_changed(&new, &changes);
+        let t = Instant::now();
+        sel.converge(&new);
+        println!(
+            "| {pilots} | {} | {fill:.3} | {t90:.3} | {:.3} | {total} |",
+            sel.layout().pool(),
+            t.elapsed().as_secs_f64()
         );
     }
 }
@@ -228,6 +316,9 @@ fn main() {
     }
     if want("fig7") {
         fig7();
+    }
+    if want("pool") {
+        pool();
     }
     if want("costs") {
         costs();
