@@ -3,8 +3,9 @@
 
 use crate::elements::Elements;
 use crate::groups::{GroupLayout, Priority};
+use crate::masking::{DEFAULT_PIXELS_HIGH, MaskingView, TextureMasking};
 use crate::qmc::GroupFactors;
-use crate::retrace::{Met, Snapshot, TraceContext, TraceOutput, UnionWorld};
+use crate::retrace::{Met, PilotHit, Snapshot, TraceContext, TraceOutput, UnionWorld};
 use crate::settings::{GroupOrder, SelectiveMode, SelectiveSettings};
 use crate::update::{Invalidation, changed_light_fraction, classify};
 use crate::{SelectiveError, shade};
@@ -62,6 +63,8 @@ pub struct Selective {
     rng: Pcg32,
     pilots_since_camera: u64,
     aspect: f32,
+    pixels_high: u32,
+    masking: TextureMasking,
     warmed_up: bool,
     counters: SelectiveCounters,
     last_shade_ms: f64,
@@ -110,6 +113,11 @@ impl Selective {
         } else {
             1e-12
         };
+        let masking = if settings.texture_masking {
+            TextureMasking::new(&world.scene, &elements, settings.masking_contrast_threshold)
+        } else {
+            TextureMasking::disabled()
+        };
         let groups = (0..layout.groups)
             .map(|_| Group {
                 epoch: Arc::clone(&current),
@@ -134,6 +142,8 @@ impl Selective {
             cursor: 0,
             pilots_since_camera: 0,
             aspect: 4.0 / 3.0,
+            pixels_high: DEFAULT_PIXELS_HIGH,
+            masking,
             warmed_up: false,
             counters: SelectiveCounters::default(),
             last_shade_ms: 0.0,
@@ -204,6 +214,8 @@ impl Selective {
             path: self.settings.photon_path(),
             inv_quantum: 1.0 / self.quantum_w,
             frustum,
+            masking: &self.masking,
+            view: MaskingView::of(frustum, self.pixels_high),
         }
     }
 
@@ -332,7 +344,13 @@ impl Selective {
     /// Raises P of the groups pilots point at (Eq. 6, §5.3).
     fn raise(&mut self, out: &TraceOutput, epoch: &Snapshot) {
         let current = &self.current;
-        for &(i, met, inst) in &out.pilot_hits {
+        for &PilotHit {
+            pilot: i,
+            met,
+            instance: inst,
+            delta_p,
+        } in &out.pilot_hits
+        {
             let h = self.layout.raised_by_pilot(i) as usize;
             let held = &self.groups[h].epoch;
             if held.id == current.id {
@@ -349,7 +367,7 @@ impl Selective {
                 }
             };
             if raise {
-                self.groups[h].priority.p += 1.0;
+                self.groups[h].priority.p += delta_p as f64;
             }
         }
     }
@@ -493,6 +511,7 @@ impl Technique for Selective {
         let t0 = Instant::now();
         if gbuffer.height > 0 {
             self.aspect = gbuffer.width as f32 / gbuffer.height as f32;
+            self.pixels_high = gbuffer.height;
         }
         let display = self.display(world);
         let img = shade::shade(world, gbuffer, &self.elements, &display);
