@@ -19,6 +19,7 @@
 //! | §5.1, Fig. 1: pilot and corrective groups | [`groups`] |
 //! | §5.2, Algorithm 1: phantoms, detection, negative/positive re-tracing | [`retrace`] |
 //! | §5.3: priorities P and V | [`groups::Priority`], [`state`] |
+//! | §5.3: visual masking by textures, Δp/T_e | [`masking`] |
 //! | §1, §3, §6: mesh elements, Gouraud display | [`elements`], [`shade`] |
 //! | §5.2 (BSDF changes), light changes (beyond the paper) | [`update`] |
 //! | the [`Technique`](illume_transport::Technique) the renderer drives | [`state`] |
@@ -35,8 +36,13 @@
 //! found late (N_g = 10 080 keeps the first bounce, Fig. 5). (4) N_g grows with the
 //! number of lights. (5) Light changes that carry much of the power restart the
 //! solution. (6) Lambertian only: glossy surfaces get their base colour's diffuse
-//! share. (7) Texture masking (Δp/T_e of §5.3) is not modelled: every pilot hit raises
-//! its group by Δp = 1.
+//! share. (7) Texture masking (Δp/T_e, §5.3) is a simpler model than the paper's VDP:
+//! per texture and MIP level, the mean of Daly's contrast-masking function over the
+//! Peli band contrast of a box pyramid of luminance, frequencies finer than an element
+//! removed, one contrast sensitivity for every frequency (no CSF, no orientation or
+//! colour channels); the MIP level of a hit comes from its distance and angle to the
+//! camera. A texture that masks less than the model says delays visible updates (only
+//! the order of re-tracing is affected).
 //!
 //! ```
 //! use illume_selective::{Selective, SelectiveSettings};
@@ -58,6 +64,7 @@
 pub mod elements;
 pub mod error;
 pub mod groups;
+pub mod masking;
 pub mod qmc;
 pub mod retrace;
 pub mod settings;

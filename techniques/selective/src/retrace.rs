@@ -23,6 +23,7 @@
 
 use crate::elements::Elements;
 use crate::groups::GroupLayout;
+use crate::masking::{DELTA_P, MaskingView, TextureMasking};
 use crate::qmc::{LightCells, emit, photon_stream};
 use illume_core::sampling::{HaltonScramble, HaltonStream};
 use illume_core::{Affine3A, Vec3};
@@ -223,6 +224,20 @@ pub enum Met {
     Light,
 }
 
+/// A pilot that met a change (§5.3): the group it raises (Eq. 6) and by how much.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PilotHit {
+    /// The pilot's index (it raises group `pilot mod N_g`).
+    pub pilot: u64,
+    /// What its first changed segment met.
+    pub met: Met,
+    /// The original instance met, or `u32::MAX` for a light change.
+    pub instance: u32,
+    /// Its increment of P: Δp/T_e for the texture where the segment ended
+    /// ([`TextureMasking::increment`]), Δp for a light change.
+    pub delta_p: f32,
+}
+
 /// One deposit: accumulator index, side (0 front, 1 back), signed quanta.
 pub type Deposit = (u32, u8, Quanta);
 
@@ -231,9 +246,8 @@ pub type Deposit = (u32, u8, Quanta);
 pub struct TraceOutput {
     /// Signed deposits, to be applied together.
     pub deposits: Vec<Deposit>,
-    /// Pilots that met a change: (pilot index, what they met, the instance met or
-    /// `u32::MAX`, barycentric point for texture masking: unused yet).
-    pub pilot_hits: Vec<(u64, Met, u32)>,
+    /// Pilots that met a change.
+    pub pilot_hits: Vec<PilotHit>,
     /// Pilots traced with an impact in the view frustum: (pilot index, visible).
     pub pilots: Vec<(u64, bool)>,
     /// Photons traced.
@@ -270,6 +284,10 @@ pub struct TraceContext<'a> {
     pub inv_quantum: f64,
     /// Tells whether a world point is in the view frustum.
     pub frustum: &'a Frustum,
+    /// Texture masking of pilot increments (§5.3).
+    pub masking: &'a TextureMasking,
+    /// The camera, for the MIP level texture masking reads.
+    pub view: MaskingView,
 }
 
 /// The camera's view frustum, for §5.3's visibility factor.
@@ -433,7 +451,12 @@ impl TraceContext<'_> {
                 if light_changed {
                     out.invalid += 1;
                     if is_pilot {
-                        out.pilot_hits.push((i, Met::Light, u32::MAX));
+                        out.pilot_hits.push(PilotHit {
+                            pilot: i,
+                            met: Met::Light,
+                            instance: u32::MAX,
+                            delta_p: DELTA_P,
+                        });
                     }
                     let mut old_s = fresh.clone();
                     if let Some((old_path, _)) = emit(&epoch.lights, &epoch.cells, &mut old_s) {
@@ -485,7 +508,12 @@ impl TraceContext<'_> {
                             } else {
                                 Met::Material
                             };
-                            fork = Some((path, met, union.original[u]));
+                            let delta_p = if is_pilot {
+                                self.masking.increment(&world.scene, &hit, &self.view)
+                            } else {
+                                DELTA_P
+                            };
+                            fork = Some((path, met, union.original[u], delta_p));
                             break;
                         }
                         if !hit.reflects {
@@ -498,10 +526,15 @@ impl TraceContext<'_> {
                         }
                     }
                 });
-                if let Some((at, met, instance)) = fork {
+                if let Some((at, met, instance, delta_p)) = fork {
                     out.invalid += 1;
                     if is_pilot {
-                        out.pilot_hits.push((i, met, instance));
+                        out.pilot_hits.push(PilotHit {
+                            pilot: i,
+                            met,
+                            instance,
+                            delta_p,
+                        });
                     }
                     let mut old_s = s.clone();
                     self.branch(

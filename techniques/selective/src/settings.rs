@@ -123,6 +123,24 @@ pub struct SelectiveSettings {
     /// `photon_stream.filtered_textures`): element buckets are far larger than a
     /// filtered texel. Default true.
     pub filtered_textures: bool,
+    /// Visual masking of lighting patterns by textures (§5.3): a pilot hit on a textured
+    /// surface raises its group's P by Δp/T_e instead of Δp = 1, T_e ≥ 1 the threshold
+    /// elevation of the texture (frequencies finer than an element removed) at the MIP
+    /// level the camera sees the hit at ([`crate::masking`]). True: changes on busy
+    /// textures, where artefacts are harder to see, are re-traced after changes on plain
+    /// surfaces, at the cost of a masking table per texture built at construction (a few
+    /// passes over each base-colour texture's texels) and a table lookup per pilot hit.
+    /// False: every pilot hit counts Δp = 1. Only the order of re-tracing depends on
+    /// it, never the converged solution. Default true.
+    pub texture_masking: bool,
+    /// Luminance contrast of a lighting artefact just visible on an untextured surface
+    /// (the inverse of contrast sensitivity), for `texture_masking` (§5.3): texture
+    /// contrast is counted in multiples of it before Daly's masking function, so a
+    /// texture whose contrast stays below it masks little (T_e < 1.2). Lower: a more sensitive
+    /// observer against whom textures mask more, so changes on textured surfaces wait
+    /// longer behind those on plain ones; higher: less masking. Unitless, in (0, 1];
+    /// default 0.01 (1 %, about the Weber fraction of photopic vision).
+    pub masking_contrast_threshold: f32,
     /// Seed of the Halton digit scrambling (scrambling keeps Eq. 3). Default 0.
     pub seed: u64,
 }
@@ -146,6 +164,8 @@ impl Default for SelectiveSettings {
             warm_up: true,
             max_bounces: 32,
             filtered_textures: true,
+            texture_masking: true,
+            masking_contrast_threshold: 0.01,
             seed: 0,
         }
     }
@@ -283,6 +303,12 @@ impl SelectiveSettings {
         }
         if self.photons_per_frame == 0 {
             return bad("photons_per_frame", "must be at least 1".into());
+        }
+        if !(self.masking_contrast_threshold > 0.0 && self.masking_contrast_threshold <= 1.0) {
+            return bad(
+                "masking_contrast_threshold",
+                format!("{} is not in (0, 1]", self.masking_contrast_threshold),
+            );
         }
         Ok(())
     }
@@ -427,6 +453,20 @@ mod tests {
                     ..Default::default()
                 },
                 "selective.frame_budget_ms",
+            ),
+            (
+                SelectiveSettings {
+                    masking_contrast_threshold: 0.0,
+                    ..Default::default()
+                },
+                "selective.masking_contrast_threshold",
+            ),
+            (
+                SelectiveSettings {
+                    masking_contrast_threshold: f32::NAN,
+                    ..Default::default()
+                },
+                "selective.masking_contrast_threshold",
             ),
         ];
         for (s, want) in cases {

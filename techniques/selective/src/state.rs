@@ -3,8 +3,9 @@
 
 use crate::elements::Elements;
 use crate::groups::{GroupLayout, Priority};
+use crate::masking::{DEFAULT_PIXELS_HIGH, MaskingView, TextureMasking};
 use crate::qmc::GroupFactors;
-use crate::retrace::{Met, Snapshot, TraceContext, TraceOutput, UnionWorld};
+use crate::retrace::{Met, PilotHit, Snapshot, TraceContext, TraceOutput, UnionWorld};
 use crate::settings::{GroupOrder, SelectiveMode, SelectiveSettings};
 use crate::update::{Invalidation, changed_light_fraction, classify};
 use crate::{SelectiveError, shade};
@@ -64,6 +65,8 @@ pub struct Selective {
     rng: Pcg32,
     pilots_since_camera: u64,
     aspect: f32,
+    pixels_high: u32,
+    masking: TextureMasking,
     warmed_up: bool,
     counters: SelectiveCounters,
     last_shade_ms: f64,
@@ -112,6 +115,11 @@ impl Selective {
         } else {
             1e-12
         };
+        let masking = if settings.texture_masking {
+            TextureMasking::new(&world.scene, &elements, settings.masking_contrast_threshold)
+        } else {
+            TextureMasking::disabled()
+        };
         let groups = (0..layout.groups)
             .map(|_| Group {
                 epoch: Arc::clone(&current),
@@ -136,6 +144,8 @@ impl Selective {
             cursor: 0,
             pilots_since_camera: 0,
             aspect: 4.0 / 3.0,
+            pixels_high: DEFAULT_PIXELS_HIGH,
+            masking,
             warmed_up: false,
             counters: SelectiveCounters::default(),
             last_shade_ms: 0.0,
@@ -212,6 +222,8 @@ impl Selective {
             path: self.settings.photon_path(),
             inv_quantum: 1.0 / self.quantum_w,
             frustum,
+            masking: &self.masking,
+            view: MaskingView::of(frustum, self.pixels_high),
         }
     }
 
@@ -340,7 +352,13 @@ impl Selective {
     /// Raises P of the groups pilots point at (Eq. 6, §5.3).
     fn raise(&mut self, out: &TraceOutput, epoch: &Snapshot) {
         let current = &self.current;
-        for &(i, met, inst) in &out.pilot_hits {
+        for &PilotHit {
+            pilot: i,
+            met,
+            instance: inst,
+            delta_p,
+        } in &out.pilot_hits
+        {
             let h = self.layout.raised_by_pilot(i) as usize;
             let held = &self.groups[h].epoch;
             if held.id == current.id {
@@ -357,7 +375,7 @@ impl Selective {
                 }
             };
             if raise {
-                self.groups[h].priority.p += 1.0;
+                self.groups[h].priority.p += delta_p as f64;
             }
         }
     }
@@ -411,10 +429,12 @@ impl Selective {
         while self.step(world).is_some() {}
     }
 
-    /// The frames' width over height, for the view frustum pilots test (§5.3's V).
+    /// The frames' size: their width over height for the view frustum pilots test
+    /// (§5.3's V), their height for the MIP level texture masking reads (§5.3's T_e).
     pub fn set_aspect(&mut self, width: u32, height: u32) {
         if height > 0 && width > 0 {
             self.aspect = width as f32 / height as f32;
+            self.pixels_high = height;
         }
     }
 

@@ -7,6 +7,7 @@ use illume_core::{Affine3A, Quat, Rgb, Vec3};
 use illume_scene::builtin::{SceneBuilder, quad, unit_box};
 use illume_scene::{InstanceId, LightKind, Material, Trs};
 use illume_selective::groups::GroupLayout;
+use illume_selective::masking::{MaskingView, TextureMasking};
 use illume_selective::qmc::{GroupFactors, emit, photon_stream};
 use illume_selective::retrace::{Frustum, Snapshot, TraceContext, UnionWorld};
 use illume_selective::{Selective, SelectiveSettings};
@@ -110,6 +111,7 @@ fn flagged_photons_are_exactly_those_whose_paths_changed() {
         ratio: 4,
     };
     let frustum = Frustum::of(&new.scene, 1.0);
+    let masking = TextureMasking::disabled();
     let ctx = TraceContext {
         elements: &elements,
         layout,
@@ -117,6 +119,8 @@ fn flagged_photons_are_exactly_those_whose_paths_changed() {
         path: SelectiveSettings::default().photon_path(),
         inv_quantum: 1e6,
         frustum: &frustum,
+        masking: &masking,
+        view: MaskingView::of(&frustum, 240),
     };
     let (mut flagged, mut changed) = (0, 0);
     for i in 0..4000u64 {
