@@ -42,7 +42,9 @@
 //! removed, one contrast sensitivity for every frequency (no CSF, no orientation or
 //! colour channels); the MIP level of a hit comes from its distance and angle to the
 //! camera. A texture that masks less than the model says delays visible updates (only
-//! the order of re-tracing is affected).
+//! the order of re-tracing is affected). (8) The default streaming mode's frames depend
+//! on the machine's speed (the thread re-traces while frames render, §6);
+//! [`SelectiveMode::Deterministic`] frames do not.
 //!
 //! ```
 //! use illume_selective::{Selective, SelectiveSettings};
