@@ -237,8 +237,13 @@ impl Selective {
     }
 
     /// Traces the next `count` photons of the index-order fill in `world` (clamped to
-    /// the pool). Returns the photons traced.
+    /// the pool), after bringing every stale group up to date: fill photons are traced
+    /// in the current state, so the photons already traced must be current too (a group
+    /// never holds photons of two epochs). Returns the photons traced.
     pub fn fill(&mut self, world: &World, count: u64) -> u64 {
+        while let Some(g) = self.next_group() {
+            self.retrace_group(world, g);
+        }
         let end = (self.filled + count).min(self.layout.pool());
         if end <= self.filled {
             return 0;

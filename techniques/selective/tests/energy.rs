@@ -193,3 +193,45 @@ fn a_grown_pool_equals_a_fresh_pool_of_the_larger_ratio() {
     // Without max_photons the pool stays at N_g·N_p·R.
     assert_eq!(from_scratch(&world, &base).filled(), pool);
 }
+
+/// A change before the pool is traced (an edit before the first frame), or between a
+/// partial fill and the warm-up, leaves the same accumulators as a fresh trace of the
+/// new scene: the fill brings stale groups up to date before it traces in the current
+/// state.
+#[test]
+fn changes_before_or_during_the_fill_are_exact() {
+    for filled_first in [0u64, 700] {
+        let mut world = World::new(illume_scene::builtin::load("cornell-spot").unwrap());
+        let settings = SelectiveSettings {
+            warm_up: true,
+            ..small(GroupOrder::Priority, 0.5)
+        };
+        let mut sel = Selective::for_world(&world, settings.clone()).unwrap();
+        sel.fill(&world, filled_first);
+        let sphere = instance(&world, "sphere");
+        let moved = Affine3A::from_translation(Vec3::new(0.3, 0.0, 0.2))
+            * world.scene.instances[sphere.index()].world_from_object;
+        apply(
+            &mut world,
+            &mut sel,
+            Edit::SetInstanceTransform {
+                instance: sphere,
+                world_from_object: moved,
+            },
+        );
+        // The warm-up fills the whole pool at the first advance.
+        sel.advance(
+            &world,
+            &Budget {
+                work: Some(1),
+                time_ms: None,
+            },
+        );
+        assert_eq!(sel.filled(), sel.layout().pool());
+        sel.converge(&world);
+        assert!(
+            sel.accumulators() == from_scratch(&world, &settings).accumulators(),
+            "a change after {filled_first} photons of the fill is not exact"
+        );
+    }
+}
