@@ -251,7 +251,9 @@ fn static_scene_shares_one_reference_across_frames() {
 /// `reference_frames` measures only the listed frames (the others have no error, and no
 /// reference is rendered for them); `own_converged_frames` measures each technique
 /// against its own converged image, which for photon_stream (deterministic) is closer
-/// than the path tracer's: its own steady state carries its bias.
+/// than the path tracer's: its own steady state carries its bias. Latency against the
+/// own images is judged with `own_latency_threshold`, against the path tracer with
+/// `latency_threshold`.
 #[test]
 fn reference_frames_and_own_converged_images() {
     let text = r#"
@@ -264,6 +266,8 @@ times_s = [0.0, 0.25, 0.5, 0.75, 1.0]
 metrics = ["rmse", "flip"]
 reference_frames = [0, 2, 4]
 own_converged_frames = 6
+latency_threshold = 0.5
+own_latency_threshold = 0.001
 
 [reference]
 spp = 16
@@ -311,6 +315,18 @@ translation = [0.2, 0.3, 0.0]
     }
     let s = &out.summaries[0];
     assert_eq!(s.own_latencies.len(), out.events.len());
+    // Each threshold judges its own error: FLIP against the path tracer (about 0.2 at
+    // this size) never rises above 0.5, so every latency is 0 frames; against its own
+    // converged image (0.006 to 0.09 here) it does not stay below 0.001, so none settles. Judged
+    // with the same threshold, both rows would agree.
+    for (e, (l, own)) in out
+        .events
+        .iter()
+        .zip(s.latencies.iter().zip(&s.own_latencies))
+    {
+        assert_eq!(l.frames, Some(0), "{}: {l:?}", e.name);
+        assert_eq!(own.frames, None, "{}: {own:?}", e.name);
+    }
     // Wall-clock latency is the frame times after the event's frame, up to the settled one.
     for (e, l) in out.events.iter().zip(&s.latencies) {
         if let (Some(k), Some(wall)) = (l.frames, l.wall_seconds) {
@@ -326,6 +342,13 @@ translation = [0.2, 0.3, 0.0]
     let md = std::fs::read_to_string(&files.report_md).unwrap();
     assert!(
         md.contains("latency wall [s]") && md.contains("to own steady state"),
+        "{md}"
+    );
+    // The latency section states both thresholds.
+    assert!(
+        md.contains("stays below 0.5 up to the next event")
+            && md.contains("(a fresh start, 6 frames at fixed work)")
+            && md.contains("stays below 0.001."),
         "{md}"
     );
     let csv = std::fs::read_to_string(&files.results_csv).unwrap();
