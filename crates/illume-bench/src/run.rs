@@ -529,10 +529,12 @@ fn technique_engine(
 }
 
 /// Technique entry `k`'s own converged image of each measured frame's state: the same
-/// technique and settings built fresh on the scene, the scenario's edits due at the
-/// frame's time applied, then `own_converged_frames` frames at that time with fixed work
-/// per frame (the technique's default budget), so the result does not depend on the
-/// machine's speed.
+/// technique and settings built fresh on the scene with the scenario's edits due at the
+/// frame's time already applied (so the technique never sees them as changes), then
+/// `own_converged_frames` frames at that time with fixed work per frame (the technique's
+/// default budget), so the result does not depend on the machine's speed. The last of
+/// them is rendered with the measured frame's index, so the renderer's random numbers
+/// (area-light samples) are the measured frame's.
 fn own_converged_images(
     scenario: &Scenario,
     k: usize,
@@ -568,11 +570,19 @@ fn own_converged_images(
     let mut images = vec![None; times.len()];
     for (n, &i) in wanted.iter().enumerate() {
         let t = times[i];
-        let mut engine = technique_engine(scenario, k, &config, scene, times)?;
+        // The technique starts on the edited scene: the state is its starting point, not
+        // a change it would have to catch up with.
+        let mut state = scene.clone();
+        Replay::new(scenario).apply_due(&mut state, t)?;
+        let mut engine = technique_engine(scenario, k, &config, &state, times)?;
         engine.set_budget(budget);
-        Replay::new(scenario).apply_due(&mut engine, t)?;
         let mut last = None;
         for step in 0..steps {
+            if step + 1 == steps {
+                // The measured frame's random numbers (area-light samples), so that
+                // direct-light noise does not count as distance from the steady state.
+                engine.set_frame_index(i as u64);
+            }
             last = Some(engine.step(t).map_err(technique_error)?.frame.full);
             progress.set(n as u64 * steps + step + 1);
         }

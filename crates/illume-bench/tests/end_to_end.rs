@@ -376,3 +376,81 @@ fn reference_frames_out_of_range_name_the_key() {
         .to_string();
     assert!(e.contains("increasing"), "{e}");
 }
+
+/// The own converged image is the technique started fresh on the edited state, its last
+/// frame rendered with the measured frame's random numbers: for selective photon tracing
+/// (deterministic), whose finished update equals a fresh trace of the pool bit for bit,
+/// the error against it is exactly zero before the edit and again once every group is up
+/// to date after it — and not zero while it catches up. The scene has an area light,
+/// whose direct light is sampled anew each frame.
+#[test]
+fn own_converged_image_is_a_fresh_start_on_the_edited_state() {
+    let scene = illume_scene::shared_scenes_dir().join("gltf/cornell_area.gltf");
+    let text = r#"
+name = "own_selective"
+scene = "SCENE"
+width = 24
+height = 18
+times_s = [0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25]
+metrics = ["rmse"]
+error_metric = "rmse"
+own_converged_frames = 1
+own_latency_threshold = 1e-12
+
+[reference]
+spp = 1
+equal_time = false
+
+[[technique]]
+name = "selective"
+settings = { mode = "deterministic", pilots_per_group = 8, ratio = 4, element_count = 400, photons_per_frame = 600 }
+
+[[edit]]
+at_s = 0.5
+instance = "sphere"
+translation = [0.3, 0.3, 0.3]
+"#
+    .replace("SCENE", &scene.to_string_lossy());
+    let root = temp_dir("own-selective");
+    let scenario = Scenario::parse(&text, &root.join("own_selective.toml")).unwrap();
+    let options = RunOptions {
+        output_dir: root.join("report"),
+        cache_dir: root.join("cache"),
+        save_frames: false,
+        notes: vec![],
+    };
+    let out = run(&scenario, &options, &mut Silent).unwrap();
+    let own: Vec<f64> = out
+        .records
+        .iter()
+        .map(|r| r.own_metric(Metric::Rmse).unwrap())
+        .collect();
+    let stale: Vec<f64> = out
+        .records
+        .iter()
+        .map(|r| r.counters.get("selective.stale_groups").unwrap())
+        .collect();
+    assert_eq!(&own[..2], &[0.0, 0.0], "before the edit: {own:?}");
+    assert!(
+        own[2] > 0.0,
+        "at the edit's frame the update has only begun: {own:?}"
+    );
+    // The first frame after the edit with every group up to date.
+    let current = (2..stale.len())
+        .find(|&f| stale[f] == 0.0)
+        .unwrap_or_else(|| panic!("groups still stale at the last frame: {stale:?}"));
+    assert!(current > 2, "the update takes a few frames: {stale:?}");
+    assert!(
+        own[current..].iter().all(|&e| e == 0.0),
+        "exact once no group is stale (frame {current}): {own:?}, stale {stale:?}"
+    );
+    // Judged against the own images with a threshold this strict, the edit's latency is
+    // the frame the update finished.
+    let edit = &out.events[1];
+    assert_eq!(
+        out.summaries[0].own_latencies[1].frames,
+        Some(current - edit.frame),
+        "{own:?}"
+    );
+    let _ = std::fs::remove_dir_all(&root);
+}
