@@ -217,11 +217,25 @@ fn shipped_scenarios_parse() {
         "cornell_spot_static.toml",
         "moving_sphere.toml",
         "moving_light.toml",
+        "selective_sphere.toml",
+        "selective_area.toml",
+        "selective_cube.toml",
     ] {
         match Scenario::load(&dir.join(name)) {
             Ok(s) => {
-                assert!(!s.frame_times().is_empty());
-                s.load_scene().unwrap();
+                let times = s.frame_times();
+                assert!(!times.is_empty());
+                let scene = s.load_scene().unwrap_or_else(|e| panic!("{name}: {e}"));
+                // Every edit names something the scene has and shows on a frame.
+                for (i, e) in s.edits.iter().enumerate() {
+                    e.resolve(&scene)
+                        .unwrap_or_else(|m| panic!("{name}: edit[{i}]: {m}"));
+                    assert!(
+                        times.last().is_some_and(|&t| t >= e.at_s),
+                        "{name}: edit[{i}] at {} s is after the last frame",
+                        e.at_s
+                    );
+                }
             }
             // Until photon_stream joins TechniqueKind, the only acceptable failure is
             // that entry; once it has joined, every shipped scenario must load.
