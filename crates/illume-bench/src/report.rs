@@ -135,9 +135,10 @@ pub fn summary_table(scenario: &Scenario, outcome: &BenchOutcome) -> Table {
 }
 
 /// One row per series per event: when it happened and how long the error took to stay
-/// below the threshold, in frames, scene seconds and wall-clock seconds (`never` if it
-/// did not by the next event or the last frame); with `own_converged_frames`, the same
-/// against the technique's own converged images.
+/// below `latency_threshold`, in frames, scene seconds and wall-clock seconds (`never` if
+/// it did not by the next event or the last frame); with `own_converged_frames`, the same
+/// in frames and wall-clock seconds against the technique's own converged images, below
+/// `own_latency_threshold`.
 pub fn latency_table(outcome: &BenchOutcome) -> Table {
     let own = outcome
         .summaries
@@ -384,10 +385,23 @@ fn markdown(
         md,
         "## Latency after events\n\nFrames, scene seconds and wall-clock seconds (the frame \
          times of the frames rendered after the event's frame, up to the settled one) from \
-         the event until {} stays below {} up to the next event (or the last frame), judged \
-         on the measured frames; `never` if it does not.\n\n{}\n",
+         the event until {} against the converged reference stays below {} up to the next \
+         event (or the last frame), judged on the measured frames; `never` if it does \
+         not.{}\n\n{}\n",
         scenario.error_metric,
         scenario.latency_threshold,
+        if scenario.own_converged_frames > 0 {
+            format!(
+                " \"To own steady state\": the same until {} against the technique's own \
+                 converged image of the frame's state (a fresh start, {} frames at fixed \
+                 work) stays below {}.",
+                scenario.error_metric,
+                scenario.own_converged_frames,
+                scenario.own_latency_threshold()
+            )
+        } else {
+            String::new()
+        },
         latency_table(outcome).to_markdown()
     );
     let _ = write!(md, "## Plots\n\n{plots}");

@@ -138,11 +138,12 @@ pub struct SeriesSummary {
     /// `(mean, max)` flicker over consecutive frame pairs (`None` with one frame).
     pub flicker: Option<(f64, f64)>,
     /// Latency after each of [`BenchOutcome::events`], in the same order: until the
-    /// error stays below the threshold up to the next event on a later frame (or the
-    /// last frame).
+    /// error against the converged reference stays below `latency_threshold` up to the
+    /// next event on a later frame (or the last frame).
     pub latencies: Vec<EventLatency>,
-    /// Latency after each event against the technique's own converged images (empty
-    /// when `own_converged_frames` is 0): the time to reach its own steady state.
+    /// Latency after each event against the technique's own converged images, with
+    /// `own_latency_threshold` (empty when `own_converged_frames` is 0): the time to
+    /// reach its own steady state.
     pub own_latencies: Vec<EventLatency>,
 }
 
@@ -528,10 +529,12 @@ fn technique_engine(
 }
 
 /// Technique entry `k`'s own converged image of each measured frame's state: the same
-/// technique and settings built fresh on the scene, the scenario's edits due at the
-/// frame's time applied, then `own_converged_frames` frames at that time with fixed work
-/// per frame (the technique's default budget), so the result does not depend on the
-/// machine's speed.
+/// technique and settings built fresh on the scene with the scenario's edits due at the
+/// frame's time already applied (so the technique never sees them as changes), then
+/// `own_converged_frames` frames at that time with fixed work per frame (the technique's
+/// default budget), so the result does not depend on the machine's speed. The last of
+/// them is rendered with the measured frame's index, so the renderer's random numbers
+/// (area-light samples) are the measured frame's.
 fn own_converged_images(
     scenario: &Scenario,
     k: usize,
@@ -567,11 +570,19 @@ fn own_converged_images(
     let mut images = vec![None; times.len()];
     for (n, &i) in wanted.iter().enumerate() {
         let t = times[i];
-        let mut engine = technique_engine(scenario, k, &config, scene, times)?;
+        // The technique starts on the edited scene: the state is its starting point, not
+        // a change it would have to catch up with.
+        let mut state = scene.clone();
+        Replay::new(scenario).apply_due(&mut state, t)?;
+        let mut engine = technique_engine(scenario, k, &config, &state, times)?;
         engine.set_budget(budget);
-        Replay::new(scenario).apply_due(&mut engine, t)?;
         let mut last = None;
         for step in 0..steps {
+            if step + 1 == steps {
+                // The measured frame's random numbers (area-light samples), so that
+                // direct-light noise does not count as distance from the steady state.
+                engine.set_frame_index(i as u64);
+            }
             last = Some(engine.step(t).map_err(technique_error)?.frame.full);
             progress.set(n as u64 * steps + step + 1);
         }
@@ -778,7 +789,14 @@ fn summarize(
                 .iter()
                 .map(|r| r.metric(scenario.error_metric).unwrap_or(f64::NAN))
                 .collect();
-            let latencies = event_latencies(scenario, &errors, times, &frame_ms, events, measured)?;
+            let latencies = event_latencies(
+                &errors,
+                times,
+                &frame_ms,
+                events,
+                measured,
+                scenario.latency_threshold,
+            )?;
             let own_latencies = if has_own {
                 let own_errors: Vec<f64> = rs
                     .iter()
@@ -787,12 +805,12 @@ fn summarize(
                 let own_measured: Vec<bool> =
                     rs.iter().map(|r| !r.own_metrics.is_empty()).collect();
                 event_latencies(
-                    scenario,
                     &own_errors,
                     times,
                     &frame_ms,
                     events,
                     &own_measured,
+                    scenario.own_latency_threshold(),
                 )?
             } else {
                 Vec::new()
@@ -826,15 +844,16 @@ fn summarize(
         .collect()
 }
 
-/// Latency after each event, judged on the measured frames only, up to the next event
-/// that shows on a later frame (or the last frame).
+/// Latency after each event until `errors` stays below `threshold`, judged on the
+/// measured frames only, up to the next event that shows on a later frame (or the last
+/// frame).
 fn event_latencies(
-    scenario: &Scenario,
     errors: &[f64],
     times: &[f64],
     frame_ms: &[f64],
     events: &[Event],
     measured: &[bool],
+    threshold: f64,
 ) -> Result<Vec<EventLatency>, BenchError> {
     events
         .iter()
@@ -852,8 +871,7 @@ fn event_latencies(
             }
             let window_errors: Vec<f64> = frames.iter().map(|&i| errors[i]).collect();
             let window_times: Vec<f64> = frames.iter().map(|&i| times[i]).collect();
-            let l =
-                latency_after_event(&window_errors, &window_times, 0, scenario.latency_threshold)?;
+            let l = latency_after_event(&window_errors, &window_times, 0, threshold)?;
             let settled = l.frames.map(|k| frames[k]);
             Ok(EventLatency {
                 frames: settled.map(|s| s - e.frame),
@@ -1002,6 +1020,60 @@ mod tests {
             (s[0].median_frame_ms - 5.05).abs() < 1e-12,
             "{}",
             s[0].median_frame_ms
+        );
+    }
+
+    /// The latency to the own steady state is judged with `own_latency_threshold`, the
+    /// latency against the converged reference with `latency_threshold`.
+    #[test]
+    fn own_latency_uses_its_own_threshold() {
+        // Against the path tracer the error sits at its bias floor (0.15); against its own
+        // converged image it falls from 0.3 to 0.03 after the event at frame 0.
+        let reference = [0.3, 0.15, 0.15, 0.15, 0.15, 0.15];
+        let own = [0.3, 0.12, 0.08, 0.04, 0.03, 0.03];
+        let times: Vec<f64> = (0..own.len()).map(|i| i as f64 * 0.1).collect();
+        let records: Vec<FrameRecord> = (0..own.len())
+            .map(|i| FrameRecord {
+                series: "s".into(),
+                technique: "selective".into(),
+                frame: i,
+                time_s: times[i],
+                frame_ms: 20.0,
+                metrics: vec![(Metric::Flip, reference[i])],
+                own_metrics: vec![(Metric::Flip, own[i])],
+                flicker: None,
+                counters: Counters::new(),
+            })
+            .collect();
+        let start = [Event {
+            name: "start".into(),
+            at_s: 0.0,
+            frame: 0,
+        }];
+        let all = [true; 6];
+        let mut scenario = Scenario {
+            metrics: vec![Metric::Flip],
+            latency_threshold: 0.2,
+            own_converged_frames: 4,
+            own_latency_threshold: Some(0.05),
+            ..Scenario::default()
+        };
+        let s = summarize(&scenario, &records, &times, &start, &all).unwrap();
+        assert_eq!(s[0].latencies[0].frames, Some(1), "0.15 < 0.2 from frame 1");
+        assert_eq!(s[0].latencies[0].wall_seconds, Some(0.02));
+        assert_eq!(
+            s[0].own_latencies[0].frames,
+            Some(3),
+            "0.04 < 0.05 from frame 3"
+        );
+        assert_eq!(s[0].own_latencies[0].wall_seconds, Some(0.06));
+        // Without it, latency_threshold serves both.
+        scenario.own_latency_threshold = None;
+        let s = summarize(&scenario, &records, &times, &start, &all).unwrap();
+        assert_eq!(
+            s[0].own_latencies[0].frames,
+            Some(1),
+            "0.12 < 0.2 from frame 1"
         );
     }
 

@@ -77,9 +77,18 @@ pub struct Scenario {
     /// The metric plotted against time and used for latency; added to `metrics` if
     /// missing. Must be one where lower is better. Default `flip`.
     pub error_metric: Metric,
-    /// Latency threshold in units of `error_metric`: after an event, the latency is the
-    /// time until the error stays below this value to the end of the run. Default 0.1.
+    /// Latency threshold in units of `error_metric`, against the converged reference:
+    /// after an event, the latency is the time until the error stays below this value up
+    /// to the next event (or the last frame). Default 0.1.
     pub latency_threshold: f64,
+    /// Latency threshold in units of `error_metric` against the technique's own
+    /// converged images (`own_converged_frames`): the latency "to own steady state" is
+    /// the time until that error stays below this value. A technique's bias keeps its
+    /// error against the path tracer above some floor, so a threshold that is meaningful
+    /// against its own steady state (e.g. FLIP 0.05) is usually lower than
+    /// `latency_threshold`. Finite and > 0; only with `own_converged_frames` > 0.
+    /// Default: `latency_threshold` (see [`Scenario::own_latency_threshold`]).
+    pub own_latency_threshold: Option<f64>,
     /// Frame indices (0-based, into the frame times) measured against the converged
     /// reference, e.g. `[0, 10, 20]`: only these get a reference image and metrics, so
     /// long sequences stay affordable; other frames are rendered and timed but carry no
@@ -92,7 +101,8 @@ pub struct Scenario {
     /// the path tracer's). The converged image is the same technique with the same
     /// settings, built fresh at that state (edits applied) and run for this many frames
     /// at fixed work per frame (its default budget), all at the frame's time. Cost: this
-    /// many frames per measured frame per technique. 0 = off. Default 0.
+    /// many frames per measured frame per technique. The latency "to own steady state"
+    /// is judged with `own_latency_threshold`. 0 = off. Default 0.
     pub own_converged_frames: u32,
     /// Renderer settings shared by every technique: the `[render]` table of a
     /// configuration file (e.g. `area_light_samples`, `seed`), without `width`/`height`
@@ -130,6 +140,7 @@ impl Default for Scenario {
             metrics: vec![Metric::Rmse, Metric::RelMse, Metric::Flip],
             error_metric: Metric::Flip,
             latency_threshold: 0.1,
+            own_latency_threshold: None,
             reference_frames: None,
             own_converged_frames: 0,
             render: None,
@@ -426,6 +437,18 @@ impl Scenario {
         if !(self.latency_threshold.is_finite() && self.latency_threshold > 0.0) {
             return Err(self.invalid("latency_threshold", "must be finite and > 0"));
         }
+        if let Some(t) = self.own_latency_threshold {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(self.invalid("own_latency_threshold", "must be finite and > 0"));
+            }
+            if self.own_converged_frames == 0 {
+                return Err(self.invalid(
+                    "own_latency_threshold",
+                    "has no effect without `own_converged_frames` > 0 (it is the latency \
+                     threshold against the technique's own converged images)",
+                ));
+            }
+        }
         let render = self.render.as_ref();
         if let Some(k) = ["width", "height"]
             .iter()
@@ -548,6 +571,12 @@ impl Scenario {
                 "give either `times_s`, or both `duration_s` and `fps`",
             )),
         }
+    }
+
+    /// The latency threshold against the technique's own converged images:
+    /// `own_latency_threshold`, or `latency_threshold` when not given.
+    pub fn own_latency_threshold(&self) -> f64 {
+        self.own_latency_threshold.unwrap_or(self.latency_threshold)
     }
 
     /// For each of `frame_count` frames, true when it is measured against the converged

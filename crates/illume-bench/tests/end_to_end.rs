@@ -251,7 +251,9 @@ fn static_scene_shares_one_reference_across_frames() {
 /// `reference_frames` measures only the listed frames (the others have no error, and no
 /// reference is rendered for them); `own_converged_frames` measures each technique
 /// against its own converged image, which for photon_stream (deterministic) is closer
-/// than the path tracer's: its own steady state carries its bias.
+/// than the path tracer's: its own steady state carries its bias. Latency against the
+/// own images is judged with `own_latency_threshold`, against the path tracer with
+/// `latency_threshold`.
 #[test]
 fn reference_frames_and_own_converged_images() {
     let text = r#"
@@ -264,6 +266,8 @@ times_s = [0.0, 0.25, 0.5, 0.75, 1.0]
 metrics = ["rmse", "flip"]
 reference_frames = [0, 2, 4]
 own_converged_frames = 6
+latency_threshold = 0.5
+own_latency_threshold = 0.001
 
 [reference]
 spp = 16
@@ -311,6 +315,18 @@ translation = [0.2, 0.3, 0.0]
     }
     let s = &out.summaries[0];
     assert_eq!(s.own_latencies.len(), out.events.len());
+    // Each threshold judges its own error: FLIP against the path tracer (about 0.2 at
+    // this size) never rises above 0.5, so every latency is 0 frames; against its own
+    // converged image (0.006 to 0.09 here) it does not stay below 0.001, so none settles. Judged
+    // with the same threshold, both rows would agree.
+    for (e, (l, own)) in out
+        .events
+        .iter()
+        .zip(s.latencies.iter().zip(&s.own_latencies))
+    {
+        assert_eq!(l.frames, Some(0), "{}: {l:?}", e.name);
+        assert_eq!(own.frames, None, "{}: {own:?}", e.name);
+    }
     // Wall-clock latency is the frame times after the event's frame, up to the settled one.
     for (e, l) in out.events.iter().zip(&s.latencies) {
         if let (Some(k), Some(wall)) = (l.frames, l.wall_seconds) {
@@ -326,6 +342,13 @@ translation = [0.2, 0.3, 0.0]
     let md = std::fs::read_to_string(&files.report_md).unwrap();
     assert!(
         md.contains("latency wall [s]") && md.contains("to own steady state"),
+        "{md}"
+    );
+    // The latency section states both thresholds.
+    assert!(
+        md.contains("stays below 0.5 up to the next event")
+            && md.contains("(a fresh start, 6 frames at fixed work)")
+            && md.contains("stays below 0.001."),
         "{md}"
     );
     let csv = std::fs::read_to_string(&files.results_csv).unwrap();
@@ -352,4 +375,82 @@ fn reference_frames_out_of_range_name_the_key() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("increasing"), "{e}");
+}
+
+/// The own converged image is the technique started fresh on the edited state, its last
+/// frame rendered with the measured frame's random numbers: for selective photon tracing
+/// (deterministic), whose finished update equals a fresh trace of the pool bit for bit,
+/// the error against it is exactly zero before the edit and again once every group is up
+/// to date after it — and not zero while it catches up. The scene has an area light,
+/// whose direct light is sampled anew each frame.
+#[test]
+fn own_converged_image_is_a_fresh_start_on_the_edited_state() {
+    let scene = illume_scene::shared_scenes_dir().join("gltf/cornell_area.gltf");
+    let text = r#"
+name = "own_selective"
+scene = "SCENE"
+width = 24
+height = 18
+times_s = [0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 1.5, 1.75, 2.0, 2.25]
+metrics = ["rmse"]
+error_metric = "rmse"
+own_converged_frames = 1
+own_latency_threshold = 1e-12
+
+[reference]
+spp = 1
+equal_time = false
+
+[[technique]]
+name = "selective"
+settings = { mode = "deterministic", pilots_per_group = 8, ratio = 4, element_count = 400, photons_per_frame = 600 }
+
+[[edit]]
+at_s = 0.5
+instance = "sphere"
+translation = [0.3, 0.3, 0.3]
+"#
+    .replace("SCENE", &scene.to_string_lossy());
+    let root = temp_dir("own-selective");
+    let scenario = Scenario::parse(&text, &root.join("own_selective.toml")).unwrap();
+    let options = RunOptions {
+        output_dir: root.join("report"),
+        cache_dir: root.join("cache"),
+        save_frames: false,
+        notes: vec![],
+    };
+    let out = run(&scenario, &options, &mut Silent).unwrap();
+    let own: Vec<f64> = out
+        .records
+        .iter()
+        .map(|r| r.own_metric(Metric::Rmse).unwrap())
+        .collect();
+    let stale: Vec<f64> = out
+        .records
+        .iter()
+        .map(|r| r.counters.get("selective.stale_groups").unwrap())
+        .collect();
+    assert_eq!(&own[..2], &[0.0, 0.0], "before the edit: {own:?}");
+    assert!(
+        own[2] > 0.0,
+        "at the edit's frame the update has only begun: {own:?}"
+    );
+    // The first frame after the edit with every group up to date.
+    let current = (2..stale.len())
+        .find(|&f| stale[f] == 0.0)
+        .unwrap_or_else(|| panic!("groups still stale at the last frame: {stale:?}"));
+    assert!(current > 2, "the update takes a few frames: {stale:?}");
+    assert!(
+        own[current..].iter().all(|&e| e == 0.0),
+        "exact once no group is stale (frame {current}): {own:?}, stale {stale:?}"
+    );
+    // Judged against the own images with a threshold this strict, the edit's latency is
+    // the frame the update finished.
+    let edit = &out.events[1];
+    assert_eq!(
+        out.summaries[0].own_latencies[1].frames,
+        Some(current - edit.frame),
+        "{own:?}"
+    );
+    let _ = std::fs::remove_dir_all(&root);
 }

@@ -217,11 +217,25 @@ fn shipped_scenarios_parse() {
         "cornell_spot_static.toml",
         "moving_sphere.toml",
         "moving_light.toml",
+        "selective_sphere.toml",
+        "selective_area.toml",
+        "selective_cube.toml",
     ] {
         match Scenario::load(&dir.join(name)) {
             Ok(s) => {
-                assert!(!s.frame_times().is_empty());
-                s.load_scene().unwrap();
+                let times = s.frame_times();
+                assert!(!times.is_empty());
+                let scene = s.load_scene().unwrap_or_else(|e| panic!("{name}: {e}"));
+                // Every edit names something the scene has and shows on a frame.
+                for (i, e) in s.edits.iter().enumerate() {
+                    e.resolve(&scene)
+                        .unwrap_or_else(|m| panic!("{name}: edit[{i}]: {m}"));
+                    assert!(
+                        times.last().is_some_and(|&t| t >= e.at_s),
+                        "{name}: edit[{i}] at {} s is after the last frame",
+                        e.at_s
+                    );
+                }
             }
             // Until photon_stream joins TechniqueKind, the only acceptable failure is
             // that entry; once it has joined, every shipped scenario must load.
@@ -244,4 +258,61 @@ fn huge_frame_counts_and_sizes_name_the_key() {
         "scene = \"builtin:cornell-spot\"\nwidth = 100000\nheight = 100000\ntimes_s = [0.0]\n[[technique]]\nname = \"reference\"\n",
     );
     assert!(e.contains("width/height") && e.contains("16384"), "{e}");
+}
+
+/// `own_latency_threshold` is the latency threshold against the technique's own converged
+/// images; without it, `latency_threshold` serves both.
+#[test]
+fn own_latency_threshold_parses_and_defaults_to_latency_threshold() {
+    let s = parse(&format!(
+        "latency_threshold = 0.2\nown_converged_frames = 3\nown_latency_threshold = 0.05\n{MINIMAL}"
+    ))
+    .unwrap();
+    assert_eq!(s.latency_threshold, 0.2);
+    assert_eq!(s.own_latency_threshold, Some(0.05));
+    assert_eq!(s.own_latency_threshold(), 0.05);
+    let s = parse(&format!(
+        "latency_threshold = 0.2\nown_converged_frames = 3\n{MINIMAL}"
+    ))
+    .unwrap();
+    assert_eq!(s.own_latency_threshold, None);
+    assert_eq!(s.own_latency_threshold(), 0.2);
+    assert_eq!(parse(MINIMAL).unwrap().own_latency_threshold(), 0.1);
+}
+
+#[test]
+fn invalid_own_latency_threshold_names_the_file_and_the_key() {
+    for value in ["0.0", "-0.05", "nan", "inf"] {
+        let e = error(&format!(
+            "own_converged_frames = 3\nown_latency_threshold = {value}\n{MINIMAL}"
+        ));
+        assert!(
+            e.contains("test_case.toml")
+                && e.contains("own_latency_threshold")
+                && e.contains("finite and > 0"),
+            "{value}: {e}"
+        );
+    }
+    // Not a number: the parser's error names the key.
+    let e = error(&format!(
+        "own_converged_frames = 3\nown_latency_threshold = \"low\"\n{MINIMAL}"
+    ));
+    assert!(
+        e.contains("test_case.toml") && e.contains("own_latency_threshold"),
+        "{e}"
+    );
+    // Without own converged images it would be ignored: refused instead.
+    let e = error(&format!("own_latency_threshold = 0.05\n{MINIMAL}"));
+    assert!(
+        e.contains("test_case.toml")
+            && e.contains("own_latency_threshold")
+            && e.contains("own_converged_frames"),
+        "{e}"
+    );
+    // latency_threshold itself is checked the same way.
+    let e = error(&format!("latency_threshold = -1.0\n{MINIMAL}"));
+    assert!(
+        e.contains("latency_threshold") && e.contains("finite"),
+        "{e}"
+    );
 }

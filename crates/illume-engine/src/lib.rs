@@ -150,6 +150,14 @@ impl Engine {
         self.budget = budget;
     }
 
+    /// Sets the index the next [`Engine::step`] renders its frame as (later steps count
+    /// up from it; a new engine starts at 0). The index seeds the renderer's random
+    /// numbers (area-light samples of the direct light), so an engine that renders the
+    /// same state as frame `index` of another gets the same direct light.
+    pub fn set_frame_index(&mut self, index: u64) {
+        self.frame_index = index;
+    }
+
     /// Runs the technique's precompute phase now, reporting to `progress`; returns its
     /// wall-clock time \[ms\]. Does nothing (0 ms) when it already ran. Without this
     /// call the first [`Engine::step`] runs it silently.
