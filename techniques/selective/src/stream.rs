@@ -9,10 +9,14 @@
 //! together and a frame never sees half a group. The frame loop takes the same mutex for
 //! scene changes and to copy the display values (shading runs outside it), so it waits
 //! for at most the group in flight. A frame that is waiting for the mutex holds the
-//! thread back from starting its next step (std's mutex is not fair), and std's
-//! `RwLock` lets no new reader in ahead of a waiting writer, so a scene update waits for
-//! one step at most too. With nothing stale and the pool full the thread sleeps until
-//! the next scene change.
+//! thread back from starting its next step (std's mutex is not fair). Likewise the frame
+//! loop announces a world write ([`Technique::before_world_write`]) and the thread takes
+//! no new read lock until the frame's [`Technique::scene_changed`] or
+//! [`Technique::advance`] (or [`WORLD_WAIT`] at most): std's `RwLock` clears its
+//! writer-waiting flag when it wakes the writer, so a reader that comes back at once gets
+//! in first, and the writer waited for ~70 steps (100 ms) before this. A scene update
+//! waits for one step at most. With nothing stale and the pool full the thread sleeps
+//! until the next scene change.
 
 use crate::elements::Elements;
 use crate::state::Selective;
@@ -30,6 +34,10 @@ use std::time::{Duration, Instant};
 /// wakes it (a change always wakes it at once).
 const IDLE_WAIT: Duration = Duration::from_millis(50);
 
+/// Longest the thread stays off the world after the frame loop announced a write and
+/// did not say it is done (an announcement no write followed).
+pub const WORLD_WAIT: Duration = Duration::from_millis(50);
+
 /// What the technique and its thread share.
 struct Shared {
     solution: Mutex<Selective>,
@@ -38,6 +46,10 @@ struct Shared {
     stop: AtomicBool,
     /// Steps the thread has taken (groups and fill chunks).
     steps: AtomicU64,
+    /// When the frame loop announced a world write, in µs since `start` (+1; 0: none
+    /// pending).
+    world_wanted_us: AtomicU64,
+    start: Instant,
 }
 
 impl Shared {
@@ -46,6 +58,17 @@ impl Shared {
     /// whole number of groups).
     fn lock(&self) -> MutexGuard<'_, Selective> {
         self.solution.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn now_us(&self) -> u64 {
+        self.start.elapsed().as_micros() as u64 + 1
+    }
+
+    /// True while a world write the frame loop announced is pending (for [`WORLD_WAIT`]
+    /// at most).
+    fn world_wanted(&self) -> bool {
+        let at = self.world_wanted_us.load(Ordering::Acquire);
+        at != 0 && self.now_us().saturating_sub(at) < WORLD_WAIT.as_micros() as u64
     }
 
     /// Locks the solution for the frame loop, ahead of the thread's next step.
@@ -78,6 +101,8 @@ impl Streaming {
             frame_waiting: AtomicU32::new(0),
             stop: AtomicBool::new(false),
             steps: AtomicU64::new(0),
+            world_wanted_us: AtomicU64::new(0),
+            start: Instant::now(),
         });
         let thread =
             spawn(Arc::clone(world), Arc::clone(&shared)).map_err(SelectiveError::Thread)?;
@@ -100,6 +125,12 @@ impl Streaming {
         self.shared.steps.load(Ordering::Acquire)
     }
 
+    /// The frame loop is done writing the world: the thread may read it again.
+    fn world_written(&self) {
+        self.shared.world_wanted_us.store(0, Ordering::Release);
+        self.wake();
+    }
+
     fn wake(&self) {
         if let Some(t) = &self.thread {
             t.thread().unpark();
@@ -115,6 +146,10 @@ fn spawn(world: SharedWorld, shared: Arc<Shared>) -> std::io::Result<JoinHandle<
             while !shared.stop.load(Ordering::Acquire) {
                 if shared.frame_waiting.load(Ordering::Acquire) > 0 {
                     std::thread::yield_now();
+                    continue;
+                }
+                if shared.world_wanted() {
+                    std::thread::park_timeout(Duration::from_millis(1));
                     continue;
                 }
                 let worked = {
@@ -157,14 +192,22 @@ impl Technique for Streaming {
 
     fn scene_changed(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
         let response = self.shared.lock_for_frame().scene_changed(world, changes);
-        self.wake();
+        self.world_written();
         response
     }
 
     /// With `warm_up`, the first call fills the pool (unless precompute did). The
     /// thread does the rest; `budget` is ignored.
     fn advance(&mut self, world: &World, _budget: &Budget) {
+        self.world_written();
         self.shared.lock_for_frame().warm_up(world);
+    }
+
+    /// The thread takes no new read lock of the world until the write is done (see the
+    /// module doc).
+    fn before_world_write(&self) {
+        let now = self.shared.now_us();
+        self.shared.world_wanted_us.store(now, Ordering::Release);
     }
 
     /// The display values are copied under the solution's lock; shading runs outside it.

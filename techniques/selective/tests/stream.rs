@@ -136,3 +136,53 @@ fn the_engine_builds_the_streaming_technique_by_default() {
     .unwrap();
     assert_eq!(deterministic.stats().get("thread_steps"), None);
 }
+
+/// An announced world write holds the thread off the world until the frame loop says it
+/// is done (`advance` or `scene_changed`): otherwise the thread's next read lock got in
+/// ahead of the woken writer, step after step.
+#[test]
+fn an_announced_world_write_pauses_the_thread_until_the_frame_goes_on() {
+    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
+    // Short steps (4 096 photons), and a pool that keeps growing: the thread never idles.
+    let mut sel = Streaming::new(
+        &world,
+        SelectiveSettings {
+            pilots_per_group: 64,
+            ratio: 64,
+            max_photons: 1 << 32,
+            ..settings()
+        },
+    )
+    .unwrap();
+    let mut checked = 0;
+    for _ in 0..20 {
+        let start = Instant::now();
+        sel.before_world_write();
+        // One step in flight (~2 ms) may finish; then none may start.
+        std::thread::sleep(Duration::from_millis(20));
+        let s1 = sel.thread_steps();
+        std::thread::sleep(Duration::from_millis(12));
+        let s2 = sel.thread_steps();
+        let within = start.elapsed() < illume_selective::stream::WORLD_WAIT;
+        let w = world.read().unwrap();
+        sel.advance(&w, &Budget::default());
+        drop(w);
+        if within {
+            assert_eq!(s1, s2, "the thread stepped while a world write was pending");
+            checked += 1;
+        }
+        // Once the frame goes on, the thread does too.
+        let t0 = Instant::now();
+        while sel.thread_steps() == s2 {
+            assert!(
+                t0.elapsed() < Duration::from_secs(60),
+                "the thread did not resume"
+            );
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+    assert!(
+        checked >= 5,
+        "only {checked} of 20 trials were timed within WORLD_WAIT"
+    );
+}
