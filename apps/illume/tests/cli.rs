@@ -741,4 +741,23 @@ fn selective_runs_on_its_thread_in_real_time_and_on_the_frame_thread_with_fixed_
         "--work-per-frame runs no thread:\n{csv}"
     );
     assert!(last_csv_value(&csv, "selective.photons_traced").is_some_and(|p| p > 0.0));
+
+    // An out-of-range setting is refused before anything renders, naming the key.
+    let png = fixed.join("never.png");
+    let out = illume(&[
+        "render",
+        "builtin:cornell-spot",
+        "--technique",
+        "selective",
+        "--set",
+        "selective.ratio=1",
+        "-o",
+        path(&png),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("selective.ratio"),
+        "{err}"
+    );
+    assert!(!png.exists());
 }

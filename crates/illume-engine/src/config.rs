@@ -406,6 +406,8 @@ mod tests {
         for (arg, key) in [
             ("reference.nope=1", "nope"),
             ("photon_stream.vsl_count=many", "vsl_count"),
+            ("selective.pilot_per_group=5", "pilot_per_group"),
+            ("selective.order=fastest", "order"),
             ("nosuchtable.x=1", "nosuchtable"),
         ] {
             let s = sets(&[arg]);
