@@ -3,7 +3,7 @@
 //!
 //! * `fig5` — relevant photons (those whose path changed) found as groups are
 //!   re-traced after the sphere of `builtin:cornell-spot` moves, for N_g = 72 (this
-//!   one-light scene's default) and 10 080, the sphere lit directly (in the spot's
+//!   one-light scene's default), 288 (the paper's ROOM) and 10 080, the sphere lit directly (in the spot's
 //!   cone) or only indirectly (outside it), priority order beside random order;
 //! * `fig7` — the same for R = 8, 16, 32, 64 at an equal pool;
 //! * `pool` — recovery against pool size (N_p = 125 … 2000 at N_g = 72, R = 16);
@@ -145,12 +145,12 @@ fn fig5() {
     ];
     for (lit, from, to) in cases {
         let mut series = Vec::new();
-        for (name, factors) in [
-            ("72 (2^3·3^2)", vec![[2, 3], [3, 2]]),
-            ("10 080", vec![[2, 5], [3, 2], [5, 1], [7, 1]]),
+        // Equal pools: 1.15 M photons (N_g · N_p · 16).
+        for (name, factors, pilots) in [
+            ("72 (2^3·3^2)", vec![[2, 3], [3, 2]], 1000),
+            ("288 (2^5·3^2)", vec![[2, 5], [3, 2]], 250),
+            ("10 080", vec![[2, 5], [3, 2], [5, 1], [7, 1]], 8),
         ] {
-            // Equal pools: 1.15 M photons.
-            let pilots = if factors.len() == 2 { 1000 } else { 8 };
             for order in [GroupOrder::Priority, GroupOrder::Random] {
                 let s = base(factors.clone(), pilots, 16, order);
                 let r = recovery(&s, from, to);
