@@ -27,10 +27,10 @@ pub struct AnimateArgs {
     pub animation: Option<String>,
     /// Length of the sequence [s] (default: the animation's duration, or 2 s); frames at
     /// 0, 1/fps, …, duration, both ends included.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub duration: Option<f64>,
     /// Frames per second of scene time (deterministic mode) and of the preview.
-    #[arg(long, default_value_t = 15.0)]
+    #[arg(long, default_value_t = 15.0, allow_negative_numbers = true)]
     pub fps: f64,
     /// Real time: scene time follows the wall clock, frames are rendered as fast as
     /// they come, and the technique runs its interactive mode (photon_stream: photons
@@ -40,7 +40,7 @@ pub struct AnimateArgs {
     /// Reproducible frames: exactly N units of the technique's work between frames
     /// (photons, samples per pixel…: listed below). Default when --realtime is not
     /// given, with the technique's own amount.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub work_per_frame: Option<u64>,
     /// Play the animation forwards then backwards (ping-pong) when the sequence is
     /// longer than the animation.

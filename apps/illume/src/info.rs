@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 use illume_core::channel_mean;
-use illume_scene::LightKind;
+use illume_scene::{LightKind, excerpt};
 use std::path::PathBuf;
 
 /// Arguments of `illume info`.
@@ -39,11 +39,12 @@ pub fn run(a: InfoArgs) -> Result<()> {
         scene.materials.iter().filter(|m| m.is_emissive()).count(),
         scene.textures.len()
     );
-    let specular: Vec<&str> = scene
+    // Names come from the file: each is cut to an excerpt.
+    let specular: Vec<String> = scene
         .materials
         .iter()
         .filter(|m| !m.is_lambertian())
-        .map(|m| m.name.as_str())
+        .map(|m| excerpt(&m.name))
         .collect();
     if specular.is_empty() {
         println!("surfaces     all Lambertian");
@@ -62,7 +63,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
     let cut: Vec<String> = scene
         .materials
         .iter()
-        .filter_map(|m| Some(format!("{} (cutoff {})", m.name, m.alpha_cutoff?)))
+        .filter_map(|m| Some(format!("{} (cutoff {})", excerpt(&m.name), m.alpha_cutoff?)))
         .collect();
     if !cut.is_empty() {
         println!(
@@ -127,7 +128,13 @@ pub fn run(a: InfoArgs) -> Result<()> {
         let pos = l.position();
         println!(
             "  {:<12} {kind}; at ({:.2}, {:.2}, {:.2}); power ({:.3}, {:.3}, {:.3}) W",
-            l.name, pos.x, pos.y, pos.z, p.x, p.y, p.z
+            excerpt(&l.name),
+            pos.x,
+            pos.y,
+            pos.z,
+            p.x,
+            p.y,
+            p.z
         );
     }
     let e = scene.emissive_power();
@@ -156,14 +163,14 @@ pub fn run(a: InfoArgs) -> Result<()> {
         };
         println!(
             "  {:<12} {:.3} s, {} channels{active}",
-            an.name,
+            excerpt(&an.name),
             an.duration(),
             an.channels.len() + an.properties.len()
         );
-        let mut nodes: Vec<&str> = an
+        let mut nodes: Vec<String> = an
             .channels
             .iter()
-            .map(|c| scene.nodes[c.node.index()].name.as_str())
+            .map(|c| excerpt(&scene.nodes[c.node.index()].name))
             .collect();
         nodes.dedup();
         if !nodes.is_empty() {
@@ -171,8 +178,8 @@ pub fn run(a: InfoArgs) -> Result<()> {
         }
         for p in &an.properties {
             use illume_scene::PropertyTarget as P;
-            let light = |l: illume_scene::LightId| scene.lights[l.index()].name.as_str();
-            let material = |m: illume_scene::MaterialId| scene.materials[m.index()].name.as_str();
+            let light = |l: illume_scene::LightId| excerpt(&scene.lights[l.index()].name);
+            let material = |m: illume_scene::MaterialId| excerpt(&scene.materials[m.index()].name);
             let what = match p.target {
                 P::LightIntensity { light: l, .. } => format!("light '{}' intensity", light(l)),
                 P::LightColour { light: l, .. } => format!("light '{}' colour", light(l)),
@@ -190,7 +197,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
     let cp = c.world_from_camera.translation;
     println!(
         "camera       '{}' at ({:.2}, {:.2}, {:.2}), vertical fov {:.1}°",
-        c.name,
+        excerpt(&c.name),
         cp.x,
         cp.y,
         cp.z,

@@ -23,9 +23,9 @@ pub struct RenderArgs {
     /// Animation to play (default: the scene's first).
     #[arg(long)]
     pub animation: Option<String>,
-    /// Samples per pixel of the still, for techniques that have such a setting (the
-    /// reference's `spp`); others warn that it is ignored.
-    #[arg(long)]
+    /// Samples per pixel of the still (at least 1), for techniques that have such a
+    /// setting (the reference's `spp`); others warn that it is ignored.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..), allow_negative_numbers = true)]
     pub spp: Option<u32>,
     /// Output image: .exr (linear radiance) or .png (tone-mapped sRGB).
     #[arg(long, short, default_value = "out/render.png")]
@@ -37,7 +37,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0.0, value_parser = crate::setup::exposure_stops, allow_hyphen_values = true)]
     pub exposure: f32,
     /// Random seed of the renderer and the technique.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
 }
 

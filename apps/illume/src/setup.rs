@@ -39,10 +39,10 @@ pub struct SetupArgs {
     #[arg(long, value_parser = technique_parser())]
     pub technique: Option<TechniqueKind>,
     /// Image width [pixels].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub width: Option<u32>,
     /// Image height [pixels].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// TOML configuration: `technique`, `[render]` and one table per technique.
     #[arg(long)]
@@ -72,7 +72,13 @@ pub struct SetupArgs {
     pub look_at: Option<Vec3>,
     /// A uniform sky of radiance R,G,B [W/(m²·sr)] (linear, each ≥ 0), replacing the
     /// scene's: escaping rays see it and it lights the scene.
-    #[arg(long, value_parser = parse_radiance, value_name = "R,G,B", conflicts_with = "envmap")]
+    #[arg(
+        long,
+        value_parser = parse_radiance,
+        value_name = "R,G,B",
+        conflicts_with = "envmap",
+        allow_hyphen_values = true
+    )]
     pub sky: Option<Vec3>,
     /// An equirectangular environment map (linear .exr or Radiance .hdr) as the sky,
     /// replacing the scene's (mapping in the README, "Formats and units").
@@ -172,7 +178,8 @@ impl SetupArgs {
     /// the result has no light at all.
     pub fn place_camera(&self, scene: &mut illume_scene::Scene) -> Result<()> {
         if let (Some(eye), Some(target)) = (self.look_from, self.look_at) {
-            illume_scene::builtin::look_from(scene, eye, target).map_err(anyhow::Error::msg)?;
+            illume_scene::builtin::look_from(scene, eye, target)
+                .map_err(|m| anyhow::anyhow!("--look-from/--look-at: {m}"))?;
         }
         if let Some(radiance) = self.sky {
             scene.sky = Some(illume_scene::Sky::Uniform { radiance });

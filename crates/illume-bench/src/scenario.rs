@@ -37,6 +37,9 @@ use std::path::{Path, PathBuf};
 /// rendered).
 pub const MAX_FRAMES: usize = 1_000_000;
 
+/// Largest `budget_ms` of a technique \[ms\]: an hour per frame.
+pub const MAX_BUDGET_MS: f64 = 3_600_000.0;
+
 /// A benchmark scenario (one `.toml` file). Every field but `scene` and `[[technique]]`
 /// has a default.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -196,12 +199,12 @@ pub struct TechniqueSpec {
     /// (e.g. `[technique.settings]` → the `[photon_stream]` table). Default: the
     /// technique's defaults.
     pub settings: Option<toml::Table>,
-    /// Wall-clock budget of the technique's `advance` per frame \[ms\]. Default: none
-    /// (the technique's default budget).
+    /// Wall-clock budget of the technique's `advance` per frame \[ms\], finite and in
+    /// (0, [`MAX_BUDGET_MS`]]. Default: none (the technique's default budget).
     pub budget_ms: Option<f64>,
     /// Work per frame in the technique's own unit (`photon_stream`: photons;
     /// `reference`: samples per pixel; `illume render --help` lists them). Also accepted
-    /// as `photons` or `samples`. Default: the technique's setting (`photon_stream`:
+    /// as `photons` or `samples`; at least 1. Default: the technique's setting (`photon_stream`:
     /// `photons_per_frame` in deterministic mode; `reference`: `spp_per_frame`).
     #[serde(alias = "photons", alias = "samples")]
     pub work: Option<u64>,
@@ -381,7 +384,9 @@ impl EditSpec {
 impl Scenario {
     /// Reads and checks a scenario file.
     pub fn load(path: &Path) -> Result<Self, BenchError> {
-        let text = std::fs::read_to_string(path).map_err(|e| BenchError::io(path, e))?;
+        let text =
+            illume_core::files::read_regular_text(path, illume_core::files::MAX_SETTINGS_BYTES)
+                .map_err(|e| BenchError::io(path, e))?;
         Self::parse(&text, path)
     }
 
@@ -496,6 +501,20 @@ impl Scenario {
                 ));
             }
             labels.push(t.label());
+            if let Some(b) = t.budget_ms
+                && !(b.is_finite() && b > 0.0 && b <= MAX_BUDGET_MS)
+            {
+                return Err(self.invalid(
+                    format!("technique[{i}].budget_ms"),
+                    format!("{b:e} must be finite and in (0, {MAX_BUDGET_MS}] ms"),
+                ));
+            }
+            if t.work == Some(0) {
+                return Err(self.invalid(
+                    format!("technique[{i}].work"),
+                    "must be at least 1 (leave it out for the technique's default)",
+                ));
+            }
             self.technique_config(i)?;
         }
         for (i, e) in self.edits.iter().enumerate() {
@@ -632,6 +651,9 @@ impl Scenario {
         let config: Config = toml::Value::Table(table)
             .try_into()
             .map_err(|e: toml::de::Error| error(format!("settings: {}", e.message())))?;
+        config
+            .check()
+            .map_err(|m| error(format!("settings: {m}")))?;
         debug_assert_eq!(config.technique, kind);
         Ok(config)
     }

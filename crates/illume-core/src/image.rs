@@ -152,8 +152,14 @@ impl RgbImage {
     }
 
     /// Reads an `.exr` or Radiance `.hdr` (linear) or `.png`/`.jpg` (sRGB-decoded to
-    /// linear) image.
+    /// linear) image: a regular file (not a pipe or device) of at most
+    /// [`MAX_IMAGE_FILE_BYTES`], decoding to at most [`MAX_DECODED_IMAGE_BYTES`] (a header
+    /// claiming more is refused before anything is allocated).
     pub fn read(path: &Path) -> Result<Self, ImageError> {
+        crate::files::check_regular(path, MAX_IMAGE_FILE_BYTES).map_err(|e| ImageError::Read {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
         match extension(path).as_deref() {
             Some("exr") => read_exr(path),
             Some("hdr") => read_hdr(path),
@@ -318,8 +324,35 @@ pub fn read_hdr(path: &Path) -> Result<RgbImage, ImageError> {
     Image::from_vec(w, h, texels).ok_or_else(|| read_error("inconsistent size".into()))
 }
 
-/// Reads the first RGB(A) layer of an OpenEXR file as linear RGB.
+/// Largest image file [`RgbImage::read`] reads \[bytes\].
+pub const MAX_IMAGE_FILE_BYTES: u64 = 4 << 30;
+
+/// Most memory an image read by [`RgbImage::read`] may decode to \[bytes\]: 1 GiB, e.g.
+/// 16384 × 5461 linear RGB pixels (the `image` crate's own limit for PNG, JPEG and HDR
+/// is 512 MiB).
+pub const MAX_DECODED_IMAGE_BYTES: u64 = 1 << 30;
+
+/// Reads the first RGB(A) layer of an OpenEXR file as linear RGB. The header's size is
+/// checked against [`MAX_DECODED_IMAGE_BYTES`] before the pixels are allocated.
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
+    let read_error = |message: String| ImageError::Read {
+        path: path.to_owned(),
+        message,
+    };
+    let meta =
+        exr::meta::MetaData::read_from_file(path, false).map_err(|e| read_error(e.to_string()))?;
+    for header in &meta.headers {
+        let (w, h) = (header.layer_size.width(), header.layer_size.height());
+        let bytes = (w as u64)
+            .saturating_mul(h as u64)
+            .saturating_mul(std::mem::size_of::<Rgb>() as u64);
+        if bytes > MAX_DECODED_IMAGE_BYTES || w > u32::MAX as usize || h > u32::MAX as usize {
+            return Err(read_error(format!(
+                "its header claims {w}×{h} pixels, more than the {} MiB illume decodes",
+                MAX_DECODED_IMAGE_BYTES >> 20
+            )));
+        }
+    }
     let img = exr::prelude::read_first_rgba_layer_from_file(
         path,
         |res, _| Image::<Rgb>::black(res.width() as u32, res.height() as u32),

@@ -1,7 +1,8 @@
 //! illume's foundation, shared by every other crate: math types and conventions
 //! ([`math`]), index-addressable random and quasi-random sample sources with their
 //! warps ([`sampling`]), HDR images with tone mapping and EXR/PNG I/O ([`image`]), named
-//! counters ([`Counters`]) and progress reports of long work ([`progress`]).
+//! counters ([`Counters`]), progress reports of long work ([`progress`]) and guarded
+//! reads of input files ([`files`]).
 //!
 //! Conventions (see `shared/DESIGN.md`): metres and seconds, right-handed with +Y up,
 //! cameras look down −Z, colour is linear Rec.709 RGB radiometry, time is `f64` seconds.
@@ -15,6 +16,7 @@
 
 pub mod atomic;
 pub mod counters;
+pub mod files;
 pub mod image;
 pub mod math;
 pub mod progress;

@@ -201,11 +201,26 @@ impl Config {
         config.validate("--set")
     }
 
-    /// Values in range for serde but not for the renderer (shadow-map resolution…).
+    /// Checks the values that are in range for serde but not for the renderer or a
+    /// technique (shadow-map resolution, image size, a NaN…): every table, the chosen
+    /// technique's and the others', so that a bad value is reported where it was written
+    /// rather than when a technique is built. The message names the table and key.
+    pub fn check(&self) -> Result<(), String> {
+        self.render
+            .validate()
+            .map_err(|e| format!("[render] {e}"))?;
+        illume_render::check_image_size(self.render.width, self.render.height)
+            .map_err(|m| format!("[render] width/height: {m}"))?;
+        self.reference.validate().map_err(|e| e.to_string())?;
+        self.photon_stream.validate().map_err(|e| e.to_string())?;
+        self.selective.validate().map_err(|e| e.to_string())
+    }
+
+    /// [`Config::check`], the error naming `source` (the file, or `--set`).
     fn validate(self, source: &str) -> Result<Self, ConfigError> {
-        self.render.validate().map_err(|e| ConfigError::Parse {
+        self.check().map_err(|message| ConfigError::Parse {
             path: source.into(),
-            message: format!("[render] {e}"),
+            message,
         })?;
         Ok(self)
     }
@@ -240,11 +255,15 @@ impl Config {
     }
 }
 
+/// A configuration file's text: a regular file (not a pipe or device) of at most
+/// [`illume_core::files::MAX_SETTINGS_BYTES`], UTF-8.
 fn read(path: &Path) -> Result<String, ConfigError> {
-    std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-        path: path.into(),
-        source,
-    })
+    illume_core::files::read_regular_text(path, illume_core::files::MAX_SETTINGS_BYTES).map_err(
+        |source| ConfigError::Io {
+            path: path.into(),
+            source,
+        },
+    )
 }
 
 fn from_table<T: serde::de::DeserializeOwned>(table: toml::Table) -> Result<T, String> {

@@ -22,7 +22,8 @@ pub struct Still {
 /// Renders `scene` at its current time with `config`'s technique at the configured
 /// size. The reference renders the whole image by path tracing
 /// ([`ReferenceRenderer`], `[reference] spp` samples per pixel, progress per chunk of
-/// samples); any other technique runs its precompute (with progress) and one frame.
+/// samples; its settings are validated first: `spp` 0 is an error, not one sample);
+/// any other technique runs its precompute (with progress) and one frame.
 pub fn render_still(
     scene: Scene,
     config: &Config,
@@ -30,12 +31,19 @@ pub fn render_still(
 ) -> Result<Still, EngineError> {
     let (w, h) = (config.render.width, config.render.height);
     if config.technique == TechniqueKind::Reference {
+        config
+            .reference
+            .validate()
+            .map_err(|e| EngineError::Technique {
+                technique: illume_reference::NAME,
+                source: Box::new(e),
+            })?;
         scene
             .validate()
             .map_err(|e| EngineError::InvalidScene(format!("{}: {e}", scene.source)))?;
         let world = World::new(scene);
         let mut r = ReferenceRenderer::new(config.reference.clone(), w, h);
-        let spp = config.reference.spp.max(1);
+        let spp = config.reference.spp;
         progress.begin("path tracing", spp as u64);
         // Chunks of samples keep the bar moving and the work parallel over pixels; the
         // image does not depend on the chunking.

@@ -122,10 +122,25 @@ impl Default for RenderSettings {
     }
 }
 
+/// Why [`RenderSettings`] were refused.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderSettingsError {
+    /// A shadow-map setting is out of range.
+    #[error(transparent)]
+    ShadowMaps(#[from] ShadowMapError),
+    /// `area_light_samples` is 0 (area lights would light nothing).
+    #[error("area_light_samples = 0: must be at least 1")]
+    NoAreaLightSamples,
+}
+
 impl RenderSettings {
-    /// Checks the settings whose ranges matter (the shadow maps').
-    pub fn validate(&self) -> Result<(), ShadowMapError> {
-        self.shadow_maps.validate()
+    /// Checks the settings whose ranges matter (area-light samples, the shadow maps';
+    /// the image size is [`check_image_size`]'s).
+    pub fn validate(&self) -> Result<(), RenderSettingsError> {
+        if self.area_light_samples == 0 {
+            return Err(RenderSettingsError::NoAreaLightSamples);
+        }
+        Ok(self.shadow_maps.validate()?)
     }
 }
 
@@ -139,8 +154,8 @@ pub const FRAME_BYTES_PER_PIXEL: u64 = 256;
 
 /// Checks a `width × height` image before anything is allocated: each side in
 /// 1..=[`MAX_IMAGE_SIDE`], and a frame's memory ([`FRAME_BYTES_PER_PIXEL`] per pixel)
-/// within the memory the system reports available (`/proc/meminfo` `MemAvailable`;
-/// unchecked where that is unknown). The message names the limit.
+/// within [`available_memory_bytes`] (unchecked where that is unknown). The message
+/// names the limit.
 pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
     if width == 0 || height == 0 {
         return Err(format!(
@@ -165,12 +180,36 @@ pub fn check_image_size(width: u32, height: u32) -> Result<(), String> {
     Ok(())
 }
 
-/// `MemAvailable` of `/proc/meminfo` in bytes, where the system reports it.
+/// The memory this process may still allocate \[bytes\], where the system reports it:
+/// `MemAvailable` of `/proc/meminfo`, or less when the process runs under an
+/// address-space limit (`ulimit -v`, `prlimit --as`: the limit minus the address space
+/// already in use, `VmSize` of `/proc/self/status`) — an allocation beyond that limit
+/// would abort the process rather than fail cleanly.
 pub fn available_memory_bytes() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    let field = |file: &str, key: &str, column: usize| -> Option<String> {
+        let text = std::fs::read_to_string(file).ok()?;
+        let line = text.lines().find(|l| l.starts_with(key))?;
+        line[key.len()..]
+            .split_whitespace()
+            .nth(column)
+            .map(str::to_owned)
+    };
+    let system = field("/proc/meminfo", "MemAvailable:", 0)
+        .and_then(|kib| kib.parse::<u64>().ok())
+        .map(|kib| kib * 1024);
+    // "Max address space   <soft> <hard> bytes"; the soft limit is the one enforced.
+    let process = field("/proc/self/limits", "Max address space", 0)
+        .and_then(|limit| limit.parse::<u64>().ok())
+        .map(|limit| {
+            let used = field("/proc/self/status", "VmSize:", 0)
+                .and_then(|kib| kib.parse::<u64>().ok())
+                .map_or(0, |kib| kib * 1024);
+            limit.saturating_sub(used)
+        });
+    match (system, process) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
 }
 
 /// Wall-clock time of a frame's stages \[ms\].
@@ -552,14 +591,24 @@ mod tests {
                 resolution: 0,
                 ..Default::default()
             },
-            ..settings
+            ..settings.clone()
         };
         assert!(matches!(
             bad.validate(),
-            Err(ShadowMapError::OutOfRange {
-                field: "resolution",
-                ..
-            })
+            Err(RenderSettingsError::ShadowMaps(
+                ShadowMapError::OutOfRange {
+                    field: "resolution",
+                    ..
+                }
+            ))
+        ));
+        let no_samples = RenderSettings {
+            area_light_samples: 0,
+            ..settings.clone()
+        };
+        assert!(matches!(
+            no_samples.validate(),
+            Err(RenderSettingsError::NoAreaLightSamples)
         ));
         let fallback = Renderer::new(bad).render(&world, &mut Black, 1);
         let rays = direct_light(

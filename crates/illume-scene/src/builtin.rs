@@ -339,11 +339,18 @@ pub const SPONZA_ATRIUM_VIEW: (Vec3, Vec3) = (Vec3::new(-14.0, 2.0, 0.0), Vec3::
 /// Points `scene`'s camera from `eye` at `target` (+Y up), keeping its field of view —
 /// for scene files without a camera, whose default view from outside the bounds sees
 /// only the outer walls of an interior like Sponza. +Y is up (−Z when looking straight
-/// down, +Z straight up). Errors on non-finite points or `eye` on `target`.
+/// down, +Z straight up). Errors on non-finite points, points beyond
+/// ±[`crate::MAX_COORDINATE_M`] or `eye` on `target`.
 pub fn look_from(scene: &mut Scene, eye: Vec3, target: Vec3) -> Result<(), String> {
     let forward = target - eye;
     if !eye.is_finite() || !target.is_finite() {
         return Err(format!("camera points {eye} and {target} must be finite"));
+    }
+    let limit = crate::MAX_COORDINATE_M;
+    if eye.abs().max_element() > limit || target.abs().max_element() > limit {
+        return Err(format!(
+            "camera points {eye} and {target} must lie within ±{limit:e} m"
+        ));
     }
     let length = forward.length();
     if !(length.is_finite() && length >= 1e-6 * (1.0 + eye.abs().max_element())) {

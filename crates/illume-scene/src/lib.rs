@@ -31,7 +31,9 @@ pub use animation::{
 };
 pub use change::{Edit, SceneChange};
 pub use cutout::MeshCutout;
-pub use load::{LoadError, LoadOptions, load_envmap, load_scene, load_scene_with};
+pub use load::{
+    EXCERPT_CHARS, LoadError, LoadOptions, excerpt, load_envmap, load_scene, load_scene_with,
+};
 pub use model::*;
 pub use timeline::{Timeline, TimelineError};
 

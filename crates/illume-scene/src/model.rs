@@ -528,6 +528,24 @@ pub struct Node {
 /// above any physical source, low enough that the transport's products stay finite.
 pub const MAX_POWER_W: f32 = 1e30;
 
+/// Largest world coordinate accepted \[m\] (a scene reaching beyond it is refused):
+/// squares and cross products of coordinates and their differences stay finite in f32
+/// (≈ 3.4·10³⁸), which a vertex at 3·10³⁸ m would overflow into a silently black image.
+pub const MAX_COORDINATE_M: f32 = 1e18;
+
+/// `p` (a power per channel, a point) for messages, each component in scientific
+/// notation when large (1.571e36, not 37 digits).
+fn format_large(p: Vec3) -> String {
+    let one = |v: f32| {
+        if v.abs() >= 1e6 {
+            format!("{v:.3e}")
+        } else {
+            format!("{v}")
+        }
+    };
+    format!("[{}, {}, {}]", one(p.x), one(p.y), one(p.z))
+}
+
 /// Bit in [`Instance::mask`] that every ordinary instance carries.
 pub const MASK_DEFAULT: u32 = 1;
 
@@ -858,11 +876,55 @@ impl Scene {
         channel_mean(self.total_power())
     }
 
+    /// Every instance's world bounds, every light's position and the camera's lie within
+    /// ±[`MAX_COORDINATE_M`]; the message names the first item beyond.
+    fn check_extent(&self) -> Result<(), String> {
+        use crate::load::excerpt;
+        let beyond = |p: Vec3| !p.is_finite() || p.abs().max_element() > MAX_COORDINATE_M;
+        for (i, inst) in self.instances.iter().enumerate() {
+            let Some(mesh) = self.meshes.get(inst.mesh.index()) else {
+                continue; // reported by validate
+            };
+            let b = mesh.bounds().transformed(&inst.world_from_object);
+            if !b.is_empty() && (beyond(b.min) || beyond(b.max)) {
+                return Err(format!(
+                    "instance {i} '{}': its world bounds {} … {} reach beyond ±{MAX_COORDINATE_M:e} m",
+                    excerpt(&inst.name),
+                    format_large(b.min),
+                    format_large(b.max)
+                ));
+            }
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            if !matches!(l.kind, LightKind::Directional { .. }) && beyond(l.position()) {
+                return Err(format!(
+                    "light {i} '{}': its position {} is beyond ±{MAX_COORDINATE_M:e} m",
+                    excerpt(&l.name),
+                    format_large(l.position())
+                ));
+            }
+        }
+        let eye = Vec3::from(self.camera.world_from_camera.translation);
+        if beyond(eye) {
+            return Err(format!(
+                "camera '{}': its position {} is beyond ±{MAX_COORDINATE_M:e} m",
+                excerpt(&self.camera.name),
+                format_large(eye)
+            ));
+        }
+        Ok(())
+    }
+
     /// Checks every cross-reference and value; the message names the offending item.
+    /// Among the values: world coordinates within ±[`MAX_COORDINATE_M`], base colours in
+    /// [0, 1], spot and directional lights whose node gives them a direction, powers up
+    /// to [`MAX_POWER_W`]. Names quoted from the input are cut to a short excerpt.
     pub fn validate(&self) -> Result<(), String> {
+        use crate::load::excerpt;
         if let Some(sky) = &self.sky {
             sky.validate()?;
         }
+        self.check_extent()?;
         let cam = &self.camera.world_from_camera;
         let det = cam.matrix3.determinant();
         if !illume_core::affine_is_finite(cam) || !det.is_finite() || det.abs() < 1e-12 {
@@ -870,11 +932,11 @@ impl Scene {
                 .nodes
                 .get(self.camera.node.index())
                 .map_or(String::new(), |n| {
-                    format!(" (node {} '{}')", self.camera.node.0, n.name)
+                    format!(" (node {} '{}')", self.camera.node.0, excerpt(&n.name))
                 });
             return Err(format!(
                 "camera '{}'{node}: its transform is degenerate (zero scale or not finite)",
-                self.camera.name
+                excerpt(&self.camera.name)
             ));
         }
         if !(self.camera.yfov_rad.is_finite()
@@ -883,29 +945,32 @@ impl Scene {
         {
             return Err(format!(
                 "camera '{}': vertical field of view {} rad is not in (0, π)",
-                self.camera.name, self.camera.yfov_rad
+                excerpt(&self.camera.name),
+                self.camera.yfov_rad
             ));
         }
         for (i, m) in self.meshes.iter().enumerate() {
             m.validate(self.materials.len())
-                .map_err(|e| format!("mesh {i} '{}': {e}", m.name))?;
+                .map_err(|e| format!("mesh {i} '{}': {e}", excerpt(&m.name)))?;
         }
         for (i, m) in self.materials.iter().enumerate() {
-            if !m.base_color.is_finite()
-                || !m.emission.is_finite()
-                || m.emission.min_element() < 0.0
-            {
+            let name = excerpt(&m.name);
+            // An albedo outside [0, 1] creates or destroys energy (negative radiance).
+            if !(m.base_color.min_element() >= 0.0 && m.base_color.max_element() <= 1.0) {
                 return Err(format!(
-                    "material {i} '{}': colour or emission not finite or negative",
-                    m.name
+                    "material {i} '{name}': base colour {} is not in [0, 1]",
+                    m.base_color
+                ));
+            }
+            if !m.emission.is_finite() || m.emission.min_element() < 0.0 {
+                return Err(format!(
+                    "material {i} '{name}': emission {} is not finite and ≥ 0",
+                    m.emission
                 ));
             }
             for (field, v) in [("metallic", m.metallic), ("roughness", m.roughness)] {
                 if !(0.0..=1.0).contains(&v) {
-                    return Err(format!(
-                        "material {i} '{}': {field} {v} outside [0, 1]",
-                        m.name
-                    ));
+                    return Err(format!("material {i} '{name}': {field} {v} outside [0, 1]"));
                 }
             }
             for (slot, texture) in [
@@ -919,8 +984,7 @@ impl Scene {
                     && t.index() >= self.textures.len()
                 {
                     return Err(format!(
-                        "material {i} '{}': {slot} texture {} of {}",
-                        m.name,
+                        "material {i} '{name}': {slot} texture {} of {}",
                         t.0,
                         self.textures.len()
                     ));
@@ -930,8 +994,8 @@ impl Scene {
                 && !(c.is_finite() && (0.0..=1.0).contains(&m.alpha))
             {
                 return Err(format!(
-                    "material {i} '{}': alpha {} or alpha cutoff {c} not finite or alpha outside [0, 1]",
-                    m.name, m.alpha
+                    "material {i} '{name}': alpha {} or alpha cutoff {c} not finite or alpha outside [0, 1]",
+                    m.alpha
                 ));
             }
         }
@@ -941,24 +1005,39 @@ impl Scene {
             {
                 return Err(format!(
                     "node {i} '{}': parent {} does not come first",
-                    n.name, p.0
+                    excerpt(&n.name),
+                    p.0
                 ));
             }
             if !n.local.is_finite() {
-                return Err(format!("node {i} '{}': transform is not finite", n.name));
+                return Err(format!(
+                    "node {i} '{}': transform is not finite",
+                    excerpt(&n.name)
+                ));
             }
         }
         for (i, inst) in self.instances.iter().enumerate() {
             if inst.mesh.index() >= self.meshes.len() || inst.node.index() >= self.nodes.len() {
                 return Err(format!(
                     "instance {i} '{}': mesh or node out of range",
-                    inst.name
+                    excerpt(&inst.name)
                 ));
             }
         }
         for (i, l) in self.lights.iter().enumerate() {
+            let aimed = !matches!(l.kind, LightKind::Point { .. });
+            let forward = l.world_from_light.transform_vector3(-Vec3::Z);
+            if aimed && !(forward.is_finite() && forward.length_squared() > 1e-24) {
+                return Err(format!(
+                    "light {i} '{}': its node's transform is degenerate (zero scale), so it has no direction",
+                    excerpt(&l.name)
+                ));
+            }
             if l.node.index() >= self.nodes.len() {
-                return Err(format!("light {i} '{}': node out of range", l.name));
+                return Err(format!(
+                    "light {i} '{}': node out of range",
+                    excerpt(&l.name)
+                ));
             }
         }
         // Powers are bounded so that every product of the transport (power × pdf ratios
@@ -968,15 +1047,17 @@ impl Scene {
             let p = l.power(if radius.is_finite() { radius } else { 0.0 });
             if !p.is_finite() || p.min_element() < 0.0 || p.max_element() > MAX_POWER_W {
                 return Err(format!(
-                    "light {i} '{}': its power {p} W is not finite, non-negative and at most {MAX_POWER_W:e} W",
-                    l.name
+                    "light {i} '{}': its power {} W is not finite, non-negative and at most {MAX_POWER_W:e} W",
+                    excerpt(&l.name),
+                    format_large(p)
                 ));
             }
         }
         let total = self.total_power();
         if !total.is_finite() || total.max_element() > MAX_POWER_W {
             return Err(format!(
-                "the scene's total light power {total} W exceeds {MAX_POWER_W:e} W (lights, emissive surfaces and sky together)"
+                "the scene's total light power {} W exceeds {MAX_POWER_W:e} W (lights, emissive surfaces and sky together)",
+                format_large(total)
             ));
         }
         for (i, a) in self.animations.iter().enumerate() {
@@ -984,7 +1065,8 @@ impl Scene {
                 if c.node.index() >= self.nodes.len() {
                     return Err(format!(
                         "animation {i} '{}': channel targets missing node {}",
-                        a.name, c.node.0
+                        excerpt(&a.name),
+                        c.node.0
                     ));
                 }
             }

@@ -12,10 +12,11 @@
 //! Mapping (see DESIGN.md "Conventions"):
 //!
 //! * the default scene (else scene 0, else every root node) is walked depth first;
-//!   each glTF node becomes a [`crate::Node`] (parents before children; a node reached
-//!   twice — a cycle or two parents — is an error); a node with a mesh places an
-//!   [`crate::Instance`], `dynamic` when the node or an ancestor is the target of any
-//!   animation channel;
+//!   each glTF node becomes a [`crate::Node`] (parents before children). The whole
+//!   document's hierarchy must be a forest, reachable from the scene or not: a node with
+//!   two parents, a cycle or a root listed twice is an error naming the node; a node
+//!   with a mesh places an [`crate::Instance`], `dynamic` when the node or an ancestor
+//!   is the target of any animation channel;
 //! * one illume [`Mesh`] per glTF mesh (shared by every node that uses it): its primitives
 //!   are concatenated with per-triangle materials; only `TRIANGLES` primitives, indexed
 //!   or not; `POSITION`, `NORMAL` (per primitive: a primitive without it is shaded flat,
@@ -53,12 +54,23 @@
 //!
 //! Any `extensionsRequired` entry other than `KHR_lights_punctual`,
 //! `KHR_materials_emissive_strength` and `KHR_animation_pointer` is
-//! [`LoadError::Unsupported`]. Non-finite numbers
-//! in transforms, vertex data or key values are [`LoadError::Malformed`] naming the node
-//! or accessor. Skins, morph targets, sparse accessors and orthographic cameras are not
-//! supported (sparse accessors are an error, the rest warnings).
+//! [`LoadError::Unsupported`], as is an `asset.version` other than 2.x. Non-finite
+//! numbers in transforms, vertex data or key values are [`LoadError::Malformed`] naming
+//! the node or accessor, and so are what the specification forbids: an accessor with
+//! `count` 0, a component type the use does not allow (POSITION, NORMAL and key times
+//! FLOAT; TEXCOORD FLOAT, UNSIGNED_BYTE or UNSIGNED_SHORT; indices unsigned integers),
+//! an animation channel targeting a node that does not exist, a `baseColorFactor`
+//! outside [0, 1], a negative or non-finite emission, a camera with `znear` ≤ 0, `zfar`
+//! ≤ `znear` or `aspectRatio` ≤ 0 (illume clips nothing and takes the aspect ratio from
+//! the image, but such a file is broken). Buffer and image files must be regular files
+//! (not pipes or devices) with paths of at most [`super::MAX_PATH_BYTES`]; names quoted
+//! in messages are cut to [`super::excerpt`]s. Skins, morph targets, sparse accessors
+//! and orthographic cameras are not supported (sparse accessors are an error, the rest
+//! warnings).
 
-use super::{LoadError, decode_texture, default_camera_for_bounds, read_file};
+use super::{
+    LoadError, decode_texture, default_camera_for_bounds, excerpt, read_file, read_referenced_file,
+};
 use crate::animation::{
     Animation, Channel, ChannelValues, Interpolation, PropertyChannel, PropertyTarget, Trs,
 };
@@ -228,6 +240,14 @@ pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
         )
     })?;
     let root = document.document.as_json();
+    let version = &root.asset.version;
+    if version.split('.').next() != Some("2") {
+        return Err(LoadError::unsupported(
+            path,
+            "asset.version",
+            format!("glTF '{}' (illume reads glTF 2.x)", excerpt(version)),
+        ));
+    }
     for (i, ext) in root.extensions_required.iter().enumerate() {
         if !SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str()) {
             return Err(LoadError::unsupported(
@@ -243,11 +263,15 @@ pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
         for (p, prim) in mesh.primitives.iter().enumerate() {
             for (semantic, a) in &prim.attributes {
                 if a.value() >= root.accessors.len() {
+                    let name = match semantic {
+                        Checked::Valid(s) => s.to_string(),
+                        Checked::Invalid => "(invalid)".into(),
+                    };
                     return Err(LoadError::malformed(
                         path,
                         format!("mesh {m} primitive {p}"),
                         format!(
-                            "attribute {semantic:?} uses accessor {} of {}",
+                            "attribute {name} uses accessor {}, which does not exist ({} accessors)",
                             a.value(),
                             root.accessors.len()
                         ),
@@ -458,15 +482,7 @@ fn load_buffers(
             Some(uri) if uri.starts_with("data:") => {
                 decode_data_uri(uri).map_err(|m| LoadError::malformed(path, &place, m))?
             }
-            Some(uri) => {
-                let file = folder.join(decode_uri_path(uri));
-                std::fs::read(&file).map_err(|source| LoadError::MissingFile {
-                    path: path.into(),
-                    place: place.clone(),
-                    file,
-                    source,
-                })?
-            }
+            Some(uri) => read_referenced_file(path, &place, &folder.join(decode_uri_path(uri)))?,
         };
         let need = b.byte_length.0;
         if (data.len() as u64) < need {
@@ -588,6 +604,9 @@ impl Ctx<'_> {
         }
         let n_comp = components(*ty);
         let count = acc.count.0;
+        if count == 0 {
+            return Err(self.malformed(place, "count 0 (glTF requires at least 1)"));
+        }
         let Some(view_index) = acc.buffer_view.map(|v| v.value()) else {
             if count.saturating_mul(n_comp as u64) > MAX_ZERO_ACCESSOR_VALUES {
                 return Err(self.malformed(place, format!("count {count} is too large")));
@@ -666,6 +685,28 @@ impl Ctx<'_> {
         Ok((out, n_comp))
     }
 
+    /// Checks that accessor `index` (used as `what`) has one of the component types glTF
+    /// allows for that use (`allowed`, named `names` in the message). A missing accessor
+    /// is left to [`Ctx::read_accessor`] to report.
+    fn check_component_type(
+        &self,
+        index: usize,
+        what: &str,
+        allowed: &[json::accessor::ComponentType],
+        names: &str,
+    ) -> Result<(), LoadError> {
+        if let Some(acc) = self.root.accessors.get(index)
+            && let Checked::Valid(json::accessor::GenericComponentType(ct)) = acc.component_type
+            && !allowed.contains(&ct)
+        {
+            return Err(self.malformed(
+                format!("accessor {index} ({what})"),
+                format!("componentType {ct:?} is not allowed here (only {names})"),
+            ));
+        }
+        Ok(())
+    }
+
     /// Reads an accessor that must have `n` components per element, as `f32` arrays.
     fn read_vecs<const N: usize>(
         &self,
@@ -686,6 +727,7 @@ impl Ctx<'_> {
 
     fn convert(mut self) -> Result<Scene, LoadError> {
         self.convert_materials()?;
+        self.check_hierarchy()?;
         let roots = self.scene_roots()?;
         let order = self.walk(&roots)?;
         // glTF node index → illume node, in walk order (parents first).
@@ -702,13 +744,14 @@ impl Ctx<'_> {
                 let mesh_id = self.mesh(mesh.value())?;
                 placements.push((name.clone(), mesh_id, id));
             }
+            let shown = excerpt(&name);
             if node.skin.is_some() {
                 self.warn(format!(
-                    "node {g} '{name}': skin ignored (rendered in bind pose)"
+                    "node {g} '{shown}': skin ignored (rendered in bind pose)"
                 ));
             }
             if node.weights.is_some() {
-                self.warn(format!("node {g} '{name}': morph weights ignored"));
+                self.warn(format!("node {g} '{shown}': morph weights ignored"));
             }
             self.light(g, &name, id)?;
         }
@@ -774,6 +817,60 @@ impl Ctx<'_> {
         }
     }
 
+    /// The whole document's node hierarchy (reachable from the scene or not) must be a
+    /// forest, as glTF requires: every child exists, no node has two parents and no node
+    /// is its own ancestor. The error names the node.
+    fn check_hierarchy(&self) -> Result<(), LoadError> {
+        let n = self.root.nodes.len();
+        let mut parent: Vec<Option<usize>> = vec![None; n];
+        for (p, node) in self.root.nodes.iter().enumerate() {
+            for c in node.children.iter().flatten().map(|c| c.value()) {
+                let Some(slot) = parent.get_mut(c) else {
+                    return Err(self.malformed(
+                        format!("node {p}"),
+                        format!("child {c} does not exist ({n} nodes)"),
+                    ));
+                };
+                if let Some(first) = slot.replace(p) {
+                    return Err(self.malformed(
+                        format!("node {c}"),
+                        format!(
+                            "is a child of node {first} and of node {p} (a node has at most one parent)"
+                        ),
+                    ));
+                }
+            }
+        }
+        // One parent each: follow parents from every node, each node walked once.
+        let mut walked_from = vec![usize::MAX; n];
+        let mut done = vec![false; n];
+        for start in 0..n {
+            let mut at = start;
+            while !done[at] {
+                if walked_from[at] == start {
+                    return Err(self.malformed(
+                        format!("node {at}"),
+                        "is its own ancestor (a cycle in the node hierarchy)",
+                    ));
+                }
+                walked_from[at] = start;
+                match parent[at] {
+                    Some(p) => at = p,
+                    None => break,
+                }
+            }
+            let mut at = start;
+            while walked_from[at] == start && !done[at] {
+                done[at] = true;
+                match parent[at] {
+                    Some(p) => at = p,
+                    None => break,
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// Depth-first order of the nodes under `roots` as `(node, parent)`; parents come
     /// before their children. A node reached twice is an error.
     fn walk(&self, roots: &[usize]) -> Result<Vec<(usize, Option<usize>)>, LoadError> {
@@ -805,7 +902,7 @@ impl Ctx<'_> {
     /// The local transform of node `g`; non-finite values are an error.
     fn node_trs(&self, g: usize) -> Result<Trs, LoadError> {
         let node = &self.root.nodes[g];
-        let place = format!("node {g} '{}'", node.name.as_deref().unwrap_or(""));
+        let place = format!("node {g} '{}'", excerpt(node.name.as_deref().unwrap_or("")));
         if let Some(m) = node.matrix {
             if m.iter().any(|x| !x.is_finite()) {
                 return Err(self.malformed(place, format!("matrix is not finite: {m:?}")));
@@ -850,7 +947,28 @@ impl Ctx<'_> {
                 .and_then(|e| e.emissive_strength.as_ref())
                 .map(|s| s.emissive_strength.0)
                 .unwrap_or(1.0);
-            let user = format!("material {i} '{name}'");
+            let user = format!("material {i} '{}'", excerpt(&name));
+            if ![r, g, b].iter().all(|v| (0.0..=1.0).contains(v)) {
+                return Err(self.malformed(
+                    &user,
+                    format!("baseColorFactor {:?} is not in [0, 1]", [r, g, b]),
+                ));
+            }
+            let emissive = m.emissive_factor.0;
+            if !emissive.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                return Err(self.malformed(
+                    &user,
+                    format!("emissiveFactor {emissive:?} must be finite and ≥ 0"),
+                ));
+            }
+            if !(strength.is_finite() && strength >= 0.0) {
+                return Err(self.malformed(
+                    &user,
+                    format!(
+                        "KHR_materials_emissive_strength emissiveStrength {strength} must be finite and ≥ 0"
+                    ),
+                ));
+            }
             let (base_color_texture, base_color_transform) = self.info_slot(
                 pbr.base_color_texture.as_ref(),
                 &user,
@@ -861,10 +979,7 @@ impl Ctx<'_> {
             let (metallic, roughness) = (pbr.metallic_factor.0, pbr.roughness_factor.0);
             for (field, v) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
                 if !(0.0..=1.0).contains(&v) {
-                    return Err(self.malformed(
-                        format!("material {i} '{name}'"),
-                        format!("{field} {v} is not in [0, 1]"),
-                    ));
+                    return Err(self.malformed(&user, format!("{field} {v} is not in [0, 1]")));
                 }
             }
             let (metallic_roughness_texture, metallic_roughness_transform) = self.info_slot(
@@ -1038,7 +1153,9 @@ impl Ctx<'_> {
         match self.decoded_texture(index, user, srgb) {
             Ok(id) => Ok(Some(id)),
             Err(ImageFailure::Image(e)) if !self.strict => {
-                self.warn(format!("{e} (the material is rendered without it)"));
+                // The error starts with the scene file: not prefixed again.
+                self.builder
+                    .warn(format!("{e} (the material is rendered without it)"));
                 Ok(None)
             }
             Err(ImageFailure::Image(e) | ImageFailure::Document(e)) => Err(e),
@@ -1086,14 +1203,8 @@ impl Ctx<'_> {
             ),
             (None, Some(uri)) => {
                 let file = self.folder.join(decode_uri_path(uri));
-                let bytes = std::fs::read(&file).map_err(|source| {
-                    ImageFailure::Image(LoadError::MissingFile {
-                        path: self.path.into(),
-                        place: place.clone(),
-                        file: file.clone(),
-                        source,
-                    })
-                })?;
+                let bytes =
+                    read_referenced_file(self.path, &place, &file).map_err(ImageFailure::Image)?;
                 (bytes, file.to_string_lossy().into_owned())
             }
             (None, None) => {
@@ -1102,8 +1213,17 @@ impl Ctx<'_> {
                 ));
             }
         };
+        // A file is named in full (its path was short enough to read), a name from the
+        // document by an excerpt.
+        let shown = if image.buffer_view.is_none()
+            && !image.uri.as_deref().unwrap_or("").starts_with("data:")
+        {
+            name.clone()
+        } else {
+            excerpt(&name)
+        };
         let tex = decode_texture(&bytes, name.clone(), wrap_u, wrap_v, srgb).map_err(|e| {
-            ImageFailure::Image(self.malformed(&place, format!("cannot decode '{name}': {e}")))
+            ImageFailure::Image(self.malformed(&place, format!("cannot decode '{shown}': {e}")))
         })?;
         let id = self.builder.texture(tex);
         self.textures
@@ -1139,10 +1259,11 @@ impl Ctx<'_> {
             name: name.clone(),
             ..Default::default()
         };
+        let shown = excerpt(&name);
         let mut with_normals = 0;
         let mut prim_normals: Vec<Vec<Vec3>> = Vec::new();
         for (p, prim) in gm.primitives.iter().enumerate() {
-            let place = format!("mesh {index} '{name}' primitive {p}");
+            let place = format!("mesh {index} '{shown}' primitive {p}");
             use json::mesh::{Mode, Semantic};
             match prim.mode {
                 Checked::Valid(Mode::Triangles) => {}
@@ -1159,8 +1280,10 @@ impl Ctx<'_> {
                 self.warn(format!("{place}: morph targets ignored"));
             }
             let attr = |s: Semantic| prim.attributes.get(&Checked::Valid(s)).map(|a| a.value());
+            use json::accessor::ComponentType as C;
             let pos_acc = attr(Semantic::Positions)
                 .ok_or_else(|| self.malformed(&place, "no POSITION attribute"))?;
+            self.check_component_type(pos_acc, &format!("{place} POSITION"), &[C::F32], "FLOAT")?;
             let positions: Vec<Vec3> = self
                 .read_vecs::<3>(pos_acc, &format!("{place} POSITION"))?
                 .into_iter()
@@ -1169,6 +1292,7 @@ impl Ctx<'_> {
             let n = positions.len();
             let normals = match attr(Semantic::Normals) {
                 Some(a) => {
+                    self.check_component_type(a, &format!("{place} NORMAL"), &[C::F32], "FLOAT")?;
                     let v: Vec<Vec3> = self
                         .read_vecs::<3>(a, &format!("{place} NORMAL"))?
                         .into_iter()
@@ -1194,6 +1318,12 @@ impl Ctx<'_> {
                 .unwrap_or(0);
             let uvs: Vec<Vec2> = match attr(Semantic::TexCoords(set)) {
                 Some(a) => {
+                    self.check_component_type(
+                        a,
+                        &format!("{place} TEXCOORD_{set}"),
+                        &[C::F32, C::U8, C::U16],
+                        "FLOAT, UNSIGNED_BYTE, UNSIGNED_SHORT",
+                    )?;
                     let v: Vec<Vec2> = self
                         .read_vecs::<2>(a, &format!("{place} TEXCOORD_{set}"))?
                         .into_iter()
@@ -1213,6 +1343,12 @@ impl Ctx<'_> {
                 Some(a) => {
                     let a = a.value();
                     let what = format!("{place} indices");
+                    self.check_component_type(
+                        a,
+                        &what,
+                        &[C::U8, C::U16, C::U32],
+                        "UNSIGNED_BYTE, UNSIGNED_SHORT, UNSIGNED_INT",
+                    )?;
                     let (v, comps) = self.read_accessor(a, &what)?;
                     if comps != 1 {
                         return Err(self.malformed(
@@ -1267,9 +1403,9 @@ impl Ctx<'_> {
         });
         if normal_mapped {
             if mesh.normals.is_empty() || mesh.uvs.is_empty() {
-                self.warn(format!("mesh {index} '{name}': a normal map needs normals and TEXCOORD_0; it is not applied"));
+                self.warn(format!("mesh {index} '{shown}': a normal map needs normals and TEXCOORD_0; it is not applied"));
             } else if !super::tangents::generate(&mut mesh) {
-                self.warn(format!("mesh {index} '{name}': MikkTSpace found no tangents; the normal map is not applied"));
+                self.warn(format!("mesh {index} '{shown}': MikkTSpace found no tangents; the normal map is not applied"));
             }
         }
         let id = self.builder.mesh(mesh);
@@ -1289,7 +1425,7 @@ impl Ctx<'_> {
         else {
             return Ok(());
         };
-        let place = format!("node {g} '{node_name}' light {index}");
+        let place = format!("node {g} '{}' light {index}", excerpt(node_name));
         let light = root
             .extensions
             .as_ref()
@@ -1369,6 +1505,28 @@ impl Ctx<'_> {
                             self.malformed(place, format!("yfov {} is not in (0, π)", p.yfov))
                         );
                     }
+                    // illume clips nothing and takes the aspect ratio from the image, but a
+                    // camera the glTF specification forbids is a broken file.
+                    if !(p.znear.is_finite() && p.znear > 0.0) {
+                        return Err(self.malformed(
+                            place,
+                            format!("znear {} must be finite and > 0", p.znear),
+                        ));
+                    }
+                    if let Some(zfar) = p.zfar
+                        && (zfar.is_nan() || zfar <= p.znear)
+                    {
+                        return Err(self.malformed(
+                            place,
+                            format!("zfar {zfar} must be greater than znear {}", p.znear),
+                        ));
+                    }
+                    if let Some(a) = p.aspect_ratio
+                        && !(a.is_finite() && a > 0.0)
+                    {
+                        return Err(self
+                            .malformed(place, format!("aspectRatio {a} must be finite and > 0")));
+                    }
                     let Some(node) = node_ids.get(g).copied().flatten() else {
                         continue;
                     };
@@ -1398,7 +1556,9 @@ impl Ctx<'_> {
             Checked::Invalid => return Err(self.malformed(place, "invalid interpolation")),
         };
         let input = sampler.input.value();
-        let (times, comps) = self.read_accessor(input, &format!("{place} input"))?;
+        let what = format!("{place} input");
+        self.check_component_type(input, &what, &[json::accessor::ComponentType::F32], "FLOAT")?;
+        let (times, comps) = self.read_accessor(input, &what)?;
         if comps != 1 {
             return Err(self.malformed(
                 format!("accessor {input} ({place} input)"),
@@ -1426,8 +1586,10 @@ impl Ctx<'_> {
             .collect();
         for p in pointers {
             let place = format!(
-                "animation {ai} '{name}' channel {} (pointer '{}')",
-                p.channel, p.pointer
+                "animation {ai} '{}' channel {} (pointer '{}')",
+                excerpt(name),
+                p.channel,
+                excerpt(&p.pointer)
             );
             let parts: Vec<&str> = p.pointer.trim_start_matches('/').split('/').collect();
             let index = |s: &str| s.parse::<usize>().ok();
@@ -1552,13 +1714,22 @@ impl Ctx<'_> {
             let name = a.name.clone().unwrap_or_else(|| format!("animation {ai}"));
             let mut channels = Vec::new();
             for (ci, ch) in a.channels.iter().enumerate() {
-                let place = format!("animation {ai} '{name}' channel {ci}");
+                let place = format!("animation {ai} '{}' channel {ci}", excerpt(&name));
                 let s = ch.sampler.value();
                 let sampler = a
                     .samplers
                     .get(s)
                     .ok_or_else(|| self.malformed(&place, format!("sampler {s} does not exist")))?;
                 let target = ch.target.node.value();
+                if target >= root.nodes.len() {
+                    return Err(self.malformed(
+                        place,
+                        format!(
+                            "targets node {target}, which does not exist ({} nodes)",
+                            root.nodes.len()
+                        ),
+                    ));
+                }
                 let property = match ch.target.path {
                     Checked::Valid(P::MorphTargetWeights) => {
                         self.warn(format!("{place}: morph-target weights ignored"));
@@ -1612,7 +1783,8 @@ impl Ctx<'_> {
             let properties = self.pointer_channels(ai, &name)?;
             if channels.is_empty() && properties.is_empty() {
                 self.warn(format!(
-                    "animation {ai} '{name}': no usable channel; skipped"
+                    "animation {ai} '{}': no usable channel; skipped",
+                    excerpt(&name)
                 ));
                 continue;
             }

@@ -6,7 +6,11 @@
 //! * a loader never panics on any input; every failure is a [`LoadError`] whose message
 //!   starts with the file and then the place (glTF: node/mesh/primitive/accessor/buffer/
 //!   image index; OBJ/MTL and ASCII PLY: line number; binary PLY: element index and byte
-//!   offset);
+//!   offset); names and tokens quoted from the input are cut to an [`excerpt`];
+//! * every file read — the scene and the buffers, libraries and textures it refers to —
+//!   must be a regular file (a pipe would block, a device never ends) of at most
+//!   [`MAX_FILE_BYTES`]; the malformed-input corpus (`apps/illume/tests/corpus.rs`,
+//!   `docs/robustness.md`) holds every loader to this contract;
 //! * the scene returned has passed [`Scene::validate`] and is evaluated at time 0;
 //! * files without a camera (OBJ, PLY, glTF without a camera node) get the camera of
 //!   [`default_camera_for_bounds`];
@@ -153,7 +157,6 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<Scene, Load
     Ok(scene)
 }
 
-/// Reads a whole file, mapping failure to [`LoadError::Io`].
 /// Reads an equirectangular environment map (linear `.exr` or Radiance `.hdr`) as a sky:
 /// radiance = `scale` × texel, turned by `rotation_deg` about +Y (the mapping is
 /// [`crate::EnvMap`]'s). Errors name the file: unreadable, not an HDR format, a texel
@@ -184,8 +187,14 @@ pub fn load_envmap(path: &Path, scale: f32, rotation_deg: f32) -> Result<crate::
             format!("rotation {rotation_deg}° is not finite"),
         ));
     }
-    let image = illume_core::image::RgbImage::read(path)
-        .map_err(|e| LoadError::malformed(path, "environment map", e.to_string()))?;
+    let image = illume_core::image::RgbImage::read(path).map_err(|e| {
+        // The image error names the file too: only its message is kept.
+        let message = match e {
+            illume_core::image::ImageError::Read { message, .. } => message,
+            other => other.to_string(),
+        };
+        LoadError::malformed(path, "environment map", message)
+    })?;
     let map = crate::EnvMap {
         name: path.display().to_string(),
         width: image.width(),
@@ -204,39 +213,63 @@ pub const MAX_FILE_BYTES: u64 = 4 << 30;
 /// Reads a whole file: only regular files (a pipe would block, a device never ends) of
 /// at most [`MAX_FILE_BYTES`].
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, LoadError> {
-    check_regular_file(path)?;
-    std::fs::read(path).map_err(|source| LoadError::Io {
+    illume_core::files::read_regular(path, MAX_FILE_BYTES).map_err(|source| LoadError::Io {
         path: path.into(),
         source,
     })
 }
 
-/// `Ok` for a regular file of at most [`MAX_FILE_BYTES`]; otherwise an error naming it.
-pub(crate) fn check_regular_file(path: &Path) -> Result<(), LoadError> {
-    let meta = std::fs::metadata(path).map_err(|source| LoadError::Io {
-        path: path.into(),
-        source,
-    })?;
-    if !meta.is_file() {
+/// Reads a file a scene refers to (glTF buffer or image, MTL library, texture) as
+/// [`read_file`] does, an error naming the scene file `path`, the `place` of the
+/// reference and the file.
+pub(crate) fn read_referenced_file(
+    path: &Path,
+    place: &str,
+    file: &Path,
+) -> Result<Vec<u8>, LoadError> {
+    check_file_name(path, place, file)?;
+    illume_core::files::read_regular(file, MAX_FILE_BYTES).map_err(|source| {
+        LoadError::MissingFile {
+            path: path.into(),
+            place: place.into(),
+            file: file.into(),
+            source,
+        }
+    })
+}
+
+/// Longest path of a file a scene refers to \[bytes\] (Linux's `PATH_MAX`): a longer
+/// one cannot be opened, and is not quoted in the message.
+pub const MAX_PATH_BYTES: usize = 4096;
+
+/// `Ok` when the path of `file`, referred to at `place` of `path`, is at most
+/// [`MAX_PATH_BYTES`] long; otherwise an error that does not quote it.
+pub(crate) fn check_file_name(path: &Path, place: &str, file: &Path) -> Result<(), LoadError> {
+    let n = file.as_os_str().len();
+    if n > MAX_PATH_BYTES {
         return Err(LoadError::malformed(
             path,
-            "file",
-            "not a regular file (a folder, pipe or device)",
-        ));
-    }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(LoadError::malformed(
-            path,
-            "file",
+            place,
             format!(
-                "{} bytes is more than the {} bytes illume reads",
-                meta.len(),
-                MAX_FILE_BYTES
+                "a file name of {n} bytes ('{}'), longer than the {MAX_PATH_BYTES} a path may have",
+                excerpt(&file.to_string_lossy())
             ),
         ));
     }
     Ok(())
 }
+
+/// `text` as quoted in a message (a name or token from the input): at most
+/// [`EXCERPT_CHARS`] characters, then `…`.
+pub fn excerpt(text: &str) -> String {
+    match text.char_indices().nth(EXCERPT_CHARS) {
+        Some((end, _)) => format!("{}…", &text[..end]),
+        None => text.to_owned(),
+    }
+}
+
+/// Longest piece of input quoted in a message \[characters\].
+pub const EXCERPT_CHARS: usize = 40;
 
 /// Vertical field of view of [`default_camera_for_bounds`]'s camera, in degrees.
 pub const DEFAULT_CAMERA_YFOV_DEG: f32 = 40.0;
@@ -279,17 +312,33 @@ pub fn default_camera_for_bounds(scene: &mut Scene) {
 }
 
 /// Decodes image bytes, the format found from their content or, for formats without a
-/// signature (TGA), from the extension of `name`.
+/// signature (TGA), from the extension of `name`. The `image` crate refuses an image
+/// whose header claims more than its default limit (512 MiB decoded) before allocating
+/// it; the message then says what the header claims.
 fn decode_image(bytes: &[u8], name: &str) -> Result<image::DynamicImage, String> {
-    match image::load_from_memory(bytes) {
-        Ok(decoded) => Ok(decoded),
+    let decoded = match image::load_from_memory(bytes) {
+        Ok(decoded) => return Ok(decoded),
         Err(e) => match image::ImageFormat::from_path(name) {
-            Ok(format) => {
-                image::load_from_memory_with_format(bytes, format).map_err(|e| e.to_string())
-            }
-            Err(_) => Err(e.to_string()),
+            Ok(format) => image::load_from_memory_with_format(bytes, format),
+            Err(_) => Err(e),
         },
-    }
+    };
+    decoded.map_err(|e| match e {
+        image::ImageError::Limits(_) => {
+            let claimed = image::ImageReader::new(std::io::Cursor::new(bytes))
+                .with_guessed_format()
+                .ok()
+                .and_then(|r| r.into_dimensions().ok());
+            match claimed {
+                Some((w, h)) => format!(
+                    "its header claims {w}×{h} pixels, more than the {} MiB illume decodes ({e})",
+                    image::Limits::default().max_alloc.unwrap_or(0) >> 20
+                ),
+                None => e.to_string(),
+            }
+        }
+        e => e.to_string(),
+    })
 }
 
 /// An image read as a coverage (opacity) map, MTL `map_d`: its alpha channel when it

@@ -13,11 +13,11 @@
 //!   `v`, `v/vt`, `v//vn`, `v/vt/vn` corners; positive indices are 1-based absolute,
 //!   negative ones are relative to the vertices read *so far* (both must refer to an
 //!   element already read); polygons are fan-triangulated;
-//! * `mtllib` (relative to the OBJ's folder; a missing library is a warning and its
-//!   materials become the default material), `usemtl` (an unknown name is a warning and
-//!   the default material);
-//! * MTL: `newmtl`, `Kd` (albedo, clamped to [0, 1]), `Ke` (emitted radiance
-//!   [W/(m²·sr)]), `Ks`/`Ns` (mapped onto the metallic-roughness model: `Ks` = 0 stays
+//! * `mtllib` (relative to the OBJ's folder; a library that is missing, not a regular
+//!   file or binary data is a warning and its materials become the default material),
+//!   `usemtl` (an unknown name is a warning and the default material);
+//! * MTL: `newmtl`, `Kd` (albedo, ≥ 0, clamped to ≤ 1), `Ke` (emitted radiance
+//!   [W/(m²·sr)], ≥ 0), `Ks`/`Ns` (mapped onto the metallic-roughness model: `Ks` = 0 stays
 //!   exactly Lambertian; otherwise base = Kd + Ks, metallic = lum(Ks)/lum(Kd + Ks),
 //!   GGX α = √(2/(Ns + 2)), roughness = √α; Kd + Ks > 1 is scaled down with a warning;
 //!   transmission (`illum` 4, 6, 7, 9) is rendered opaque with a warning), `map_Kd` (an sRGB image
@@ -45,8 +45,8 @@
 //! ignored with a warning. Line continuations (`\`) are not supported.
 
 use super::{
-    LoadError, decode_coverage_texture, decode_texture, default_camera_for_bounds,
-    normal_map_from_height, read_file,
+    LoadError, decode_coverage_texture, decode_texture, default_camera_for_bounds, excerpt,
+    normal_map_from_height, read_file, read_referenced_file,
 };
 use crate::animation::Trs;
 use crate::builtin::SceneBuilder;
@@ -86,34 +86,10 @@ struct ObjReader<'a> {
     unknown_materials: BTreeSet<String>,
 }
 
-/// `text` as quoted in an error message: at most 40 characters, then `…`.
-pub(crate) fn excerpt(text: &str) -> String {
-    const MAX: usize = 40;
-    match text.char_indices().nth(MAX) {
-        Some((end, _)) => format!("{}…", &text[..end]),
-        None => text.to_owned(),
-    }
-}
-
 pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
     let bytes = read_file(path)?;
-    // A text format: a NUL byte or a run of non-text bytes means binary data.
-    if let Some(at) = bytes.iter().position(|&b| b == 0) {
-        return Err(LoadError::malformed(
-            path,
-            format!("byte {at}"),
-            "binary data (a NUL byte) in what should be a text OBJ file",
-        ));
-    }
-    if std::str::from_utf8(&bytes).is_err() {
-        let bad = bytes.iter().filter(|&&b| b >= 0x80).count();
-        if bad * 10 > bytes.len() {
-            return Err(LoadError::malformed(
-                path,
-                "file",
-                "mostly non-text bytes: not a text OBJ file",
-            ));
-        }
+    if let Some((place, message)) = binary_data(&bytes, "OBJ") {
+        return Err(LoadError::malformed(path, place, message));
     }
     let text = String::from_utf8_lossy(&bytes);
     let mut r = ObjReader {
@@ -189,6 +165,27 @@ pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
     Ok(scene)
 }
 
+/// `Some((place, message))` when `bytes` are binary data rather than text of `format`
+/// (OBJ, MTL): a NUL byte, or mostly bytes that are not UTF-8 text.
+fn binary_data(bytes: &[u8], format: &str) -> Option<(String, String)> {
+    if let Some(at) = bytes.iter().position(|&b| b == 0) {
+        return Some((
+            format!("byte {at}"),
+            format!("binary data (a NUL byte) in what should be a text {format} file"),
+        ));
+    }
+    if std::str::from_utf8(bytes).is_err() {
+        let bad = bytes.iter().filter(|&&b| b >= 0x80).count();
+        if bad * 10 > bytes.len() {
+            return Some((
+                "file".into(),
+                format!("mostly non-text bytes: not a text {format} file"),
+            ));
+        }
+    }
+    None
+}
+
 /// The text of a line without its comment and surrounding whitespace.
 fn strip_comment(raw: &str) -> &str {
     raw.split('#').next().unwrap_or("").trim()
@@ -225,6 +222,25 @@ fn floats<const N: usize>(
         }
     }
     Ok(out)
+}
+
+/// An MTL colour statement's value (`Kd`, `Ke`, `Ks`): one number (grey, as the MTL
+/// spec says) or three, each finite and ≥ 0; `text` is the whole statement.
+fn colour(
+    tokens: &mut std::str::SplitWhitespace<'_>,
+    text: &str,
+    what: &str,
+) -> Result<Rgb, String> {
+    let [r, g, b] = floats::<3>(tokens, 1, what)?;
+    let c = if text.split_whitespace().count() == 2 {
+        Rgb::splat(r)
+    } else {
+        Rgb::new(r, g, b)
+    };
+    if c.min_element() < 0.0 {
+        return Err(format!("{what} {c} must be ≥ 0"));
+    }
+    Ok(c)
 }
 
 /// Resolves a 1-based (positive) or relative (negative) OBJ index against `count`
@@ -275,7 +291,7 @@ impl ObjReader<'_> {
                 self.current = Some(match self.materials.get(name) {
                     Some(&m) => m,
                     None => {
-                        self.unknown_materials.insert(name.to_string());
+                        self.unknown_materials.insert(excerpt(name));
                         self.default_material()
                     }
                 });
@@ -283,7 +299,7 @@ impl ObjReader<'_> {
             "mtllib" => self.mtllib(n, after_keyword(text))?,
             "o" | "g" | "s" => {}
             other => {
-                self.ignored.insert(other.to_string());
+                self.ignored.insert(excerpt(other));
             }
         }
         Ok(())
@@ -350,14 +366,26 @@ impl ObjReader<'_> {
         };
         for name in names {
             let mtl_path = folder.join(name.replace('\\', "/"));
-            match std::fs::read(&mtl_path) {
-                Ok(bytes) => self.parse_mtl(&mtl_path, &String::from_utf8_lossy(&bytes))?,
-                Err(e) => self.builder.warn(format!(
-                    "{}: line {line}: material library '{}' not readable ({e}); its materials use the default material",
-                    self.path.display(),
-                    mtl_path.display()
-                )),
-            }
+            let problem = match illume_core::files::read_regular(&mtl_path, super::MAX_FILE_BYTES) {
+                Ok(bytes) => match binary_data(&bytes, "MTL") {
+                    None => {
+                        self.parse_mtl(&mtl_path, &String::from_utf8_lossy(&bytes))?;
+                        continue;
+                    }
+                    Some((place, message)) => format!("{place}: {message}"),
+                },
+                Err(e) => e.to_string(),
+            };
+            let shown = mtl_path.to_string_lossy();
+            let shown = if shown.len() > super::MAX_PATH_BYTES {
+                excerpt(&shown)
+            } else {
+                shown.into_owned()
+            };
+            self.builder.warn(format!(
+                "{}: line {line}: material library '{shown}' not readable ({problem}); its materials use the default material",
+                self.path.display(),
+            ));
         }
         Ok(())
     }
@@ -395,23 +423,12 @@ impl ObjReader<'_> {
             };
             match keyword.as_str() {
                 "kd" => {
-                    let [r, g, b] = floats::<3>(&mut tokens, 1, "Kd").map_err(|e| err(n, e))?;
-                    // A single value means grey (MTL spec).
-                    let c = if text.split_whitespace().count() == 2 {
-                        Rgb::splat(r)
-                    } else {
-                        Rgb::new(r, g, b)
-                    };
-                    m.base_color = c.clamp(Rgb::ZERO, Rgb::ONE);
+                    let c = colour(&mut tokens, text, "Kd").map_err(|e| err(n, e))?;
+                    // Above 1 is common in exported files: clamped.
+                    m.base_color = c.min(Rgb::ONE);
                 }
                 "ke" => {
-                    let [r, g, b] = floats::<3>(&mut tokens, 1, "Ke").map_err(|e| err(n, e))?;
-                    let c = if text.split_whitespace().count() == 2 {
-                        Rgb::splat(r)
-                    } else {
-                        Rgb::new(r, g, b)
-                    };
-                    m.emission = c.max(Rgb::ZERO);
+                    m.emission = colour(&mut tokens, text, "Ke").map_err(|e| err(n, e))?;
                 }
                 "ns" => {
                     let [ns] = floats::<1>(&mut tokens, 1, "Ns").map_err(|e| err(n, e))?;
@@ -421,16 +438,7 @@ impl ObjReader<'_> {
                     phong.ns = Some(ns);
                 }
                 "ks" => {
-                    let [r, g, b] = floats::<3>(&mut tokens, 1, "Ks").map_err(|e| err(n, e))?;
-                    let c = if text.split_whitespace().count() == 2 {
-                        Rgb::splat(r)
-                    } else {
-                        Rgb::new(r, g, b)
-                    };
-                    if !c.is_finite() || c.min_element() < 0.0 {
-                        return Err(err(n, format!("Ks {c} must be finite and ≥ 0")));
-                    }
-                    phong.ks = c;
+                    phong.ks = colour(&mut tokens, text, "Ks").map_err(|e| err(n, e))?;
                 }
                 "illum" => {
                     // 4, 6, 7, 9: the MTL illumination models with transparency or
@@ -494,7 +502,7 @@ impl ObjReader<'_> {
                 self.builder.warn(format!(
                     "{}: material '{}': {warning}",
                     mtl_path.display(),
-                    m.name
+                    excerpt(&m.name)
                 ));
             }
             let name = m.name.clone();
@@ -522,13 +530,8 @@ impl ObjReader<'_> {
             return Ok(Some(id));
         }
         let place = format!("{} ({keyword})", mtl_place(mtl_path, line));
-        let decoded = match std::fs::read(tex_path) {
-            Err(source) => Err(LoadError::MissingFile {
-                path: self.path.into(),
-                place: place.clone(),
-                file: tex_path.into(),
-                source,
-            }),
+        let decoded = match read_referenced_file(self.path, &place, tex_path) {
+            Err(e) => Err(e),
             Ok(bytes) => {
                 let name = tex_path.to_string_lossy().into_owned();
                 match usage {

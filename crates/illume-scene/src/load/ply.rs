@@ -17,7 +17,7 @@
 //! Errors name the file and the place: the header line, or the element and its index
 //! plus the line (ASCII) or byte offset (binary) where reading failed.
 
-use super::{LoadError, default_camera_for_bounds, read_file};
+use super::{LoadError, default_camera_for_bounds, excerpt, read_file};
 use crate::animation::Trs;
 use crate::builtin::SceneBuilder;
 use crate::model::{Material, Mesh, Scene};
@@ -152,10 +152,13 @@ impl Body<'_> {
                 }
                 let s = std::str::from_utf8(token)
                     .map_err(|_| "value is not ASCII text".to_string())?;
-                let x: f64 = s.parse().map_err(|_| format!("'{s}' is not a number"))?;
+                let x: f64 = s
+                    .parse()
+                    .map_err(|_| format!("'{}' is not a number", excerpt(s)))?;
                 if !matches!(ty, Scalar::F32 | Scalar::F64) && x.fract() != 0.0 {
                     return Err(format!(
-                        "'{s}' is not an integer but the property is {ty:?}"
+                        "'{}' is not an integer but the property is {ty:?}",
+                        excerpt(s)
                     ));
                 }
                 Ok(x)
@@ -236,12 +239,15 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
                     "ascii" => Format::Ascii,
                     "binary_little_endian" => Format::BinaryLittleEndian,
                     "binary_big_endian" => Format::BinaryBigEndian,
-                    _ => return Err(err(line_no, format!("unknown format '{f}'"))),
+                    _ => return Err(err(line_no, format!("unknown format '{}'", excerpt(f)))),
                 });
                 if version != "1.0" {
                     return Err(err(
                         line_no,
-                        format!("unsupported PLY version '{version}' (expected 1.0)"),
+                        format!(
+                            "unsupported PLY version '{}' (expected 1.0)",
+                            excerpt(version)
+                        ),
                     ));
                 }
             }
@@ -253,7 +259,10 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
                     .next()
                     .and_then(|c| c.parse::<usize>().ok())
                     .ok_or_else(|| {
-                        err(line_no, format!("element '{name}' without a valid count"))
+                        err(
+                            line_no,
+                            format!("element '{}' without a valid count", excerpt(name)),
+                        )
                     })?;
                 elements.push(Element {
                     name: name.into(),
@@ -269,22 +278,23 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
                 let kind = if t == "list" {
                     let c = tokens.next().unwrap_or("");
                     let i = tokens.next().unwrap_or("");
-                    let count = Scalar::parse(c)
-                        .ok_or_else(|| err(line_no, format!("unknown list count type '{c}'")))?;
+                    let count = Scalar::parse(c).ok_or_else(|| {
+                        err(line_no, format!("unknown list count type '{}'", excerpt(c)))
+                    })?;
                     if matches!(count, Scalar::F32 | Scalar::F64) {
                         return Err(err(
                             line_no,
                             format!("list count type '{c}' is not an integer type"),
                         ));
                     }
-                    let item = Scalar::parse(i)
-                        .ok_or_else(|| err(line_no, format!("unknown list item type '{i}'")))?;
+                    let item = Scalar::parse(i).ok_or_else(|| {
+                        err(line_no, format!("unknown list item type '{}'", excerpt(i)))
+                    })?;
                     Kind::List { count, item }
                 } else {
-                    Kind::Scalar(
-                        Scalar::parse(t)
-                            .ok_or_else(|| err(line_no, format!("unknown property type '{t}'")))?,
-                    )
+                    Kind::Scalar(Scalar::parse(t).ok_or_else(|| {
+                        err(line_no, format!("unknown property type '{}'", excerpt(t)))
+                    })?)
                 };
                 let name = tokens
                     .next()
@@ -295,7 +305,12 @@ fn parse_header(path: &Path, bytes: &[u8]) -> Result<Header, LoadError> {
                 });
             }
             "end_header" => break,
-            other => return Err(err(line_no, format!("unknown header keyword '{other}'"))),
+            other => {
+                return Err(err(
+                    line_no,
+                    format!("unknown header keyword '{}'", excerpt(other)),
+                ));
+            }
         }
     }
     let format = format.ok_or_else(|| err(line_no, "no 'format' line before end_header".into()))?;
@@ -397,7 +412,8 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         }
         let mut values = vec![0.0f64; element.properties.len()];
         for item in 0..element.count {
-            let at = |body: &Body<'_>| format!("{} {item} ({})", element.name, body.place());
+            let at =
+                |body: &Body<'_>| format!("{} {item} ({})", excerpt(&element.name), body.place());
             let start = body.mark();
             let mut list: Vec<f64> = Vec::new();
             for (k, p) in element.properties.iter().enumerate() {
@@ -405,7 +421,11 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
                     Kind::Scalar(ty) => {
                         let place = at(&body);
                         values[k] = body.read(ty).map_err(|m| {
-                            LoadError::malformed(path, place, format!("property '{}': {m}", p.name))
+                            LoadError::malformed(
+                                path,
+                                place,
+                                format!("property '{}': {m}", excerpt(&p.name)),
+                            )
                         })?;
                     }
                     Kind::List { count, item: ty } => {
@@ -414,21 +434,25 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
                             LoadError::malformed(
                                 path,
                                 place.clone(),
-                                format!("list '{}' count: {m}", p.name),
+                                format!("list '{}' count: {m}", excerpt(&p.name)),
                             )
                         })?;
                         if n < 0.0 {
                             return Err(LoadError::malformed(
                                 path,
                                 place,
-                                format!("list '{}' has negative count {n}", p.name),
+                                format!("list '{}' has negative count {n}", excerpt(&p.name)),
                             ));
                         }
                         let keep = Some(k) == index_list;
                         for _ in 0..n as usize {
                             let place = at(&body);
                             let v = body.read(ty).map_err(|m| {
-                                LoadError::malformed(path, place, format!("list '{}': {m}", p.name))
+                                LoadError::malformed(
+                                    path,
+                                    place,
+                                    format!("list '{}': {m}", excerpt(&p.name)),
+                                )
                             })?;
                             if keep {
                                 list.push(v);
@@ -461,7 +485,15 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
                     ));
                 }
                 if let Some([u, v]) = uv {
-                    uvs.push(Vec2::new(values[u] as f32, 1.0 - values[v] as f32));
+                    let uv = Vec2::new(values[u] as f32, 1.0 - values[v] as f32);
+                    if !uv.is_finite() {
+                        return Err(LoadError::malformed(
+                            path,
+                            format!("vertex {item} ({mark})"),
+                            format!("texture coordinates {uv} are not finite"),
+                        ));
+                    }
+                    uvs.push(uv);
                 }
             }
             if index_list.is_some() {
