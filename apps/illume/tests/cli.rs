@@ -761,3 +761,51 @@ fn selective_runs_on_its_thread_in_real_time_and_on_the_frame_thread_with_fixed_
     );
     assert!(!png.exists());
 }
+
+#[test]
+fn demo_streams_its_frames_to_disk_and_leaves_a_preview() {
+    let dir = scratch("demo");
+    ok(&illume(&[
+        "demo",
+        "--duration",
+        "0.6",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--output",
+        path(&dir),
+    ]));
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    let frames = names
+        .iter()
+        .filter(|n| n.starts_with("frame_") && n.ends_with(".png"))
+        .count();
+    let csv = std::fs::read_to_string(dir.join("frames.csv")).unwrap();
+    assert!(frames >= 2, "{names:?}");
+    assert_eq!(
+        csv.lines().count(),
+        1 + frames,
+        "one CSV row per frame on disk"
+    );
+    // Every frame decodes at the requested size.
+    for i in 0..frames {
+        let img = image::open(dir.join(format!("frame_{i:05}.png"))).unwrap();
+        assert_eq!((img.width(), img.height()), (32, 24));
+    }
+    assert!(
+        names
+            .iter()
+            .any(|n| n == "preview.gif" || n == "preview.mp4"),
+        "{names:?}"
+    );
+    assert!(
+        !names
+            .iter()
+            .any(|n| n.contains("partial") || n.contains(".tmp")),
+        "temporary files left behind: {names:?}"
+    );
+}
