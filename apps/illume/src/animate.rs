@@ -108,8 +108,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     if !(duration >= 0.0 && duration.is_finite()) {
         bail!("--duration must be a non-negative number of seconds");
     }
-    std::fs::create_dir_all(&a.output)
-        .with_context(|| format!("{}: cannot create folder", a.output.display()))?;
+    crate::frames::prepare_output(&a.output)?;
     let tone = ToneMap {
         exposure_ev: a.exposure,
         ..Default::default()

@@ -15,6 +15,72 @@ use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 
+/// True for the names `animate` writes into its output folder: `frame_NNNNN.png` /
+/// `.exr`, `frames.csv`, `preview.gif` / `.mp4`, and the temporary files they are
+/// written through (`.NAME.PID.tmp`, `.preview.gif.partial`).
+pub fn is_animate_output(name: &str) -> bool {
+    let frame = name
+        .strip_prefix("frame_")
+        .and_then(|r| r.strip_suffix(".png").or_else(|| r.strip_suffix(".exr")))
+        .is_some_and(|n| n.len() >= 5 && n.bytes().all(|b| b.is_ascii_digit()));
+    let temporary = name.starts_with('.')
+        && (name.ends_with(".tmp") || name == ".preview.gif.partial")
+        && is_animate_output(
+            name.trim_start_matches('.')
+                .split('.')
+                .take(2)
+                .collect::<Vec<_>>()
+                .join(".")
+                .as_str(),
+        );
+    frame
+        || temporary
+        || matches!(name, "frames.csv" | "preview.gif" | "preview.mp4")
+        || name == ".preview.gif.partial"
+}
+
+/// Makes `dir` ready for a sequence: created if missing; a folder holding only what an
+/// earlier `animate` wrote ([`is_animate_output`]) is cleared of it, so no stale frame of
+/// a longer earlier run survives; a folder holding anything else is refused, naming it,
+/// and nothing in it is touched.
+pub fn prepare_output(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create folder", dir.display()))?;
+    let mut ours = Vec::new();
+    let mut foreign = Vec::new();
+    for entry in
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?
+    {
+        let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        if is_file && is_animate_output(&name) {
+            ours.push(entry.path());
+        } else {
+            foreign.push(name);
+        }
+    }
+    if !foreign.is_empty() {
+        foreign.sort();
+        let shown: Vec<&str> = foreign.iter().take(3).map(String::as_str).collect();
+        anyhow::bail!(
+            "{}: the output folder holds files illume did not write ({}{}); choose an empty or new folder with --output",
+            dir.display(),
+            shown.join(", "),
+            if foreign.len() > 3 {
+                format!(" and {} more", foreign.len() - 3)
+            } else {
+                String::new()
+            }
+        );
+    }
+    for path in ours {
+        std::fs::remove_file(&path)
+            .with_context(|| format!("{}: cannot remove an earlier run's file", path.display()))?;
+    }
+    Ok(())
+}
+
 /// Frames waiting to be written may hold at most this many bytes (sRGB and HDR copies);
 /// beyond it the frame loop waits for the writer.
 pub const QUEUE_BYTES: usize = 256 << 20;
@@ -330,3 +396,36 @@ fn mp4(dir: &Path, fps: f64) -> Result<PathBuf> {
 }
 
 use image::ImageEncoder as _;
+
+#[cfg(test)]
+mod tests {
+    use super::is_animate_output;
+
+    #[test]
+    fn animate_outputs_are_recognised_by_name() {
+        for ours in [
+            "frame_00000.png",
+            "frame_12345.exr",
+            "frame_1234567.png",
+            "frames.csv",
+            "preview.gif",
+            "preview.mp4",
+            ".preview.gif.partial",
+            ".frame_00003.png.4242.tmp",
+            ".frames.csv.17.tmp",
+        ] {
+            assert!(is_animate_output(ours), "{ours}");
+        }
+        for theirs in [
+            "frame_0001.png",
+            "frame_0000a.png",
+            "frame_00000.jpg",
+            "notes.txt",
+            "frames.csv.bak",
+            ".notes.txt.1.tmp",
+            "preview.webm",
+        ] {
+            assert!(!is_animate_output(theirs), "{theirs}");
+        }
+    }
+}

@@ -809,3 +809,52 @@ fn demo_streams_its_frames_to_disk_and_leaves_a_preview() {
         "temporary files left behind: {names:?}"
     );
 }
+
+#[test]
+fn animate_clears_its_own_earlier_frames_and_refuses_a_folder_it_did_not_write() {
+    let dir = scratch("animate-folder");
+    let run = |duration: &str| {
+        illume(&[
+            "animate",
+            "builtin:cornell-spot",
+            "--duration",
+            duration,
+            "--fps",
+            "10",
+            "--work-per-frame",
+            "1000",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--output",
+            path(&dir),
+        ])
+    };
+    let frames = || {
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| {
+                let n = e.as_ref().unwrap().file_name();
+                n.to_string_lossy().starts_with("frame_")
+            })
+            .count()
+    };
+    ok(&run("0.5"));
+    assert_eq!(frames(), 6);
+    // A shorter re-run leaves no stale frame of the longer one.
+    ok(&run("0.2"));
+    assert_eq!(
+        frames(),
+        3,
+        "stale frames of the earlier, longer run remain"
+    );
+    // A file illume did not write: refused, named, and nothing is touched.
+    let notes = dir.join("notes.txt");
+    std::fs::write(&notes, "mine").unwrap();
+    let out = run("0.1");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("notes.txt"), "{err}");
+    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
+    assert_eq!(frames(), 3);
+}
