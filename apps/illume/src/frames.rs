@@ -369,9 +369,11 @@ fn write_frame(dir: &Path, f: &Frame, w: u32, h: u32) -> Result<()> {
     Ok(())
 }
 
-/// `preview.mp4` from the PNG frames at `fps` through ffmpeg.
+/// `preview.mp4` from the PNG frames at `fps` through ffmpeg, written to a temporary
+/// sibling and renamed into place (a failed encode keeps an earlier preview whole).
 fn mp4(dir: &Path, fps: f64) -> Result<PathBuf> {
     let out = dir.join("preview.mp4");
+    let tmp = dir.join(format!(".preview.mp4.{}.tmp", std::process::id()));
     let status = std::process::Command::new("ffmpeg")
         .args([
             "-y",
@@ -387,11 +389,17 @@ fn mp4(dir: &Path, fps: f64) -> Result<PathBuf> {
             "yuv420p",
             "-vf",
             "scale=trunc(iw/2)*2:trunc(ih/2)*2",
+            "-f",
+            "mp4",
         ])
-        .arg(&out)
+        .arg(&tmp)
         .status()
         .context("running ffmpeg")?;
-    anyhow::ensure!(status.success(), "ffmpeg failed ({status})");
+    if !status.success() {
+        let _ = std::fs::remove_file(&tmp);
+        anyhow::bail!("ffmpeg failed ({status})");
+    }
+    std::fs::rename(&tmp, &out).with_context(|| format!("{}: cannot write", out.display()))?;
     Ok(out)
 }
 
@@ -413,6 +421,7 @@ mod tests {
             ".preview.gif.partial",
             ".frame_00003.png.4242.tmp",
             ".frames.csv.17.tmp",
+            ".preview.mp4.99.tmp",
         ] {
             assert!(is_animate_output(ours), "{ours}");
         }
