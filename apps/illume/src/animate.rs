@@ -4,9 +4,10 @@
 use crate::frames::{Frame, FrameWriter};
 use crate::progress;
 use crate::render::load_scene;
+use crate::setup::ExposureMode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use illume_core::image::{ToneMap, to_srgb8};
+use illume_core::image::{ToneMap, auto_exposure_ev, to_srgb8};
 use illume_engine::{Engine, TechniqueKind};
 use illume_scene::Timeline;
 use illume_scene::timeline::ping_pong_time;
@@ -53,9 +54,14 @@ pub struct AnimateArgs {
     /// Also write linear frame_NNNNN.exr.
     #[arg(long)]
     pub exr: bool,
-    /// Exposure for PNG and preview output [stops], within ±64.
+    /// Exposure for PNG and preview output [stops] added to the automatic one (or to 0
+    /// with `--exposure-mode fixed`), within ±64.
     #[arg(long, default_value_t = 0.0, value_parser = crate::setup::exposure_stops, allow_hyphen_values = true)]
     pub exposure: f32,
+    /// `auto` (default): one exposure for the whole sequence, from its first frame with
+    /// light (log-average luminance to middle grey); `fixed`: 0 + `--exposure`.
+    #[arg(long, value_enum, default_value_t)]
+    pub exposure_mode: crate::setup::ExposureMode,
 }
 
 /// Arguments of `illume demo`.
@@ -109,9 +115,10 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         bail!("--duration must be a non-negative number of seconds");
     }
     crate::frames::prepare_output(&a.output)?;
-    let tone = ToneMap {
-        exposure_ev: a.exposure,
-        ..Default::default()
+    // Fixed: known now. Auto: from the first frame with light, then kept for the sequence.
+    let mut exposure_ev = match a.exposure_mode {
+        ExposureMode::Fixed => Some(a.exposure),
+        ExposureMode::Auto => None,
     };
     if (duration * a.fps).round() >= 1e6 {
         bail!(
@@ -182,7 +189,16 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         writer.push(Frame {
             index,
             shown_s: if a.realtime { t } else { index as f64 / a.fps },
-            srgb8: to_srgb8(&out.frame.full, &tone),
+            srgb8: {
+                if exposure_ev.is_none() {
+                    exposure_ev = auto_exposure_ev(&out.frame.full).map(|ev| ev + a.exposure);
+                }
+                let tone = ToneMap {
+                    exposure_ev: exposure_ev.unwrap_or(a.exposure),
+                    ..Default::default()
+                };
+                to_srgb8(&out.frame.full, &tone)
+            },
             hdr: a.exr.then(|| out.frame.full.clone()),
         })?;
         index += 1;
@@ -231,6 +247,11 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         index as f64 / render_s
     );
     eprintln!(
+        "exposure {:+.2} EV ({:?})",
+        exposure_ev.unwrap_or(a.exposure),
+        a.exposure_mode
+    );
+    eprintln!(
         "wrote {}/frame_NNNNN.png{}, {}, {}",
         a.output.display(),
         if a.exr { " (+ .exr)" } else { "" },
@@ -261,5 +282,6 @@ pub fn demo(d: DemoArgs) -> Result<()> {
         output: d.output,
         exr: false,
         exposure: 0.0,
+        exposure_mode: ExposureMode::Auto,
     })
 }

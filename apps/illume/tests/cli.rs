@@ -858,3 +858,53 @@ fn animate_clears_its_own_earlier_frames_and_refuses_a_folder_it_did_not_write()
     assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
     assert_eq!(frames(), 3);
 }
+
+/// PNG output is exposed automatically (the log-average luminance to middle grey, one
+/// exposure for the full image and its split parts), `--exposure` adds stops on top, and
+/// `--exposure-mode fixed` maps radiance without it.
+#[test]
+fn png_exposure_is_automatic_by_default_and_fixed_on_request() {
+    use illume_core::image::{ToneMap, auto_exposure_ev, to_srgb8};
+    let dir = scratch("exposure");
+    let render = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "builtin:cornell-spot",
+            "--technique",
+            "reference",
+            "--spp",
+            "4",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "-o",
+            path(out),
+        ];
+        args.extend_from_slice(extra);
+        ok(&illume(&args));
+    };
+    let exr = dir.join("linear.exr");
+    render(&exr, &[]);
+    let linear = RgbImage::read(&exr).unwrap();
+    let auto = auto_exposure_ev(&linear).unwrap();
+    assert!(auto > 0.5, "the spot-lit box is dim at exposure 0: {auto}");
+    for (extra, ev) in [
+        (vec![], auto),
+        (vec!["--exposure=-1.5"], auto - 1.5),
+        (vec!["--exposure-mode", "fixed"], 0.0),
+        (vec!["--exposure-mode", "fixed", "--exposure", "2"], 2.0),
+    ] {
+        let png = dir.join("out.png");
+        render(&png, &extra);
+        let got = image::open(&png).unwrap().to_rgb8().into_raw();
+        let want = to_srgb8(
+            &linear,
+            &ToneMap {
+                exposure_ev: ev,
+                ..Default::default()
+            },
+        );
+        assert!(got == want, "{extra:?}: the PNG is not exposed at {ev} EV");
+    }
+}
