@@ -65,7 +65,7 @@ pub struct RadianceCacheSettings {
     /// its smaller dimensions, below half its diagonal (tested at the floor centre of
     /// the cube-in-box), so the clamp binds mostly where rays escape.
     pub r_max_fraction: f32,
-    /// Also clamp R_k to E/|∇_p E| (the largest over channels; Křivánek et al. 2006,
+    /// Also clamp R_k to E/|∇_p E| (the smallest over channels; Křivánek et al. 2006,
     /// beyond the paper): the translation term of Eq. 4 then changes a record's value by
     /// at most the fraction a within its sphere, so extrapolation stays positive where
     /// indirect light changes fast (indirect shadow edges) although the geometry is far.

@@ -281,8 +281,8 @@ fn translation_gradient_under_a_traced_half_plane() {
 }
 
 /// The default R_max (half the scene's diagonal) does not bind inside a closed room: at
-/// the floor centre of the cube-in-box, where R_k is largest, the unclamped harmonic mean
-/// distance is below it (and above the default R_min).
+/// the floor centre of the cube-in-box the unclamped harmonic mean distance is below it
+/// (and above the default R_min).
 #[test]
 fn default_r_k_clamps_do_not_bind_in_the_cube_in_box() {
     let world = World::new(illume_scene::builtin::load("cube-in-box").unwrap());
