@@ -68,6 +68,7 @@ pub mod hsh;
 pub mod octree;
 pub mod record;
 pub mod settings;
+pub mod state;
 pub mod temporal;
 
 pub use error::RadianceCacheError;
@@ -76,6 +77,7 @@ pub use record::{
     HemisphereGather, IrradianceRecord, IrradianceValue, RecordSettings, RgbGradient,
 };
 pub use settings::{RadianceCacheSettings, TemporalMode};
+pub use state::RadianceCache;
 
 /// The technique's one name: CLI value, settings table, counter and error prefix.
 pub const NAME: &str = "radiance_cache";
