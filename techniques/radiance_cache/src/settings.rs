@@ -137,8 +137,11 @@ pub struct RadianceCacheSettings {
     pub reuse_directions: bool,
     /// Beyond the paper: a change not on the timeline (an edit, a frame off the
     /// timeline) expires the records whose rays hit the changed item. False: such
-    /// records live out their lifespan (ghosts). Default true. Used by the frame loop
-    /// (to come).
+    /// records live out their lifespan (ghosts). Default true. For now (`reuse`, no
+    /// timeline matching yet) the frame loop treats every change alike, timeline steps
+    /// too, and expires coarser sets: the records on an instance that moved, was added
+    /// or removed; every record on a light, sky or material change. False: changes
+    /// expire nothing.
     pub expire_on_surprise: bool,
     /// §7's future work: a new record whose lifespan is short shortens the lifespans of
     /// the records whose spheres of influence contain it to its own, so a change seen by

@@ -27,7 +27,8 @@
 //! material change expires every record (their irradiance is wrong everywhere). Records
 //! near a moving object but not on it keep the light of the object's old position until
 //! δt_max ends their life: the ghosting of Fig. 5c, which τ and the temporal gradients
-//! (to come) are there to cut. This holds for timeline steps and surprises alike.
+//! (to come) are there to cut. This holds for timeline steps and surprises alike;
+//! `expire_on_surprise = false` turns it off (changes then expire nothing).
 //!
 //! **Budget.** All records a frame needs are computed in [`Technique::indirect`] (the
 //! G-buffer says where); [`Budget`] is not honoured yet and `advance` does nothing.
@@ -299,6 +300,9 @@ impl Technique for RadianceCache {
     }
 
     fn scene_changed(&mut self, _world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        if !self.settings.expire_on_surprise {
+            return ChangeResponse::Updated;
+        }
         for c in changes {
             match c {
                 SceneChange::CameraMoved { .. } => {}

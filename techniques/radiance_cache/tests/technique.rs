@@ -116,6 +116,47 @@ fn a_light_change_expires_every_record_in_reuse() {
 }
 
 #[test]
+fn an_instance_move_expires_only_the_records_on_it() {
+    let world = World::new(illume_scene::builtin::load("cube-in-box").unwrap());
+    let g = GBuffer::render(&world, W, H, Vec2::splat(0.5));
+    let mut rc = cache(&world, quick(TemporalMode::Reuse));
+    rc.indirect(&world, &g);
+    let alive = rc.records_alive();
+    let (instance, transform) = world
+        .scene
+        .instances
+        .iter()
+        .enumerate()
+        .find_map(|(i, inst)| {
+            let on = rc
+                .records()
+                .filter(|r| r.instance.map(|x| x.index()) == Some(i))
+                .count();
+            (on > 0 && on < alive).then_some((i, inst.world_from_object))
+        })
+        .expect("records on more than one instance");
+    let on = rc
+        .records()
+        .filter(|r| r.instance.map(|x| x.index()) == Some(instance))
+        .count();
+    let id = rc
+        .records()
+        .find_map(|r| r.instance.filter(|x| x.index() == instance))
+        .unwrap();
+    rc.scene_changed(
+        &world,
+        &[illume_scene::SceneChange::InstanceMoved {
+            instance: id,
+            from: transform,
+            to: transform,
+        }],
+    );
+    rc.indirect(&world, &g);
+    assert_eq!(rc.stats().get("records_expired"), Some(on as f64));
+    assert_eq!(rc.stats().get("records_reused"), Some((alive - on) as f64));
+}
+
+#[test]
 fn placement_does_not_depend_on_the_thread_count() {
     let (world, g) = cornell();
     let run = |threads: usize| {
