@@ -27,11 +27,15 @@ pub enum TemporalMode {
     PerFrame,
     /// Records live for their lifespan (Eq. 10, Eq. 12) and are replaced at the same
     /// place, with no temporal gradient (Fig. 5c): the value jumps when a record is
-    /// replaced.
+    /// replaced. **For now** (no reprojection, so no τ): records live δt_max frames and
+    /// expired ones are not replaced in place but placed anew over the G-buffer; records
+    /// near moving objects keep stale light until then (ghosts).
     Reuse,
+    /// Not built yet (refused at construction: needs the §4.3 reprojection).
     /// One pass: temporal gradients extrapolated from the reprojected next-frame estimate
     /// (Eq. 18–20, Fig. 5d). Smaller jumps at replacement than `reuse`.
     Extrapolated,
+    /// Not built yet (refused at construction: needs the §4.3 reprojection).
     /// Two passes: the first computes every record of the timeline, the second renders
     /// with temporal gradients interpolated towards each record's replacement
     /// (Eq. 21–23, Fig. 5e): no jump at replacement. The paper's choice for quality.
