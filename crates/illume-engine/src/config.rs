@@ -20,6 +20,7 @@
 
 use crate::TechniqueKind;
 use illume_photon_stream::PhotonStreamSettings;
+use illume_radiance_cache::RadianceCacheSettings;
 use illume_reference::ReferenceSettings;
 use illume_render::RenderSettings;
 use illume_selective::SelectiveSettings;
@@ -40,6 +41,8 @@ pub struct Config {
     pub photon_stream: PhotonStreamSettings,
     /// Selective photon tracing (`[selective]`).
     pub selective: SelectiveSettings,
+    /// Temporal radiance caching (`[radiance_cache]`).
+    pub radiance_cache: RadianceCacheSettings,
 }
 
 /// Why a configuration was rejected.
@@ -216,6 +219,7 @@ impl Config {
             TechniqueKind::Reference => &self.reference,
             TechniqueKind::PhotonStream => &self.photon_stream,
             TechniqueKind::Selective => &self.selective,
+            TechniqueKind::RadianceCache => &self.radiance_cache,
         }
     }
 
@@ -225,6 +229,7 @@ impl Config {
             TechniqueKind::Reference => &mut self.reference,
             TechniqueKind::PhotonStream => &mut self.photon_stream,
             TechniqueKind::Selective => &mut self.selective,
+            TechniqueKind::RadianceCache => &mut self.radiance_cache,
         }
     }
 

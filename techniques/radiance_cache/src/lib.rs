@@ -15,8 +15,14 @@
 //! the same place. Reused records cost nothing and keep their positions, so animations
 //! are cheaper and flicker less than with a new cache per frame.
 //!
-//! **Status.** This crate holds the technique's tested core; the frame loop, the
-//! reprojection and the engine and CLI integration are still to come.
+//! **Status (in progress).** A selectable technique (`--technique radiance_cache` in
+//! `illume render` and `illume animate`) with two temporal modes: `per_frame` (the
+//! paper's baseline, a new cache every frame) and `reuse` (records kept for δt_max
+//! frames with no temporal weighting: ghosts, see [`state`]); **the default is `reuse`
+//! for now**. `extrapolated` and `interpolated` need the §4.3 reprojection, still to
+//! come, and are refused at construction (`radiance_cache.temporal: … not built yet`);
+//! `interpolated` becomes the default with it. Glossy surfaces are shaded Lambertian
+//! (irradiance records only) until radiance records are placed and shaded.
 //!
 //! | paper | here |
 //! |---|---|
@@ -25,11 +31,13 @@
 //! | §4.2, Eq. 5–12: change rate τ, temporal weight, lifespan | [`temporal`] |
 //! | §4.4, Eq. 13–23: contribution over time, extrapolated and interpolated temporal gradients | [`temporal`] |
 //! | §3, radiance records for glossy surfaces (KGPB05, GKPB04): hemispherical harmonics | [`hsh`] |
-//! | §6: the paper's parameters and the reasoned ones; presets `paper`, `fast` | [`settings`] |
+//! | §6: the paper's parameters and the reasoned ones; presets `paper`, `still`, `fast` | [`settings`] |
+//! | §6 baseline (`per_frame`), Fig. 5c without τ (`reuse`): the `Technique`, coarse-to-fine placement over the G-buffer, shading ρ/π·E | [`state`] |
 //! | §4.3, §5, Fig. 7–8: next-frame estimate by reprojection, hole filling | to come |
-//! | §4.2, Fig. 5–6: replacement at the same place; §5, Fig. 9: deletion | to come |
-//! | radiance records' translation gradients and their placement | to come |
-//! | the `Technique` (state, update, frame loop, two passes), engine, CLI, bench | to come |
+//! | §4.2, Fig. 5–6: lifespans from τ, replacement at the same place; §5, Fig. 9: deletion | to come |
+//! | §4.4 in the frame loop: `extrapolated`, `interpolated` (two passes) | to come |
+//! | radiance records: placement, translation gradients, glossy shading | to come |
+//! | bench scenario, Table 1 and Figure 10 in kind | to come |
 //!
 //! **Failure modes known from the paper.** (1) Ghosts: a record reused after the light
 //! around it changed keeps showing the old light; the temporal weight sees only the
@@ -68,6 +76,7 @@ pub mod hsh;
 pub mod octree;
 pub mod record;
 pub mod settings;
+pub mod state;
 pub mod temporal;
 
 pub use error::RadianceCacheError;
@@ -76,6 +85,7 @@ pub use record::{
     HemisphereGather, IrradianceRecord, IrradianceValue, RecordSettings, RgbGradient,
 };
 pub use settings::{RadianceCacheSettings, TemporalMode};
+pub use state::RadianceCache;
 
 /// The technique's one name: CLI value, settings table, counter and error prefix.
 pub const NAME: &str = "radiance_cache";

@@ -5,13 +5,16 @@
 //! a 64×64 hemisphere grid: §6) and reasoned choices where it gives none (a, the R_k
 //! clamps, the hemispherical-harmonics order), each explained at its field and in
 //! `docs/techniques/radiance_cache.md`. The struct covers the whole technique; the parts
-//! that use some of its fields (the frame loop, reprojection, replacement and deletion)
-//! are still to come, and those fields say so. So is `impl TechniqueSettings`: its
-//! pacing and work unit belong to the frame loop; [`RadianceCacheSettings::presets`] and
-//! [`RadianceCacheSettings::preset`] already have the trait's shape.
+//! that use some of its fields (reprojection, replacement and deletion, radiance
+//! records) are still to come, and those fields say so.
+//!
+//! **The default mode is `reuse` for now**: `extrapolated` and `interpolated` need the
+//! §4.3 next-frame reprojection, not built yet, and are refused at construction. The
+//! issue's default, `interpolated`, comes with the reprojection chunk.
 
 use crate::RadianceCacheError;
 use crate::record::RecordSettings;
+use illume_transport::{Budget, Pacing, TechniqueSettings};
 use serde::{Deserialize, Serialize};
 
 /// How records follow time (§4.2–4.4).
@@ -24,11 +27,15 @@ pub enum TemporalMode {
     PerFrame,
     /// Records live for their lifespan (Eq. 10, Eq. 12) and are replaced at the same
     /// place, with no temporal gradient (Fig. 5c): the value jumps when a record is
-    /// replaced.
+    /// replaced. **For now** (no reprojection, so no τ): records live δt_max frames and
+    /// expired ones are not replaced in place but placed anew over the G-buffer; records
+    /// near moving objects keep stale light until then (ghosts).
     Reuse,
+    /// Not built yet (refused at construction: needs the §4.3 reprojection).
     /// One pass: temporal gradients extrapolated from the reprojected next-frame estimate
     /// (Eq. 18–20, Fig. 5d). Smaller jumps at replacement than `reuse`.
     Extrapolated,
+    /// Not built yet (refused at construction: needs the §4.3 reprojection).
     /// Two passes: the first computes every record of the timeline, the second renders
     /// with temporal gradients interpolated towards each record's replacement
     /// (Eq. 21–23, Fig. 5e): no jump at replacement. The paper's choice for quality.
@@ -89,7 +96,10 @@ pub struct RadianceCacheSettings {
     /// object about to enter its hemisphere, Fig. 4) is caught within this many frames.
     /// Lower: fewer ghosts, at the cost of more records. 1–100 000, default 20 (§6).
     pub max_age_frames: u32,
-    /// How records follow time. Default [`TemporalMode::Interpolated`].
+    /// How records follow time. Default [`TemporalMode::Reuse`] for now: `extrapolated`
+    /// and `interpolated` are refused at construction until the §4.3 reprojection is
+    /// built (`interpolated`, the paper's choice, becomes the default then). `per_frame`
+    /// and `reuse` run with or without a timeline (also with `--realtime`).
     pub temporal: TemporalMode,
     /// Surfaces that are not exactly Lambertian and whose perceptual roughness is at or
     /// below this are glossy: their specular lobe is shaded from radiance records
@@ -131,8 +141,11 @@ pub struct RadianceCacheSettings {
     pub reuse_directions: bool,
     /// Beyond the paper: a change not on the timeline (an edit, a frame off the
     /// timeline) expires the records whose rays hit the changed item. False: such
-    /// records live out their lifespan (ghosts). Default true. Used by the frame loop
-    /// (to come).
+    /// records live out their lifespan (ghosts). Default true. For now (`reuse`, no
+    /// timeline matching yet) the frame loop treats every change alike, timeline steps
+    /// too, and expires coarser sets: the records on an instance that moved, was added
+    /// or removed; every record on a light, sky or material change. False: changes
+    /// expire nothing.
     pub expire_on_surprise: bool,
     /// §7's future work: a new record whose lifespan is short shortens the lifespans of
     /// the records whose spheres of influence contain it to its own, so a change seen by
@@ -163,6 +176,38 @@ impl Default for RadianceCacheSettings {
 /// The largest grid side accepted (`theta_strata`, `phi_strata`): 1024² rays per record.
 pub const MAX_STRATA: u32 = 1024;
 
+impl TechniqueSettings for RadianceCacheSettings {
+    const NAME: &'static str = crate::NAME;
+    /// Records are computed where the G-buffer needs them; [`Budget::work`] is not
+    /// honoured yet.
+    const WORK_UNIT: &'static str = "records";
+
+    fn presets() -> &'static [(&'static str, &'static str)] {
+        RadianceCacheSettings::presets()
+    }
+
+    fn preset(name: &str) -> Option<Self> {
+        RadianceCacheSettings::preset(name)
+    }
+
+    /// Nothing to map: `per_frame` and `reuse` compute the records each frame needs,
+    /// in real time as in fixed-work frames (`work_per_frame` is ignored: the G-buffer
+    /// decides the work). The modes that need the timeline (`extrapolated`,
+    /// `interpolated`) are refused at construction for now.
+    fn pace(&mut self, pacing: Pacing) {
+        let _ = pacing;
+    }
+
+    /// Unlimited: a frame computes every record its G-buffer needs.
+    fn default_budget(&self) -> Budget {
+        Budget::default()
+    }
+
+    fn set_seed(&mut self, seed: u64) {
+        self.seed = seed;
+    }
+}
+
 impl RadianceCacheSettings {
     /// The paper's values (§6) and the reasoned choices where it gives none: the
     /// default.
@@ -176,7 +221,7 @@ impl RadianceCacheSettings {
             phi_strata: 64,
             temporal_accuracy: 0.05,
             max_age_frames: 20,
-            temporal: TemporalMode::Interpolated,
+            temporal: TemporalMode::Reuse,
             glossy_roughness_max: 1.0,
             hsh_order: 8,
             traced_roughness_max: 0.5,
@@ -189,6 +234,15 @@ impl RadianceCacheSettings {
             rr_start_depth: 3,
             max_depth: 1024,
             seed: 0,
+        }
+    }
+
+    /// The preset for `render`'s stills: the defaults in `per_frame` mode (one frame: the
+    /// same image as `reuse`, without keeping the records).
+    pub fn still() -> Self {
+        Self {
+            temporal: TemporalMode::PerFrame,
+            ..Self::paper()
         }
     }
 
@@ -207,17 +261,21 @@ impl RadianceCacheSettings {
         }
     }
 
-    /// Named presets with a one-line description each; the first is `default` (the
-    /// shape of `TechniqueSettings::presets`, which the integration implements with it).
+    /// Named presets with a one-line description each; the first is `default`
+    /// ([`TechniqueSettings::presets`]).
     pub fn presets() -> &'static [(&'static str, &'static str)] {
         &[
             (
                 "default",
-                "paper: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated",
+                "paper: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, reuse (interpolated: to come)",
             ),
             (
                 "paper",
-                "the paper's values (§6): a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated",
+                "the paper's values (§6): a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, reuse (interpolated: to come)",
+            ),
+            (
+                "still",
+                "the defaults in per_frame mode: `render`'s default",
             ),
             (
                 "fast",
@@ -231,6 +289,7 @@ impl RadianceCacheSettings {
         match name {
             "default" | "paper" => Some(Self::paper()),
             "fast" => Some(Self::fast()),
+            "still" => Some(Self::still()),
             _ => None,
         }
     }

@@ -10,7 +10,7 @@ fn defaults_are_the_papers_values() {
     assert_eq!(s.temporal_accuracy, 0.05);
     assert_eq!(s.max_age_frames, 20);
     assert_eq!((s.theta_strata, s.phi_strata), (64, 64));
-    assert_eq!(s.temporal, TemporalMode::Interpolated);
+    assert_eq!(s.temporal, TemporalMode::Reuse); // interpolated: with the reprojection
     s.validate().unwrap();
 }
 
