@@ -1,16 +1,18 @@
 //! `illume animate` and `illume demo`: render an animation frame by frame with a
 //! technique, write numbered frames, an animated preview and a per-frame CSV.
 
+use crate::frames::{Frame, FrameWriter};
 use crate::progress;
 use crate::render::load_scene;
+use crate::setup::ExposureMode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use illume_core::image::{RgbImage, ToneMap, to_srgb8, write_exr};
+use illume_core::image::{ToneMap, auto_exposure_ev, to_srgb8};
 use illume_engine::{Engine, TechniqueKind};
 use illume_scene::Timeline;
 use illume_scene::timeline::ping_pong_time;
 use illume_transport::Pacing;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Arguments of `illume animate`.
@@ -52,9 +54,14 @@ pub struct AnimateArgs {
     /// Also write linear frame_NNNNN.exr.
     #[arg(long)]
     pub exr: bool,
-    /// Exposure for PNG and preview output [stops], within ±64.
+    /// Exposure for PNG and preview output [stops] added to the automatic one (or to 0
+    /// with `--exposure-mode fixed`), within ±64.
     #[arg(long, default_value_t = 0.0, value_parser = crate::setup::exposure_stops, allow_hyphen_values = true)]
     pub exposure: f32,
+    /// `auto` (default): one exposure for the whole sequence, from its first frame with
+    /// light (log-average luminance to middle grey); `fixed`: 0 + `--exposure`.
+    #[arg(long, value_enum, default_value_t)]
+    pub exposure_mode: crate::setup::ExposureMode,
 }
 
 /// Arguments of `illume demo`.
@@ -76,11 +83,6 @@ pub struct DemoArgs {
     /// `photon_stream.vsl_count=200`.
     #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
     pub sets: Vec<String>,
-}
-
-struct StoredFrame {
-    srgb8: Vec<u8>,
-    hdr: Option<RgbImage>,
 }
 
 /// Runs `illume animate`.
@@ -112,11 +114,11 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     if !(duration >= 0.0 && duration.is_finite()) {
         bail!("--duration must be a non-negative number of seconds");
     }
-    std::fs::create_dir_all(&a.output)
-        .with_context(|| format!("{}: cannot create folder", a.output.display()))?;
-    let tone = ToneMap {
-        exposure_ev: a.exposure,
-        ..Default::default()
+    crate::frames::prepare_output(&a.output)?;
+    // Fixed: known now. Auto: from the first frame with light, then kept for the sequence.
+    let mut exposure_ev = match a.exposure_mode {
+        ExposureMode::Fixed => Some(a.exposure),
+        ExposureMode::Auto => None,
     };
     if (duration * a.fps).round() >= 1e6 {
         bail!(
@@ -144,7 +146,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     };
     let mut csv_header: Option<Vec<String>> = None;
     let mut csv_rows: Vec<String> = Vec::new();
-    let mut stored: Vec<StoredFrame> = Vec::new();
+    let mut writer = FrameWriter::start(&a.output, w, h)?;
     let start = Instant::now();
     let mut render_s = 0.0;
     let mut index = 0u64;
@@ -182,19 +184,23 @@ pub fn run(a: AnimateArgs) -> Result<()> {
             row += &format!(",{v}");
         }
         csv_rows.push(row);
-        let frame = StoredFrame {
-            srgb8: to_srgb8(&out.frame.full, &tone),
+        // Written on the writer thread while the next frames render (memory stays
+        // bounded; before, real-time runs kept every frame until the end).
+        writer.push(Frame {
+            index,
+            shown_s: if a.realtime { t } else { index as f64 / a.fps },
+            srgb8: {
+                if exposure_ev.is_none() {
+                    exposure_ev = auto_exposure_ev(&out.frame.full).map(|ev| ev + a.exposure);
+                }
+                let tone = ToneMap {
+                    exposure_ev: exposure_ev.unwrap_or(a.exposure),
+                    ..Default::default()
+                };
+                to_srgb8(&out.frame.full, &tone)
+            },
             hdr: a.exr.then(|| out.frame.full.clone()),
-        };
-        if a.realtime {
-            stored.push(frame); // written after the run, so disk I/O does not slow the loop
-        } else {
-            write_frame(&a.output, index, &frame, w, h)?;
-            stored.push(StoredFrame {
-                srgb8: frame.srgb8,
-                hdr: None,
-            });
-        }
+        })?;
         index += 1;
         if a.realtime {
             pb.set_position((t * 10.0) as u64);
@@ -207,11 +213,6 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     }
     pb.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
-    if a.realtime {
-        for (i, f) in stored.iter().enumerate() {
-            write_frame(&a.output, i as u64, f, w, h)?;
-        }
-    }
     let csv_path = a.output.join("frames.csv");
     use std::fmt::Write as _;
     let mut csv = String::new();
@@ -226,17 +227,11 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     }
     illume_core::atomic::write_file(&csv_path, csv)
         .with_context(|| format!("{}: cannot write", csv_path.display()))?;
-    let preview = write_preview(
-        &a.output,
-        &stored,
-        w,
-        h,
-        if a.realtime {
-            index as f64 / wall
-        } else {
-            a.fps
-        },
-    )?;
+    let preview = writer.finish(if a.realtime {
+        index as f64 / wall
+    } else {
+        a.fps
+    })?;
     eprintln!(
         "{} frames of {}×{} with {} in {wall:.2} s{}: {:.2} frames per second (rendering alone {:.2} fps)",
         index,
@@ -252,6 +247,11 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         index as f64 / render_s
     );
     eprintln!(
+        "exposure {:+.2} EV ({:?})",
+        exposure_ev.unwrap_or(a.exposure),
+        a.exposure_mode
+    );
+    eprintln!(
         "wrote {}/frame_NNNNN.png{}, {}, {}",
         a.output.display(),
         if a.exr { " (+ .exr)" } else { "" },
@@ -259,66 +259,6 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         preview.display()
     );
     Ok(())
-}
-
-fn write_frame(dir: &Path, index: u64, f: &StoredFrame, w: u32, h: u32) -> Result<()> {
-    let path = dir.join(format!("frame_{index:05}.png"));
-    image::save_buffer(&path, &f.srgb8, w, h, image::ColorType::Rgb8)
-        .with_context(|| format!("{}: cannot write", path.display()))?;
-    if let Some(hdr) = &f.hdr {
-        write_exr(hdr, &path.with_extension("exr"))?;
-    }
-    Ok(())
-}
-
-/// MP4 through ffmpeg when it is on PATH, else an animated GIF (half size).
-fn write_preview(dir: &Path, frames: &[StoredFrame], w: u32, h: u32, fps: f64) -> Result<PathBuf> {
-    let ffmpeg_ok = std::process::Command::new("ffmpeg")
-        .arg("-version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if ffmpeg_ok {
-        let out = dir.join("preview.mp4");
-        let status = std::process::Command::new("ffmpeg")
-            .args([
-                "-y",
-                "-loglevel",
-                "error",
-                "-framerate",
-                &format!("{fps:.3}"),
-                "-i",
-            ])
-            .arg(dir.join("frame_%05d.png"))
-            .args([
-                "-pix_fmt",
-                "yuv420p",
-                "-vf",
-                "scale=trunc(iw/2)*2:trunc(ih/2)*2",
-            ])
-            .arg(&out)
-            .status()
-            .context("running ffmpeg")?;
-        if status.success() {
-            return Ok(out);
-        }
-        eprintln!("warning: ffmpeg failed ({status}); writing a GIF instead");
-    }
-    let out = dir.join("preview.gif");
-    let mut gif = Vec::new();
-    let mut enc = image::codecs::gif::GifEncoder::new_with_speed(&mut gif, 30);
-    enc.set_repeat(image::codecs::gif::Repeat::Infinite)?;
-    let (pw, ph) = ((w / 2).max(1), (h / 2).max(1));
-    let delay = image::Delay::from_numer_denom_ms((1000.0 / fps.max(1.0)) as u32, 1);
-    for f in frames {
-        let rgb = image::RgbImage::from_raw(w, h, f.srgb8.clone()).context("frame size")?;
-        let small = image::imageops::resize(&rgb, pw, ph, image::imageops::FilterType::Triangle);
-        let rgba = image::DynamicImage::ImageRgb8(small).to_rgba8();
-        enc.encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))?;
-    }
-    drop(enc);
-    illume_core::atomic::write_file(&out, gif)
-        .with_context(|| format!("{}: cannot write", out.display()))?;
-    Ok(out)
 }
 
 /// Runs `illume demo`: builtin:cornell-spot, sphere and spot light moving, photon
@@ -342,5 +282,6 @@ pub fn demo(d: DemoArgs) -> Result<()> {
         output: d.output,
         exr: false,
         exposure: 0.0,
+        exposure_mode: ExposureMode::Auto,
     })
 }

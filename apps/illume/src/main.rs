@@ -18,6 +18,7 @@
 mod animate;
 mod bench;
 mod compare;
+mod frames;
 mod info;
 mod progress;
 mod render;

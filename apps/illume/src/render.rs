@@ -3,7 +3,7 @@
 use crate::progress;
 use anyhow::{Context, Result};
 use clap::Args;
-use illume_core::image::{RgbImage, ToneMap};
+use illume_core::image::{RgbImage, ToneMap, auto_exposure_ev};
 use illume_engine::render_still;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -33,9 +33,14 @@ pub struct RenderArgs {
     /// Also write FILE_direct and FILE_indirect beside the output.
     #[arg(long)]
     pub split: bool,
-    /// Exposure for PNG output [stops], within ±64.
+    /// Exposure for PNG output [stops] added to the automatic one (or to 0 with
+    /// `--exposure-mode fixed`), within ±64.
     #[arg(long, default_value_t = 0.0, value_parser = crate::setup::exposure_stops, allow_hyphen_values = true)]
     pub exposure: f32,
+    /// `auto` (default): PNG exposure from the image (log-average luminance to middle
+    /// grey); `fixed`: exposure 0 + `--exposure`.
+    #[arg(long, value_enum, default_value_t)]
+    pub exposure_mode: crate::setup::ExposureMode,
     /// Random seed of the renderer and the technique.
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
@@ -78,6 +83,11 @@ pub fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
         .unwrap_or("render");
     let ext = path.extension().and_then(|s| s.to_str()).unwrap_or("png");
     path.with_file_name(format!("{stem}_{suffix}.{ext}"))
+}
+
+/// True when `path` is written tone-mapped (8-bit), i.e. not as linear EXR.
+fn is_png(path: &Path) -> bool {
+    path.extension().and_then(|s| s.to_str()) != Some("exr")
 }
 
 fn write(img: &RgbImage, path: &Path, tone: &ToneMap) -> Result<()> {
@@ -132,10 +142,6 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if let Some(s) = a.seed {
         config.set_seed(s);
     }
-    let tone = ToneMap {
-        exposure_ev: a.exposure,
-        ..Default::default()
-    };
     let mut scene = load_scene(
         &a.scene,
         a.animation.as_deref(),
@@ -165,6 +171,25 @@ pub fn run(a: RenderArgs) -> Result<()> {
         m.y,
         m.z
     );
+    // One exposure for the full image and its split parts, so they stay comparable.
+    let tone = ToneMap {
+        exposure_ev: a
+            .exposure_mode
+            .stops(auto_exposure_ev(&still.full), a.exposure),
+        ..Default::default()
+    };
+    if is_png(&a.output) {
+        eprintln!(
+            "exposure {:+.2} EV ({:?}{})",
+            tone.exposure_ev,
+            a.exposure_mode,
+            if a.exposure != 0.0 {
+                format!(", {:+} from --exposure", a.exposure)
+            } else {
+                String::new()
+            }
+        );
+    }
     write(&still.full, &a.output, &tone)?;
     if a.split {
         write(&still.direct, &with_suffix(&a.output, "direct"), &tone)?;

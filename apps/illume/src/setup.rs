@@ -112,6 +112,30 @@ fn parse_radiance(s: &str) -> Result<Vec3, String> {
     Ok(v)
 }
 
+/// How 8-bit output (PNG, GIF, MP4) is exposed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ExposureMode {
+    /// Reinhard et al. 2002's key-value rule: the log-average luminance of the lit pixels
+    /// maps to middle grey 0.18 (`illume_core::image::auto_exposure_ev`), computed per
+    /// still; for a sequence once, on its first frame with light, and kept (no pumping).
+    /// `--exposure` adds stops on top.
+    #[default]
+    Auto,
+    /// Exposure 0 plus `--exposure` stops: radiance 1 W/(m²·sr) maps near white.
+    Fixed,
+}
+
+impl ExposureMode {
+    /// The exposure in stops for an image whose automatic exposure is `auto` (None: no
+    /// light), plus `extra_ev`.
+    pub fn stops(self, auto: Option<f32>, extra_ev: f32) -> f32 {
+        match self {
+            ExposureMode::Auto => auto.unwrap_or(0.0) + extra_ev,
+            ExposureMode::Fixed => extra_ev,
+        }
+    }
+}
+
 /// An exposure in stops: finite and within ±64 (2⁶⁴ already maps every representable
 /// radiance to black or white).
 pub fn exposure_stops(s: &str) -> Result<f32, String> {

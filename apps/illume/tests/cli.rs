@@ -761,3 +761,150 @@ fn selective_runs_on_its_thread_in_real_time_and_on_the_frame_thread_with_fixed_
     );
     assert!(!png.exists());
 }
+
+#[test]
+fn demo_streams_its_frames_to_disk_and_leaves_a_preview() {
+    let dir = scratch("demo");
+    ok(&illume(&[
+        "demo",
+        "--duration",
+        "0.6",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--output",
+        path(&dir),
+    ]));
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    let frames = names
+        .iter()
+        .filter(|n| n.starts_with("frame_") && n.ends_with(".png"))
+        .count();
+    let csv = std::fs::read_to_string(dir.join("frames.csv")).unwrap();
+    assert!(frames >= 2, "{names:?}");
+    assert_eq!(
+        csv.lines().count(),
+        1 + frames,
+        "one CSV row per frame on disk"
+    );
+    // Every frame decodes at the requested size.
+    for i in 0..frames {
+        let img = image::open(dir.join(format!("frame_{i:05}.png"))).unwrap();
+        assert_eq!((img.width(), img.height()), (32, 24));
+    }
+    assert!(
+        names
+            .iter()
+            .any(|n| n == "preview.gif" || n == "preview.mp4"),
+        "{names:?}"
+    );
+    assert!(
+        !names
+            .iter()
+            .any(|n| n.contains("partial") || n.contains(".tmp")),
+        "temporary files left behind: {names:?}"
+    );
+}
+
+#[test]
+fn animate_clears_its_own_earlier_frames_and_refuses_a_folder_it_did_not_write() {
+    let dir = scratch("animate-folder");
+    let run = |duration: &str| {
+        illume(&[
+            "animate",
+            "builtin:cornell-spot",
+            "--duration",
+            duration,
+            "--fps",
+            "10",
+            "--work-per-frame",
+            "1000",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "--output",
+            path(&dir),
+        ])
+    };
+    let frames = || {
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .filter(|e| {
+                let n = e.as_ref().unwrap().file_name();
+                n.to_string_lossy().starts_with("frame_")
+            })
+            .count()
+    };
+    ok(&run("0.5"));
+    assert_eq!(frames(), 6);
+    // A shorter re-run leaves no stale frame of the longer one.
+    ok(&run("0.2"));
+    assert_eq!(
+        frames(),
+        3,
+        "stale frames of the earlier, longer run remain"
+    );
+    // A file illume did not write: refused, named, and nothing is touched.
+    let notes = dir.join("notes.txt");
+    std::fs::write(&notes, "mine").unwrap();
+    let out = run("0.1");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("notes.txt"), "{err}");
+    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
+    assert_eq!(frames(), 3);
+}
+
+/// PNG output is exposed automatically (the log-average luminance to middle grey, one
+/// exposure for the full image and its split parts), `--exposure` adds stops on top, and
+/// `--exposure-mode fixed` maps radiance without it.
+#[test]
+fn png_exposure_is_automatic_by_default_and_fixed_on_request() {
+    use illume_core::image::{ToneMap, auto_exposure_ev, to_srgb8};
+    let dir = scratch("exposure");
+    let render = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "builtin:cornell-spot",
+            "--technique",
+            "reference",
+            "--spp",
+            "4",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "-o",
+            path(out),
+        ];
+        args.extend_from_slice(extra);
+        ok(&illume(&args));
+    };
+    let exr = dir.join("linear.exr");
+    render(&exr, &[]);
+    let linear = RgbImage::read(&exr).unwrap();
+    let auto = auto_exposure_ev(&linear).unwrap();
+    assert!(auto > 0.5, "the spot-lit box is dim at exposure 0: {auto}");
+    for (extra, ev) in [
+        (vec![], auto),
+        (vec!["--exposure=-1.5"], auto - 1.5),
+        (vec!["--exposure-mode", "fixed"], 0.0),
+        (vec!["--exposure-mode", "fixed", "--exposure", "2"], 2.0),
+    ] {
+        let png = dir.join("out.png");
+        render(&png, &extra);
+        let got = image::open(&png).unwrap().to_rgb8().into_raw();
+        let want = to_srgb8(
+            &linear,
+            &ToneMap {
+                exposure_ev: ev,
+                ..Default::default()
+            },
+        );
+        assert!(got == want, "{extra:?}: the PNG is not exposed at {ev} EV");
+    }
+}

@@ -237,6 +237,32 @@ impl ToneMap {
     }
 }
 
+/// The middle grey automatic exposure maps the scene's log-average luminance to
+/// (Reinhard et al. 2002, "Photographic tone reproduction", the key value a = 0.18).
+pub const AUTO_EXPOSURE_KEY: f32 = 0.18;
+
+/// Automatic exposure in stops for `img` (Reinhard et al. 2002's key-value rule): the
+/// exposure that maps the log-average luminance L̄ = exp(mean ln(δ + Y)) to
+/// [`AUTO_EXPOSURE_KEY`], i.e. log₂(0.18 / L̄), with δ = 10⁻⁶ W/(m²·sr) against
+/// ln 0. Pixels that see nothing (exactly black: the background of a scene without a
+/// sky) and non-finite pixels are left out, so a small object on black is exposed for
+/// the object. None when no pixel has light. Clamped to ±32 stops.
+pub fn auto_exposure_ev(img: &RgbImage) -> Option<f32> {
+    let (mut sum, mut n) = (0.0f64, 0u64);
+    for &p in img.pixels() {
+        let y = crate::luminance(p);
+        if y > 0.0 && y.is_finite() {
+            sum += (1e-6 + y as f64).ln();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return None;
+    }
+    let log_average = (sum / n as f64).exp();
+    Some(((AUTO_EXPOSURE_KEY as f64 / log_average).log2() as f32).clamp(-32.0, 32.0))
+}
+
 /// sRGB transfer (encode) of a display-linear value in [0, 1].
 #[inline]
 pub fn srgb_encode(x: f32) -> f32 {
@@ -421,6 +447,32 @@ pub fn read_ldr(path: &Path) -> Result<RgbImage, ImageError> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn auto_exposure_maps_the_log_average_to_middle_grey() {
+        // Uniform radiance L: exposure log2(0.18 / L), whatever L.
+        for l in [0.01f32, 1.0, 250.0] {
+            let img = RgbImage::filled(4, 4, Rgb::splat(l));
+            let ev = auto_exposure_ev(&img).unwrap();
+            assert!((ev - (0.18 / l).log2()).abs() < 1e-3, "L = {l}: {ev}");
+        }
+        // Half the pixels at 1, half at 4: the log-average is 2 (the geometric mean),
+        // black pixels are left out.
+        let mut img = RgbImage::filled(4, 2, Rgb::ZERO);
+        for (i, p) in img.pixels_mut().iter_mut().enumerate() {
+            *p = Rgb::splat(match i % 4 {
+                0 => 1.0,
+                1 => 4.0,
+                2 => 0.0,
+                _ => f32::NAN,
+            });
+        }
+        let ev = auto_exposure_ev(&img).unwrap();
+        assert!((ev - (0.18f32 / 2.0).log2()).abs() < 1e-3, "{ev}");
+        // Nothing lit: no exposure to choose.
+        assert_eq!(auto_exposure_ev(&RgbImage::filled(2, 2, Rgb::ZERO)), None);
+    }
+
     use super::*;
 
     /// Writes go through a temporary file renamed into place: success leaves only the

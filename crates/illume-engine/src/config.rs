@@ -20,6 +20,7 @@
 
 use crate::TechniqueKind;
 use illume_photon_stream::PhotonStreamSettings;
+use illume_radiance_cache::RadianceCacheSettings;
 use illume_reference::ReferenceSettings;
 use illume_render::RenderSettings;
 use illume_selective::SelectiveSettings;
@@ -40,6 +41,8 @@ pub struct Config {
     pub photon_stream: PhotonStreamSettings,
     /// Selective photon tracing (`[selective]`).
     pub selective: SelectiveSettings,
+    /// Temporal radiance caching (`[radiance_cache]`).
+    pub radiance_cache: RadianceCacheSettings,
 }
 
 /// Why a configuration was rejected.
@@ -213,7 +216,8 @@ impl Config {
             .map_err(|m| format!("[render] width/height: {m}"))?;
         self.reference.validate().map_err(|e| e.to_string())?;
         self.photon_stream.validate().map_err(|e| e.to_string())?;
-        self.selective.validate().map_err(|e| e.to_string())
+        self.selective.validate().map_err(|e| e.to_string())?;
+        self.radiance_cache.validate().map_err(|e| e.to_string())
     }
 
     /// [`Config::check`], the error naming `source` (the file, or `--set`).
@@ -231,6 +235,7 @@ impl Config {
             TechniqueKind::Reference => &self.reference,
             TechniqueKind::PhotonStream => &self.photon_stream,
             TechniqueKind::Selective => &self.selective,
+            TechniqueKind::RadianceCache => &self.radiance_cache,
         }
     }
 
@@ -240,6 +245,7 @@ impl Config {
             TechniqueKind::Reference => &mut self.reference,
             TechniqueKind::PhotonStream => &mut self.photon_stream,
             TechniqueKind::Selective => &mut self.selective,
+            TechniqueKind::RadianceCache => &mut self.radiance_cache,
         }
     }
 

@@ -4,6 +4,7 @@
 
 use crate::{Config, EngineError};
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
+use illume_radiance_cache::{RadianceCache, RadianceCacheSettings};
 use illume_reference::{ReferenceSettings, ReferenceTechnique};
 use illume_scene::Timeline;
 use illume_selective::SelectiveSettings;
@@ -23,6 +24,9 @@ pub enum TechniqueKind {
     /// Selective photon tracing with Halton pilot and corrective groups (Dmitriev et al.
     /// 2002).
     Selective,
+    /// Temporal radiance caching (Gautron et al. 2006), the offline technique for
+    /// animations known in advance (in progress: `per_frame` and `reuse` modes).
+    RadianceCache,
 }
 
 impl TechniqueKind {
@@ -31,6 +35,7 @@ impl TechniqueKind {
         TechniqueKind::Reference,
         TechniqueKind::PhotonStream,
         TechniqueKind::Selective,
+        TechniqueKind::RadianceCache,
     ];
 
     /// The technique's one name (its crate's `NAME`).
@@ -39,6 +44,7 @@ impl TechniqueKind {
             TechniqueKind::Reference => illume_reference::NAME,
             TechniqueKind::PhotonStream => illume_photon_stream::NAME,
             TechniqueKind::Selective => illume_selective::NAME,
+            TechniqueKind::RadianceCache => illume_radiance_cache::NAME,
         }
     }
 
@@ -48,6 +54,7 @@ impl TechniqueKind {
             TechniqueKind::Reference => ReferenceSettings::presets(),
             TechniqueKind::PhotonStream => PhotonStreamSettings::presets(),
             TechniqueKind::Selective => SelectiveSettings::presets(),
+            TechniqueKind::RadianceCache => RadianceCacheSettings::presets(),
         }
     }
 
@@ -61,6 +68,7 @@ impl TechniqueKind {
             TechniqueKind::Reference => table::<ReferenceSettings>(name),
             TechniqueKind::PhotonStream => table::<PhotonStreamSettings>(name),
             TechniqueKind::Selective => table::<SelectiveSettings>(name),
+            TechniqueKind::RadianceCache => table::<RadianceCacheSettings>(name),
         }
     }
 
@@ -71,6 +79,7 @@ impl TechniqueKind {
             TechniqueKind::Reference => ReferenceSettings::WORK_UNIT,
             TechniqueKind::PhotonStream => PhotonStreamSettings::WORK_UNIT,
             TechniqueKind::Selective => SelectiveSettings::WORK_UNIT,
+            TechniqueKind::RadianceCache => RadianceCacheSettings::WORK_UNIT,
         }
     }
 
@@ -81,6 +90,8 @@ impl TechniqueKind {
             TechniqueKind::Reference | TechniqueKind::PhotonStream | TechniqueKind::Selective => {
                 false
             }
+            // The offline technique (for now it uses only the timeline's image size).
+            TechniqueKind::RadianceCache => true,
         }
     }
 
@@ -92,7 +103,6 @@ impl TechniqueKind {
         config: &Config,
         timeline: &Timeline,
     ) -> Result<Box<dyn Technique>, EngineError> {
-        let _ = timeline; // no offline technique yet
         let wrap = |source: TechniqueError| EngineError::Technique {
             technique: self.name(),
             source,
@@ -107,6 +117,13 @@ impl TechniqueKind {
             ),
             TechniqueKind::Selective => illume_selective::build(world, config.selective.clone())
                 .map_err(|e| wrap(e.into()))?,
+            TechniqueKind::RadianceCache => {
+                let world = world.read().unwrap_or_else(|e| e.into_inner());
+                Box::new(
+                    RadianceCache::new(&world, timeline, config.radiance_cache.clone())
+                        .map_err(|e| wrap(e.into()))?,
+                )
+            }
         })
     }
 }

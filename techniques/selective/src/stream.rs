@@ -155,11 +155,15 @@ fn spawn(world: SharedWorld, shared: Arc<Shared>) -> std::io::Result<JoinHandle<
                 let worked = {
                     let w = world.read().unwrap_or_else(|e| e.into_inner());
                     let mut solution = shared.lock();
-                    solution.step(&w).is_some()
+                    let worked = solution.step(&w).is_some();
+                    if worked {
+                        // Counted under the lock: whoever sees the step's effect sees it
+                        // counted.
+                        shared.steps.fetch_add(1, Ordering::AcqRel);
+                    }
+                    worked
                 };
-                if worked {
-                    shared.steps.fetch_add(1, Ordering::AcqRel);
-                } else {
+                if !worked {
                     std::thread::park_timeout(IDLE_WAIT);
                 }
             }

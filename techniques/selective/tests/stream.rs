@@ -158,17 +158,20 @@ fn an_announced_world_write_pauses_the_thread_until_the_frame_goes_on() {
     for _ in 0..20 {
         let start = Instant::now();
         sel.before_world_write();
-        // One step in flight (~2 ms) may finish; then none may start.
-        std::thread::sleep(Duration::from_millis(20));
         let s1 = sel.thread_steps();
-        std::thread::sleep(Duration::from_millis(12));
+        // At most the step in flight may finish; no new one may start.
+        std::thread::sleep(Duration::from_millis(30));
         let s2 = sel.thread_steps();
         let within = start.elapsed() < illume_selective::stream::WORLD_WAIT;
         let w = world.read().unwrap();
         sel.advance(&w, &Budget::default());
         drop(w);
         if within {
-            assert_eq!(s1, s2, "the thread stepped while a world write was pending");
+            assert!(
+                s2 - s1 <= 1,
+                "the thread took {} steps while a world write was pending",
+                s2 - s1
+            );
             checked += 1;
         }
         // Once the frame goes on, the thread does too.

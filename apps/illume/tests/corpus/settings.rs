@@ -198,6 +198,11 @@ pub fn cases() -> Vec<Case> {
             error(&[c, "masking_contrast_threshold"]),
         ),
         config(
+            "radiance_cache_nan",
+            "[render]\nwidth = 8\nheight = 8\n[radiance_cache]\naccuracy = nan\n",
+            error(&[c, "accuracy"]),
+        ),
+        config(
             "empty_file",
             "[render]\nwidth = 8\nheight = 8\n",
             Expect::Success,

@@ -1,0 +1,440 @@
+//! Frames of `animate` and `demo` written to disk while the sequence renders, on a
+//! background thread, with the preview GIF encoded as frames arrive: memory stays bounded
+//! however long the sequence (before, real-time runs kept every frame until the end: 395 MB
+//! after 10 s of `illume demo`).
+//!
+//! The frame loop hands each frame over through a queue bounded in bytes
+//! ([`QUEUE_BYTES`]); the writer runs at the lowest OS priority so that in real time it
+//! takes the CPU the renderer leaves, and the loop waits only when the queue is full (a
+//! disk slower than the renderer for a long stretch).
+
+use anyhow::{Context, Result};
+use illume_core::image::RgbImage;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+
+/// True for the names `animate` writes into its output folder: `frame_NNNNN.png` /
+/// `.exr`, `frames.csv`, `preview.gif` / `.mp4`, and the temporary files they are
+/// written through (`.NAME.PID.tmp`, `.preview.gif.partial`).
+pub fn is_animate_output(name: &str) -> bool {
+    let frame = name
+        .strip_prefix("frame_")
+        .and_then(|r| r.strip_suffix(".png").or_else(|| r.strip_suffix(".exr")))
+        .is_some_and(|n| n.len() >= 5 && n.bytes().all(|b| b.is_ascii_digit()));
+    let temporary = name.starts_with('.')
+        && (name.ends_with(".tmp") || name == ".preview.gif.partial")
+        && is_animate_output(
+            name.trim_start_matches('.')
+                .split('.')
+                .take(2)
+                .collect::<Vec<_>>()
+                .join(".")
+                .as_str(),
+        );
+    frame
+        || temporary
+        || matches!(name, "frames.csv" | "preview.gif" | "preview.mp4")
+        || name == ".preview.gif.partial"
+}
+
+/// Makes `dir` ready for a sequence: created if missing; a folder holding only what an
+/// earlier `animate` wrote ([`is_animate_output`]) is cleared of it, so no stale frame of
+/// a longer earlier run survives; a folder holding anything else is refused, naming it,
+/// and nothing in it is touched.
+pub fn prepare_output(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create folder", dir.display()))?;
+    let mut ours = Vec::new();
+    let mut foreign = Vec::new();
+    for entry in
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?
+    {
+        let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        if is_file && is_animate_output(&name) {
+            ours.push(entry.path());
+        } else {
+            foreign.push(name);
+        }
+    }
+    if !foreign.is_empty() {
+        foreign.sort();
+        let shown: Vec<&str> = foreign.iter().take(3).map(String::as_str).collect();
+        anyhow::bail!(
+            "{}: the output folder holds files illume did not write ({}{}); choose an empty or new folder with --output",
+            dir.display(),
+            shown.join(", "),
+            if foreign.len() > 3 {
+                format!(" and {} more", foreign.len() - 3)
+            } else {
+                String::new()
+            }
+        );
+    }
+    for path in ours {
+        std::fs::remove_file(&path)
+            .with_context(|| format!("{}: cannot remove an earlier run's file", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Frames waiting to be written may hold at most this many bytes (sRGB and HDR copies);
+/// beyond it the frame loop waits for the writer.
+pub const QUEUE_BYTES: usize = 256 << 20;
+
+/// One rendered frame: its 8-bit sRGB pixels and, with `--exr`, the linear image.
+pub struct Frame {
+    /// Frame number (file name `frame_NNNNN`).
+    pub index: u64,
+    /// Seconds of the sequence at which it was shown: the preview's timing.
+    pub shown_s: f64,
+    /// Tone-mapped 8-bit RGB, row-major.
+    pub srgb8: Vec<u8>,
+    /// The linear frame, when EXR frames are asked for.
+    pub hdr: Option<RgbImage>,
+}
+
+impl Frame {
+    fn bytes(&self) -> usize {
+        self.srgb8.len() + self.hdr.as_ref().map_or(0, |h| h.pixels().len() * 12)
+    }
+}
+
+/// How the preview is made once all frames are on disk.
+pub enum Preview {
+    /// ffmpeg is on PATH: an MP4 from the PNG frames at the end.
+    Mp4,
+    /// No ffmpeg: an animated GIF at half size, encoded as frames arrive.
+    Gif,
+}
+
+/// Bytes queued, and a condition the loop waits on when over [`QUEUE_BYTES`].
+#[derive(Default)]
+struct Budget {
+    queued: Mutex<usize>,
+    freed: Condvar,
+}
+
+/// The background writer.
+pub struct FrameWriter {
+    dir: PathBuf,
+    size: (u32, u32),
+    frames: u64,
+    tx: Option<SyncSender<Frame>>,
+    budget: Arc<Budget>,
+    thread: Option<JoinHandle<Result<Option<PathBuf>>>>,
+    preview: Preview,
+}
+
+impl FrameWriter {
+    /// Starts a writer of `w × h` frames into `dir`.
+    pub fn start(dir: &Path, w: u32, h: u32) -> Result<Self> {
+        let preview = if ffmpeg_available() {
+            Preview::Mp4
+        } else {
+            Preview::Gif
+        };
+        // The byte budget bounds the queue; the channel's own bound only has to be large.
+        let (tx, rx) = sync_channel::<Frame>(1 << 16);
+        let budget = Arc::new(Budget::default());
+        let gif = matches!(preview, Preview::Gif);
+        let thread = {
+            let dir = dir.to_owned();
+            let budget = Arc::clone(&budget);
+            std::thread::Builder::new()
+                .name("frame writer".into())
+                .spawn(move || {
+                    // Lowering one's own priority needs no privilege on Linux; where it is
+                    // refused the writer simply competes at normal priority.
+                    let _ = thread_priority::set_current_thread_priority(
+                        thread_priority::ThreadPriority::Min,
+                    );
+                    write_all(&dir, w, h, gif, rx, &budget)
+                })
+                .context("cannot start the frame writer thread")?
+        };
+        Ok(Self {
+            dir: dir.to_owned(),
+            size: (w, h),
+            frames: 0,
+            tx: Some(tx),
+            budget,
+            thread: Some(thread),
+            preview,
+        })
+    }
+
+    /// Queues `frame`, waiting while the queue holds more than [`QUEUE_BYTES`]. An error
+    /// the writer met (a full disk, say) is returned here as soon as it is known.
+    pub fn push(&mut self, frame: Frame) -> Result<()> {
+        let bytes = frame.bytes();
+        {
+            let mut queued = self.budget.queued.lock().unwrap_or_else(|e| e.into_inner());
+            while *queued > 0 && *queued + bytes > QUEUE_BYTES {
+                if self.thread.as_ref().is_none_or(|t| t.is_finished()) {
+                    break;
+                }
+                queued = self
+                    .budget
+                    .freed
+                    .wait_timeout(queued, std::time::Duration::from_millis(50))
+                    .unwrap_or_else(|e| e.into_inner())
+                    .0;
+            }
+            *queued += bytes;
+        }
+        self.frames += 1;
+        let sent = self.tx.as_ref().is_some_and(|tx| tx.send(frame).is_ok());
+        if !sent {
+            // The writer stopped: its error says why.
+            self.finish_thread()?;
+            anyhow::bail!("the frame writer stopped early");
+        }
+        Ok(())
+    }
+
+    fn finish_thread(&mut self) -> Result<Option<PathBuf>> {
+        self.tx = None;
+        match self.thread.take() {
+            Some(t) => t
+                .join()
+                .map_err(|_| anyhow::anyhow!("the frame writer thread panicked"))?,
+            None => Ok(None),
+        }
+    }
+
+    /// Waits for every frame to be written and makes the preview (`preview.mp4` through
+    /// ffmpeg at `fps`, else the GIF encoded along the way; when ffmpeg fails, a GIF read
+    /// back from the PNG frames). Returns its path.
+    pub fn finish(mut self, fps: f64) -> Result<PathBuf> {
+        let partial = self.finish_thread()?;
+        let out = self.dir.join("preview.gif");
+        if let (Preview::Gif, Some(partial)) = (&self.preview, partial) {
+            std::fs::rename(&partial, &out)
+                .with_context(|| format!("{}: cannot write", out.display()))?;
+            return Ok(out);
+        }
+        match mp4(&self.dir, fps) {
+            Ok(path) => Ok(path),
+            Err(e) => {
+                eprintln!("warning: {e:#}; writing a GIF instead");
+                let gif = gif_from_disk(&self.dir, self.frames, self.size, fps)?;
+                illume_core::atomic::write_file(&out, gif)
+                    .with_context(|| format!("{}: cannot write", out.display()))?;
+                Ok(out)
+            }
+        }
+    }
+}
+
+/// The half-size GIF of `frames` PNG frames already on disk, at `fps`.
+fn gif_from_disk(dir: &Path, frames: u64, (w, h): (u32, u32), fps: f64) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    let mut enc = image::codecs::gif::GifEncoder::new_with_speed(&mut bytes, 30);
+    enc.set_repeat(image::codecs::gif::Repeat::Infinite)?;
+    for index in 0..frames {
+        let path = dir.join(format!("frame_{index:05}.png"));
+        let rgb = image::open(&path)
+            .with_context(|| format!("{}: cannot read back", path.display()))?
+            .to_rgb8();
+        encode_gif_frame(&mut enc, half_size(&rgb, w, h), 1.0 / fps.max(1.0))?;
+    }
+    drop(enc);
+    Ok(bytes)
+}
+
+/// The preview's half-size RGBA copy of a `w × h` frame.
+fn half_size(rgb: &image::RgbImage, w: u32, h: u32) -> image::RgbaImage {
+    let small = image::imageops::resize(
+        rgb,
+        (w / 2).max(1),
+        (h / 2).max(1),
+        image::imageops::FilterType::Triangle,
+    );
+    image::DynamicImage::ImageRgb8(small).to_rgba8()
+}
+
+impl Drop for FrameWriter {
+    fn drop(&mut self) {
+        self.tx = None;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn ffmpeg_available() -> bool {
+    std::process::Command::new("ffmpeg")
+        .arg("-version")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
+/// The writer thread: PNG (+ EXR) per frame; with `gif`, each frame's half-size copy is
+/// encoded when the next one arrives (its delay is the time until the next frame was
+/// shown, so the preview plays at the speed the sequence was rendered).
+fn write_all(
+    dir: &Path,
+    w: u32,
+    h: u32,
+    gif: bool,
+    rx: Receiver<Frame>,
+    budget: &Budget,
+) -> Result<Option<PathBuf>> {
+    // The GIF grows in a temporary file beside the frames, renamed into place at the end.
+    let partial = dir.join(".preview.gif.partial");
+    let mut out = if gif {
+        let file = std::fs::File::create(&partial)
+            .with_context(|| format!("{}: cannot create", partial.display()))?;
+        Some(std::io::BufWriter::new(file))
+    } else {
+        None
+    };
+    let mut encoder = out
+        .as_mut()
+        .map(|w| image::codecs::gif::GifEncoder::new_with_speed(w, 30));
+    if let Some(enc) = encoder.as_mut() {
+        enc.set_repeat(image::codecs::gif::Repeat::Infinite)?;
+    }
+    let mut pending: Option<(image::RgbaImage, f64)> = None;
+    let mut last_delay_s = 1.0 / 15.0;
+    for frame in rx {
+        let size = frame.bytes();
+        let written = write_frame(dir, &frame, w, h);
+        let small = encoder.as_ref().map(|_| {
+            image::RgbImage::from_raw(w, h, frame.srgb8.clone()).map(|rgb| half_size(&rgb, w, h))
+        });
+        let shown_s = frame.shown_s;
+        drop(frame);
+        {
+            let mut queued = budget.queued.lock().unwrap_or_else(|e| e.into_inner());
+            *queued = queued.saturating_sub(size);
+            budget.freed.notify_all();
+        }
+        written?;
+        if let (Some(enc), Some(Some(small))) = (encoder.as_mut(), small) {
+            if let Some((prev, prev_s)) = pending.take() {
+                last_delay_s = (shown_s - prev_s).max(0.01);
+                encode_gif_frame(enc, prev, last_delay_s)?;
+            }
+            pending = Some((small, shown_s));
+        }
+    }
+    if let (Some(enc), Some((prev, _))) = (encoder.as_mut(), pending.take()) {
+        encode_gif_frame(enc, prev, last_delay_s)?;
+    }
+    // Dropping the encoder writes the GIF trailer.
+    drop(encoder);
+    if let Some(mut out) = out {
+        use std::io::Write as _;
+        out.flush()
+            .map_err(anyhow::Error::from)
+            .and_then(|()| Ok(out.get_ref().sync_all()?))
+            .with_context(|| format!("{}: cannot write", partial.display()))?;
+        return Ok(Some(partial));
+    }
+    Ok(None)
+}
+
+fn encode_gif_frame<W: std::io::Write>(
+    enc: &mut image::codecs::gif::GifEncoder<W>,
+    rgba: image::RgbaImage,
+    delay_s: f64,
+) -> Result<()> {
+    let delay = image::Delay::from_numer_denom_ms((delay_s * 1000.0).round() as u32, 1);
+    enc.encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))?;
+    Ok(())
+}
+
+/// Writes `frame_NNNNN.png` (and `.exr`), each through a temporary file renamed into
+/// place.
+fn write_frame(dir: &Path, f: &Frame, w: u32, h: u32) -> Result<()> {
+    let path = dir.join(format!("frame_{:05}.png", f.index));
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new_with_quality(
+        &mut png,
+        image::codecs::png::CompressionType::Fast,
+        image::codecs::png::FilterType::Adaptive,
+    )
+    .write_image(&f.srgb8, w, h, image::ExtendedColorType::Rgb8)
+    .with_context(|| format!("{}: cannot encode", path.display()))?;
+    illume_core::atomic::write_file(&path, png)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
+    if let Some(hdr) = &f.hdr {
+        illume_core::image::write_exr(hdr, &path.with_extension("exr"))?;
+    }
+    Ok(())
+}
+
+/// `preview.mp4` from the PNG frames at `fps` through ffmpeg, written to a temporary
+/// sibling and renamed into place (a failed encode keeps an earlier preview whole).
+fn mp4(dir: &Path, fps: f64) -> Result<PathBuf> {
+    let out = dir.join("preview.mp4");
+    let tmp = dir.join(format!(".preview.mp4.{}.tmp", std::process::id()));
+    let status = std::process::Command::new("ffmpeg")
+        .args([
+            "-y",
+            "-loglevel",
+            "error",
+            "-framerate",
+            &format!("{fps:.3}"),
+            "-i",
+        ])
+        .arg(dir.join("frame_%05d.png"))
+        .args([
+            "-pix_fmt",
+            "yuv420p",
+            "-vf",
+            "scale=trunc(iw/2)*2:trunc(ih/2)*2",
+            "-f",
+            "mp4",
+        ])
+        .arg(&tmp)
+        .status()
+        .context("running ffmpeg")?;
+    if !status.success() {
+        let _ = std::fs::remove_file(&tmp);
+        anyhow::bail!("ffmpeg failed ({status})");
+    }
+    std::fs::rename(&tmp, &out).with_context(|| format!("{}: cannot write", out.display()))?;
+    Ok(out)
+}
+
+use image::ImageEncoder as _;
+
+#[cfg(test)]
+mod tests {
+    use super::is_animate_output;
+
+    #[test]
+    fn animate_outputs_are_recognised_by_name() {
+        for ours in [
+            "frame_00000.png",
+            "frame_12345.exr",
+            "frame_1234567.png",
+            "frames.csv",
+            "preview.gif",
+            "preview.mp4",
+            ".preview.gif.partial",
+            ".frame_00003.png.4242.tmp",
+            ".frames.csv.17.tmp",
+            ".preview.mp4.99.tmp",
+        ] {
+            assert!(is_animate_output(ours), "{ours}");
+        }
+        for theirs in [
+            "frame_0001.png",
+            "frame_0000a.png",
+            "frame_00000.jpg",
+            "notes.txt",
+            "frames.csv.bak",
+            ".notes.txt.1.tmp",
+            "preview.webm",
+        ] {
+            assert!(!is_animate_output(theirs), "{theirs}");
+        }
+    }
+}

@@ -1,0 +1,91 @@
+//! Temporal radiance caching — Gautron, Bouatouch & Pattanaik, *Temporal Radiance
+//! Caching* (INRIA research report PI 1796, 2006;
+//! `shared/papers/temporal-radiance-caching.md`).
+//!
+//! **What it approximates.** The indirect light of an animation known in advance
+//! (objects, lights and camera moving along the timeline): the reference's `indirect`
+//! image, frame by frame. Irradiance caching (Ward et al. 1988) computes the incoming
+//! light at sparse records by gathering a hemisphere of rays and interpolates it between
+//! them with Ward & Heckbert's gradients; radiance caching (Křivánek et al. 2005) does
+//! the same for glossy surfaces with hemispherical harmonics. The paper extends both
+//! over time: a record estimates how fast its irradiance changes (τ, from a reprojected
+//! next-frame estimate), which gives it a lifespan (the temporal weighting function,
+//! Eq. 9–12); while it lives it is reused, following temporal gradients extrapolated
+//! from the next-frame estimate or interpolated towards the record that replaces it at
+//! the same place. Reused records cost nothing and keep their positions, so animations
+//! are cheaper and flicker less than with a new cache per frame.
+//!
+//! **Status (in progress).** A selectable technique (`--technique radiance_cache` in
+//! `illume render` and `illume animate`) with two temporal modes: `per_frame` (the
+//! paper's baseline, a new cache every frame) and `reuse` (records kept for δt_max
+//! frames with no temporal weighting: ghosts, see [`state`]); **the default is `reuse`
+//! for now**. `extrapolated` and `interpolated` need the §4.3 reprojection, still to
+//! come, and are refused at construction (`radiance_cache.temporal: … not built yet`);
+//! `interpolated` becomes the default with it. Glossy surfaces are shaded Lambertian
+//! (irradiance records only) until radiance records are placed and shaded.
+//!
+//! | paper | here |
+//! |---|---|
+//! | §3, Eq. 1–4: records, Ward's weight, usable set, gradients, interpolation | [`record`] |
+//! | §5 (CPU counterpart): which records' spheres of influence contain a point (WRC88 octree) | [`octree`] |
+//! | §4.2, Eq. 5–12: change rate τ, temporal weight, lifespan | [`temporal`] |
+//! | §4.4, Eq. 13–23: contribution over time, extrapolated and interpolated temporal gradients | [`temporal`] |
+//! | §3, radiance records for glossy surfaces (KGPB05, GKPB04): hemispherical harmonics | [`hsh`] |
+//! | §6: the paper's parameters and the reasoned ones; presets `paper`, `still`, `fast` | [`settings`] |
+//! | §6 baseline (`per_frame`), Fig. 5c without τ (`reuse`): the `Technique`, coarse-to-fine placement over the G-buffer, shading ρ/π·E | [`state`] |
+//! | §4.3, §5, Fig. 7–8: next-frame estimate by reprojection, hole filling | to come |
+//! | §4.2, Fig. 5–6: lifespans from τ, replacement at the same place; §5, Fig. 9: deletion | to come |
+//! | §4.4 in the frame loop: `extrapolated`, `interpolated` (two passes) | to come |
+//! | radiance records: placement, translation gradients, glossy shading | to come |
+//! | bench scenario, Table 1 and Figure 10 in kind | to come |
+//!
+//! **Failure modes known from the paper.** (1) Ghosts: a record reused after the light
+//! around it changed keeps showing the old light; the temporal weight sees only the
+//! change between its first two frames, so a change that starts later (an object
+//! entering its hemisphere, Fig. 4) is caught only when δt_max ends its life.
+//! (2) Newly visible objects: the reprojected next-frame estimate has holes where
+//! surfaces appear; they are filled from neighbouring cells, so τ misjudges light from
+//! things not yet seen. (3) Flicker at replacement: without temporal gradients (the
+//! `reuse` mode) the value jumps when a record is replaced (Fig. 5c); extrapolated
+//! gradients shrink the jump (Fig. 5d), only interpolated ones remove it (Fig. 5e) at
+//! the price of a first pass over the whole timeline. (4) Fast-changing light (a moving
+//! light source, the paper's Moving Light and the start of Japanese Interior): lifespans
+//! are short and reuse saves little (Table 1: no faster than a new cache per frame,
+//! but without its flicker). (5) Spatial
+//! interpolation errors of irradiance caching remain: Eq. 3 has no test for records in
+//! front of the point (WRC88's), so light can leak under thin objects; the weight is
+//! discontinuous at the sphere's edge.
+//!
+//! ```
+//! use illume_core::{Rgb, Vec3};
+//! use illume_radiance_cache::record::{HemisphereGather, IrradianceRecord, RecordSettings};
+//! use illume_radiance_cache::temporal::{change_rate, lifespan_frames};
+//! // A record under uniform radiance 1: E = π, no gradient.
+//! let settings = RecordSettings { theta_strata: 8, phi_strata: 16, ..Default::default() };
+//! let gather = HemisphereGather::from_fn(Vec3::Y, &settings, 0, |_| (Rgb::ONE, 2.0)).unwrap();
+//! let record = IrradianceRecord::from_gather(Vec3::ZERO, &gather, 0, None, &settings);
+//! assert!((record.value.irradiance.x - std::f32::consts::PI).abs() < 1e-5);
+//! assert_eq!(record.value.translation_gradient.max_length(), 0.0);
+//! // Its irradiance grows 2 % in a frame: a^t = 0.05 keeps it for 3 frames.
+//! let change = change_rate(record.value.irradiance, record.value.irradiance * 1.02);
+//! assert_eq!(lifespan_frames(change, 0.05, 20), 3);
+//! ```
+
+pub mod error;
+pub mod hsh;
+pub mod octree;
+pub mod record;
+pub mod settings;
+pub mod state;
+pub mod temporal;
+
+pub use error::RadianceCacheError;
+pub use octree::Octree;
+pub use record::{
+    HemisphereGather, IrradianceRecord, IrradianceValue, RecordSettings, RgbGradient,
+};
+pub use settings::{RadianceCacheSettings, TemporalMode};
+pub use state::RadianceCache;
+
+/// The technique's one name: CLI value, settings table, counter and error prefix.
+pub const NAME: &str = "radiance_cache";

@@ -1,0 +1,404 @@
+//! Settings of temporal radiance caching (`[radiance_cache]` table), written as a tuning
+//! guide.
+//!
+//! Defaults are the paper's values where it gives one (a^t = 0.05, δt_max = 20 frames,
+//! a 64×64 hemisphere grid: §6) and reasoned choices where it gives none (a, the R_k
+//! clamps, the hemispherical-harmonics order), each explained at its field and in
+//! `docs/techniques/radiance_cache.md`. The struct covers the whole technique; the parts
+//! that use some of its fields (reprojection, replacement and deletion, radiance
+//! records) are still to come, and those fields say so.
+//!
+//! **The default mode is `reuse` for now**: `extrapolated` and `interpolated` need the
+//! §4.3 next-frame reprojection, not built yet, and are refused at construction. The
+//! issue's default, `interpolated`, comes with the reprojection chunk.
+
+use crate::RadianceCacheError;
+use crate::record::RecordSettings;
+use illume_transport::{Budget, Pacing, TechniqueSettings};
+use serde::{Deserialize, Serialize};
+
+/// How records follow time (§4.2–4.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum TemporalMode {
+    /// The paper's baseline ("per-frame computation", §6): a new cache for every frame,
+    /// no record outlives its frame. The slowest mode and the one that flickers most
+    /// (record positions change from frame to frame, Fig. 2).
+    PerFrame,
+    /// Records live for their lifespan (Eq. 10, Eq. 12) and are replaced at the same
+    /// place, with no temporal gradient (Fig. 5c): the value jumps when a record is
+    /// replaced. **For now** (no reprojection, so no τ): records live δt_max frames and
+    /// expired ones are not replaced in place but placed anew over the G-buffer; records
+    /// near moving objects keep stale light until then (ghosts).
+    Reuse,
+    /// Not built yet (refused at construction: needs the §4.3 reprojection).
+    /// One pass: temporal gradients extrapolated from the reprojected next-frame estimate
+    /// (Eq. 18–20, Fig. 5d). Smaller jumps at replacement than `reuse`.
+    Extrapolated,
+    /// Not built yet (refused at construction: needs the §4.3 reprojection).
+    /// Two passes: the first computes every record of the timeline, the second renders
+    /// with temporal gradients interpolated towards each record's replacement
+    /// (Eq. 21–23, Fig. 5e): no jump at replacement. The paper's choice for quality.
+    #[default]
+    Interpolated,
+}
+
+/// Temporal radiance caching settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RadianceCacheSettings {
+    /// a, the spatial accuracy of Ward's weight (§3, Eq. 2–3): a record is used at a
+    /// point where w_k ≥ 1/a, i.e. within distance a·R_k of it and with normals at most
+    /// acos(1 − a²) apart. Unitless, in (0, 1]. Lower: more records (their number grows
+    /// as 1/a² over surfaces) and less interpolation error, at a cost linear in the
+    /// records. The paper gives no value; default 0.2: 1/w estimates the relative change
+    /// of irradiance between the record and the point (WRC88), so a = 0.2 admits points
+    /// where that first-order change is at most 20 %, which the gradients of Eq. 4 then
+    /// correct to first order; normals up to 11.5° apart; spheres of influence of R_k/5.
+    pub accuracy: f32,
+    /// Smallest R_k (harmonic mean distance, §3), as a fraction of the scene's
+    /// bounding-box diagonal. Near corners and contacts R_k tends to zero and Ward's
+    /// weight would place records without bound; this clamp caps the record density at
+    /// about one per π(a·R_min)². It also bounds the distances used by the translation
+    /// gradient. Lower: finer indirect detail in corners, at the cost of more records
+    /// there. In (0, 1], at most `r_max_fraction`; default 0.01 (3.5 cm in the 2 m
+    /// cube-in-box).
+    pub r_min_fraction: f32,
+    /// Largest R_k, as a fraction of the scene's bounding-box diagonal. Where most
+    /// gather rays escape (open scenes) R_k is unbounded and one record would serve a
+    /// whole plane; this clamp keeps spheres of influence below a·R_max. Higher: fewer
+    /// records in open regions, at the cost of extrapolating further. In (0, 10];
+    /// default 0.5: the harmonic mean distance inside a closed room is of the order of
+    /// its smaller dimensions, below half its diagonal (tested at the floor centre of
+    /// the cube-in-box), so the clamp binds mostly where rays escape.
+    pub r_max_fraction: f32,
+    /// Also clamp R_k to E/|∇_p E| (the smallest over channels; Křivánek et al. 2006,
+    /// beyond the paper): the translation term of Eq. 4 then changes a record's value by
+    /// at most the fraction a within its sphere, so extrapolation stays positive where
+    /// indirect light changes fast (indirect shadow edges) although the geometry is far.
+    /// True costs more records along such edges. Default true.
+    pub gradient_limit: bool,
+    /// Strata of the hemisphere grid in θ (cosine-weighted: each stratum has the same
+    /// projected solid angle), §6: 64. Rays per record = `theta_strata × phi_strata`.
+    /// Higher: less noise per record and finer gradients, at a cost linear in the rays.
+    /// 2–1024, default 64.
+    pub theta_strata: u32,
+    /// Strata of the hemisphere grid in φ, §6: 64. 3–1024, default 64.
+    pub phi_strata: u32,
+    /// a^t, the temporal accuracy (§4.2, Eq. 10): a record made at t₀ stays valid while
+    /// |τ − 1|·(t − t₀) ≤ a^t, τ = E₁/E₀ its irradiance's change over one frame. Its
+    /// lifespan is 1 + min(⌊a^t/|τ − 1|⌋, δt_max − 1) frames. Unitless, in (0, 1].
+    /// Lower: shorter lifespans (more records computed), less lag behind changing light.
+    /// Default 0.05 (§6).
+    pub temporal_accuracy: f32,
+    /// δt_max, the longest lifespan in frames (§4.2, Eq. 12), even for records whose
+    /// irradiance does not change: a change that a record's rays do not yet see (an
+    /// object about to enter its hemisphere, Fig. 4) is caught within this many frames.
+    /// Lower: fewer ghosts, at the cost of more records. 1–100 000, default 20 (§6).
+    pub max_age_frames: u32,
+    /// How records follow time. Default [`TemporalMode::Reuse`] for now: `extrapolated`
+    /// and `interpolated` are refused at construction until the §4.3 reprojection is
+    /// built (`interpolated`, the paper's choice, becomes the default then). `per_frame`
+    /// and `reuse` run with or without a timeline (also with `--realtime`).
+    pub temporal: TemporalMode,
+    /// Surfaces that are not exactly Lambertian and whose perceptual roughness is at or
+    /// below this are glossy: their specular lobe is shaded from radiance records
+    /// (hemispherical harmonics, §3, KGPB05), their diffuse part from irradiance
+    /// records (the paper's Japanese Interior). Rougher surfaces are shaded from
+    /// irradiance records alone, as if Lambertian with the BRDF's albedo. Lower: fewer
+    /// radiance records (n² RGB coefficients each against one RGB value), at the cost of
+    /// that approximation, which holds for rough dielectrics (their specular lobe is a
+    /// small part of what they reflect) but not for metals at any roughness
+    /// (`BENCHMARKS.md`, radiance_cache). In [0, 1], at least `traced_roughness_max`;
+    /// default 1: every non-Lambertian surface keeps its lobe.
+    pub glossy_roughness_max: f32,
+    /// Order n of the hemispherical harmonics of radiance records (bands 0..n, n²
+    /// coefficients per colour channel). The paper gives none. Higher: sharper lobes
+    /// served by records (see `traced_roughness_max`), at the cost of memory (n² RGB
+    /// coefficients and their gradients per record) and shading time (n² per record
+    /// and pixel). 1–16, default 8.
+    pub hsh_order: u32,
+    /// Glossy lobes of surfaces smoother than this are too sharp for `hsh_order`: their
+    /// specular part is traced per pixel (with `continue_path`) instead of read from
+    /// radiance records. In [0, `glossy_roughness_max`]; default 0.5, the smallest
+    /// roughness (in steps of 0.05) whose BRDF×cos lobe order 8 represents within 10 %
+    /// (relative L²) for views up to 45° off the normal, for a white metal (the
+    /// sharpest lobe at a roughness; tested in `tests/hsh.rs`).
+    pub traced_roughness_max: f32,
+    /// Largest number of 3×3 averaging passes that fill the holes of a reprojected
+    /// next-frame grid (§4.3, Fig. 8); cells still empty after them take the grid's mean.
+    /// Higher: holes filled from nearer cells only, at a cost per pass. 1–4096,
+    /// default 64 (the grid's side). Used by the reprojection (to come).
+    pub hole_fill_max_passes: u32,
+    /// Beyond the paper: an expired record is replaced only where a surface facing its
+    /// normal still lies at its position (else it is deleted), so records on objects
+    /// that moved away do not float in the air. Default true. Used by replacement (to
+    /// come).
+    pub replace_only_on_surface: bool,
+    /// Beyond the paper: a replacement traces its predecessor's directions with its
+    /// random numbers, so E_l − E_k (Eq. 21) measures change, not noise. Default true.
+    /// Used by replacement (to come).
+    pub reuse_directions: bool,
+    /// Beyond the paper: a change not on the timeline (an edit, a frame off the
+    /// timeline) expires the records whose rays hit the changed item. False: such
+    /// records live out their lifespan (ghosts). Default true. For now (`reuse`, no
+    /// timeline matching yet) the frame loop treats every change alike, timeline steps
+    /// too, and expires coarser sets: the records on an instance that moved, was added
+    /// or removed; every record on a light, sky or material change. False: changes
+    /// expire nothing.
+    pub expire_on_surprise: bool,
+    /// §7's future work: a new record whose lifespan is short shortens the lifespans of
+    /// the records whose spheres of influence contain it to its own, so a change seen by
+    /// one record ages its neighbours faster. Default false (the paper's behaviour).
+    /// Used by the frame loop (to come).
+    pub neighbour_aging: bool,
+    /// §5, Fig. 9: an expired record that no pixel of its last frame used is deleted
+    /// instead of replaced (the paper reports −25–30 % storage, −20–30 % time). False:
+    /// every expired record is replaced. Default true. Used by the frame loop (to come).
+    pub deletion: bool,
+    /// Reflections after which Russian roulette may end a gather ray's path
+    /// (`continue_path`). Lower: faster, noisier records (still unbiased). Default 3.
+    pub rr_start_depth: u32,
+    /// Hard limit on a gather ray's reflections, a safety net behind Russian roulette.
+    /// At least 1; default 1024.
+    pub max_depth: u32,
+    /// Seed of the gather rays' jitter and paths: the same seed gives the same records,
+    /// whatever the thread count. Default 0.
+    pub seed: u64,
+}
+
+impl Default for RadianceCacheSettings {
+    fn default() -> Self {
+        Self::paper()
+    }
+}
+
+/// The largest grid side accepted (`theta_strata`, `phi_strata`): 1024² rays per record.
+pub const MAX_STRATA: u32 = 1024;
+
+impl TechniqueSettings for RadianceCacheSettings {
+    const NAME: &'static str = crate::NAME;
+    /// Records are computed where the G-buffer needs them; [`Budget::work`] is not
+    /// honoured yet.
+    const WORK_UNIT: &'static str = "records";
+
+    fn presets() -> &'static [(&'static str, &'static str)] {
+        RadianceCacheSettings::presets()
+    }
+
+    fn preset(name: &str) -> Option<Self> {
+        RadianceCacheSettings::preset(name)
+    }
+
+    /// Nothing to map: `per_frame` and `reuse` compute the records each frame needs,
+    /// in real time as in fixed-work frames (`work_per_frame` is ignored: the G-buffer
+    /// decides the work). The modes that need the timeline (`extrapolated`,
+    /// `interpolated`) are refused at construction for now.
+    fn pace(&mut self, pacing: Pacing) {
+        let _ = pacing;
+    }
+
+    /// Unlimited: a frame computes every record its G-buffer needs.
+    fn default_budget(&self) -> Budget {
+        Budget::default()
+    }
+
+    fn set_seed(&mut self, seed: u64) {
+        self.seed = seed;
+    }
+}
+
+impl RadianceCacheSettings {
+    /// The paper's values (§6) and the reasoned choices where it gives none: the
+    /// default.
+    pub fn paper() -> Self {
+        Self {
+            accuracy: 0.2,
+            r_min_fraction: 0.01,
+            r_max_fraction: 0.5,
+            gradient_limit: true,
+            theta_strata: 64,
+            phi_strata: 64,
+            temporal_accuracy: 0.05,
+            max_age_frames: 20,
+            temporal: TemporalMode::Reuse,
+            glossy_roughness_max: 1.0,
+            hsh_order: 8,
+            traced_roughness_max: 0.5,
+            hole_fill_max_passes: 64,
+            replace_only_on_surface: true,
+            reuse_directions: true,
+            expire_on_surprise: true,
+            neighbour_aging: false,
+            deletion: true,
+            rr_start_depth: 3,
+            max_depth: 1024,
+            seed: 0,
+        }
+    }
+
+    /// The preset for `render`'s stills: the defaults in `per_frame` mode (one frame: the
+    /// same image as `reuse`, without keeping the records).
+    pub fn still() -> Self {
+        Self {
+            temporal: TemporalMode::PerFrame,
+            ..Self::paper()
+        }
+    }
+
+    /// Previews: a = 0.3 (about half the records), a 32×32 grid (a quarter of the rays
+    /// per record), HSH order 6 (36 coefficients) with lobes below roughness 0.6 traced
+    /// (the same 10 % criterion as the default's).
+    pub fn fast() -> Self {
+        Self {
+            accuracy: 0.3,
+            theta_strata: 32,
+            phi_strata: 32,
+            hsh_order: 6,
+            traced_roughness_max: 0.6,
+            hole_fill_max_passes: 32,
+            ..Self::paper()
+        }
+    }
+
+    /// Named presets with a one-line description each; the first is `default`
+    /// ([`TechniqueSettings::presets`]).
+    pub fn presets() -> &'static [(&'static str, &'static str)] {
+        &[
+            (
+                "default",
+                "paper: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, reuse (interpolated: to come)",
+            ),
+            (
+                "paper",
+                "the paper's values (§6): a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, reuse (interpolated: to come)",
+            ),
+            (
+                "still",
+                "the defaults in per_frame mode: `render`'s default",
+            ),
+            (
+                "fast",
+                "a = 0.3, 32×32 rays per record, HSH order 6 (lobes below roughness 0.6 traced): previews",
+            ),
+        ]
+    }
+
+    /// The preset called `name`, if there is one.
+    pub fn preset(name: &str) -> Option<Self> {
+        match name {
+            "default" | "paper" => Some(Self::paper()),
+            "fast" => Some(Self::fast()),
+            "still" => Some(Self::still()),
+            _ => None,
+        }
+    }
+
+    /// What a record computation needs from these settings, for a scene whose
+    /// bounding-box diagonal is `scene_diagonal_m` (the R_k clamps become metres).
+    pub fn record_settings(&self, scene_diagonal_m: f32) -> RecordSettings {
+        RecordSettings {
+            theta_strata: self.theta_strata,
+            phi_strata: self.phi_strata,
+            r_min_m: self.r_min_fraction * scene_diagonal_m,
+            r_max_m: self.r_max_fraction * scene_diagonal_m,
+            gradient_limit: self.gradient_limit,
+            path: illume_transport::path::PathSettings {
+                rr_start_depth: self.rr_start_depth,
+                max_depth: self.max_depth,
+            },
+            seed: self.seed,
+            ..RecordSettings::default()
+        }
+    }
+
+    /// Checks every value; the error names the field (`radiance_cache.FIELD: …`).
+    pub fn validate(&self) -> Result<(), RadianceCacheError> {
+        let bad = |field: &'static str, reason: String| {
+            Err(RadianceCacheError::InvalidSetting { field, reason })
+        };
+        // Written as `!(in range)` so that NaN fails every check.
+        if !(self.accuracy > 0.0 && self.accuracy <= 1.0) {
+            return bad("accuracy", format!("{} is not in (0, 1]", self.accuracy));
+        }
+        if !(self.r_min_fraction > 0.0 && self.r_min_fraction <= 1.0) {
+            return bad(
+                "r_min_fraction",
+                format!("{} is not in (0, 1]", self.r_min_fraction),
+            );
+        }
+        if !(self.r_max_fraction > 0.0 && self.r_max_fraction <= 10.0) {
+            return bad(
+                "r_max_fraction",
+                format!("{} is not in (0, 10]", self.r_max_fraction),
+            );
+        }
+        if self.r_min_fraction > self.r_max_fraction {
+            return bad(
+                "r_min_fraction",
+                format!(
+                    "{} is larger than r_max_fraction = {}",
+                    self.r_min_fraction, self.r_max_fraction
+                ),
+            );
+        }
+        if !(2..=MAX_STRATA).contains(&self.theta_strata) {
+            return bad(
+                "theta_strata",
+                format!("{} is not in 2..={MAX_STRATA}", self.theta_strata),
+            );
+        }
+        if !(3..=MAX_STRATA).contains(&self.phi_strata) {
+            return bad(
+                "phi_strata",
+                format!("{} is not in 3..={MAX_STRATA}", self.phi_strata),
+            );
+        }
+        if !(self.temporal_accuracy > 0.0 && self.temporal_accuracy <= 1.0) {
+            return bad(
+                "temporal_accuracy",
+                format!("{} is not in (0, 1]", self.temporal_accuracy),
+            );
+        }
+        if !(1..=100_000).contains(&self.max_age_frames) {
+            return bad(
+                "max_age_frames",
+                format!("{} is not in 1..=100000", self.max_age_frames),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.glossy_roughness_max) {
+            return bad(
+                "glossy_roughness_max",
+                format!("{} is not in [0, 1]", self.glossy_roughness_max),
+            );
+        }
+        let max_order = crate::hsh::MAX_ORDER as u32;
+        if !(1..=max_order).contains(&self.hsh_order) {
+            return bad(
+                "hsh_order",
+                format!("{} is not in 1..={max_order}", self.hsh_order),
+            );
+        }
+        if !(self.traced_roughness_max >= 0.0
+            && self.traced_roughness_max <= self.glossy_roughness_max)
+        {
+            return bad(
+                "traced_roughness_max",
+                format!(
+                    "{} is not in [0, glossy_roughness_max = {}]",
+                    self.traced_roughness_max, self.glossy_roughness_max
+                ),
+            );
+        }
+        if !(1..=4096).contains(&self.hole_fill_max_passes) {
+            return bad(
+                "hole_fill_max_passes",
+                format!("{} is not in 1..=4096", self.hole_fill_max_passes),
+            );
+        }
+        if self.max_depth == 0 {
+            return bad("max_depth", "must be at least 1".into());
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,205 @@
+//! The technique on G-buffers: the furnace's closed form, `reuse` against `per_frame`
+//! on a static scene, placement independent of the thread count, refused settings.
+
+use illume_core::{Rgb, Vec2};
+use illume_radiance_cache::{RadianceCache, RadianceCacheSettings, TemporalMode};
+use illume_scene::Timeline;
+use illume_transport::{GBuffer, Technique, World};
+
+const W: u32 = 64;
+const H: u32 = 48;
+
+fn cache(world: &World, settings: RadianceCacheSettings) -> RadianceCache {
+    let timeline = Timeline::single(world.scene.clone(), 0.0, W, H);
+    RadianceCache::new(world, &timeline, settings).unwrap()
+}
+
+/// Small records for fast tests: a 16×16 grid.
+fn quick(temporal: TemporalMode) -> RadianceCacheSettings {
+    RadianceCacheSettings {
+        theta_strata: 16,
+        phi_strata: 16,
+        temporal,
+        ..RadianceCacheSettings::paper()
+    }
+}
+
+fn cornell() -> (World, GBuffer) {
+    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap());
+    let g = GBuffer::render(&world, W, H, Vec2::splat(0.5));
+    (world, g)
+}
+
+#[test]
+fn furnace_indirect_light_is_rho_squared_le_over_one_minus_rho() {
+    // Closed sphere, ρ = 0.5, Le = 1: every gather ray brings back the light reflected
+    // at least once, ρ·Le/(1 − ρ), so E = π·ρ·Le/(1 − ρ) and ρ/π·E = ρ²·Le/(1 − ρ) =
+    // 0.5. Uniform radiance: no gradient, so only the gather's path noise (Russian
+    // roulette, 64×64 rays per record) separates the image from it; 2 % bounds it.
+    let rho = 0.5f32;
+    let world = World::new(illume_scene::builtin::furnace(rho, Rgb::ONE));
+    let g = GBuffer::render(&world, W, H, Vec2::splat(0.5));
+    let mut rc = cache(&world, RadianceCacheSettings::paper());
+    let img = rc.indirect(&world, &g);
+    let expect = rho * rho / (1.0 - rho);
+    let mean = img.mean();
+    for c in mean.to_array() {
+        assert!(
+            (c / expect - 1.0).abs() < 0.02,
+            "indirect {mean} vs {expect}"
+        );
+    }
+    // Every pixel sees the sphere, and every pixel is covered.
+    assert!(img.pixels().iter().all(|p| p.min_element() > 0.0));
+    assert!(rc.records_alive() > 0);
+}
+
+#[test]
+fn reuse_keeps_a_static_frame_and_computes_fewer_records_than_per_frame() {
+    let (world, g) = cornell();
+    let mut per_frame = cache(&world, quick(TemporalMode::PerFrame));
+    let mut reuse = cache(&world, quick(TemporalMode::Reuse));
+    let p1 = per_frame.indirect(&world, &g);
+    let p2 = per_frame.indirect(&world, &g);
+    let r1 = reuse.indirect(&world, &g);
+    let after_one = reuse.records_created();
+    let r2 = reuse.indirect(&world, &g);
+    // Frame 1 is the same cache in both modes.
+    assert_eq!(p1.pixels(), r1.pixels());
+    assert!(after_one > 0);
+    // per_frame starts again (new keys: other rays, about as many records); reuse adds
+    // none.
+    assert!(per_frame.records_created() > 2 * after_one * 9 / 10);
+    assert_eq!(reuse.records_created(), after_one);
+    assert_eq!(reuse.stats().get("records_reused"), Some(after_one as f64));
+    assert_eq!(r1.pixels(), r2.pixels(), "a static frame is kept exactly");
+    assert_ne!(p1.pixels(), p2.pixels(), "per_frame draws new records");
+}
+
+#[test]
+fn reuse_expires_records_after_max_age_frames() {
+    let (world, g) = cornell();
+    let mut rc = cache(
+        &world,
+        RadianceCacheSettings {
+            max_age_frames: 2,
+            ..quick(TemporalMode::Reuse)
+        },
+    );
+    rc.indirect(&world, &g);
+    let first = rc.records_created();
+    rc.indirect(&world, &g);
+    assert_eq!(rc.records_created(), first);
+    rc.indirect(&world, &g); // frame 2: the frame-0 records are 2 frames old
+    assert!(rc.records_created() > 2 * first * 9 / 10);
+    assert_eq!(rc.stats().get("records_reused"), Some(0.0));
+}
+
+#[test]
+fn a_light_change_expires_every_record_in_reuse() {
+    let (world, g) = cornell();
+    let mut rc = cache(&world, quick(TemporalMode::Reuse));
+    rc.indirect(&world, &g);
+    let first = rc.records_created();
+    let light = world.scene.lights[0].clone();
+    rc.scene_changed(
+        &world,
+        &[illume_scene::SceneChange::LightChanged {
+            light: illume_scene::LightId(0),
+            from: Box::new(light.clone()),
+            to: Box::new(light),
+        }],
+    );
+    rc.indirect(&world, &g);
+    assert!(rc.records_created() > 2 * first * 9 / 10);
+    assert_eq!(rc.stats().get("records_reused"), Some(0.0));
+}
+
+#[test]
+fn an_instance_move_expires_only_the_records_on_it() {
+    let world = World::new(illume_scene::builtin::load("cube-in-box").unwrap());
+    let g = GBuffer::render(&world, W, H, Vec2::splat(0.5));
+    let mut rc = cache(&world, quick(TemporalMode::Reuse));
+    rc.indirect(&world, &g);
+    let alive = rc.records_alive();
+    let (instance, transform) = world
+        .scene
+        .instances
+        .iter()
+        .enumerate()
+        .find_map(|(i, inst)| {
+            let on = rc
+                .records()
+                .filter(|r| r.instance.map(|x| x.index()) == Some(i))
+                .count();
+            (on > 0 && on < alive).then_some((i, inst.world_from_object))
+        })
+        .expect("records on more than one instance");
+    let on = rc
+        .records()
+        .filter(|r| r.instance.map(|x| x.index()) == Some(instance))
+        .count();
+    let id = rc
+        .records()
+        .find_map(|r| r.instance.filter(|x| x.index() == instance))
+        .unwrap();
+    rc.scene_changed(
+        &world,
+        &[illume_scene::SceneChange::InstanceMoved {
+            instance: id,
+            from: transform,
+            to: transform,
+        }],
+    );
+    rc.indirect(&world, &g);
+    assert_eq!(rc.stats().get("records_expired"), Some(on as f64));
+    assert_eq!(rc.stats().get("records_reused"), Some((alive - on) as f64));
+}
+
+#[test]
+fn placement_does_not_depend_on_the_thread_count() {
+    let (world, g) = cornell();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let mut rc = cache(&world, quick(TemporalMode::PerFrame));
+            let img = rc.indirect(&world, &g);
+            let records: Vec<_> = rc.records().map(|r| r.position).collect();
+            (img, records)
+        })
+    };
+    let (a, ra) = run(1);
+    let (b, rb) = run(2);
+    assert_eq!(ra, rb);
+    assert_eq!(a.pixels(), b.pixels());
+}
+
+#[test]
+fn modes_not_built_yet_and_bad_settings_are_refused_by_name() {
+    let (world, _) = cornell();
+    let timeline = Timeline::single(world.scene.clone(), 0.0, W, H);
+    for mode in [TemporalMode::Extrapolated, TemporalMode::Interpolated] {
+        let s = RadianceCacheSettings {
+            temporal: mode,
+            ..RadianceCacheSettings::paper()
+        };
+        let e = RadianceCache::new(&world, &timeline, s)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.starts_with("radiance_cache.temporal: "), "{e}");
+        assert!(e.contains("not built yet"), "{e}");
+    }
+    let s = RadianceCacheSettings {
+        accuracy: 0.0,
+        ..RadianceCacheSettings::paper()
+    };
+    let e = RadianceCache::new(&world, &timeline, s)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.starts_with("radiance_cache.accuracy: "), "{e}");
+}
