@@ -3,9 +3,8 @@
 //! the hand-computed priorities (§5.3); phantoms follow the M₁ → M₂ → M₃ example.
 
 use illume_core::sampling::HaltonScramble;
-use illume_core::{Affine3A, Quat, Rgb, Vec3};
-use illume_scene::builtin::{SceneBuilder, quad, unit_box};
-use illume_scene::{InstanceId, LightKind, Material, Trs};
+use illume_core::{Affine3A, Rgb, Vec3};
+use illume_scene::{InstanceId, Material};
 use illume_selective::groups::GroupLayout;
 use illume_selective::masking::{MaskingView, TextureMasking};
 use illume_selective::qmc::{GroupFactors, emit, photon_stream};
@@ -14,49 +13,16 @@ use illume_selective::{Selective, SelectiveSettings};
 use illume_transport::photon::PhotonPathStats;
 use illume_transport::{Technique, World};
 
-/// A floor, a box above it and a point light.
+mod common;
+
+/// A floor, a grey box above it and a point light.
 fn box_scene() -> World {
-    let mut b = SceneBuilder::new();
-    let m = b.material(Material {
-        base_color: Rgb::splat(0.6),
-        ..Default::default()
-    });
-    let floor = b.mesh(quad(Vec3::ZERO, Vec3::Z * 4.0, Vec3::X * 4.0, m));
-    b.placed("floor", floor, Trs::IDENTITY, false);
-    let cube = b.mesh(unit_box(m, false));
-    b.placed(
-        "box",
-        cube,
-        Trs {
-            scale: Vec3::splat(0.5),
-            ..Trs::from_translation(Vec3::new(0.0, 0.6, 0.0))
-        },
-        true,
-    );
-    let ln = b.node(
-        "light",
-        None,
-        Trs::from_translation(Vec3::new(0.3, 2.5, 0.2)),
-    );
-    b.light(
-        "light",
-        LightKind::Point {
-            intensity: Rgb::splat(10.0),
-        },
-        ln,
-    );
-    let cam = b.node(
-        "camera",
-        None,
-        Trs {
-            rotation: Quat::from_rotation_x(-0.6),
-            ..Trs::from_translation(Vec3::new(0.0, 3.0, 4.0))
-        },
-    );
-    b.camera("camera", 50f32.to_radians(), cam);
-    let mut scene = b.finish("test:box");
-    scene.set_time(0.0);
-    World::new(scene)
+    common::box_scene(|b| {
+        b.material(Material {
+            base_color: Rgb::splat(0.6),
+            ..Default::default()
+        })
+    })
 }
 
 type Impacts = Vec<(u32, u32, [u32; 3])>;

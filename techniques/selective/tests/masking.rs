@@ -3,8 +3,10 @@
 //! contrast, frequencies finer than an element removed), the MIP level from distance and
 //! angle, and the pilot increment Δp/T_e a textured moved object gives its groups.
 
+mod common;
+
 use illume_core::{Affine3A, Quat, Ray, Rgb, Vec2, Vec3};
-use illume_scene::builtin::{SceneBuilder, quad, unit_box};
+use illume_scene::builtin::{SceneBuilder, quad};
 use illume_scene::{
     InstanceId, LightKind, MASK_DEFAULT, Material, Mesh, Texture, TextureId, Trs, WrapMode,
 };
@@ -323,53 +325,14 @@ fn cascade(c: f32) -> Texture {
 /// A floor, a box above it (textured with `cascade(0.3)` or plain, albedo 0.15 on
 /// average either way) and a point light; the camera looks down at the box.
 fn box_scene(textured: bool) -> World {
-    let mut b = SceneBuilder::new();
-    let floor_m = b.material(Material {
-        base_color: Rgb::splat(0.6),
-        ..Default::default()
-    });
-    let texture = textured.then(|| b.texture(cascade(0.3)));
-    let box_m = b.material(Material {
-        base_color: Rgb::splat(0.15),
-        base_color_texture: texture,
-        ..Default::default()
-    });
-    let floor = b.mesh(quad(Vec3::ZERO, Vec3::Z * 4.0, Vec3::X * 4.0, floor_m));
-    b.placed("floor", floor, Trs::IDENTITY, false);
-    let cube = b.mesh(unit_box(box_m, false));
-    b.placed(
-        "box",
-        cube,
-        Trs {
-            scale: Vec3::splat(0.5),
-            ..Trs::from_translation(Vec3::new(0.0, 0.6, 0.0))
-        },
-        true,
-    );
-    let ln = b.node(
-        "light",
-        None,
-        Trs::from_translation(Vec3::new(0.3, 2.5, 0.2)),
-    );
-    b.light(
-        "light",
-        LightKind::Point {
-            intensity: Rgb::splat(10.0),
-        },
-        ln,
-    );
-    let cam = b.node(
-        "camera",
-        None,
-        Trs {
-            rotation: Quat::from_rotation_x(-0.6),
-            ..Trs::from_translation(Vec3::new(0.0, 3.0, 4.0))
-        },
-    );
-    b.camera("camera", 50f32.to_radians(), cam);
-    let mut scene = b.finish("test:box");
-    scene.set_time(0.0);
-    World::new(scene)
+    common::box_scene(|b| {
+        let texture = textured.then(|| b.texture(cascade(0.3)));
+        b.material(Material {
+            base_color: Rgb::splat(0.15),
+            base_color_texture: texture,
+            ..Default::default()
+        })
+    })
 }
 
 const ELEMENTS: u32 = 500;

@@ -1,0 +1,54 @@
+//! Scenes shared by the selective tests.
+
+use illume_core::{Quat, Rgb, Vec3};
+use illume_scene::builtin::{SceneBuilder, quad, unit_box};
+use illume_scene::{LightKind, Material, MaterialId, Trs};
+use illume_transport::World;
+
+/// A grey floor (albedo 0.6), a half-metre box 0.6 m above it (dynamic, named "box") with
+/// the material `box_material` makes, a 10 W/sr point light at (0.3, 2.5, 0.2) and a
+/// camera looking down at the box.
+pub fn box_scene(box_material: impl FnOnce(&mut SceneBuilder) -> MaterialId) -> World {
+    let mut b = SceneBuilder::new();
+    let floor_m = b.material(Material {
+        base_color: Rgb::splat(0.6),
+        ..Default::default()
+    });
+    let box_m = box_material(&mut b);
+    let floor = b.mesh(quad(Vec3::ZERO, Vec3::Z * 4.0, Vec3::X * 4.0, floor_m));
+    b.placed("floor", floor, Trs::IDENTITY, false);
+    let cube = b.mesh(unit_box(box_m, false));
+    b.placed(
+        "box",
+        cube,
+        Trs {
+            scale: Vec3::splat(0.5),
+            ..Trs::from_translation(Vec3::new(0.0, 0.6, 0.0))
+        },
+        true,
+    );
+    let ln = b.node(
+        "light",
+        None,
+        Trs::from_translation(Vec3::new(0.3, 2.5, 0.2)),
+    );
+    b.light(
+        "light",
+        LightKind::Point {
+            intensity: Rgb::splat(10.0),
+        },
+        ln,
+    );
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_x(-0.6),
+            ..Trs::from_translation(Vec3::new(0.0, 3.0, 4.0))
+        },
+    );
+    b.camera("camera", 50f32.to_radians(), cam);
+    let mut scene = b.finish("test:box");
+    scene.set_time(0.0);
+    World::new(scene)
+}
