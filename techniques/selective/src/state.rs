@@ -445,9 +445,9 @@ impl Selective {
 
     /// With `warm_up`, fills the whole pool the first time it is called (unless
     /// [`Technique::precompute`] already did); otherwise nothing.
-    pub fn warm_up(&mut self, world: &World) {
+    pub fn warm_up(&mut self, world: &World, progress: &mut dyn Progress) {
         if self.settings.warm_up && !self.warmed_up {
-            self.fill_all(world, &mut illume_core::progress::Silent);
+            self.fill_all(world, progress);
             self.warmed_up = true;
         }
     }
@@ -473,10 +473,7 @@ impl Technique for Selective {
         world: &World,
         progress: &mut dyn Progress,
     ) -> Result<(), illume_transport::TechniqueError> {
-        if self.settings.warm_up && !self.warmed_up {
-            self.fill_all(world, progress);
-            self.warmed_up = true;
-        }
+        self.warm_up(world, progress);
         Ok(())
     }
 
@@ -528,7 +525,7 @@ impl Technique for Selective {
     /// this solution, as for [`Selective::for_world`]); whole groups, so one group may
     /// overrun.
     fn advance(&mut self, world: &World, budget: &Budget) {
-        self.warm_up(world);
+        self.warm_up(world, &mut illume_core::progress::Silent);
         let t0 = Instant::now();
         let (work, time_ms) = match self.settings.mode {
             SelectiveMode::Deterministic => (

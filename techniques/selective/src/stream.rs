@@ -204,7 +204,9 @@ impl Technique for Streaming {
     /// thread does the rest; `budget` is ignored.
     fn advance(&mut self, world: &World, _budget: &Budget) {
         self.world_written();
-        self.shared.lock_for_frame().warm_up(world);
+        self.shared
+            .lock_for_frame()
+            .warm_up(world, &mut illume_core::progress::Silent);
     }
 
     /// The thread takes no new read lock of the world until the write is done (see the
