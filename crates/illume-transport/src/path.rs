@@ -15,8 +15,10 @@ pub struct PathSettings {
     /// Reflections after which Russian roulette may end a path (unbiased: survivors are
     /// re-weighted). Lower = faster, noisier deep bounces. Default 3.
     pub rr_start_depth: u32,
-    /// Hard cap on reflections (biased when reached; at the default it practically never
-    /// is, as roulette ends paths long before). Default 1024.
+    /// Hard cap on reflections: paths end after this many, with the light their last
+    /// sampled direction finds still counted, so `1` gives exact direct light (biased
+    /// only when paths would have gone on; at the default they practically never do, as
+    /// roulette ends them long before). Default 1024.
     pub max_depth: u32,
 }
 
@@ -165,9 +167,6 @@ pub fn continue_path(
         }
         throughput *= weight;
         bounces += 1;
-        if bounces >= settings.max_depth {
-            return;
-        }
         if bounces >= settings.rr_start_depth {
             match russian_roulette(throughput, u_rr) {
                 Some(w) => throughput *= w,
@@ -192,6 +191,11 @@ pub fn continue_path(
             );
             let w = power_heuristic(pdf, light_pdf);
             out.add(bounces, throughput * next.emission * w);
+        }
+        // The cap ends the path after the emission its last sampled ray found, which
+        // completes that reflection's MIS pair: `max_depth = 1` is exact direct light.
+        if bounces >= settings.max_depth {
+            return;
         }
         wo = -wi;
         hit = next;

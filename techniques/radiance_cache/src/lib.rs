@@ -75,6 +75,7 @@ pub mod error;
 pub mod hsh;
 pub mod octree;
 pub mod record;
+pub mod reproject;
 pub mod settings;
 pub mod state;
 pub mod temporal;
@@ -82,7 +83,7 @@ pub mod temporal;
 pub use error::RadianceCacheError;
 pub use octree::Octree;
 pub use record::{
-    HemisphereGather, IrradianceRecord, IrradianceValue, RecordSettings, RgbGradient,
+    CellPath, HemisphereGather, IrradianceRecord, IrradianceValue, RecordSettings, RgbGradient,
 };
 pub use settings::{RadianceCacheSettings, TemporalMode};
 pub use state::RadianceCache;

@@ -35,6 +35,7 @@
 //! predecessor's key sees the same directions and random numbers.
 
 use crate::RadianceCacheError;
+use illume_accel::Hit;
 use illume_core::sampling::{Pcg32, SampleStream, mix64};
 use illume_core::{Frame, PI, Ray, Rgb, Vec3, offset_ray_origin};
 use illume_scene::InstanceId;
@@ -235,6 +236,34 @@ pub struct GatherCell {
     pub distance_m: f32,
 }
 
+/// What one gather ray found, for moving it to the next frame (§4.3): its first hit,
+/// the random stream its path started from, and the light reflected there once
+/// (`direct`, recomputed at the next frame) and more than once (`multiple`, carried
+/// over).
+#[derive(Clone, Debug)]
+pub struct CellPath {
+    /// The first hit (instance, triangle, barycentrics, distance); `None` when the ray
+    /// left the scene.
+    pub hit: Option<Hit>,
+    /// The cell's random stream as the path at the hit started drawing from it.
+    pub stream: Pcg32,
+    /// Light reflected once at the hit towards the record \[W/(m²·sr)\].
+    pub direct: Rgb,
+    /// Light reflected two or more times \[W/(m²·sr)\].
+    pub multiple: Rgb,
+}
+
+impl CellPath {
+    fn escaped() -> Self {
+        Self {
+            hit: None,
+            stream: Pcg32::new(0, 0),
+            direct: Rgb::ZERO,
+            multiple: Rgb::ZERO,
+        }
+    }
+}
+
 /// The gather rays of one record: an M×N grid of [`GatherCell`]s over the hemisphere
 /// of a normal, θ-stratum major (cell (j, k) at `j·N + k`).
 #[derive(Clone, Debug, PartialEq)]
@@ -281,6 +310,33 @@ impl HemisphereGather {
         key: u64,
         settings: &RecordSettings,
     ) -> Result<Self, RadianceCacheError> {
+        Self::trace_cells(world, position, normal, key, settings, None)
+    }
+
+    /// [`HemisphereGather::trace`], also returning what each cell's ray found (its first
+    /// hit, the random stream its path started from, its light split by bounces): what
+    /// the §4.3 reprojection moves to the next frame ([`crate::reproject`]). The gather
+    /// is the same as [`HemisphereGather::trace`]'s, bit for bit.
+    pub fn trace_keeping_paths(
+        world: &World,
+        position: Vec3,
+        normal: Vec3,
+        key: u64,
+        settings: &RecordSettings,
+    ) -> Result<(Self, Vec<CellPath>), RadianceCacheError> {
+        let mut paths = Vec::with_capacity((settings.theta_strata * settings.phi_strata) as usize);
+        let gather = Self::trace_cells(world, position, normal, key, settings, Some(&mut paths))?;
+        Ok((gather, paths))
+    }
+
+    fn trace_cells(
+        world: &World,
+        position: Vec3,
+        normal: Vec3,
+        key: u64,
+        settings: &RecordSettings,
+        mut keep: Option<&mut Vec<CellPath>>,
+    ) -> Result<Self, RadianceCacheError> {
         let frame = record_frame(position, normal)?;
         Ok(Self::gather(frame, settings, key, |direction, stream| {
             let ray = Ray::new(offset_ray_origin(position, frame.n, direction), direction);
@@ -290,12 +346,30 @@ impl HemisphereGather {
                         Incoming::Reflected => Rgb::ZERO,
                         Incoming::All => world.lights.sky_radiance(direction),
                     };
+                    if let Some(keep) = keep.as_deref_mut() {
+                        keep.push(CellPath::escaped());
+                    }
                     (sky, f32::INFINITY)
                 }
                 Some(hit) => {
                     let (emission, t) = (hit.emission, hit.t);
+                    let first = Hit {
+                        t,
+                        instance: hit.instance,
+                        triangle: hit.triangle,
+                        barycentrics: hit.barycentrics,
+                    };
+                    let start = keep.is_some().then(|| stream.clone());
                     let mut out = PathRadiance::default();
                     continue_path(world, hit, -direction, stream, &settings.path, &mut out);
+                    if let (Some(keep), Some(stream)) = (keep.as_deref_mut(), start) {
+                        keep.push(CellPath {
+                            hit: Some(first),
+                            stream,
+                            direct: out.direct,
+                            multiple: out.indirect,
+                        });
+                    }
                     let reflected = out.direct + out.indirect;
                     let radiance = match settings.incoming {
                         Incoming::Reflected => reflected,
@@ -305,6 +379,23 @@ impl HemisphereGather {
                 }
             }
         }))
+    }
+
+    /// A gather over `frame` with `cells` given (θ-stratum major, `theta_strata ×
+    /// phi_strata` of them), for grids assembled elsewhere (the reprojection's).
+    pub(crate) fn from_cells(
+        frame: Frame,
+        theta_strata: u32,
+        phi_strata: u32,
+        cells: Vec<GatherCell>,
+    ) -> Self {
+        debug_assert_eq!(cells.len(), (theta_strata * phi_strata) as usize);
+        Self {
+            frame,
+            theta_strata,
+            phi_strata,
+            cells,
+        }
     }
 
     /// A gather whose radiance and distances come from `sample(direction)` (world

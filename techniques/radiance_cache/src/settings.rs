@@ -4,13 +4,8 @@
 //! Defaults are the paper's values where it gives one (a^t = 0.05, δt_max = 20 frames,
 //! a 64×64 hemisphere grid: §6) and reasoned choices where it gives none (a, the R_k
 //! clamps, the hemispherical-harmonics order), each explained at its field and in
-//! `docs/techniques/radiance_cache.md`. The struct covers the whole technique; the parts
-//! that use some of its fields (reprojection, replacement and deletion, radiance
-//! records) are still to come, and those fields say so.
-//!
-//! **The default mode is `reuse` for now**: `extrapolated` and `interpolated` need the
-//! §4.3 next-frame reprojection, not built yet, and are refused at construction. The
-//! issue's default, `interpolated`, comes with the reprojection chunk.
+//! `docs/techniques/radiance_cache.md`. The struct covers the whole technique; the
+//! fields of the radiance records (still to come) say so.
 
 use crate::RadianceCacheError;
 use crate::record::RecordSettings;
@@ -25,20 +20,17 @@ pub enum TemporalMode {
     /// no record outlives its frame. The slowest mode and the one that flickers most
     /// (record positions change from frame to frame, Fig. 2).
     PerFrame,
-    /// Records live for their lifespan (Eq. 10, Eq. 12) and are replaced at the same
-    /// place, with no temporal gradient (Fig. 5c): the value jumps when a record is
-    /// replaced. **For now** (no reprojection, so no τ): records live δt_max frames and
-    /// expired ones are not replaced in place but placed anew over the G-buffer; records
-    /// near moving objects keep stale light until then (ghosts).
+    /// Records live for their lifespan (Eq. 10, Eq. 12, τ from the §4.3 reprojection)
+    /// and are replaced at the same place, with no temporal gradient (Fig. 5c): the value
+    /// jumps when a record is replaced.
     Reuse,
-    /// Not built yet (refused at construction: needs the §4.3 reprojection).
     /// One pass: temporal gradients extrapolated from the reprojected next-frame estimate
     /// (Eq. 18–20, Fig. 5d). Smaller jumps at replacement than `reuse`.
     Extrapolated,
-    /// Not built yet (refused at construction: needs the §4.3 reprojection).
-    /// Two passes: the first computes every record of the timeline, the second renders
-    /// with temporal gradients interpolated towards each record's replacement
-    /// (Eq. 21–23, Fig. 5e): no jump at replacement. The paper's choice for quality.
+    /// Two passes: the first (in the precompute phase) computes every record of the
+    /// timeline, the second renders with temporal gradients interpolated towards each
+    /// record's replacement (Eq. 21–23, Fig. 5e): no jump at replacement. The paper's
+    /// choice for quality, and the default.
     #[default]
     Interpolated,
 }
@@ -96,10 +88,11 @@ pub struct RadianceCacheSettings {
     /// object about to enter its hemisphere, Fig. 4) is caught within this many frames.
     /// Lower: fewer ghosts, at the cost of more records. 1–100 000, default 20 (§6).
     pub max_age_frames: u32,
-    /// How records follow time. Default [`TemporalMode::Reuse`] for now: `extrapolated`
-    /// and `interpolated` are refused at construction until the §4.3 reprojection is
-    /// built (`interpolated`, the paper's choice, becomes the default then). `per_frame`
-    /// and `reuse` run with or without a timeline (also with `--realtime`).
+    /// How records follow time. Default [`TemporalMode::Interpolated`] (the paper's
+    /// choice). `extrapolated` and `interpolated` need the frames known in advance (a
+    /// timeline) and are refused with `--realtime`, whose frame times are known only as
+    /// they come; `per_frame` and `reuse` run anywhere (in real time every frame is a
+    /// surprise, so `reuse` then lives on δt_max and surprise expiry alone).
     pub temporal: TemporalMode,
     /// Surfaces that are not exactly Lambertian and whose perceptual roughness is at or
     /// below this are glossy: their specular lobe is shaded from radiance records
@@ -128,33 +121,29 @@ pub struct RadianceCacheSettings {
     /// Largest number of 3×3 averaging passes that fill the holes of a reprojected
     /// next-frame grid (§4.3, Fig. 8); cells still empty after them take the grid's mean.
     /// Higher: holes filled from nearer cells only, at a cost per pass. 1–4096,
-    /// default 64 (the grid's side). Used by the reprojection (to come).
+    /// default 64 (the grid's side).
     pub hole_fill_max_passes: u32,
     /// Beyond the paper: an expired record is replaced only where a surface facing its
     /// normal still lies at its position (else it is deleted), so records on objects
-    /// that moved away do not float in the air. Default true. Used by replacement (to
-    /// come).
+    /// that moved away do not float in the air. Default true.
     pub replace_only_on_surface: bool,
     /// Beyond the paper: a replacement traces its predecessor's directions with its
     /// random numbers, so E_l − E_k (Eq. 21) measures change, not noise. Default true.
-    /// Used by replacement (to come).
     pub reuse_directions: bool,
     /// Beyond the paper: a change not on the timeline (an edit, a frame off the
-    /// timeline) expires the records whose rays hit the changed item. False: such
-    /// records live out their lifespan (ghosts). Default true. For now (`reuse`, no
-    /// timeline matching yet) the frame loop treats every change alike, timeline steps
-    /// too, and expires coarser sets: the records on an instance that moved, was added
-    /// or removed; every record on a light, sky or material change. False: changes
-    /// expire nothing.
+    /// timeline) expires the records on the changed instance and those whose rays hit
+    /// it (a moved, added or removed instance), or every record (a light, sky or
+    /// material change). False: such records live out their lifespan (ghosts). Default
+    /// true. Changes on the timeline expire nothing: τ and the lifespans handle them.
     pub expire_on_surprise: bool,
     /// §7's future work: a new record whose lifespan is short shortens the lifespans of
     /// the records whose spheres of influence contain it to its own, so a change seen by
     /// one record ages its neighbours faster. Default false (the paper's behaviour).
-    /// Used by the frame loop (to come).
+    /// Not built yet: `true` is refused.
     pub neighbour_aging: bool,
     /// §5, Fig. 9: an expired record that no pixel of its last frame used is deleted
     /// instead of replaced (the paper reports −25–30 % storage, −20–30 % time). False:
-    /// every expired record is replaced. Default true. Used by the frame loop (to come).
+    /// every expired record is replaced. Default true.
     pub deletion: bool,
     /// Reflections after which Russian roulette may end a gather ray's path
     /// (`continue_path`). Lower: faster, noisier records (still unbiased). Default 3.
@@ -165,6 +154,9 @@ pub struct RadianceCacheSettings {
     /// Seed of the gather rays' jitter and paths: the same seed gives the same records,
     /// whatever the thread count. Default 0.
     pub seed: u64,
+    /// Set by `--realtime` pacing ([`TechniqueSettings::pace`]), not a setting.
+    #[serde(skip)]
+    pub paced_real_time: bool,
 }
 
 impl Default for RadianceCacheSettings {
@@ -190,12 +182,11 @@ impl TechniqueSettings for RadianceCacheSettings {
         RadianceCacheSettings::preset(name)
     }
 
-    /// Nothing to map: `per_frame` and `reuse` compute the records each frame needs,
-    /// in real time as in fixed-work frames (`work_per_frame` is ignored: the G-buffer
-    /// decides the work). The modes that need the timeline (`extrapolated`,
-    /// `interpolated`) are refused at construction for now.
+    /// Records are computed where each frame's G-buffer needs them (`work_per_frame` is
+    /// ignored). Real-time pacing is remembered: the modes that need the frames known
+    /// in advance (`extrapolated`, `interpolated`) are then refused at construction.
     fn pace(&mut self, pacing: Pacing) {
-        let _ = pacing;
+        self.paced_real_time = matches!(pacing, Pacing::RealTime);
     }
 
     /// Unlimited: a frame computes every record its G-buffer needs.
@@ -221,7 +212,7 @@ impl RadianceCacheSettings {
             phi_strata: 64,
             temporal_accuracy: 0.05,
             max_age_frames: 20,
-            temporal: TemporalMode::Reuse,
+            temporal: TemporalMode::Interpolated,
             glossy_roughness_max: 1.0,
             hsh_order: 8,
             traced_roughness_max: 0.5,
@@ -234,6 +225,7 @@ impl RadianceCacheSettings {
             rr_start_depth: 3,
             max_depth: 1024,
             seed: 0,
+            paced_real_time: false,
         }
     }
 
@@ -267,11 +259,11 @@ impl RadianceCacheSettings {
         &[
             (
                 "default",
-                "paper: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, reuse (interpolated: to come)",
+                "paper: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated",
             ),
             (
                 "paper",
-                "the paper's values (§6): a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, reuse (interpolated: to come)",
+                "the paper's values (§6): a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated",
             ),
             (
                 "still",
@@ -398,6 +390,38 @@ impl RadianceCacheSettings {
         }
         if self.max_depth == 0 {
             return bad("max_depth", "must be at least 1".into());
+        }
+        if self.neighbour_aging {
+            return bad(
+                "neighbour_aging",
+                "is not built yet (§7's future work); leave it false".into(),
+            );
+        }
+        if self.paced_real_time
+            && matches!(
+                self.temporal,
+                TemporalMode::Extrapolated | TemporalMode::Interpolated
+            )
+        {
+            let name = if self.temporal == TemporalMode::Extrapolated {
+                "extrapolated"
+            } else {
+                "interpolated"
+            };
+            return bad(
+                "temporal",
+                format!(
+                    "`{name}` needs the frames known in advance (it reprojects records into \
+                     the next frame{}), but --realtime frames come at times known only as \
+                     they are rendered; drop --realtime (or use --work-per-frame), or set \
+                     radiance_cache.temporal = \"reuse\" or \"per_frame\"",
+                    if name == "interpolated" {
+                        " and plans every record of the timeline first"
+                    } else {
+                        ""
+                    }
+                ),
+            );
         }
         Ok(())
     }

@@ -1,47 +1,74 @@
-//! The technique: [`RadianceCache`], the frame loop of the `per_frame` and `reuse`
-//! modes over the G-buffer.
+//! The technique: [`RadianceCache`], the frame loop over the G-buffer in the four
+//! temporal modes.
 //!
-//! Each frame ([`Technique::indirect`]):
-//! 1. Records leave the cache: all of them in `per_frame` (the paper's baseline, a new
-//!    cache every frame); in `reuse`, those older than δt_max (`max_age_frames`, Eq. 12;
-//!    without the §4.3 reprojection there is no τ, so Eq. 10 cannot shorten a lifespan)
-//!    and those a scene change expired ([`RadianceCache::scene_changed`]).
-//! 2. New records are placed coarse to fine over the G-buffer (the classic multi-pass
-//!    scheme): pixels on grids of spacing 32, 16, 8, 4, 2 and 1 px; a pixel of a pass
-//!    gets a new record only if no record is usable there (w ≥ 1/a, Eq. 2–3). Which
-//!    pixels get one is decided from the cache as it was before the pass, then the
-//!    records are computed in parallel and inserted in pixel order: records are pure
-//!    functions of (seed, record key, cell), the key is (frame, pixel), so the cache and
-//!    the image do not depend on the thread count. Two pixels of the same pass may both
-//!    get a record although one would have covered the other: the price of that
-//!    determinism, paid mostly at the fine passes where gaps are small.
-//! 3. Each pixel is shaded from the usable records (Eq. 1 with Eq. 4, the octree giving
-//!    the candidates): indirect radiance = ρ/π·E, ρ the pixel's albedo.
+//! Each frame t ([`Technique::indirect`]):
+//! 1. **Expiry** (§4.2). A record lives `lifespan_frames` frames from its own (Eq. 10
+//!    and Eq. 12 through τ, [`crate::temporal`]). When its life ends it is:
+//!    * **deleted** (§5, Fig. 9) when no pixel used it in the last frame shaded
+//!      (`deletion`; the exact use count stands in for the paper's occlusion query), or
+//!      when no surface facing its normal lies at its position any more
+//!      (`replace_only_on_surface`, beyond the paper);
+//!    * otherwise **replaced** by a new record at the same position and normal (§4.2,
+//!      Fig. 6), traced with its predecessor's directions and random numbers
+//!      (`reuse_directions`), so the difference between the two is change, not noise.
+//!
+//!    `per_frame` (the paper's baseline) drops every record each frame instead.
+//! 2. **Placement, coarse to fine.** Grids of spacing 32, 16, 8, 4, 2 and 1 px; a pixel
+//!    of a pass gets a new record only if no record is usable there (w ≥ 1/a, Eq. 2–3).
+//!    Which pixels get one is decided from the cache before the pass, then the records
+//!    are computed in parallel and inserted in pixel order: records are pure functions
+//!    of (seed, key, cell), the key is (frame, pixel), so the cache and the image do not
+//!    depend on the thread count.
+//! 3. **Shading**: Eq. 1 over the usable records, each contributing by Eq. 17 (Eq. 4
+//!    moved along its temporal gradient by t − t_k); indirect radiance = ρ/π·E. Each
+//!    record counts the pixels that used it (for deletion).
+//!
+//! **A new record's future** (§4.3): in the temporal modes its gather is reprojected into
+//! the next timeline frame's world ([`crate::reproject`]), giving E(t + 1), hence τ and
+//! the lifespan, and the extrapolated temporal gradient (Eq. 18–20). Where the next frame
+//! is unknown (the last frame, a frame off the timeline) or the scene does not change
+//! between the two, τ = 1 and the record lives δt_max frames.
+//!
+//! **Modes.** `reuse`: lifespans and replacement, no temporal gradient (Fig. 5c).
+//! `extrapolated`: also the extrapolated gradients (Fig. 5d), one pass. `interpolated`
+//! (Fig. 5e): [`Technique::precompute`] runs the extrapolated loop over the whole
+//! timeline (pass 1) on a private world, keeping every record with its successor; each
+//! replaced record's temporal gradient then becomes the interpolated one towards its
+//! replacement (Eq. 21–23), and the frames (pass 2) replay that plan: a frame admits
+//! the records made at it and drops the expired, with no new gather except for pixels
+//! the plan does not cover (counted as `records_created`).
+//!
+//! **Surprises** (changes not on the timeline: edits, frames off it): the plan is
+//! dropped and the loop goes on online (as `extrapolated`). With `expire_on_surprise`, a
+//! moved, added or removed instance expires the records on it and the records whose
+//! rays hit it; a light, sky or material change expires every record. Camera moves
+//! expire nothing (records are world-space). Changes on the timeline are what τ and
+//! the lifespans are for, and expire nothing.
 //!
 //! **Glossy surfaces are shaded Lambertian for now** (ρ = base colour, irradiance
 //! records only): radiance records (hemispherical harmonics, [`crate::hsh`]) are to come.
 //!
-//! **Scene changes** (`reuse`): records are world-space and keep their positions, so a
-//! camera move keeps them all. An instance that moved, was added or removed expires the
-//! records made on it (they would float in the air or lie inside it). A light, sky or
-//! material change expires every record (their irradiance is wrong everywhere). Records
-//! near a moving object but not on it keep the light of the object's old position until
-//! δt_max ends their life: the ghosting of Fig. 5c, which τ and the temporal gradients
-//! (to come) are there to cut. This holds for timeline steps and surprises alike;
-//! `expire_on_surprise = false` turns it off (changes then expire nothing).
-//!
 //! **Budget.** All records a frame needs are computed in [`Technique::indirect`] (the
-//! G-buffer says where); [`Budget`] is not honoured yet and `advance` does nothing.
+//! G-buffer says where); [`Budget`] is not honoured and `advance` does nothing.
 
 use crate::octree::Octree;
 use crate::record::{IrradianceRecord, RecordSettings, WeightedSum, usable};
+use crate::reproject::reproject;
 use crate::settings::{RadianceCacheSettings, TemporalMode};
-use crate::{NAME, RadianceCacheError};
+use crate::temporal::{
+    change_rate, contribution, interpolated_gradient, is_valid, lifespan_frames,
+};
+use crate::{HemisphereGather, NAME, RadianceCacheError};
 use illume_core::image::RgbImage;
-use illume_core::{Counters, INV_PI, Rgb, Vec3};
-use illume_scene::{InstanceId, SceneChange, Timeline};
-use illume_transport::{Budget, ChangeResponse, GBuffer, GBufferPixel, Technique, World};
+use illume_core::progress::Progress;
+use illume_core::sampling::mix64;
+use illume_core::{Counters, INV_PI, Ray, Rgb, Vec3};
+use illume_scene::{InstanceId, Scene, SceneChange, Timeline};
+use illume_transport::{
+    Budget, ChangeResponse, GBuffer, GBufferPixel, Technique, TechniqueError, World,
+};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
 /// Grid spacings of the placement passes, coarse to fine \[px\].
@@ -51,27 +78,75 @@ pub const PLACEMENT_SPACINGS_PX: [u32; 6] = [32, 16, 8, 4, 2, 1];
 #[derive(Clone, Copy, Debug, Default)]
 struct FrameCounters {
     created: u64,
+    replaced: u64,
+    deleted: u64,
+    admitted: u64,
     reused: u64,
     expired: u64,
+    surprise_expired: u64,
     failed: u64,
+    holes: u64,
     created_total: u64,
+    replaced_total: u64,
+    deleted_total: u64,
+    lifespan_sum: u64,
+    lifespan_count: u64,
+    record_ms: f64,
     place_ms: f64,
     shade_ms: f64,
 }
 
-/// Temporal radiance caching, `per_frame` and `reuse` modes (see the module docs).
+/// A record in the cache, with what the frame loop needs besides Eq. 1–4.
+#[derive(Clone, Debug)]
+struct Slot {
+    record: IrradianceRecord,
+    /// The key its gather was traced with (a replacement may reuse it).
+    key: u64,
+    /// Instances its gather rays hit first, sorted (surprise expiry).
+    seen: Vec<InstanceId>,
+    /// Its entry in the pass-1 history (`interpolated`), if recorded.
+    history: Option<u32>,
+}
+
+/// A record made by pass 1 of `interpolated`, and the one that replaced it.
+#[derive(Clone, Debug)]
+struct Planned {
+    slot: Slot,
+    successor: Option<u32>,
+}
+
+/// A new record and what its making found.
+struct Made {
+    slot: Slot,
+    holes: u32,
+}
+
+/// Temporal radiance caching (see the module docs).
 pub struct RadianceCache {
     settings: RadianceCacheSettings,
     record_settings: RecordSettings,
+    timeline: Timeline,
     /// Records by id (the octree's ids); `None` for free slots.
-    records: Vec<Option<IrradianceRecord>>,
+    slots: Vec<Option<Slot>>,
+    /// Pixels that used each record in the last frame shaded, by id.
+    uses: Vec<AtomicU32>,
     free: Vec<u32>,
     octree: Octree,
     /// Frames shaded so far: the next frame's index.
     frame: u32,
+    /// The world of timeline frame `.0` (the next frame's, for reprojection), kept
+    /// between frames; `.1` false when the scene does not change from frame `.0 − 1`.
+    next_world: Option<(u32, World, bool)>,
+    /// Pass 1's records (`interpolated`), in the order made; empty otherwise.
+    history: Vec<Planned>,
+    /// Pass 2's plan: history indices by the frame they are made at; `None` when
+    /// running online (other modes, or after a surprise).
+    plan: Option<Vec<Vec<u32>>>,
+    /// Pass 1 is running: record every record made into `history`.
+    recording: bool,
     /// A scene change expired every record; done at the next frame.
     expire_all: bool,
-    /// Instances whose records a scene change expired; done at the next frame.
+    /// Instances whose records (on them, or whose rays hit them) a surprise expired.
     expire_instances: Vec<InstanceId>,
     counters: FrameCounters,
 }
@@ -91,33 +166,26 @@ fn shading_point(p: &GBufferPixel) -> Option<(Vec3, Vec3)> {
     Some((hit.position, n))
 }
 
+/// True when the parts of `a` that records depend on (instances, lights, materials,
+/// sky) equal `b`'s: the camera and the time may differ.
+fn same_lighting(a: &Scene, b: &Scene) -> bool {
+    a.instances == b.instances
+        && a.lights == b.lights
+        && a.materials == b.materials
+        && a.sky == b.sky
+}
+
 impl RadianceCache {
-    /// The technique for `world` with `settings`; `timeline` gives the image size for
-    /// now (the reprojection and the two-pass mode will use its frames). Errors on
-    /// invalid settings (`radiance_cache.FIELD: …`), and for the temporal modes not
-    /// built yet (`extrapolated`, `interpolated`).
+    /// The technique for `world` with `settings`, for the frames of `timeline` (the
+    /// temporal modes reproject into its next frames; `interpolated` runs its pass 1 over
+    /// it in [`Technique::precompute`]). Errors on invalid settings
+    /// (`radiance_cache.FIELD: …`).
     pub fn new(
         world: &World,
         timeline: &Timeline,
         settings: RadianceCacheSettings,
     ) -> Result<Self, RadianceCacheError> {
-        let _ = timeline;
         settings.validate()?;
-        if let mode @ (TemporalMode::Extrapolated | TemporalMode::Interpolated) = settings.temporal
-        {
-            let name = if mode == TemporalMode::Extrapolated {
-                "extrapolated"
-            } else {
-                "interpolated"
-            };
-            return Err(RadianceCacheError::InvalidSetting {
-                field: "temporal",
-                reason: format!(
-                    "`{name}` is not built yet (it needs the §4.3 next-frame reprojection, \
-                     to come); use `per_frame` or `reuse`"
-                ),
-            });
-        }
         let bounds = world.scene.bounds();
         let diagonal = (bounds.max - bounds.min).length();
         let diagonal = if diagonal.is_finite() && diagonal > 0.0 {
@@ -128,10 +196,16 @@ impl RadianceCache {
         Ok(Self {
             record_settings: settings.record_settings(diagonal),
             settings,
-            records: Vec::new(),
+            timeline: timeline.clone(),
+            slots: Vec::new(),
+            uses: Vec::new(),
             free: Vec::new(),
             octree: Octree::new(),
             frame: 0,
+            next_world: None,
+            history: Vec::new(),
+            plan: None,
+            recording: false,
             expire_all: false,
             expire_instances: Vec::new(),
             counters: FrameCounters::default(),
@@ -143,64 +217,265 @@ impl RadianceCache {
         self.octree.len()
     }
 
-    /// Records created since construction (or the last reset).
+    /// Records computed since construction (or the last reset), replacements included;
+    /// pass 1's records are counted by [`RadianceCache::records_planned`].
     pub fn records_created(&self) -> u64 {
-        self.counters.created_total
+        self.counters.created_total + self.counters.replaced_total
+    }
+
+    /// Records pass 1 of `interpolated` computed (0 in the other modes).
+    pub fn records_planned(&self) -> usize {
+        self.history.len()
     }
 
     /// The live records, in id order.
     pub fn records(&self) -> impl Iterator<Item = &IrradianceRecord> {
-        self.records.iter().flatten()
+        self.slots.iter().flatten().map(|s| &s.record)
+    }
+
+    /// The live records with the instances their gather rays hit first (sorted), in
+    /// id order.
+    pub fn records_with_seen(&self) -> impl Iterator<Item = (&IrradianceRecord, &[InstanceId])> {
+        self.slots
+            .iter()
+            .flatten()
+            .map(|s| (&s.record, s.seen.as_slice()))
+    }
+
+    fn temporal(&self) -> bool {
+        self.settings.temporal != TemporalMode::PerFrame
     }
 
     fn remove(&mut self, id: u32) {
-        if self.records[id as usize].take().is_some() {
+        if self.slots[id as usize].take().is_some() {
             self.octree.remove(id);
             self.free.push(id);
         }
     }
 
-    fn insert(&mut self, record: IrradianceRecord) -> Result<(), RadianceCacheError> {
+    fn insert(&mut self, slot: Slot) -> Result<u32, RadianceCacheError> {
         let id = match self.free.pop() {
             Some(id) => id,
             None => {
-                self.records.push(None);
-                (self.records.len() - 1) as u32
+                self.slots.push(None);
+                self.uses.push(AtomicU32::new(0));
+                (self.slots.len() - 1) as u32
             }
         };
-        let radius = record.influence_radius_m(self.settings.accuracy);
-        if let Err(e) = self.octree.insert(id, record.position, radius) {
+        let radius = slot.record.influence_radius_m(self.settings.accuracy);
+        if let Err(e) = self.octree.insert(id, slot.record.position, radius) {
             self.free.push(id);
             return Err(e);
         }
-        self.records[id as usize] = Some(record);
-        Ok(())
+        self.uses[id as usize].store(0, Ordering::Relaxed);
+        self.slots[id as usize] = Some(slot);
+        Ok(id)
     }
 
-    /// Step 1: the records that leave the cache before frame `self.frame`.
-    fn expire(&mut self) {
-        let frame = self.frame;
-        let max_age = self.settings.max_age_frames;
-        let all = self.expire_all || self.settings.temporal == TemporalMode::PerFrame;
-        let doomed: Vec<u32> = self
-            .records
+    /// Inserts a new record, into pass 1's history too when recording.
+    fn admit(&mut self, mut slot: Slot) -> Result<u32, RadianceCacheError> {
+        if self.recording {
+            slot.history = Some(self.history.len() as u32);
+            self.history.push(Planned {
+                slot: slot.clone(),
+                successor: None,
+            });
+        }
+        self.counters.lifespan_sum += slot.record.lifespan_frames as u64;
+        self.counters.lifespan_count += 1;
+        self.insert(slot)
+    }
+
+    /// The world of timeline frame `frame + 1`, for reprojecting records made at
+    /// `frame`, and whether the scene changes between the two; `None` past the
+    /// timeline's end.
+    fn prepare_next(&mut self, world: &World) {
+        if !self.temporal() {
+            return;
+        }
+        let next = self.frame + 1;
+        if self.next_world.as_ref().is_some_and(|(f, _, _)| *f == next) {
+            return;
+        }
+        self.next_world = self.timeline.times().get(next as usize).map(|&t| {
+            let mut scene = world.scene.clone();
+            let changes = scene.set_time(t);
+            let changed = !changes.is_empty() && !same_lighting(&scene, &world.scene);
+            (next, world.with_scene(scene), changed)
+        });
+    }
+
+    /// Makes a record at `p` with normal `n` at the current frame (see the module docs:
+    /// its lifespan and extrapolated gradient from the reprojection when the next frame
+    /// is known and differs).
+    fn make(
+        &self,
+        world: &World,
+        p: Vec3,
+        n: Vec3,
+        instance: Option<InstanceId>,
+        key: u64,
+    ) -> Result<Made, RadianceCacheError> {
+        let rs = &self.record_settings;
+        let (gather, paths) = HemisphereGather::trace_keeping_paths(world, p, n, key, rs)?;
+        let mut record = IrradianceRecord::from_gather(p, &gather, self.frame, instance, rs);
+        let mut seen: Vec<InstanceId> = paths
             .iter()
-            .enumerate()
-            .filter_map(|(id, r)| {
-                let r = r.as_ref()?;
-                let gone = all
-                    || frame.saturating_sub(r.frame) >= max_age
-                    || r.instance
-                        .is_some_and(|i| self.expire_instances.contains(&i));
-                gone.then_some(id as u32)
+            .filter_map(|c| c.hit.map(|h| h.instance))
+            .collect();
+        seen.sort_unstable();
+        seen.dedup();
+        let mut holes = 0;
+        let s = &self.settings;
+        record.lifespan_frames = match (s.temporal, &self.next_world) {
+            (TemporalMode::PerFrame, _) => 1,
+            (_, Some((_, next, true))) => {
+                let r = reproject(world, next, p, &gather, &paths, rs, s.hole_fill_max_passes);
+                holes = r.holes;
+                let next_value =
+                    IrradianceRecord::from_gather(p, &r.gather, self.frame + 1, instance, rs).value;
+                if s.temporal != TemporalMode::Reuse {
+                    record.temporal_gradient = next_value - record.value;
+                }
+                let change = change_rate(record.value.irradiance, next_value.irradiance);
+                lifespan_frames(change, s.temporal_accuracy, s.max_age_frames)
+            }
+            // The next frame unknown, or no change: τ = 1.
+            _ => s.max_age_frames,
+        };
+        Ok(Made {
+            slot: Slot {
+                record,
+                key,
+                seen,
+                history: None,
+            },
+            holes,
+        })
+    }
+
+    /// True when a surface facing `n` lies at `p` in `world` (within 0.1 % of the
+    /// scene's size, normals within 25°).
+    fn surface_at(&self, world: &World, p: Vec3, n: Vec3) -> bool {
+        let eps = self.record_settings.r_min_m.max(1e-4);
+        let origin = p + n * eps;
+        let Some(hit) = world.trace(&Ray::new(origin, -n), illume_scene::MASK_DEFAULT) else {
+            return false;
+        };
+        let facing = if hit.front_face {
+            hit.shading_normal
+        } else {
+            -hit.shading_normal
+        };
+        hit.t <= 2.0 * eps && hit.reflects && facing.dot(n) >= 25f32.to_radians().cos()
+    }
+
+    /// Step 1: the records that leave the cache before the current frame, and their
+    /// replacements (see the module docs).
+    fn expire(&mut self, world: &World) {
+        let frame = self.frame;
+        let per_frame = !self.temporal();
+        let all = self.expire_all;
+        let replaying = self.plan.is_some();
+        let mut doomed = Vec::new();
+        let mut successors = Vec::new();
+        for (id, slot) in self.slots.iter().enumerate() {
+            let Some(slot) = slot else { continue };
+            let r = &slot.record;
+            let surprised = all
+                || (!self.expire_instances.is_empty()
+                    && (r
+                        .instance
+                        .is_some_and(|i| self.expire_instances.contains(&i))
+                        || slot.seen.iter().any(|i| self.expire_instances.contains(i))));
+            if surprised {
+                self.counters.surprise_expired += 1;
+                doomed.push(id as u32);
+            } else if per_frame || !is_valid(r.frame, r.lifespan_frames, frame) {
+                doomed.push(id as u32);
+                if !per_frame && !replaying {
+                    successors.push(id as u32);
+                }
+            }
+        }
+        self.counters.expired = doomed.len() as u64;
+        // Replacements, decided and computed from the cache's state now, in id order.
+        let this = &*self;
+        let made: Vec<(u32, Result<Option<Made>, RadianceCacheError>)> = successors
+            .par_iter()
+            .map(|&id| {
+                let slot = this.slots[id as usize].as_ref().expect("live slot");
+                let unused =
+                    this.settings.deletion && this.uses[id as usize].load(Ordering::Relaxed) == 0;
+                let result = if unused
+                    || (this.settings.replace_only_on_surface
+                        && !this.surface_at(world, slot.record.position, slot.record.normal))
+                {
+                    Ok(None)
+                } else {
+                    let key = if this.settings.reuse_directions {
+                        slot.key
+                    } else {
+                        mix64(slot.key ^ ((frame as u64) << 40))
+                    };
+                    let r = &slot.record;
+                    this.make(world, r.position, r.normal, r.instance, key)
+                        .map(Some)
+                };
+                (id, result)
             })
             .collect();
-        self.counters.expired = doomed.len() as u64;
+        let mut predecessors = Vec::new();
+        for (id, result) in made {
+            let predecessor = self.slots[id as usize].as_ref().and_then(|s| s.history);
+            match result {
+                Ok(None) => {
+                    self.counters.deleted += 1;
+                }
+                Ok(Some(m)) => {
+                    self.counters.holes += m.holes as u64;
+                    predecessors.push((predecessor, m.slot));
+                }
+                Err(_) => self.counters.failed += 1,
+            }
+        }
         for id in doomed {
             self.remove(id);
         }
+        for (predecessor, slot) in predecessors {
+            match self.admit(slot) {
+                Ok(id) => {
+                    self.counters.replaced += 1;
+                    if let (Some(p), Some(h)) = (
+                        predecessor,
+                        self.slots[id as usize].as_ref().and_then(|s| s.history),
+                    ) {
+                        self.history[p as usize].successor = Some(h);
+                    }
+                }
+                Err(_) => self.counters.failed += 1,
+            }
+        }
         self.expire_all = false;
         self.expire_instances.clear();
+    }
+
+    /// Pass 2 of `interpolated`: the planned records made at the current frame enter.
+    fn admit_planned(&mut self) {
+        let Some(plan) = &self.plan else { return };
+        let Some(ids) = plan.get(self.frame as usize) else {
+            return;
+        };
+        let slots: Vec<Slot> = ids
+            .iter()
+            .map(|&h| self.history[h as usize].slot.clone())
+            .collect();
+        for slot in slots {
+            match self.insert(slot) {
+                Ok(_) => self.counters.admitted += 1,
+                Err(_) => self.counters.failed += 1,
+            }
+        }
     }
 
     /// True when a record of the cache is usable at `p` with normal `n` (Eq. 3).
@@ -208,8 +483,8 @@ impl RadianceCache {
         let mut found = false;
         self.octree.for_each_containing(p, |id| {
             if !found
-                && let Some(r) = &self.records[id as usize]
-                && usable(r.ward_error(p, n), self.settings.accuracy)
+                && let Some(s) = &self.slots[id as usize]
+                && usable(s.record.ward_error(p, n), self.settings.accuracy)
             {
                 found = true;
             }
@@ -233,40 +508,39 @@ impl RadianceCache {
                 .collect();
             let this = &*self;
             // Decided from the cache before the pass, computed in parallel, kept in order.
-            let new: Vec<Result<IrradianceRecord, RadianceCacheError>> = pixels
+            let new: Vec<Result<Made, RadianceCacheError>> = pixels
                 .par_iter()
                 .filter_map(|&(x, y)| {
-                    let (p, n) = shading_point(gbuffer.get(x, y)?)?;
+                    let px = gbuffer.get(x, y)?;
+                    let (p, n) = shading_point(px)?;
                     if this.covered(p, n) {
                         return None;
                     }
-                    let instance = gbuffer.get(x, y).map(|px| px.hit.instance);
                     let key = ((frame as u64) << 32) | (y as u64 * w as u64 + x as u64);
-                    Some(IrradianceRecord::compute(
-                        world,
-                        p,
-                        n,
-                        frame,
-                        instance,
-                        key,
-                        &this.record_settings,
-                    ))
+                    Some(this.make(world, p, n, Some(px.hit.instance), key))
                 })
                 .collect();
             for r in new {
-                match r.and_then(|r| self.insert(r)) {
-                    Ok(()) => self.counters.created += 1,
+                match r.and_then(|m| {
+                    self.counters.holes += m.holes as u64;
+                    self.admit(m.slot)
+                }) {
+                    Ok(_) => self.counters.created += 1,
                     Err(_) => self.counters.failed += 1,
                 }
             }
         }
     }
 
-    /// Step 3: Eq. 1 with Eq. 4 at every pixel, times ρ/π.
+    /// Step 3: Eq. 1 with Eq. 17 at every pixel, times ρ/π; counts each record's uses.
     fn shade(&self, gbuffer: &GBuffer) -> RgbImage {
         let w = gbuffer.width.max(1) as usize;
         let mut img = RgbImage::filled(gbuffer.width, gbuffer.height, Rgb::ZERO);
         let accuracy = self.settings.accuracy;
+        let frame = self.frame;
+        for u in &self.uses {
+            u.store(0, Ordering::Relaxed);
+        }
         img.pixels_mut()
             .par_chunks_mut(w)
             .zip(gbuffer.pixels.par_chunks(w))
@@ -278,10 +552,11 @@ impl RadianceCache {
                     };
                     let mut sum = WeightedSum::default();
                     self.octree.for_each_containing(p, |id| {
-                        if let Some(r) = &self.records[id as usize] {
-                            let error = r.ward_error(p, n);
+                        if let Some(s) = &self.slots[id as usize] {
+                            let error = s.record.ward_error(p, n);
                             if usable(error, accuracy) {
-                                sum.add(1.0 / error, r.contribution(p, n));
+                                sum.add(1.0 / error, contribution(&s.record, p, n, frame));
+                                self.uses[id as usize].fetch_add(1, Ordering::Relaxed);
                             }
                         }
                     });
@@ -292,6 +567,117 @@ impl RadianceCache {
             });
         img
     }
+
+    /// One frame: expiry (or the plan's admissions), placement, shading.
+    fn frame_step(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
+        let t0 = Instant::now();
+        let before = self.octree.len() as u64;
+        let keep_total = (
+            self.counters.created_total,
+            self.counters.replaced_total,
+            self.counters.deleted_total,
+            self.counters.lifespan_sum,
+            self.counters.lifespan_count,
+        );
+        self.counters = FrameCounters {
+            created_total: keep_total.0,
+            replaced_total: keep_total.1,
+            deleted_total: keep_total.2,
+            lifespan_sum: keep_total.3,
+            lifespan_count: keep_total.4,
+            ..FrameCounters::default()
+        };
+        if self.plan.is_some() && self.frame as usize >= self.timeline.len() {
+            // Past the planned frames: online from here.
+            self.plan = None;
+        }
+        self.prepare_next(world);
+        self.expire(world);
+        self.counters.reused = before - self.counters.expired;
+        self.admit_planned();
+        let t1 = Instant::now();
+        self.place(world, gbuffer);
+        let c = &mut self.counters;
+        c.created_total += c.created;
+        c.replaced_total += c.replaced;
+        c.deleted_total += c.deleted;
+        let t2 = Instant::now();
+        let img = self.shade(gbuffer);
+        self.counters.record_ms = (t1 - t0).as_secs_f64() * 1e3;
+        self.counters.place_ms = (t2 - t1).as_secs_f64() * 1e3;
+        self.counters.shade_ms = t2.elapsed().as_secs_f64() * 1e3;
+        self.frame += 1;
+        img
+    }
+
+    /// Drops the cache (records, octree, frame count, pending expiries), keeping the
+    /// plan and the history.
+    fn clear_cache(&mut self) {
+        self.slots.clear();
+        self.uses.clear();
+        self.free.clear();
+        self.octree = Octree::new();
+        self.frame = 0;
+        self.next_world = None;
+        self.expire_all = false;
+        self.expire_instances.clear();
+        self.counters = FrameCounters::default();
+    }
+
+    /// Pass 1 of `interpolated` over the timeline on a private world (see the module
+    /// docs), then the interpolated gradients (Eq. 21–23) and the plan.
+    fn plan_timeline(
+        &mut self,
+        world: &World,
+        progress: &mut dyn Progress,
+    ) -> Result<(), RadianceCacheError> {
+        let times = self.timeline.times().to_vec();
+        let (w, h) = (self.timeline.width(), self.timeline.height());
+        progress.begin(
+            "radiance_cache pass 1 (records of the whole timeline)",
+            times.len() as u64,
+        );
+        self.clear_cache();
+        self.history.clear();
+        self.recording = true;
+        let mut private = world.at_time(times[0]);
+        for (i, &t) in times.iter().enumerate() {
+            if i > 0 {
+                private.set_time(t);
+            }
+            let gbuffer = GBuffer::rasterize(&private, w, h);
+            self.frame_step(&private, &gbuffer);
+            progress.set(i as u64 + 1);
+        }
+        self.recording = false;
+        progress.end();
+        // Eq. 21–23: each replaced record moves towards its replacement.
+        for k in 0..self.history.len() {
+            if let Some(l) = self.history[k].successor {
+                let (rk, rl) = (
+                    &self.history[k].slot.record,
+                    &self.history[l as usize].slot.record,
+                );
+                if let Ok(g) = interpolated_gradient(&rk.value, rk.frame, &rl.value, rl.frame) {
+                    self.history[k].slot.record.temporal_gradient = g;
+                }
+            }
+        }
+        let mut plan = vec![Vec::new(); times.len()];
+        for (i, p) in self.history.iter().enumerate() {
+            if let Some(at) = plan.get_mut(p.slot.record.frame as usize) {
+                at.push(i as u32);
+            }
+        }
+        let planned = self.history.len();
+        self.clear_cache();
+        self.plan = Some(plan);
+        progress.message(&format!(
+            "radiance_cache: pass 1 made {planned} records over {} frames",
+            times.len()
+        ));
+        Ok(())
+    }
 }
 
 impl Technique for RadianceCache {
@@ -299,7 +685,40 @@ impl Technique for RadianceCache {
         NAME
     }
 
-    fn scene_changed(&mut self, _world: &World, changes: &[SceneChange]) -> ChangeResponse {
+    fn precompute(
+        &mut self,
+        world: &World,
+        progress: &mut dyn Progress,
+    ) -> Result<(), TechniqueError> {
+        if self.settings.temporal == TemporalMode::Interpolated {
+            self.plan_timeline(world, progress)?;
+        }
+        Ok(())
+    }
+
+    fn scene_changed(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        // On the timeline: the frame about to be rendered is the timeline's, in time and
+        // in everything records depend on. τ and the lifespans handle such changes.
+        let on_timeline = self.temporal()
+            && self
+                .timeline
+                .times()
+                .get(self.frame as usize)
+                .is_some_and(|&t| {
+                    t == world.scene.time
+                        && same_lighting(&self.timeline.scene_at_time(t), &world.scene)
+                });
+        if on_timeline {
+            return ChangeResponse::Updated;
+        }
+        if changes
+            .iter()
+            .any(|c| !matches!(c, SceneChange::CameraMoved { .. }))
+        {
+            // Pass 2's plan assumed the timeline: online from here.
+            self.plan = None;
+            self.next_world = None;
+        }
         if !self.settings.expire_on_surprise {
             return ChangeResponse::Updated;
         }
@@ -320,36 +739,44 @@ impl Technique for RadianceCache {
     fn advance(&mut self, _world: &World, _budget: &Budget) {}
 
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
-        let t0 = Instant::now();
-        let before = self.octree.len() as u64;
-        self.counters.created = 0;
-        self.counters.failed = 0;
-        self.expire();
-        self.counters.reused = before - self.counters.expired;
-        self.place(world, gbuffer);
-        self.counters.created_total += self.counters.created;
-        let t1 = Instant::now();
-        let img = self.shade(gbuffer);
-        self.counters.place_ms = (t1 - t0).as_secs_f64() * 1e3;
-        self.counters.shade_ms = t1.elapsed().as_secs_f64() * 1e3;
-        self.frame += 1;
-        img
+        self.frame_step(world, gbuffer)
     }
 
     fn stats(&self) -> Counters {
         let c = &self.counters;
         let mut out = Counters::new();
-        let memory = self.records.capacity() * std::mem::size_of::<Option<IrradianceRecord>>()
+        let memory = self.slots.capacity() * std::mem::size_of::<Option<Slot>>()
+            + self
+                .slots
+                .iter()
+                .flatten()
+                .map(|s| s.seen.capacity() * 4)
+                .sum::<usize>()
             + self.octree.node_count() * 128
             + self.octree.len() * 16;
+        let mean_lifespan = if c.lifespan_count > 0 {
+            c.lifespan_sum as f64 / c.lifespan_count as f64
+        } else {
+            0.0
+        };
         for (name, x) in [
             ("records_alive", self.octree.len() as f64),
             ("records_created", c.created as f64),
+            ("records_replaced", c.replaced as f64),
+            ("records_deleted", c.deleted as f64),
+            ("records_admitted", c.admitted as f64),
             ("records_reused", c.reused as f64),
             ("records_expired", c.expired as f64),
+            ("records_surprise_expired", c.surprise_expired as f64),
             ("records_failed", c.failed as f64),
             ("records_created_total", c.created_total as f64),
+            ("records_replaced_total", c.replaced_total as f64),
+            ("records_deleted_total", c.deleted_total as f64),
+            ("records_planned", self.history.len() as f64),
+            ("mean_lifespan_frames", mean_lifespan),
+            ("reprojection_holes", c.holes as f64),
             ("memory_bytes", memory as f64),
+            ("expire_ms", c.record_ms),
             ("place_ms", c.place_ms),
             ("shade_ms", c.shade_ms),
         ] {
@@ -359,12 +786,6 @@ impl Technique for RadianceCache {
     }
 
     fn reset(&mut self) {
-        self.records.clear();
-        self.free.clear();
-        self.octree = Octree::new();
-        self.frame = 0;
-        self.expire_all = false;
-        self.expire_instances.clear();
-        self.counters = FrameCounters::default();
+        self.clear_cache();
     }
 }

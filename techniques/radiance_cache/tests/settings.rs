@@ -10,7 +10,7 @@ fn defaults_are_the_papers_values() {
     assert_eq!(s.temporal_accuracy, 0.05);
     assert_eq!(s.max_age_frames, 20);
     assert_eq!((s.theta_strata, s.phi_strata), (64, 64));
-    assert_eq!(s.temporal, TemporalMode::Reuse); // interpolated: with the reprojection
+    assert_eq!(s.temporal, TemporalMode::Interpolated);
     s.validate().unwrap();
 }
 
@@ -50,6 +50,7 @@ fn invalid_settings_name_their_field() {
         (|s| s.traced_roughness_max = -0.1, "traced_roughness_max"),
         (|s| s.hole_fill_max_passes = 0, "hole_fill_max_passes"),
         (|s| s.max_depth = 0, "max_depth"),
+        (|s| s.neighbour_aging = true, "neighbour_aging"),
     ];
     for (edit, field) in cases {
         let mut s = RadianceCacheSettings::default();
@@ -57,6 +58,38 @@ fn invalid_settings_name_their_field() {
         let want = format!("radiance_cache.{field}:");
         let e = s.validate().expect_err(&want).to_string();
         assert!(e.starts_with(&want), "{e} should start with {want}");
+    }
+}
+
+#[test]
+fn real_time_pacing_refuses_the_modes_that_need_the_timeline() {
+    use illume_transport::{Pacing, TechniqueSettings};
+    for (mode, refused) in [
+        (TemporalMode::PerFrame, false),
+        (TemporalMode::Reuse, false),
+        (TemporalMode::Extrapolated, true),
+        (TemporalMode::Interpolated, true),
+    ] {
+        let mut s = RadianceCacheSettings {
+            temporal: mode,
+            ..RadianceCacheSettings::default()
+        };
+        s.pace(Pacing::RealTime);
+        match s.validate() {
+            Err(e) if refused => {
+                let e = e.to_string();
+                assert!(
+                    e.starts_with("radiance_cache.temporal:") && e.contains("--realtime"),
+                    "{e}"
+                );
+            }
+            Ok(()) if !refused => {}
+            other => panic!("{mode:?}: {other:?}"),
+        }
+        s.pace(Pacing::FixedWork {
+            work_per_frame: None,
+        });
+        s.validate().unwrap();
     }
 }
 
