@@ -74,6 +74,7 @@
 pub mod error;
 pub mod hsh;
 pub mod octree;
+pub mod radiance;
 pub mod record;
 pub mod reproject;
 pub mod settings;

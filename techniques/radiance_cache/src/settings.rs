@@ -118,6 +118,12 @@ pub struct RadianceCacheSettings {
     /// (relative L²) for views up to 45° off the normal, for a white metal (the
     /// sharpest lobe at a roughness; tested in `tests/hsh.rs`).
     pub traced_roughness_max: f32,
+    /// Rays per pixel for the specular part of glossy surfaces smoother than
+    /// `traced_roughness_max` (drawn from the BRDF, each bringing back `continue_path`'s
+    /// reflected light; the same random numbers for a pixel in every frame, so a still
+    /// scene does not flicker). Higher: less noise in sharp glossy reflections, at a cost
+    /// linear in it (one path per ray). 1–4096, default 16.
+    pub traced_rays: u32,
     /// Largest number of 3×3 averaging passes that fill the holes of a reprojected
     /// next-frame grid (§4.3, Fig. 8); cells still empty after them take the grid's mean.
     /// Higher: holes filled from nearer cells only, at a cost per pass. 1–4096,
@@ -216,6 +222,7 @@ impl RadianceCacheSettings {
             glossy_roughness_max: 1.0,
             hsh_order: 8,
             traced_roughness_max: 0.5,
+            traced_rays: 16,
             hole_fill_max_passes: 64,
             replace_only_on_surface: true,
             reuse_directions: true,
@@ -380,6 +387,12 @@ impl RadianceCacheSettings {
                     "{} is not in [0, glossy_roughness_max = {}]",
                     self.traced_roughness_max, self.glossy_roughness_max
                 ),
+            );
+        }
+        if !(1..=4096).contains(&self.traced_rays) {
+            return bad(
+                "traced_rays",
+                format!("{} is not in 1..=4096", self.traced_rays),
             );
         }
         if !(1..=4096).contains(&self.hole_fill_max_passes) {

@@ -45,13 +45,18 @@
 //! expire nothing (records are world-space). Changes on the timeline are what τ and
 //! the lifespans are for, and expire nothing.
 //!
-//! **Glossy surfaces are shaded Lambertian for now** (ρ = base colour, irradiance
-//! records only): radiance records (hemispherical harmonics, [`crate::hsh`]) are to come.
+//! **Glossy surfaces** ([`crate::radiance`]): the BRDF's Lambertian part ρ_d/π·E comes
+//! from irradiance records; the specular part from radiance records (hemispherical
+//! harmonics; a record made at a glossy pixel carries both, from one gather, and its
+//! replacements too) where the roughness is at least `traced_roughness_max`, from
+//! `traced_rays` rays per pixel below it. Surfaces rougher than `glossy_roughness_max`
+//! are shaded Lambertian with the BRDF's approximate albedo.
 //!
 //! **Budget.** All records a frame needs are computed in [`Technique::indirect`] (the
 //! G-buffer says where); [`Budget`] is not honoured and `advance` does nothing.
 
 use crate::octree::Octree;
+use crate::radiance::{GlossyShading, RadianceData, diffuse_albedo};
 use crate::record::{IrradianceRecord, RecordSettings, WeightedSum, usable};
 use crate::reproject::reproject;
 use crate::settings::{RadianceCacheSettings, TemporalMode};
@@ -62,8 +67,9 @@ use crate::{HemisphereGather, NAME, RadianceCacheError};
 use illume_core::image::RgbImage;
 use illume_core::progress::Progress;
 use illume_core::sampling::mix64;
-use illume_core::{Counters, INV_PI, Ray, Rgb, Vec3};
+use illume_core::{Counters, Frame, INV_PI, Ray, Rgb, Vec3};
 use illume_scene::{InstanceId, Scene, SceneChange, Timeline};
+use illume_transport::metal_rough::{DIELECTRIC_F0, MetalRough};
 use illume_transport::{
     Budget, ChangeResponse, GBuffer, GBufferPixel, Technique, TechniqueError, World,
 };
@@ -106,6 +112,9 @@ struct Slot {
     seen: Vec<InstanceId>,
     /// Its entry in the pass-1 history (`interpolated`), if recorded.
     history: Option<u32>,
+    /// Incoming radiance in hemispherical harmonics (a radiance record, made where a
+    /// glossy surface needed one), in the frame `Frame::from_normal(record.normal)`.
+    radiance: Option<Box<RadianceData>>,
 }
 
 /// A record made by pass 1 of `interpolated`, and the one that replaced it.
@@ -149,6 +158,21 @@ pub struct RadianceCache {
     /// Instances whose records (on them, or whose rays hit them) a surprise expired.
     expire_instances: Vec<InstanceId>,
     counters: FrameCounters,
+    glossy: GlossyShading,
+}
+
+/// How a pixel's surface is shaded (see the module docs).
+#[derive(Clone, Copy, Debug)]
+enum Surface {
+    /// ρ/π·E only: Lambertian, or rougher than `glossy_roughness_max` (ρ the BRDF's
+    /// approximate albedo).
+    Diffuse(Rgb),
+    /// ρ_d/π·E plus the specular part, from radiance records (`traced` false) or rays.
+    Glossy {
+        diffuse: Rgb,
+        brdf: MetalRough,
+        traced: bool,
+    },
 }
 
 /// The shading point and normal of a pixel, or `None` where nothing reflects: the normal
@@ -164,6 +188,14 @@ fn shading_point(p: &GBufferPixel) -> Option<(Vec3, Vec3)> {
         -hit.shading_normal
     };
     Some((hit.position, n))
+}
+
+/// The albedo a non-Lambertian surface shaded as Lambertian gets: ρ_d plus the
+/// specular lobe's normal-incidence reflectance, (1 − m)·F0 + m·base.
+fn lambertian_albedo(brdf: &MetalRough) -> Rgb {
+    diffuse_albedo(brdf)
+        + Rgb::splat((1.0 - brdf.metallic) * DIELECTRIC_F0)
+        + brdf.base_color * brdf.metallic
 }
 
 /// True when the parts of `a` that records depend on (instances, lights, materials,
@@ -186,6 +218,7 @@ impl RadianceCache {
         settings: RadianceCacheSettings,
     ) -> Result<Self, RadianceCacheError> {
         settings.validate()?;
+        let settings_order = settings.hsh_order as usize;
         let bounds = world.scene.bounds();
         let diagonal = (bounds.max - bounds.min).length();
         let diagonal = if diagonal.is_finite() && diagonal > 0.0 {
@@ -209,6 +242,7 @@ impl RadianceCache {
             expire_all: false,
             expire_instances: Vec::new(),
             counters: FrameCounters::default(),
+            glossy: GlossyShading::new(settings_order)?,
         })
     }
 
@@ -240,6 +274,27 @@ impl RadianceCache {
             .iter()
             .flatten()
             .map(|s| (&s.record, s.seen.as_slice()))
+    }
+
+    /// How the surface of `hit` is shaded.
+    fn surface(&self, hit: &illume_transport::SurfaceHit) -> Surface {
+        let brdf = hit.brdf();
+        if brdf.is_lambertian() {
+            return Surface::Diffuse(brdf.base_color);
+        }
+        if brdf.roughness > self.settings.glossy_roughness_max {
+            return Surface::Diffuse(lambertian_albedo(&brdf));
+        }
+        Surface::Glossy {
+            diffuse: diffuse_albedo(&brdf),
+            brdf,
+            traced: brdf.roughness < self.settings.traced_roughness_max,
+        }
+    }
+
+    /// True when the pixel's surface needs radiance records.
+    fn needs_radiance(&self, hit: &illume_transport::SurfaceHit) -> bool {
+        matches!(self.surface(hit), Surface::Glossy { traced: false, .. })
     }
 
     fn temporal(&self) -> bool {
@@ -315,6 +370,7 @@ impl RadianceCache {
         n: Vec3,
         instance: Option<InstanceId>,
         key: u64,
+        glossy: bool,
     ) -> Result<Made, RadianceCacheError> {
         let rs = &self.record_settings;
         let (gather, paths) = HemisphereGather::trace_keeping_paths(world, p, n, key, rs)?;
@@ -327,6 +383,7 @@ impl RadianceCache {
         seen.dedup();
         let mut holes = 0;
         let s = &self.settings;
+        let mut radiance = glossy.then(|| Box::new(self.glossy.project(&gather, rs.r_min_m)));
         record.lifespan_frames = match (s.temporal, &self.next_world) {
             (TemporalMode::PerFrame, _) => 1,
             (_, Some((_, next, true))) => {
@@ -336,6 +393,15 @@ impl RadianceCache {
                     IrradianceRecord::from_gather(p, &r.gather, self.frame + 1, instance, rs).value;
                 if s.temporal != TemporalMode::Reuse {
                     record.temporal_gradient = next_value - record.value;
+                    if let Some(data) = &mut radiance {
+                        let next = self.glossy.project(&r.gather, rs.r_min_m);
+                        data.temporal_gradient = next
+                            .coefficients
+                            .iter()
+                            .zip(&data.coefficients)
+                            .map(|(a, b)| *a - *b)
+                            .collect();
+                    }
                 }
                 let change = change_rate(record.value.irradiance, next_value.irradiance);
                 lifespan_frames(change, s.temporal_accuracy, s.max_age_frames)
@@ -349,6 +415,7 @@ impl RadianceCache {
                 key,
                 seen,
                 history: None,
+                radiance,
             },
             holes,
         })
@@ -419,7 +486,8 @@ impl RadianceCache {
                         mix64(slot.key ^ ((frame as u64) << 40))
                     };
                     let r = &slot.record;
-                    this.make(world, r.position, r.normal, r.instance, key)
+                    let glossy = slot.radiance.is_some();
+                    this.make(world, r.position, r.normal, r.instance, key, glossy)
                         .map(Some)
                 };
                 (id, result)
@@ -478,18 +546,19 @@ impl RadianceCache {
         }
     }
 
-    /// True when a record of the cache is usable at `p` with normal `n` (Eq. 3).
-    fn covered(&self, p: Vec3, n: Vec3) -> bool {
-        let mut found = false;
+    /// True when a record of the cache is usable at `p` with normal `n` (Eq. 3), and,
+    /// with `radiance`, a radiance record too.
+    fn covered(&self, p: Vec3, n: Vec3, radiance: bool) -> bool {
+        let (mut any, mut with_radiance) = (false, false);
         self.octree.for_each_containing(p, |id| {
-            if !found
-                && let Some(s) = &self.slots[id as usize]
+            if let Some(s) = &self.slots[id as usize]
                 && usable(s.record.ward_error(p, n), self.settings.accuracy)
             {
-                found = true;
+                any = true;
+                with_radiance |= s.radiance.is_some();
             }
         });
-        found
+        any && (with_radiance || !radiance)
     }
 
     /// Step 2: coarse-to-fine placement over `gbuffer`.
@@ -513,11 +582,12 @@ impl RadianceCache {
                 .filter_map(|&(x, y)| {
                     let px = gbuffer.get(x, y)?;
                     let (p, n) = shading_point(px)?;
-                    if this.covered(p, n) {
+                    let glossy = this.needs_radiance(&px.hit);
+                    if this.covered(p, n, glossy) {
                         return None;
                     }
                     let key = ((frame as u64) << 32) | (y as u64 * w as u64 + x as u64);
-                    Some(this.make(world, p, n, Some(px.hit.instance), key))
+                    Some(this.make(world, p, n, Some(px.hit.instance), key, glossy))
                 })
                 .collect();
             for r in new {
@@ -532,8 +602,9 @@ impl RadianceCache {
         }
     }
 
-    /// Step 3: Eq. 1 with Eq. 17 at every pixel, times ρ/π; counts each record's uses.
-    fn shade(&self, gbuffer: &GBuffer) -> RgbImage {
+    /// Step 3: Eq. 1 with Eq. 17 at every pixel, times ρ/π, plus the specular part of
+    /// glossy pixels; counts each record's uses.
+    fn shade(&self, world: &World, gbuffer: &GBuffer) -> RgbImage {
         let w = gbuffer.width.max(1) as usize;
         let mut img = RgbImage::filled(gbuffer.width, gbuffer.height, Rgb::ZERO);
         let accuracy = self.settings.accuracy;
@@ -544,12 +615,14 @@ impl RadianceCache {
         img.pixels_mut()
             .par_chunks_mut(w)
             .zip(gbuffer.pixels.par_chunks(w))
-            .for_each(|(row, px)| {
-                for (out, p) in row.iter_mut().zip(px) {
+            .enumerate()
+            .for_each(|(y, (row, px))| {
+                for (x, (out, p)) in row.iter_mut().zip(px).enumerate() {
                     let Some(px) = p else { continue };
                     let Some((p, n)) = shading_point(px) else {
                         continue;
                     };
+                    let surface = self.surface(&px.hit);
                     let mut sum = WeightedSum::default();
                     self.octree.for_each_containing(p, |id| {
                         if let Some(s) = &self.slots[id as usize] {
@@ -560,12 +633,89 @@ impl RadianceCache {
                             }
                         }
                     });
-                    if let Some(e) = sum.result() {
-                        *out = px.hit.albedo * INV_PI * e;
-                    }
+                    let e = sum.result().unwrap_or(Rgb::ZERO);
+                    *out = match surface {
+                        Surface::Diffuse(rho) => rho * INV_PI * e,
+                        Surface::Glossy {
+                            diffuse,
+                            brdf,
+                            traced,
+                        } => {
+                            let specular = if traced {
+                                let key = (y * w + x) as u64;
+                                GlossyShading::traced(
+                                    world,
+                                    p,
+                                    n,
+                                    &brdf,
+                                    px.to_camera,
+                                    self.settings.traced_rays,
+                                    self.settings.seed,
+                                    key,
+                                    &self.record_settings.path,
+                                )
+                            } else {
+                                self.specular_from_records(p, n, &brdf, px.to_camera, frame)
+                            };
+                            diffuse * INV_PI * e + specular
+                        }
+                    };
                 }
             });
         img
+    }
+
+    /// The specular part at `p` (normal `n`, view `wo`) from the usable radiance
+    /// records: their coefficients moved to `p` (translation and temporal gradients),
+    /// rotated into the point's frame, averaged with Ward's weights, shaded with f_s's
+    /// BRDF×cos coefficients. Black where no radiance record is usable.
+    fn specular_from_records(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        brdf: &MetalRough,
+        wo: Vec3,
+        frame: u32,
+    ) -> Rgb {
+        let to = Frame::from_normal(n);
+        let len = self.glossy.basis().len();
+        let mut acc = vec![Rgb::ZERO; len];
+        let mut total = 0.0f32;
+        let mut moved = vec![Rgb::ZERO; len];
+        self.octree.for_each_containing(p, |id| {
+            let Some(s) = &self.slots[id as usize] else {
+                return;
+            };
+            let Some(data) = &s.radiance else { return };
+            let error = s.record.ward_error(p, n);
+            if !usable(error, self.settings.accuracy) {
+                return;
+            }
+            let offset = p - s.record.position;
+            let dt = frame as f32 - s.record.frame as f32;
+            for (((m, c), g), t) in moved
+                .iter_mut()
+                .zip(&data.coefficients)
+                .zip(&data.translation_gradient)
+                .zip(&data.temporal_gradient)
+            {
+                *m = *c + g.dot(offset) + *t * dt;
+            }
+            let from = Frame::from_normal(s.record.normal);
+            let rotated = self.glossy.rotate(&moved, &from, &to);
+            let weight = 1.0 / error.max(1e-6);
+            for (a, r) in acc.iter_mut().zip(&rotated) {
+                *a += *r * weight;
+            }
+            total += weight;
+        });
+        if total <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let b = self
+            .glossy
+            .specular_coefficients_tabulated(brdf, to.to_local(wo));
+        (crate::hsh::shade(&b, &acc) * (1.0 / total)).max(Rgb::ZERO)
     }
 
     /// One frame: expiry (or the plan's admissions), placement, shading.
@@ -602,7 +752,7 @@ impl RadianceCache {
         c.replaced_total += c.replaced;
         c.deleted_total += c.deleted;
         let t2 = Instant::now();
-        let img = self.shade(gbuffer);
+        let img = self.shade(world, gbuffer);
         self.counters.record_ms = (t1 - t0).as_secs_f64() * 1e3;
         self.counters.place_ms = (t2 - t1).as_secs_f64() * 1e3;
         self.counters.shade_ms = t2.elapsed().as_secs_f64() * 1e3;
@@ -658,8 +808,23 @@ impl RadianceCache {
                     &self.history[k].slot.record,
                     &self.history[l as usize].slot.record,
                 );
+                let span = rl.frame.saturating_sub(rk.frame);
                 if let Ok(g) = interpolated_gradient(&rk.value, rk.frame, &rl.value, rl.frame) {
                     self.history[k].slot.record.temporal_gradient = g;
+                }
+                let next = self.history[l as usize]
+                    .slot
+                    .radiance
+                    .as_ref()
+                    .map(|d| d.coefficients.clone());
+                if let (Some(next), Some(data), true) =
+                    (next, self.history[k].slot.radiance.as_mut(), span > 0)
+                {
+                    data.temporal_gradient = next
+                        .iter()
+                        .zip(&data.coefficients)
+                        .map(|(a, b)| (*a - *b) * (1.0 / span as f32))
+                        .collect();
                 }
             }
         }

@@ -49,6 +49,7 @@ fn invalid_settings_name_their_field() {
         ),
         (|s| s.traced_roughness_max = -0.1, "traced_roughness_max"),
         (|s| s.hole_fill_max_passes = 0, "hole_fill_max_passes"),
+        (|s| s.traced_rays = 0, "traced_rays"),
         (|s| s.max_depth = 0, "max_depth"),
         (|s| s.neighbour_aging = true, "neighbour_aging"),
     ];
