@@ -9,7 +9,9 @@
 //!   ceiling (the photon-streaming paper's Figure 11); `move_sphere` and `move_light`
 //!   play each motion alone.
 //! * `cube-in-box` — a closed white box with an orange cube travelling a square path on
-//!   the floor (0–4 s), lit by a point light (temporal radiance caching's first test).
+//!   the floor (animation `move`, 0–4 s), lit by a point light (temporal radiance
+//!   caching's Cube in a Box); `move_light` (0–4 s) leaves the cube at its start and
+//!   moves the light along a square below the ceiling (its Moving Light).
 //!
 //! [`SceneBuilder`] is the same construction kit the loaders use.
 
@@ -614,6 +616,23 @@ fn cube_in_box() -> Scene {
             cube_node,
             &[0.0, 1.0, 2.0, 3.0, 4.0],
             &path,
+        )],
+        properties: Vec::new(),
+    });
+    // The paper's second row ("Moving Light"): the cube rests, the light travels.
+    let light_path = [
+        Vec3::new(0.0, 1.8, -0.2),
+        Vec3::new(0.6, 1.6, -0.5),
+        Vec3::new(0.6, 1.6, 0.4),
+        Vec3::new(-0.6, 1.6, 0.4),
+        Vec3::new(0.0, 1.8, -0.2),
+    ];
+    b.animation(Animation {
+        name: "move_light".into(),
+        channels: vec![linear_translation(
+            light,
+            &[0.0, 1.0, 2.0, 3.0, 4.0],
+            &light_path,
         )],
         properties: Vec::new(),
     });
