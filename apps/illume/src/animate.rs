@@ -232,18 +232,29 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     } else {
         a.fps
     })?;
+    // A precompute (radiance caching's pass 1, …) is work for these frames: the headline
+    // rate counts it.
+    let precompute_s = precompute_ms / 1e3;
     eprintln!(
-        "{} frames of {}×{} with {} in {wall:.2} s{}: {:.2} frames per second (rendering alone {:.2} fps)",
+        "{} frames of {}×{} with {} in {wall:.2} s{}: {:.2} frames per second{} (rendering alone {:.2} fps)",
         index,
         w,
         h,
         config.technique,
         if precompute_ms > 0.0 {
-            format!(" after {:.2} s of precompute", precompute_ms / 1e3)
+            format!(" after {precompute_s:.2} s of precompute")
         } else {
             String::new()
         },
-        index as f64 / wall,
+        index as f64 / (wall + precompute_s),
+        if precompute_ms > 0.0 {
+            format!(
+                " with the precompute, {:.2} without",
+                index as f64 / wall
+            )
+        } else {
+            String::new()
+        },
         index as f64 / render_s
     );
     eprintln!(

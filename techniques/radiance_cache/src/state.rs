@@ -381,6 +381,7 @@ impl RadianceCache {
             .collect();
         seen.sort_unstable();
         seen.dedup();
+        seen.shrink_to_fit();
         let mut holes = 0;
         let s = &self.settings;
         let mut radiance = glossy.then(|| Box::new(self.glossy.project(&gather, rs.r_min_m)));
