@@ -248,10 +248,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         },
         index as f64 / (wall + precompute_s),
         if precompute_ms > 0.0 {
-            format!(
-                " with the precompute, {:.2} without",
-                index as f64 / wall
-            )
+            format!(" with the precompute, {:.2} without", index as f64 / wall)
         } else {
             String::new()
         },

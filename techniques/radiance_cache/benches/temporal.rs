@@ -72,7 +72,9 @@ fn fig10() {
             continue;
         }
         used += 1;
-        let next = reproject(&worlds[0], &worlds[1], p, &g, &paths, &s, 64).gather.irradiance();
+        let next = reproject(&worlds[0], &worlds[1], p, &g, &paths, &s, 64)
+            .gather
+            .irradiance();
         let truth: Vec<Rgb> = worlds
             .iter()
             .map(|w| {
@@ -86,7 +88,8 @@ fn fig10() {
             let dt = t as f32;
             kept[t] += relative_error(e0, truth[t]);
             extrapolated[t] += relative_error(e0 + (next - e0) * dt, truth[t]);
-            interpolated[t] += relative_error(e0 + (last - e0) * (dt / (frames - 1) as f32), truth[t]);
+            interpolated[t] +=
+                relative_error(e0 + (last - e0) * (dt / (frames - 1) as f32), truth[t]);
         }
     }
     println!(
@@ -138,7 +141,9 @@ fn costs() {
 fn deletion() {
     let (w, h) = (160u32, 120u32);
     let times: Vec<f64> = (0..100).map(|i| i as f64 / FPS).collect();
-    println!("deletion: builtin:cube-in-box, {w}×{h}, 100 frames at 100 fps, extrapolated, 64×64 rays");
+    println!(
+        "deletion: builtin:cube-in-box, {w}×{h}, 100 frames at 100 fps, extrapolated, 64×64 rays"
+    );
     println!("| deletion | time s | records computed | alive at the end | memory MB | deleted |");
     println!("|---|---:|---:|---:|---:|---:|");
     for deletion in [true, false] {

@@ -294,6 +294,28 @@ pub fn cases() -> Vec<Case> {
         .runs_replaced("builtin:furnace", "{dir}/x.fbx")
         .file("x.fbx", "Kaydara FBX Binary"),
         animate("animate_fps_nan", &["--fps", "nan"], error(&["--fps"])),
+        // Radiance caching's default mode plans the whole timeline: real-time frames
+        // come at times not known in advance.
+        animate(
+            "radiance_cache_interpolated_realtime",
+            &["--technique", "radiance_cache", "--realtime"],
+            error(&["radiance_cache.temporal", "--realtime"]),
+        ),
+        animate(
+            "radiance_cache_reuse_realtime",
+            &[
+                "--technique",
+                "radiance_cache",
+                "--realtime",
+                "--set",
+                "radiance_cache.temporal=reuse",
+                "--set",
+                "radiance_cache.theta_strata=4",
+                "--set",
+                "radiance_cache.phi_strata=4",
+            ],
+            Expect::Success,
+        ),
         animate("animate_fps_negative", &["--fps", "-5"], error(&["--fps"])),
         animate(
             "animate_duration_negative",
