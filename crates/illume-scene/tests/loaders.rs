@@ -1026,6 +1026,54 @@ fn gltf_bad_json_extension_accessor_and_mode() {
 }
 
 #[test]
+fn gltf_unsupported_extensions_are_warnings_naming_material_and_effect() {
+    let (dir, doc) = cube_copy("gltf_unsupported_ext");
+    let mut d = doc.clone();
+    d["materials"][0]["extensions"] = json!({
+        "KHR_materials_transmission": {"transmissionFactor": 1.0},
+        "KHR_materials_clearcoat": {"clearcoatFactor": 1.0}
+    });
+    d["extensionsUsed"] = json!([
+        "KHR_materials_transmission",
+        "KHR_materials_clearcoat",
+        "EXT_mesh_gpu_instancing"
+    ]);
+    let s = load_scene(&write_json(&dir, "ext.gltf", &d)).unwrap();
+    let name = doc["materials"][0]["name"].as_str().unwrap_or("material 0");
+    let find = |what: &[&str]| {
+        s.warnings
+            .iter()
+            .filter(|w| what.iter().all(|x| w.contains(x)))
+            .count()
+    };
+    assert_eq!(
+        find(&["KHR_materials_transmission", "opaque", name]),
+        1,
+        "{:?}",
+        s.warnings
+    );
+    assert_eq!(
+        find(&["KHR_materials_clearcoat", "clear coat", name]),
+        1,
+        "{:?}",
+        s.warnings
+    );
+    assert_eq!(
+        find(&["EXT_mesh_gpu_instancing", "not supported"]),
+        1,
+        "{:?}",
+        s.warnings
+    );
+    // The same file without them has none of these warnings.
+    let s = load_scene(&write_json(&dir, "plain.gltf", &doc)).unwrap();
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("extension")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
 fn obj_phong_materials_map_onto_metallic_roughness() {
     let s = load_scene(&scenes_dir().join("cornell_box/CornellBox-Sphere.obj")).unwrap();
     let by = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap().clone();

@@ -52,6 +52,11 @@
 //!   `baseColorFactor`, `emissiveFactor`, `metallicFactor`, `roughnessFactor`
 //!   ([`PropertyChannel`]); other pointers are warnings.
 //!
+//! Material extensions illume does not read (`KHR_materials_transmission`, `_volume`,
+//! `_clearcoat`, `_sheen`, `_specular`, `_ior`, …) are one warning per material, naming
+//! the material and what it is rendered as instead; other `extensionsUsed` entries it
+//! does not read are one warning per file.
+//!
 //! Any `extensionsRequired` entry other than `KHR_lights_punctual`,
 //! `KHR_materials_emissive_strength` and `KHR_animation_pointer` is
 //! [`LoadError::Unsupported`], as is an `asset.version` other than 2.x. Non-finite
@@ -93,6 +98,30 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 4] = [
     "KHR_animation_pointer",
     "KHR_texture_transform",
 ];
+
+/// What a material looks like when the named extension, which illume does not read, is
+/// ignored (for the warning).
+fn unsupported_material_extension_effect(name: &str) -> &'static str {
+    match name {
+        "KHR_materials_transmission"
+        | "KHR_materials_volume"
+        | "KHR_materials_diffuse_transmission" => "rendered opaque (no light passes through)",
+        "KHR_materials_ior" => "the metallic-roughness model's IOR 1.5 (F0 = 0.04) is used",
+        "KHR_materials_clearcoat" => "rendered without its clear coat",
+        "KHR_materials_sheen" => "rendered without sheen",
+        "KHR_materials_specular" => {
+            "the specular layer follows metallic-roughness (F0 = 0.04, white)"
+        }
+        "KHR_materials_iridescence" => "rendered without iridescence",
+        "KHR_materials_anisotropy" => "rendered with isotropic roughness",
+        "KHR_materials_unlit" => "shaded as lit by the scene (not unlit)",
+        "KHR_materials_pbrSpecularGlossiness" => {
+            "its metallic-roughness values (or their defaults) are used"
+        }
+        "KHR_materials_dispersion" => "rendered without dispersion",
+        _ => "rendered from its core metallic-roughness values",
+    }
+}
 
 /// Largest number of values (elements × components) of an accessor *without* a buffer
 /// view (all zeros) accepted: guards memory against absurd counts. Accessors with data
@@ -323,6 +352,19 @@ pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
     let sky = sky_from_extras(path, root)?;
     let mut scene = ctx.convert()?;
     scene.sky = sky;
+    // Extensions used (not required) that illume does not read at all; material
+    // extensions are named per material by `convert`.
+    for ext in &root.extensions_used {
+        let read = SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str())
+            || ext.starts_with("KHR_materials_");
+        if !read {
+            scene.warnings.push(format!(
+                "{}: extension {} is not supported, ignored (the file says it can be read without it)",
+                path.display(),
+                excerpt(ext)
+            ));
+        }
+    }
     Ok(scene)
 }
 
@@ -1023,6 +1065,19 @@ impl Ctx<'_> {
                 }
                 None => (None, None, 1.0),
             };
+            // Material extensions illume does not read: one warning each, saying what the
+            // material is rendered as instead.
+            if let Some(ext) = &m.extensions {
+                let mut names: Vec<&String> = ext.others.keys().collect();
+                names.sort();
+                for name in names {
+                    self.warn(format!(
+                        "{user}: extension {} is not supported, ignored: {}",
+                        excerpt(name),
+                        unsupported_material_extension_effect(name)
+                    ));
+                }
+            }
             let alpha_cutoff = match m.alpha_mode {
                 Checked::Valid(json::material::AlphaMode::Opaque) => None,
                 Checked::Valid(json::material::AlphaMode::Mask) => {
