@@ -3,7 +3,6 @@
 
 use crate::frames::{Frame, FrameWriter};
 use crate::progress;
-use crate::render::load_scene;
 use crate::setup::ExposureMode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
@@ -99,12 +98,12 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         bail!("--fps must be positive, got {}", a.fps);
     }
     let (w, h) = (config.render.width, config.render.height);
-    let mut scene = load_scene(
+    let mut scene = crate::render::load_scene_with(
         &a.scene,
         a.animation.as_deref(),
         0.0,
         a.setup.spot_from_above,
-        a.setup.strict,
+        &a.setup.load_options(),
     )?;
     a.setup.place_camera(&mut scene)?;
     let animation_s = scene.animation_duration();

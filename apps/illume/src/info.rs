@@ -11,11 +11,18 @@ use std::path::PathBuf;
 pub struct InfoArgs {
     /// Scene file (.gltf, .glb, .obj, .ply) or builtin:NAME.
     pub scene: PathBuf,
+    /// How a glTF file's light intensities and emission are read (as in `render`).
+    #[arg(long, value_enum, default_value_t = crate::setup::Units::Radiometric)]
+    pub units: crate::setup::Units,
 }
 
 /// Runs `illume info`.
 pub fn run(a: InfoArgs) -> Result<()> {
-    let scene = crate::render::load_scene(&a.scene, None, 0.0, false, false)?;
+    let options = illume_scene::LoadOptions {
+        units: a.units.load(),
+        ..Default::default()
+    };
+    let scene = crate::render::load_scene_with(&a.scene, None, 0.0, false, &options)?;
     let b = scene.bounds();
     println!("scene        {}", scene.source);
     println!(
@@ -101,6 +108,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
     );
     let r = b.bounding_radius();
     println!("lights       {}", scene.lights.len());
+    println!("units        {}", a.units.describe());
     for l in &scene.lights {
         let p = l.power(r);
         let kind = match l.kind {

@@ -46,18 +46,18 @@ pub struct RenderArgs {
     pub seed: Option<u64>,
 }
 
-/// Loads a scene given on the command line (file or builtin:NAME), selects its
-/// animation and moves it to `time`, optionally relit by
-/// [`illume_scene::builtin::spot_from_above`]; prints load warnings.
-pub fn load_scene(
+/// Loads a scene given on the command line (file or builtin:NAME) with `options`
+/// (`--strict`, `--units`), selects its animation and moves it to `time`, optionally
+/// relit by [`illume_scene::builtin::spot_from_above`]; prints load warnings.
+pub fn load_scene_with(
     path: &Path,
     animation: Option<&str>,
     time: f64,
     spot_from_above: bool,
-    strict: bool,
+    options: &illume_scene::LoadOptions,
 ) -> Result<illume_scene::Scene> {
     let t0 = Instant::now();
-    let mut scene = illume_scene::load_scene_with(path, &illume_scene::LoadOptions { strict })?;
+    let mut scene = illume_scene::load_scene_with(path, options)?;
     if spot_from_above {
         scene = illume_scene::builtin::spot_from_above(scene);
     }
@@ -142,12 +142,12 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if let Some(s) = a.seed {
         config.set_seed(s);
     }
-    let mut scene = load_scene(
+    let mut scene = load_scene_with(
         &a.scene,
         a.animation.as_deref(),
         a.time,
         a.setup.spot_from_above,
-        a.setup.strict,
+        &a.setup.load_options(),
     )?;
     a.setup.place_camera(&mut scene)?;
     let t0 = Instant::now();

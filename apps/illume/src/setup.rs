@@ -64,6 +64,11 @@ pub struct SetupArgs {
     /// warning naming it, and the material is rendered with its factors alone).
     #[arg(long)]
     pub strict: bool,
+    /// How a glTF file's light intensities and emission are read: `radiometric` (W/sr,
+    /// W/m², W/(m²·sr); files written for illume) or `photometric` (glTF's own cd, lx,
+    /// cd/m², as Blender exports them, divided by 683 lm/W).
+    #[arg(long, value_enum, default_value_t = Units::Radiometric)]
+    pub units: Units,
     /// Camera position X,Y,Z [m] (with --look-at): replaces the scene's camera placement.
     #[arg(long, value_parser = parse_point, requires = "look_at", allow_hyphen_values = true)]
     pub look_from: Option<Vec3>,
@@ -110,6 +115,36 @@ fn parse_radiance(s: &str) -> Result<Vec3, String> {
         return Err(format!("'{s}': radiance must be ≥ 0"));
     }
     Ok(v)
+}
+
+/// How a glTF file's light intensities are read (`--units`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Units {
+    /// W/sr, W/m², W/(m²·sr).
+    #[default]
+    Radiometric,
+    /// cd, lx, cd/m² ÷ 683 lm/W.
+    Photometric,
+}
+
+impl Units {
+    /// The loader's option.
+    pub fn load(self) -> illume_scene::Units {
+        match self {
+            Units::Radiometric => illume_scene::Units::Radiometric,
+            Units::Photometric => illume_scene::Units::Photometric,
+        }
+    }
+
+    /// How `illume info` names the reading.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Units::Radiometric => {
+                "radiometric (glTF light intensities read as W/sr, W/m², emission as W/(m²·sr))"
+            }
+            Units::Photometric => "photometric (glTF cd, lx, cd/m² divided by 683 lm/W)",
+        }
+    }
 }
 
 /// How 8-bit output (PNG, GIF, MP4) is exposed.
@@ -169,6 +204,14 @@ fn parse_point(s: &str) -> Result<Vec3, String> {
 }
 
 impl SetupArgs {
+    /// The scene loader's options from `--strict` and `--units`.
+    pub fn load_options(&self) -> illume_scene::LoadOptions {
+        illume_scene::LoadOptions {
+            strict: self.strict,
+            units: self.units.load(),
+        }
+    }
+
     /// The configuration these arguments give. `default_preset` is used when neither
     /// --preset nor --config is given and the chosen technique has a preset of that
     /// name (`render` asks for `still`).

@@ -1074,6 +1074,46 @@ fn gltf_unsupported_extensions_are_warnings_naming_material_and_effect() {
 }
 
 #[test]
+fn gltf_photometric_units_divide_lights_and_emission_by_683() {
+    use illume_scene::{LoadOptions, Units, load_scene_with};
+    let (dir, mut doc) = cube_copy("gltf_photometric");
+    doc["extensions"]["KHR_lights_punctual"]["lights"][0] =
+        json!({"type": "point", "color": [1.0, 0.5, 0.25], "intensity": 683.0});
+    doc["materials"][0]["emissiveFactor"] = json!([1.0, 1.0, 1.0]);
+    let path = write_json(&dir, "photometric.gltf", &doc);
+    let read = |units| {
+        load_scene_with(
+            &path,
+            &LoadOptions {
+                units,
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    };
+    let (radiometric, photometric) = (read(Units::Radiometric), read(Units::Photometric));
+    // 683 cd of colour (1, 0.5, 0.25) are (1, 0.5, 0.25) W/sr.
+    assert_eq!(
+        photometric.lights[0].kind,
+        LightKind::Point {
+            intensity: Vec3::new(1.0, 0.5, 0.25)
+        }
+    );
+    assert_eq!(
+        radiometric.lights[0].kind,
+        LightKind::Point {
+            intensity: Vec3::new(683.0, 341.5, 170.75)
+        }
+    );
+    let (e_r, e_p) = (
+        radiometric.materials[0].emission,
+        photometric.materials[0].emission,
+    );
+    assert!(e_r.x > 0.0);
+    assert!((e_p * 683.0 - e_r).abs().max_element() < 1e-5 * e_r.max_element());
+}
+
+#[test]
 fn obj_phong_materials_map_onto_metallic_roughness() {
     let s = load_scene(&scenes_dir().join("cornell_box/CornellBox-Sphere.obj")).unwrap();
     let by = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap().clone();
@@ -1496,7 +1536,10 @@ fn gltf_missing_texture_and_data_uri_texture() {
         .unwrap_or_else(|| panic!("no warning names the missing image: {:?}", s.warnings));
     assert_contains(warning, &["image 0", "without it"]);
     assert!(s.materials.iter().all(|m| m.base_color_texture.is_none()));
-    let strict = illume_scene::LoadOptions { strict: true };
+    let strict = illume_scene::LoadOptions {
+        strict: true,
+        ..Default::default()
+    };
     let msg = illume_scene::load_scene_with(&missing, &strict)
         .expect_err("strict loading refuses a missing image")
         .to_string();
@@ -1670,7 +1713,10 @@ fn obj_materials_textures_and_missing_files() {
     );
     assert_eq!(s.materials[0].base_color, Vec3::new(1.0, 0.0, 0.0));
     assert!(s.materials[0].base_color_texture.is_none());
-    let strict = illume_scene::LoadOptions { strict: true };
+    let strict = illume_scene::LoadOptions {
+        strict: true,
+        ..Default::default()
+    };
     let msg = illume_scene::load_scene_with(&p, &strict)
         .expect_err("strict loading refuses a missing texture")
         .to_string();

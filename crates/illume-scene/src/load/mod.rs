@@ -22,8 +22,9 @@ mod obj;
 mod ply;
 mod tangents;
 
+use crate::animation::PropertyTarget;
 use crate::animation::Trs;
-use crate::model::{Camera, Node, NodeId, Scene, Texture, WrapMode};
+use crate::model::{Camera, LightKind, Node, NodeId, Scene, Texture, WrapMode};
 use illume_core::image::srgb_decode;
 use illume_core::{Affine3A, Rgb, Vec3};
 use std::path::{Path, PathBuf};
@@ -124,6 +125,55 @@ pub struct LoadOptions {
     /// a warning naming the file (in [`Scene::warnings`]) and the material is rendered
     /// with its factors alone.
     pub strict: bool,
+    /// How a glTF file's light intensities and emission are read.
+    pub units: Units,
+}
+
+/// How glTF light intensities and emission strengths are read.
+///
+/// glTF's `KHR_lights_punctual` states photometric units (point and spot lights in
+/// candela, directional lights in lux) and `KHR_materials_emissive_strength` luminance
+/// (nits, cd/m²); Blender's exporter writes them so. illume renders radiometric
+/// quantities (W/sr, W/m², W/(m²·sr)), and by default takes the numbers as such (files
+/// written for illume and the shared test scenes do). `Photometric` converts with the
+/// luminous efficacy of 683 lm/W (the definition of the candela at 555 nm): every
+/// quantity is divided by 683 — a flat spectrum's efficacy is lower, so this is the
+/// standard convention, not a physical spectral conversion.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Units {
+    /// The numbers are W/sr, W/m² and W/(m²·sr) (the default).
+    #[default]
+    Radiometric,
+    /// The numbers are cd, lx and cd/m² (glTF's own units), divided by 683 lm/W.
+    Photometric,
+}
+
+/// Luminous efficacy of the photometric conversion \[lm/W\].
+pub const LUMENS_PER_WATT: f32 = 683.0;
+
+/// Converts the lights, emissive factors and their animation channels of a glTF scene
+/// read in photometric units to watts ([`Units::Photometric`]).
+fn photometric_to_radiometric(scene: &mut Scene) {
+    let k = 1.0 / LUMENS_PER_WATT;
+    for light in &mut scene.lights {
+        match &mut light.kind {
+            LightKind::Point { intensity } | LightKind::Spot { intensity, .. } => *intensity *= k,
+            LightKind::Directional { irradiance } => *irradiance *= k,
+        }
+    }
+    for m in &mut scene.materials {
+        m.emission *= k;
+    }
+    for a in &mut scene.animations {
+        for p in &mut a.properties {
+            match &mut p.target {
+                PropertyTarget::LightIntensity { colour, .. } => *colour *= k,
+                PropertyTarget::LightColour { intensity, .. } => *intensity *= k,
+                PropertyTarget::Emissive { strength, .. } => *strength *= k,
+                _ => {}
+            }
+        }
+    }
 }
 
 /// [`load_scene`] with options.
@@ -144,7 +194,13 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<Scene, Load
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     let mut scene = match ext.as_str() {
-        "gltf" | "glb" => gltf::load(path, options.strict)?,
+        "gltf" | "glb" => {
+            let mut scene = gltf::load(path, options.strict)?;
+            if options.units == Units::Photometric {
+                photometric_to_radiometric(&mut scene);
+            }
+            scene
+        }
         "obj" => obj::load(path, options.strict)?,
         "ply" => ply::load(path)?,
         _ => return Err(LoadError::UnknownFormat { path: path.into() }),
