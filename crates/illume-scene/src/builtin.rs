@@ -12,6 +12,13 @@
 //!   the floor (animation `move`, 0–4 s), lit by a point light (temporal radiance
 //!   caching's Cube in a Box); `move_light` (0–4 s) leaves the cube at its start and
 //!   moves the light along a square below the ceiling (its Moving Light).
+//! * `kite` — the same white box with a tiled (checker-textured) floor and a flat
+//!   two-coloured kite flying a loop through the room (animation `fly`, 0–4 s): a textured
+//!   scene with a flying object (temporal radiance caching's Flying Kite, in kind).
+//! * `glossy-box` — the same box with a rough gold sphere (metallic, roughness 0.55) and a
+//!   glossy blue box (dielectric, roughness 0.5); animation `light_then_objects`: the
+//!   light travels for 2 s, then the sphere rolls for 2 s (the glossy row of temporal
+//!   radiance caching's Table 1, in kind).
 //!
 //! [`SceneBuilder`] is the same construction kit the loaders use.
 
@@ -20,7 +27,13 @@ use crate::model::*;
 use illume_core::{Affine3A, PI, Quat, Rgb, Vec2, Vec3};
 
 /// Names accepted by [`load`].
-pub const NAMES: [&str; 3] = ["furnace", "cornell-spot", "cube-in-box"];
+pub const NAMES: [&str; 5] = [
+    "furnace",
+    "cornell-spot",
+    "cube-in-box",
+    "kite",
+    "glossy-box",
+];
 
 /// A built-in scene name that does not exist.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -36,6 +49,8 @@ pub fn load(name: &str) -> Result<Scene, UnknownBuiltin> {
         "furnace" => furnace(0.5, Rgb::ONE),
         "cornell-spot" => cornell_spot(),
         "cube-in-box" => cube_in_box(),
+        "kite" => kite(),
+        "glossy-box" => glossy_box(),
         _ => {
             return Err(UnknownBuiltin {
                 name: name.to_owned(),
@@ -558,18 +573,8 @@ fn cornell_spot() -> Scene {
 
 fn cube_in_box() -> Scene {
     let mut b = SceneBuilder::new();
-    let white = b.material(lambert("white", [0.75, 0.75, 0.75], false));
+    let light = white_room(&mut b);
     let orange = b.material(lambert("orange", [0.8, 0.35, 0.08], false));
-    let room = b.mesh(unit_box(white, true));
-    b.placed(
-        "box",
-        room,
-        Trs {
-            translation: Vec3::new(0.0, 1.0, 0.0),
-            ..Trs::IDENTITY
-        },
-        false,
-    );
     let cube_mesh = b.mesh(unit_box(orange, false));
     let start = Vec3::new(-0.5, 0.2, -0.4);
     let cube = b.placed(
@@ -582,27 +587,6 @@ fn cube_in_box() -> Scene {
         true,
     );
     let cube_node = b.scene().instances[cube.index()].node;
-    let light = b.node(
-        "point_light",
-        None,
-        Trs::from_translation(Vec3::new(0.0, 1.8, -0.2)),
-    );
-    b.light(
-        "point",
-        LightKind::Point {
-            intensity: Rgb::ONE,
-        },
-        light,
-    );
-    let cam = b.node(
-        "camera",
-        None,
-        Trs {
-            rotation: Quat::from_rotation_x(-12f32.to_radians()),
-            ..Trs::from_translation(Vec3::new(0.0, 1.1, 0.95))
-        },
-    );
-    b.camera("camera", 60f32.to_radians(), cam);
     let path = [
         start,
         Vec3::new(0.5, 0.2, -0.4),
@@ -637,6 +621,198 @@ fn cube_in_box() -> Scene {
         properties: Vec::new(),
     });
     b.finish("builtin:cube-in-box")
+}
+
+/// The cube-in-box room (a closed white 2 m box, floor at y = 0) with a point light near
+/// the ceiling; returns the light's node.
+fn white_room(b: &mut SceneBuilder) -> NodeId {
+    let white = b.material(lambert("white", [0.75, 0.75, 0.75], false));
+    let room = b.mesh(unit_box(white, true));
+    b.placed(
+        "box",
+        room,
+        Trs {
+            translation: Vec3::new(0.0, 1.0, 0.0),
+            ..Trs::IDENTITY
+        },
+        false,
+    );
+    let light = b.node(
+        "point_light",
+        None,
+        Trs::from_translation(Vec3::new(0.0, 1.8, -0.2)),
+    );
+    b.light(
+        "point",
+        LightKind::Point {
+            intensity: Rgb::ONE,
+        },
+        light,
+    );
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_x(-12f32.to_radians()),
+            ..Trs::from_translation(Vec3::new(0.0, 1.1, 0.95))
+        },
+    );
+    b.camera("camera", 60f32.to_radians(), cam);
+    light
+}
+
+/// A `size`-texel square checker of `tiles` × `tiles` tiles of colours `a` and `b`.
+fn checker(name: &str, size: u32, tiles: u32, a: Rgb, b: Rgb) -> Texture {
+    let tile = (size / tiles).max(1);
+    Texture {
+        name: name.into(),
+        width: size,
+        height: size,
+        texels: (0..size * size)
+            .map(|i| {
+                let (x, y) = (i % size / tile, i / size / tile);
+                if (x + y) % 2 == 0 { a } else { b }
+            })
+            .collect(),
+        wrap_u: WrapMode::Repeat,
+        wrap_v: WrapMode::Repeat,
+        alpha: Vec::new(),
+    }
+}
+
+fn kite() -> Scene {
+    let mut b = SceneBuilder::new();
+    white_room(&mut b);
+    let tiles = b.texture(checker(
+        "tiles",
+        256,
+        8,
+        Rgb::new(0.8, 0.78, 0.72),
+        Rgb::new(0.25, 0.3, 0.45),
+    ));
+    let floor = b.material(Material {
+        name: "tiles".into(),
+        base_color: Rgb::ONE,
+        base_color_texture: Some(tiles),
+        ..Default::default()
+    });
+    let floor_mesh = b.mesh(quad(Vec3::ZERO, Vec3::Z * 0.999, Vec3::X * 0.999, floor));
+    b.placed(
+        "floor_tiles",
+        floor_mesh,
+        Trs::from_translation(Vec3::new(0.0, 0.002, 0.0)),
+        false,
+    );
+    // The kite: a flat diamond-ish slab, red on top, yellow below (two quads back to back).
+    let red = b.material(lambert("kite_red", [0.8, 0.1, 0.08], false));
+    let yellow = b.material(lambert("kite_yellow", [0.85, 0.7, 0.1], false));
+    let mut kite = Mesh {
+        name: "kite".into(),
+        ..Default::default()
+    };
+    append_quad(&mut kite, Vec3::ZERO, Vec3::Z * 0.18, Vec3::X * 0.28, red);
+    append_quad(
+        &mut kite,
+        Vec3::ZERO,
+        Vec3::X * 0.28,
+        Vec3::Z * 0.18,
+        yellow,
+    );
+    let kite_mesh = b.mesh(kite);
+    let start = Vec3::new(-0.6, 0.9, -0.4);
+    let k = b.placed(
+        "kite",
+        kite_mesh,
+        Trs {
+            rotation: Quat::from_rotation_x(55f32.to_radians()),
+            ..Trs::from_translation(start)
+        },
+        true,
+    );
+    let node = b.scene().instances[k.index()].node;
+    let path = [
+        start,
+        Vec3::new(0.0, 1.3, -0.6),
+        Vec3::new(0.6, 0.9, -0.2),
+        Vec3::new(0.0, 0.6, 0.2),
+        start,
+    ];
+    let times = [0.0, 1.0, 2.0, 3.0, 4.0];
+    let tilt = |deg: f32| {
+        // Facing the camera about 55° up from flat, banking by `deg`.
+        let q = Quat::from_rotation_z(deg.to_radians()) * Quat::from_rotation_x(55f32.to_radians());
+        illume_core::Vec4::new(q.x, q.y, q.z, q.w)
+    };
+    b.animation(Animation {
+        name: "fly".into(),
+        channels: vec![
+            linear_translation(node, &times, &path),
+            Channel {
+                node,
+                times: times.to_vec(),
+                values: ChannelValues::Rotation(vec![
+                    tilt(0.0),
+                    tilt(25.0),
+                    tilt(-20.0),
+                    tilt(15.0),
+                    tilt(0.0),
+                ]),
+                interpolation: Interpolation::Linear,
+            },
+        ],
+        properties: Vec::new(),
+    });
+    b.finish("builtin:kite")
+}
+
+fn glossy_box() -> Scene {
+    let mut b = SceneBuilder::new();
+    let light = white_room(&mut b);
+    let gold = b.material(Material {
+        name: "gold".into(),
+        base_color: Rgb::new(1.0, 0.78, 0.34),
+        metallic: 1.0,
+        roughness: 0.55,
+        ..Default::default()
+    });
+    let blue = b.material(Material {
+        name: "glossy_blue".into(),
+        base_color: Rgb::new(0.2, 0.35, 0.7),
+        metallic: 0.0,
+        roughness: 0.5,
+        ..Default::default()
+    });
+    let sphere = b.mesh(uv_sphere(0.25, 48, 24, gold, false));
+    let start = Vec3::new(-0.45, 0.25, -0.35);
+    let s = b.placed("sphere", sphere, Trs::from_translation(start), true);
+    let sphere_node = b.scene().instances[s.index()].node;
+    let cube = b.mesh(unit_box(blue, false));
+    b.placed(
+        "glossy_box",
+        cube,
+        Trs {
+            rotation: Quat::from_rotation_y(0.4),
+            scale: Vec3::new(0.22, 0.35, 0.22),
+            translation: Vec3::new(0.4, 0.35, -0.45),
+        },
+        false,
+    );
+    let times = [0.0, 2.0, 4.0];
+    let at = Vec3::new(0.0, 1.8, -0.2);
+    let end = Vec3::new(0.55, 1.6, 0.3);
+    b.animation(Animation {
+        name: "light_then_objects".into(),
+        channels: vec![
+            linear_translation(light, &times, &[at, end, end]),
+            linear_translation(
+                sphere_node,
+                &times,
+                &[start, start, Vec3::new(0.1, 0.25, 0.25)],
+            ),
+        ],
+        properties: Vec::new(),
+    });
+    b.finish("builtin:glossy-box")
 }
 
 /// `world_from_object` of a node placed at `trs` with no parent.
