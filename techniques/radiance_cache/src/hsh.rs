@@ -368,23 +368,29 @@ impl HshRotation {
         let mut c = coefficients.to_vec();
         basis.rotate_about_normal(&mut c, self.gamma);
         if let Some(m) = &self.tilt {
-            let n2 = basis.len();
-            c = (0..n2)
-                .map(|i| {
-                    let row = &m[i * n2..(i + 1) * n2];
-                    let mut acc = [0.0f64; 3];
-                    for (mij, cj) in row.iter().zip(&c) {
-                        for k in 0..3 {
-                            acc[k] += mij * cj[k] as f64;
-                        }
-                    }
-                    Rgb::new(acc[0] as f32, acc[1] as f32, acc[2] as f32)
-                })
-                .collect();
+            c = apply_tilt(m, &c);
         }
         basis.rotate_about_normal(&mut c, self.alpha);
         c
     }
+}
+
+/// `m` (row-major n² × n², a tilt matrix [`HshBasis::tilt_matrix`]) times the
+/// coefficients `c` (n² of them), per channel, summed in f64.
+pub fn apply_tilt(m: &[f64], c: &[Rgb]) -> Coefficients {
+    let n2 = c.len();
+    (0..n2)
+        .map(|i| {
+            let row = &m[i * n2..(i + 1) * n2];
+            let mut acc = [0.0f64; 3];
+            for (mij, cj) in row.iter().zip(c) {
+                for k in 0..3 {
+                    acc[k] += mij * cj[k] as f64;
+                }
+            }
+            Rgb::new(acc[0] as f32, acc[1] as f32, acc[2] as f32)
+        })
+        .collect()
 }
 
 /// The rotation taking directions local to `from` to directions local to `to`.

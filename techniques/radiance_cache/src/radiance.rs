@@ -34,7 +34,7 @@
 //! of f_s for the view direction: L_o = Σ_i b_i·c_i.
 
 use crate::RadianceCacheError;
-use crate::hsh::{HshBasis, Quadrature, frame_rotation, zyz_angles};
+use crate::hsh::{HshBasis, Quadrature, apply_tilt, frame_rotation, zyz_angles};
 use crate::record::{HemisphereGather, RgbGradient};
 use illume_core::sampling::{Pcg32, SampleStream, mix64};
 use illume_core::{Frame, INV_PI, PI, Ray, Rgb, Vec3};
@@ -337,19 +337,7 @@ impl GlossyShading {
                 computed = self.basis.tilt_matrix(beta);
                 &computed
             };
-            let n2 = self.basis.len();
-            c = (0..n2)
-                .map(|r| {
-                    let row = &m[r * n2..(r + 1) * n2];
-                    let mut acc = [0.0f64; 3];
-                    for (mij, cj) in row.iter().zip(&c) {
-                        for k in 0..3 {
-                            acc[k] += mij * cj[k] as f64;
-                        }
-                    }
-                    Rgb::new(acc[0] as f32, acc[1] as f32, acc[2] as f32)
-                })
-                .collect();
+            c = apply_tilt(m, &c);
         }
         self.basis.rotate_about_normal(&mut c, alpha);
         c
