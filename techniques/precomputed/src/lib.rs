@@ -21,3 +21,4 @@
 //! block it nor bleed colour).
 
 pub mod pca;
+pub mod schedule;
