@@ -20,5 +20,6 @@
 //! reflective objects); dynamic objects leave the indirect light unchanged (they neither
 //! block it nor bleed colour).
 
+pub mod file;
 pub mod pca;
 pub mod schedule;
