@@ -104,7 +104,7 @@ pub enum FileError {
     },
     /// It was precomputed for another scene (or the static scene changed since).
     #[error(
-        "{path}: precomputed for another scene: the file's static-scene fingerprint is {found} ({found_source}), the scene's is {expected} ({expected_source}){detail}"
+        "{path}: precomputed for another scene: the file's static-scene fingerprint is {found} ({found_source}), the scene's is {expected} ({expected_source})"
     )]
     OtherScene {
         /// The file.
@@ -117,8 +117,6 @@ pub enum FileError {
         found: String,
         /// The source named in the file.
         found_source: String,
-        /// The first differing line of the fingerprint texts, if known.
-        detail: String,
     },
     /// The file's camera or image size differs from the run's (screen and cube domains).
     #[error("{path}: {what} differs: the file has {found}, this run has {expected}")]
@@ -485,7 +483,6 @@ impl PcFile {
             expected_source: scene.source.clone(),
             found: self.header.scene_fingerprint.clone(),
             found_source: self.header.scene_source.clone(),
-            detail: String::new(),
         })
     }
 }
