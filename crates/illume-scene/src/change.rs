@@ -150,6 +150,20 @@ pub enum EditError {
     },
 }
 
+/// `sky` with its radiance multiplied by `scale` (same angular distribution).
+fn scaled_sky(sky: &Sky, scale: f32) -> Sky {
+    match sky {
+        Sky::Uniform { radiance } => Sky::Uniform {
+            radiance: *radiance * scale,
+        },
+        Sky::Equirect(map) => {
+            let mut map = (**map).clone();
+            map.texels.iter_mut().for_each(|t| *t *= scale);
+            Sky::Equirect(std::sync::Arc::new(map))
+        }
+    }
+}
+
 /// Sets a light's radiometric quantity (intensity or irradiance) to `value`.
 fn set_light_quantity(kind: &mut LightKind, value: illume_core::Rgb) {
     match kind {
@@ -267,7 +281,11 @@ impl Scene {
                 LightId(self.lights.len() as u32 - 1)
             }
         };
-        self.sun = Some(SunPath { settings, light });
+        self.sun = Some(SunPath {
+            settings,
+            light,
+            sky_base: self.sky.clone(),
+        });
         let mut ignored = Vec::new();
         self.apply_sun(&mut ignored);
         Ok(light)
@@ -284,6 +302,10 @@ impl Scene {
             return;
         };
         let id = sun.light;
+        self.sky = sun
+            .sky_base
+            .as_ref()
+            .map(|sky| scaled_sky(sky, state.sky_scale));
         let Some(light) = self.lights.get(id.index()) else {
             return;
         };

@@ -768,6 +768,10 @@ pub struct SunPath {
     pub settings: crate::sun::SunSettings,
     /// The directional light it drives (its node is a root node the sun owns).
     pub light: LightId,
+    /// The scene's sky when the sun was attached: [`Scene::set_time`] sets the sky to it
+    /// scaled by [`crate::sun::sky_scale`] (a fixed angular distribution, so a sky image
+    /// rendered once scales exactly; Bahnsen et al. §2).
+    pub sky_base: Option<Sky>,
 }
 
 impl Default for Camera {

@@ -20,6 +20,17 @@
 //! reflective objects); dynamic objects leave the indirect light unchanged (they neither
 //! block it nor bleed colour).
 
+pub mod error;
 pub mod file;
 pub mod pca;
+pub mod precompute;
 pub mod schedule;
+pub mod settings;
+pub mod state;
+
+pub use error::PrecomputedError;
+pub use settings::PrecomputedSettings;
+pub use state::Precomputed;
+
+/// The technique's one name.
+pub const NAME: &str = "precomputed";
