@@ -26,6 +26,7 @@ pub mod pca;
 pub mod precompute;
 pub mod schedule;
 pub mod settings;
+pub mod shard;
 pub mod state;
 
 pub use error::PrecomputedError;

@@ -186,16 +186,16 @@ pub fn fit(
         .step_by(BLOCK_ROWS)
         .map(|r0| (r0, (r0 + BLOCK_ROWS).min(rows)))
         .collect();
-    let covariance = blocks
+    // Block products in parallel, summed in block order: the same bits on any machine
+    // and thread count (merged shards must equal the unsharded file).
+    let products: Vec<Mat<f64>> = blocks
         .par_iter()
         .map(|&(r0, r1)| block_covariance(keys, &mean, r0, r1, precision))
-        .reduce(
-            || Mat::<f64>::zeros(t_count, t_count),
-            |mut a, b| {
-                a += &b;
-                a
-            },
-        );
+        .collect();
+    let mut covariance = Mat::<f64>::zeros(t_count, t_count);
+    for b in &products {
+        covariance += b;
+    }
     let covariance = Mat::<f64>::from_fn(t_count, t_count, |i, j| covariance[(i, j)] / rows as f64);
     let eigen = covariance
         .self_adjoint_eigen(Side::Lower)

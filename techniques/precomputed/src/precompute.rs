@@ -150,17 +150,55 @@ pub fn to_srgb8(image: &RgbImage, exposure: f32) -> Vec<u8> {
     )
 }
 
-/// Runs the PCA over the non-dark keys and assembles the file. `keys` sorted by time.
-pub fn compress(
+/// The header of a file for `world` with `settings` at `size`: everything but the keys
+/// and the PCA results.
+pub fn base_header(
     world: &World,
+    settings: &PrecomputedSettings,
+    size: (u32, u32),
+) -> Result<Header, PrecomputedError> {
+    let sun = sun_of(&world.scene)?;
+    let (_, fingerprint) = scene_fingerprint(&world.scene);
+    let camera = &world.scene.camera;
+    let mut cam: Vec<f32> = camera.world_from_camera.to_cols_array().to_vec();
+    cam.push(camera.yfov_rad);
+    let table = |v: &dyn erased::Ser| v.table();
+    // The data path is where a file is read from, not how it was made.
+    let mut settings_table = table(settings);
+    settings_table.remove("data");
+    Ok(Header {
+        kind: "pca".into(),
+        scene_source: world.scene.source.clone(),
+        scene_fingerprint: fingerprint,
+        settings: settings_table,
+        sun: table(&sun),
+        domain: "screen".into(),
+        width: size.0,
+        height: size.1,
+        channels: 3,
+        camera: cam,
+        exposure: settings.exposure,
+        shard: [0, 1],
+        keys: Vec::new(),
+        components: 0,
+        colour: match settings.colour {
+            Colour::PerChannel => "per-channel".into(),
+            Colour::Joint => "joint".into(),
+        },
+        eigenvalues: Vec::new(),
+        sections: Vec::new(),
+    })
+}
+
+/// Runs the PCA over the non-dark keys and assembles the file from `base`
+/// ([`base_header`]). `keys` sorted by time.
+pub fn compress(
+    base: Header,
     settings: &PrecomputedSettings,
     keys: &[Key],
     sky: &RgbImage,
-    size: (u32, u32),
 ) -> Result<PcFile, PrecomputedError> {
-    let sun = sun_of(&world.scene)?;
     let bright: Vec<usize> = (0..keys.len()).filter(|&i| !keys[i].dark).collect();
-    let pixels = size.0 as usize * size.1 as usize;
     let channel =
         |key: &Key, c: usize| -> Vec<f32> { key.image.pixels().iter().map(|p| p[c]).collect() };
     let components = match settings.variance_target {
@@ -201,13 +239,6 @@ pub fn compress(
         )],
     };
     for (name, data) in groups {
-        let rows = data.first().map_or(
-            match settings.colour {
-                Colour::PerChannel => pixels,
-                Colour::Joint => 3 * pixels,
-            },
-            Vec::len,
-        );
         let (mean, temporal_bright, images, k, eig) = if data.is_empty() {
             (Vec::new(), Vec::new(), Vec::new(), 0, Vec::new())
         } else {
@@ -233,7 +264,6 @@ pub fn compress(
                 temporal_all[c * t_all + i] = temporal_bright[c * bright.len() + j];
             }
         }
-        let _ = rows;
         sections.push(Section {
             name: format!("mean.{name}"),
             format: SectionFormat::F32,
@@ -256,24 +286,9 @@ pub fn compress(
         format: SectionFormat::F32,
         values: sky.pixels().iter().flat_map(|p| p.to_array()).collect(),
     });
-    let (_, fingerprint) = scene_fingerprint(&world.scene);
-    let camera = &world.scene.camera;
-    let mut cam: Vec<f32> = camera.world_from_camera.to_cols_array().to_vec();
-    cam.push(camera.yfov_rad);
-    let table = |v: &dyn erased::Ser| v.table();
     Ok(PcFile {
         header: Header {
             kind: "pca".into(),
-            scene_source: world.scene.source.clone(),
-            scene_fingerprint: fingerprint,
-            settings: table(settings),
-            sun: table(&sun),
-            domain: "screen".into(),
-            width: size.0,
-            height: size.1,
-            channels: 3,
-            camera: cam,
-            exposure: settings.exposure,
             shard: [0, 1],
             keys: keys
                 .iter()
@@ -284,12 +299,9 @@ pub fn compress(
                 })
                 .collect(),
             components: k_kept as u32,
-            colour: match settings.colour {
-                Colour::PerChannel => "per-channel".into(),
-                Colour::Joint => "joint".into(),
-            },
             eigenvalues,
             sections: Vec::new(),
+            ..base
         },
         sections,
     })
@@ -395,5 +407,5 @@ pub fn precompute(
                 .collect()
         }
     };
-    compress(world, settings, &keys, &sky, size)
+    compress(base_header(world, settings, size)?, settings, &keys, &sky)
 }
