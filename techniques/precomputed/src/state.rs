@@ -43,9 +43,43 @@ pub struct Precomputed {
     load_s: f64,
     last_ms: f64,
     stale: u64,
+    /// No file yet: [`Technique::precompute`] makes one in memory.
+    pending: bool,
 }
 
 impl Precomputed {
+    /// The technique for the engine: loads `settings.data` if set, else precomputes in
+    /// memory at [`Technique::precompute`] (for tests and tiny scenes).
+    pub fn new(
+        world: &World,
+        settings: PrecomputedSettings,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, PrecomputedError> {
+        settings.validate()?;
+        if !settings.data.is_empty() {
+            let path = PathBuf::from(&settings.data);
+            return Self::load(world, settings, &path, width, height);
+        }
+        crate::precompute::sun_of(&world.scene)?;
+        Ok(Self {
+            file: PathBuf::from("(precomputed in memory)"),
+            sun: crate::precompute::sun_of(&world.scene)?,
+            settings,
+            times: Vec::new(),
+            k: 0,
+            groups: Vec::new(),
+            joint: false,
+            sky: Vec::new(),
+            width,
+            height,
+            load_s: 0.0,
+            last_ms: 0.0,
+            stale: 0,
+            pending: true,
+        })
+    }
+
     /// Loads `path` for `world`: checks the file, the static scene, and (screen domain)
     /// the camera and the image size `width × height`.
     pub fn load(
@@ -166,6 +200,7 @@ impl Precomputed {
             load_s: start.elapsed().as_secs_f64(),
             last_ms: 0.0,
             stale: 0,
+            pending: false,
         })
     }
 
@@ -264,9 +299,38 @@ impl Technique for Precomputed {
         ChangeResponse::Updated
     }
 
+    fn precompute(
+        &mut self,
+        world: &World,
+        progress: &mut dyn illume_core::Progress,
+    ) -> Result<(), illume_transport::TechniqueError> {
+        if !self.pending {
+            return Ok(());
+        }
+        let start = std::time::Instant::now();
+        let size = (self.width, self.height);
+        let file = crate::precompute::precompute(world, &self.settings, size, progress)?;
+        let path = self.file.clone();
+        *self = Self::from_file(
+            world,
+            self.settings.clone(),
+            &path,
+            file,
+            size.0,
+            size.1,
+            start,
+        )?;
+        Ok(())
+    }
+
     fn advance(&mut self, _world: &World, _budget: &Budget) {}
 
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
+        if self.pending || self.times.is_empty() {
+            let n = gbuffer.width as usize * gbuffer.height as usize;
+            return RgbImage::from_vec(gbuffer.width, gbuffer.height, vec![Rgb::ZERO; n])
+                .expect("one value per pixel");
+        }
         let start = std::time::Instant::now();
         let hours = self.sun.clock_hours(world.scene.time);
         let elevation = illume_scene::sun::solar_position(&self.sun, hours)
