@@ -12,15 +12,15 @@ pub enum PrecomputedError {
         reason: String,
     },
     /// The scene has no `[sun]` (nothing to precompute a day of).
-    #[error("precomputed: scene {0} has no sun path ([sun] table): nothing to precompute")]
+    #[error("scene {0} has no sun path ([sun] table): nothing to precompute")]
     NoSun(String),
-    /// The `.illumepc` file is unusable.
-    #[error("precomputed: {0}")]
+    /// The `.illumepc` file is unusable (the message names it).
+    #[error("{0}")]
     File(#[from] crate::file::FileError),
     /// The PCA failed.
-    #[error("precomputed: {0}")]
+    #[error("PCA: {0}")]
     Pca(#[from] crate::pca::PcaError),
     /// The sun table is invalid.
-    #[error("precomputed: {0}")]
+    #[error("{0}")]
     Sun(#[from] illume_scene::sun::SunError),
 }

@@ -276,7 +276,9 @@ pub fn scene_fingerprint(scene: &Scene) -> (String, String) {
     for m in &scene.materials {
         let _ = writeln!(text, "material {m:?}");
     }
-    let _ = writeln!(text, "sky {:?}", scene.sky);
+    // The sky at scale 1: a sun path scales the scene's sky with the time of day.
+    let sky = scene.sun.as_ref().map_or(&scene.sky, |sun| &sun.sky_base);
+    let _ = writeln!(text, "sky {sky:?}");
     let hash = format!("{:016x}", fnv1a64(text.as_bytes()));
     (text, hash)
 }
