@@ -173,3 +173,55 @@ fn restored_keys_pass_yee_and_night_is_black() {
     assert!(night.dark);
     assert!(night.image.pixels().iter().all(|p| *p == Rgb::ZERO));
 }
+
+/// A screen file used with another camera or image size, or for a scene whose static
+/// part changed: one error naming the file and what differs, never a wrong image.
+#[test]
+fn another_camera_size_or_scene_is_refused() {
+    let world = world();
+    let s = PrecomputedSettings {
+        from_h: 12.0,
+        to_h: 13.0,
+        step_min: 60.0,
+        spp: 4,
+        ..settings()
+    };
+    let small = (8, 6);
+    let file = precompute(&world, &s, small, &mut illume_core::progress::Silent).unwrap();
+    let path = std::path::Path::new("room.illumepc");
+    let load = |w: &World, size: (u32, u32)| {
+        Precomputed::from_file(
+            w,
+            s.clone(),
+            path,
+            file.clone(),
+            size.0,
+            size.1,
+            std::time::Instant::now(),
+        )
+        .err()
+        .map(|e| e.to_string())
+    };
+    assert_eq!(load(&world, small), None);
+    let e = load(&world, (16, 6)).expect("another size is refused");
+    assert!(
+        e.contains("room.illumepc") && e.contains("image size"),
+        "{e}"
+    );
+    let mut scene = world.scene.clone();
+    scene.camera.world_from_camera.translation.x += 0.1;
+    let e = load(&world.with_scene(scene), small).expect("another camera is refused");
+    assert!(e.contains("room.illumepc") && e.contains("camera"), "{e}");
+    let mut scene = world.scene.clone();
+    scene.materials[0].base_color *= 0.5;
+    let e = load(&world.with_scene(scene), small).expect("another scene is refused");
+    assert!(
+        e.contains("room.illumepc") && e.contains("another scene"),
+        "{e}"
+    );
+    // The dynamic box may move: the file still fits.
+    let mut scene = world.scene.clone();
+    let i = scene.instances.iter().position(|i| i.dynamic).unwrap();
+    scene.instances[i].world_from_object.translation.x -= 0.3;
+    assert_eq!(load(&world.with_scene(scene), small), None);
+}
