@@ -100,6 +100,10 @@ struct InfoArgs {
     /// Write each key as restored from the file (and the sky image) as EXR into DIR.
     #[arg(long)]
     dump: Option<PathBuf>,
+    /// Write the plots into DIR: `variance.svg` (captured variance vs k, Fig. 5) and
+    /// `keys_per_hour.svg` (Fig. 6).
+    #[arg(long)]
+    plot: Option<PathBuf>,
 }
 
 /// Runs `illume precompute`.
@@ -302,6 +306,53 @@ fn run_info(i: InfoArgs) -> Result<()> {
     }
     if let Some(dir) = &i.dump {
         dump(&file, dir)?;
+    }
+    if let Some(dir) = &i.plot {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let names = ["r", "g", "b"];
+        let series: Vec<illume_metrics::report::Series> = h
+            .eigenvalues
+            .iter()
+            .enumerate()
+            .map(|(g, eig)| illume_metrics::report::Series {
+                name: if h.eigenvalues.len() == 1 {
+                    "rgb".into()
+                } else {
+                    names.get(g).copied().unwrap_or("?").into()
+                },
+                points: (1..=eig.len().min(40))
+                    .map(|k| {
+                        (
+                            k as f64,
+                            100.0 * illume_precomputed::pca::variance_captured(eig, k),
+                        )
+                    })
+                    .collect(),
+            })
+            .collect();
+        illume_metrics::report::plot_lines(
+            &dir.join("variance.svg"),
+            "variance captured by the first k eigenvectors",
+            "k",
+            "variance [%]",
+            &series,
+        )?;
+        let bars: Vec<illume_metrics::report::Bar> = (0..24)
+            .map(|hr| illume_metrics::report::Bar {
+                label: format!("{hr:02}"),
+                value: per_hour.get(&hr).copied().unwrap_or(0) as f64,
+            })
+            .collect();
+        illume_metrics::report::plot_bars(
+            &dir.join("keys_per_hour.svg"),
+            "keys per clock hour",
+            "keys",
+            &bars,
+        )?;
+        eprintln!(
+            "wrote variance.svg and keys_per_hour.svg into {}",
+            dir.display()
+        );
     }
     Ok(())
 }
