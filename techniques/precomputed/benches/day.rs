@@ -52,8 +52,14 @@ fn main() {
     let dir = std::env::temp_dir().join(format!("illumepc-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
 
+    let runtime_only = std::env::var_os("DAY_ONLY_RUNTIME").is_some();
     let mut files = Vec::new();
-    for schedule in [ScheduleKind::Adaptive, ScheduleKind::Uniform] {
+    let schedules: &[ScheduleKind] = if runtime_only {
+        &[]
+    } else {
+        &[ScheduleKind::Adaptive, ScheduleKind::Uniform]
+    };
+    for &schedule in schedules {
         let s = PrecomputedSettings {
             schedule,
             ..base.clone()
@@ -108,6 +114,24 @@ fn main() {
         files.push((schedule, s, file));
     }
 
+    if !runtime_only {
+        measure_pca_and_error(&world, &sun, &files, size, spp);
+    }
+    runtime(&world, &sun, &dir);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// PCA time on the uniform keys and error between keys against the reference.
+fn measure_pca_and_error(
+    world: &World,
+    sun: &illume_scene::sun::SunSettings,
+    files: &[(ScheduleKind, PrecomputedSettings, PcFile)],
+    size: (u32, u32),
+    spp: u32,
+) {
+    let (w, h) = size;
+    let world = world.clone_world();
+    let sun = sun.clone();
     // PCA time alone at this size on the uniform keys.
     let (_, s_uniform, uniform_file) = &files[1];
     let keys: Vec<Key> = uniform_file
@@ -168,10 +192,26 @@ fn main() {
                 h,
             );
             r.add_samples(&rw, 4 * spp);
-            r.images().indirect
+            // The technique supplies the sky's direct light too: add the sky's alone.
+            let mut sky_only = rw.scene.clone();
+            let light = sky_only.sun.take().unwrap().light;
+            sky_only.lights[light.index()].kind = illume_scene::LightKind::Directional {
+                irradiance: illume_core::Rgb::ZERO,
+            };
+            let mut rs = ReferenceRenderer::new(
+                ReferenceSettings {
+                    spp: 4 * spp,
+                    seed: 4321,
+                    ..Default::default()
+                },
+                w,
+                h,
+            );
+            rs.add_samples(&world.with_scene(sky_only), 4 * spp);
+            r.images().indirect.add(&rs.images().direct)
         })
         .collect();
-    for (schedule, s, file) in &files {
+    for (schedule, s, file) in files {
         for k in [10usize, 20] {
             for interpolation in [Interpolation::Linear, Interpolation::Cubic] {
                 let s = PrecomputedSettings {
@@ -235,7 +275,11 @@ fn main() {
             }
         }
     }
+}
 
+/// Run time at 800×600.
+fn runtime(world: &World, sun: &illume_scene::sun::SunSettings, dir: &std::path::Path) {
+    let world = world.clone_world();
     // Run time at 800×600: a synthetic file of the right size (run time does not depend
     // on the content), reconstruction alone and whole engine frames.
     let (fw, fh) = (800u32, 600u32);
@@ -315,5 +359,15 @@ fn main() {
         1e3 / frame_ms,
         100.0 * rec_ms / frame_ms
     );
-    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A second world on the same meshes (the bench's helpers take `&World`).
+trait CloneWorld {
+    fn clone_world(&self) -> World;
+}
+
+impl CloneWorld for World {
+    fn clone_world(&self) -> World {
+        self.with_scene(self.scene.clone())
+    }
 }

@@ -109,8 +109,10 @@ pub fn render_key(
     })
 }
 
-/// Renders the sky's indirect image at sky scale 1 (sun off, dynamic masked): at run
-/// time it is multiplied by s(t); the sky's direct light is the renderer's.
+/// Renders the sky's whole light (direct and indirect, Bahnsen et al. §2 "the skylight
+/// … precomputed … which we scale") at sky scale 1, sun off, dynamic instances masked,
+/// emission off (the renderer adds emission): at run time it is multiplied by s(t) and
+/// the renderer skips its own sky term ([`illume_transport::Technique::supplies_sky_light`]).
 pub fn render_sky(
     world: &World,
     settings: &PrecomputedSettings,
@@ -127,16 +129,26 @@ pub fn render_sky(
             irradiance: illume_core::Rgb::ZERO,
         };
     }
+    for m in scene.materials.iter_mut() {
+        m.emission = illume_core::Rgb::ZERO;
+        m.emissive_texture = None;
+    }
     if scene.sky.is_none() {
         return Ok(RgbImage::filled(size.0, size.1, illume_core::Rgb::ZERO));
     }
-    Ok(indirect(
-        world,
-        scene,
-        settings.spp,
-        mix64(settings.seed ^ 0x0073_6b79),
-        size,
-    ))
+    let w = world.with_scene(scene);
+    let spp = settings.spp;
+    let mut r = ReferenceRenderer::new(
+        ReferenceSettings {
+            spp,
+            seed: mix64(settings.seed ^ 0x0073_6b79),
+            ..Default::default()
+        },
+        size.0,
+        size.1,
+    );
+    r.add_samples(&w, spp);
+    Ok(r.images().full)
 }
 
 /// The 8-bit sRGB encoding (clamped, no tone curve) of an image at `exposure` (for the Yee metric).

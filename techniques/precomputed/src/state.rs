@@ -1,7 +1,7 @@
 //! Run time (Bahnsen et al. §3.1, Eq. 2, §4.2): everything is loaded at construction (the
 //! paper pre-loads); each frame interpolates the k temporal coefficients and the mean
 //! between the two keys around the clock time, reconstructs every pixel in O(k), clamps at
-//! 0 and adds the sky's indirect image scaled by s(t).
+//! 0 and adds the sky image (its direct and indirect light) scaled by s(t).
 
 use crate::PrecomputedError;
 use crate::file::{FileError, PcFile};
@@ -231,8 +231,8 @@ impl Precomputed {
         }
     }
 
-    /// The sun's indirect light at clock time `hours` plus the sky's at scale `sky_scale`,
-    /// one value per pixel of the file's image.
+    /// The sun's indirect light at clock time `hours` plus the sky's whole light (direct
+    /// and indirect) at scale `sky_scale`, one value per pixel of the file's image.
     pub fn reconstruct(&self, hours: f64, sky_scale: f32) -> Vec<Rgb> {
         let weights = self.weights(hours);
         let keys = self.times.len();
@@ -366,6 +366,11 @@ impl Technique for Precomputed {
 
     /// Shadow maps for the sun, as in the paper's demo.
     fn interactive(&self) -> bool {
+        true
+    }
+
+    /// The precomputed sky image holds the sky's direct light too (Eq. 2's s(t)·L_sky).
+    fn supplies_sky_light(&self) -> bool {
         true
     }
 }

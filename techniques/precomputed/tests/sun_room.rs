@@ -85,7 +85,24 @@ fn indirect_between_keys_matches_the_reference() {
         SIZE.1,
     );
     r.add_samples(&reference_world, 256);
-    let reference = r.images().indirect;
+    // Ours holds the sky's direct light too (the renderer skips it): add the reference's
+    // direct light of the sky alone at that time.
+    let mut sky_only = reference_world.scene.clone();
+    let sun_light = sky_only.sun.take().unwrap().light;
+    sky_only.lights[sun_light.index()].kind = illume_scene::LightKind::Directional {
+        irradiance: Rgb::ZERO,
+    };
+    let mut rs = ReferenceRenderer::new(
+        ReferenceSettings {
+            spp: 256,
+            seed: 98,
+            ..Default::default()
+        },
+        SIZE.0,
+        SIZE.1,
+    );
+    rs.add_samples(&world.with_scene(sky_only), 256);
+    let reference = r.images().indirect.add(&rs.images().direct);
     let ours = technique.reconstruct(hours, illume_scene::sun::sky_scale(elevation));
 
     let mean = |v: &[Rgb]| v.iter().map(|p| (p.x + p.y + p.z) / 3.0).sum::<f32>() / v.len() as f32;
@@ -224,4 +241,62 @@ fn another_camera_size_or_scene_is_refused() {
     let i = scene.instances.iter().position(|i| i.dynamic).unwrap();
     scene.instances[i].world_from_object.translation.x -= 0.3;
     assert_eq!(load(&world.with_scene(scene), small), None);
+}
+
+/// Linear and cubic interpolation both return the keys at key times, and blend between.
+#[test]
+fn interpolation_returns_keys_at_key_times() {
+    use illume_precomputed::settings::Interpolation;
+    let world = world();
+    let s = PrecomputedSettings {
+        from_h: 10.0,
+        to_h: 14.0,
+        step_min: 60.0,
+        spp: 4,
+        components: 4,
+        ..settings()
+    };
+    let size = (8, 6);
+    let file = precompute(&world, &s, size, &mut illume_core::progress::Silent).unwrap();
+    let build = |interpolation| {
+        Precomputed::from_file(
+            &world,
+            PrecomputedSettings {
+                interpolation,
+                ..s.clone()
+            },
+            std::path::Path::new("memory"),
+            file.clone(),
+            size.0,
+            size.1,
+            std::time::Instant::now(),
+        )
+        .unwrap()
+    };
+    let (linear, cubic) = (build(Interpolation::Linear), build(Interpolation::Cubic));
+    for hours in [10.0, 11.0, 12.0, 13.0] {
+        let (a, b) = (
+            linear.reconstruct(hours, 0.0),
+            cubic.reconstruct(hours, 0.0),
+        );
+        for (x, y) in a.iter().zip(&b) {
+            assert!(
+                (*x - *y).abs().max_element() <= 1e-6 * (1.0 + x.max_element()),
+                "{hours} h"
+            );
+        }
+    }
+    // Between keys: linear is the average of its neighbours' values.
+    let (k11, k12, mid) = (
+        linear.reconstruct(11.0, 0.0),
+        linear.reconstruct(12.0, 0.0),
+        linear.reconstruct(11.5, 0.0),
+    );
+    for i in 0..mid.len() {
+        let expect = (k11[i] + k12[i]) * 0.5;
+        // Clamping at 0 happens per key restored value; where both are ≥ 0 the blend is exact.
+        if k11[i].min_element() > 0.0 && k12[i].min_element() > 0.0 {
+            assert!((mid[i] - expect).abs().max_element() < 1e-5 * (1.0 + expect.max_element()));
+        }
+    }
 }
