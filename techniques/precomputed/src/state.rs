@@ -250,21 +250,44 @@ impl Precomputed {
             })
             .collect();
         let pixels = self.width as usize * self.height as usize;
+        // Channel planes, filled in cache-sized chunks: per chunk, mean then one
+        // multiply-add pass per component (vectorised), then clamp at 0.
+        const CHUNK: usize = 4096;
+        let mut planes = vec![vec![0f32; pixels]; 3];
+        for (c, plane) in planes.iter_mut().enumerate() {
+            let g = if self.joint { 0 } else { c };
+            let group = &self.groups[g];
+            let (mean, coefficients) = &per_group[g];
+            plane
+                .par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(chunk, out)| {
+                    let first = chunk * CHUNK;
+                    out.fill(*mean);
+                    for (i, coefficient) in coefficients.iter().enumerate() {
+                        let image = &group.images[i * group.rows..(i + 1) * group.rows];
+                        if self.joint {
+                            for (j, o) in out.iter_mut().enumerate() {
+                                *o += image[3 * (first + j) + c] * coefficient;
+                            }
+                        } else {
+                            let src = &image[first..first + out.len()];
+                            for (o, x) in out.iter_mut().zip(src) {
+                                *o += x * coefficient;
+                            }
+                        }
+                    }
+                });
+        }
         (0..pixels)
             .into_par_iter()
+            .with_min_len(CHUNK)
             .map(|p| {
-                let mut v = [0f32; 3];
-                for (c, value) in v.iter_mut().enumerate() {
-                    let (g, row) = if self.joint { (0, 3 * p + c) } else { (c, p) };
-                    let group = &self.groups[g];
-                    let (mean, coefficients) = &per_group[g];
-                    let mut x = *mean;
-                    for (i, coefficient) in coefficients.iter().enumerate() {
-                        x += group.images[i * group.rows + row] * coefficient;
-                    }
-                    *value = x.max(0.0);
-                }
-                Rgb::new(v[0], v[1], v[2]) + self.sky[p] * sky_scale
+                Rgb::new(
+                    planes[0][p].max(0.0),
+                    planes[1][p].max(0.0),
+                    planes[2][p].max(0.0),
+                ) + self.sky[p] * sky_scale
             })
             .collect()
     }
