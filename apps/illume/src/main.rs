@@ -6,6 +6,8 @@
 //! * `illume animate SCENE` — an animation: numbered frames, a preview, a per-frame CSV;
 //! * `illume demo` — photon streaming on `builtin:cornell-spot` in real time.
 //! * `illume bench SCENARIO.toml` — run a benchmark scenario and write its report.
+//! * `illume precompute SCENE --output FILE` — a day of precomputed indirect light
+//!   (`--shard K/N` for one shard; `precompute merge`, `precompute info`).
 //!
 //! SCENE is a file (`.gltf`, `.glb`, `.obj`, `.ply`) or `builtin:NAME`
 //! (`builtin:cornell-spot`, `builtin:cube-in-box`, `builtin:furnace`).
@@ -20,6 +22,7 @@ mod bench;
 mod compare;
 mod frames;
 mod info;
+mod precompute;
 mod progress;
 mod render;
 mod setup;
@@ -57,6 +60,9 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Run a benchmark scenario: techniques vs the converged reference, report and plots.
     Bench(bench::BenchArgs),
+    /// Precompute a day of indirect light for the technique `precomputed` (or one shard
+    /// of it with --shard K/N); `merge` shards; `info` describes a .illumepc file.
+    Precompute(precompute::PrecomputeArgs),
 }
 
 fn main() {
@@ -68,6 +74,7 @@ fn main() {
         Command::Animate(a) => animate::run(a),
         Command::Demo(a) => animate::demo(a),
         Command::Bench(a) => bench::run_bench(a),
+        Command::Precompute(a) => precompute::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {}", error_message(&e));

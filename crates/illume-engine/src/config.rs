@@ -20,6 +20,7 @@
 
 use crate::TechniqueKind;
 use illume_photon_stream::PhotonStreamSettings;
+use illume_precomputed::PrecomputedSettings;
 use illume_radiance_cache::RadianceCacheSettings;
 use illume_reference::ReferenceSettings;
 use illume_render::RenderSettings;
@@ -43,6 +44,8 @@ pub struct Config {
     pub selective: SelectiveSettings,
     /// Temporal radiance caching (`[radiance_cache]`).
     pub radiance_cache: RadianceCacheSettings,
+    /// Precomputed indirect light for a day of sun (`[precomputed]`).
+    pub precomputed: PrecomputedSettings,
 }
 
 /// Why a configuration was rejected.
@@ -217,7 +220,8 @@ impl Config {
         self.reference.validate().map_err(|e| e.to_string())?;
         self.photon_stream.validate().map_err(|e| e.to_string())?;
         self.selective.validate().map_err(|e| e.to_string())?;
-        self.radiance_cache.validate().map_err(|e| e.to_string())
+        self.radiance_cache.validate().map_err(|e| e.to_string())?;
+        self.precomputed.validate().map_err(|e| e.to_string())
     }
 
     /// [`Config::check`], the error naming `source` (the file, or `--set`).
@@ -236,6 +240,7 @@ impl Config {
             TechniqueKind::PhotonStream => &self.photon_stream,
             TechniqueKind::Selective => &self.selective,
             TechniqueKind::RadianceCache => &self.radiance_cache,
+            TechniqueKind::Precomputed => &self.precomputed,
         }
     }
 
@@ -246,6 +251,7 @@ impl Config {
             TechniqueKind::PhotonStream => &mut self.photon_stream,
             TechniqueKind::Selective => &mut self.selective,
             TechniqueKind::RadianceCache => &mut self.radiance_cache,
+            TechniqueKind::Precomputed => &mut self.precomputed,
         }
     }
 

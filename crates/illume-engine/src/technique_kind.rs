@@ -4,6 +4,7 @@
 
 use crate::{Config, EngineError};
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
+use illume_precomputed::{Precomputed, PrecomputedSettings};
 use illume_radiance_cache::{RadianceCache, RadianceCacheSettings};
 use illume_reference::{ReferenceSettings, ReferenceTechnique};
 use illume_scene::Timeline;
@@ -27,6 +28,9 @@ pub enum TechniqueKind {
     /// Temporal radiance caching (Gautron et al. 2006), the offline technique for
     /// animations known in advance (in progress: `per_frame` and `reuse` modes).
     RadianceCache,
+    /// Precomputed indirect light for a day of sun, PCA-compressed (Bahnsen et al.
+    /// 2012): needs a scene with a `[sun]` and a `.illumepc` file (`--data`).
+    Precomputed,
 }
 
 impl TechniqueKind {
@@ -36,6 +40,7 @@ impl TechniqueKind {
         TechniqueKind::PhotonStream,
         TechniqueKind::Selective,
         TechniqueKind::RadianceCache,
+        TechniqueKind::Precomputed,
     ];
 
     /// The technique's one name (its crate's `NAME`).
@@ -45,6 +50,7 @@ impl TechniqueKind {
             TechniqueKind::PhotonStream => illume_photon_stream::NAME,
             TechniqueKind::Selective => illume_selective::NAME,
             TechniqueKind::RadianceCache => illume_radiance_cache::NAME,
+            TechniqueKind::Precomputed => illume_precomputed::NAME,
         }
     }
 
@@ -55,6 +61,7 @@ impl TechniqueKind {
             TechniqueKind::PhotonStream => PhotonStreamSettings::presets(),
             TechniqueKind::Selective => SelectiveSettings::presets(),
             TechniqueKind::RadianceCache => RadianceCacheSettings::presets(),
+            TechniqueKind::Precomputed => PrecomputedSettings::presets(),
         }
     }
 
@@ -69,6 +76,7 @@ impl TechniqueKind {
             TechniqueKind::PhotonStream => table::<PhotonStreamSettings>(name),
             TechniqueKind::Selective => table::<SelectiveSettings>(name),
             TechniqueKind::RadianceCache => table::<RadianceCacheSettings>(name),
+            TechniqueKind::Precomputed => table::<PrecomputedSettings>(name),
         }
     }
 
@@ -80,6 +88,7 @@ impl TechniqueKind {
             TechniqueKind::PhotonStream => PhotonStreamSettings::WORK_UNIT,
             TechniqueKind::Selective => SelectiveSettings::WORK_UNIT,
             TechniqueKind::RadianceCache => RadianceCacheSettings::WORK_UNIT,
+            TechniqueKind::Precomputed => PrecomputedSettings::WORK_UNIT,
         }
     }
 
@@ -92,6 +101,7 @@ impl TechniqueKind {
             }
             // The offline technique (for now it uses only the timeline's image size).
             TechniqueKind::RadianceCache => true,
+            TechniqueKind::Precomputed => true,
         }
     }
 
@@ -122,6 +132,18 @@ impl TechniqueKind {
                 Box::new(
                     RadianceCache::new(&world, timeline, config.radiance_cache.clone())
                         .map_err(|e| wrap(e.into()))?,
+                )
+            }
+            TechniqueKind::Precomputed => {
+                let world = world.read().unwrap_or_else(|e| e.into_inner());
+                Box::new(
+                    Precomputed::new(
+                        &world,
+                        config.precomputed.clone(),
+                        timeline.width(),
+                        timeline.height(),
+                    )
+                    .map_err(|e| wrap(e.into()))?,
                 )
             }
         })

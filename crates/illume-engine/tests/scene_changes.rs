@@ -36,7 +36,12 @@ fn mean_over(img: &RgbImage, mask: &[bool]) -> Rgb {
 
 #[test]
 fn every_technique_follows_an_object_added_then_removed() {
-    for &kind in TechniqueKind::ALL {
+    // precomputed needs a scene with a sun path and does not follow added objects by
+    // design (Bahnsen et al. §2: dynamic objects leave indirect light unchanged).
+    for &kind in TechniqueKind::ALL
+        .iter()
+        .filter(|k| **k != TechniqueKind::Precomputed)
+    {
         let scene = illume_scene::builtin::load("cornell-spot").unwrap();
         let sphere = scene
             .instances

@@ -21,6 +21,7 @@
 //! | `flip` | mean LDR-FLIP, 67.02 pixels per degree by default | inputs clamped to [0, 1] |
 //! | `hdr-flip` | mean HDR-FLIP, ACES, automatic exposures | matches NVIDIA's reference implementation to < 2e-6 on the test set |
 //! | flicker | `mean_p max(0, abs(ΔY_test) − abs(ΔY_ref))` per frame pair, `Y` = Rec.709 luminance | see [`temporal::Flicker`] |
+//! | `yee` | pixels that differ visibly by Yee & Newman 2004 (PerceptualDiff's model) | 8-bit inputs, see [`yee`] |
 //! | latency | frames (and seconds) from the event until the error is below a threshold for good | see [`temporal::latency_after_event`] |
 //!
 //! ```
@@ -41,6 +42,7 @@ pub mod flip;
 pub mod pixel;
 pub mod report;
 pub mod temporal;
+pub mod yee;
 
 pub use compare::{
     CompareSettings, FileComparison, FolderComparison, Metric, compare_files, compare_folders,
@@ -53,3 +55,4 @@ pub use flip::{
 };
 pub use pixel::{Peak, block_error, mse, psnr, rel_mse, rmse, ssim};
 pub use temporal::{ErrorCurve, Flicker, Latency, error_curve, flicker, latency_after_event};
+pub use yee::{YeeResult, YeeSettings, yee_diff};

@@ -304,12 +304,13 @@ impl Renderer {
             Shadows::Rays
         };
         let t_maps = Instant::now();
-        let direct = direct_light_with(
+        let direct = direct_light_sky(
             world,
             &gbuffer,
             shadows,
             s.area_light_samples,
             mix64(s.seed ^ frame_index.wrapping_mul(0x9e37)),
+            !technique.supplies_sky_light(),
         );
         drop(maps);
         let t2 = Instant::now();
@@ -353,6 +354,19 @@ pub fn direct_light_with(
     area_light_samples: u32,
     seed: u64,
 ) -> RgbImage {
+    direct_light_sky(world, gbuffer, shadows, area_light_samples, seed, true)
+}
+
+/// [`direct_light_with`], with the sky's light at surface points only when `sky` (a
+/// technique that supplies it, [`Technique::supplies_sky_light`], turns it off).
+pub fn direct_light_sky(
+    world: &World,
+    gbuffer: &GBuffer,
+    shadows: Shadows<'_>,
+    area_light_samples: u32,
+    seed: u64,
+    sky: bool,
+) -> RgbImage {
     // Jobs of a few rows: per-pixel work is ~20 ns, so finer splitting costs more in
     // scheduling than it gains in balance.
     // Pixels that see nothing see the sky (black without one).
@@ -367,7 +381,8 @@ pub fn direct_light_with(
         .map(|(i, px)| match px {
             Some(px) => {
                 let mut rng = Pcg32::new(seed, i as u64);
-                px.hit.emission + direct_at_with(world, px, shadows, area_light_samples, &mut rng)
+                px.hit.emission
+                    + direct_at_sky(world, px, shadows, area_light_samples, &mut rng, sky)
             }
             None => match &camera {
                 Some(c) => {
@@ -401,6 +416,18 @@ pub fn direct_at_with(
     shadows: Shadows<'_>,
     area_light_samples: u32,
     rng: &mut Pcg32,
+) -> Rgb {
+    direct_at_sky(world, px, shadows, area_light_samples, rng, true)
+}
+
+/// [`direct_at_with`], the sky's term only when `sky`.
+fn direct_at_sky(
+    world: &World,
+    px: &GBufferPixel,
+    shadows: Shadows<'_>,
+    area_light_samples: u32,
+    rng: &mut Pcg32,
+    sky: bool,
 ) -> Rgb {
     let hit = &px.hit;
     if hit.is_black() {
@@ -452,7 +479,7 @@ pub fn direct_at_with(
     }
     // The sky: cosine-weighted samples about the normal with shadow rays to infinity
     // (as many as area-light samples, at least one).
-    if lights.sky().is_some() {
+    if sky && lights.sky().is_some() {
         let samples = area_light_samples.max(1);
         let mut sky = Rgb::ZERO;
         for _ in 0..samples {

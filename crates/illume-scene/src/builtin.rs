@@ -20,6 +20,13 @@
 //!   light travels for 2 s, then the sphere rolls for 2 s (the glossy row of temporal
 //!   radiance caching's Table 1, in kind).
 //!
+//! * `sun-room` — a closed room (x∈[−2,2], y∈\[0,3\], z∈[−2,2]) with a window in its
+//!   south wall (+z; north is −z, see [`crate::sun`]), a table and a red cabinet (static)
+//!   and a small blue box (dynamic), lit through the window by the `[sun]` defaults
+//!   (Koldinghus, 21 June; irradiance × 10⁻³) and a uniform sky of radiance 0.05 at
+//!   sky scale 1. Scene time is seconds since local midnight (Bahnsen et al.'s scene in
+//!   kind: indirect light of a day of sun).
+//!
 //! [`SceneBuilder`] is the same construction kit the loaders use.
 
 use crate::animation::{Animation, Channel, ChannelValues, Interpolation, Trs};
@@ -27,12 +34,13 @@ use crate::model::*;
 use illume_core::{Affine3A, PI, Quat, Rgb, Vec2, Vec3};
 
 /// Names accepted by [`load`].
-pub const NAMES: [&str; 5] = [
+pub const NAMES: [&str; 6] = [
     "furnace",
     "cornell-spot",
     "cube-in-box",
     "kite",
     "glossy-box",
+    "sun-room",
 ];
 
 /// A built-in scene name that does not exist.
@@ -51,6 +59,7 @@ pub fn load(name: &str) -> Result<Scene, UnknownBuiltin> {
         "cube-in-box" => cube_in_box(),
         "kite" => kite(),
         "glossy-box" => glossy_box(),
+        "sun-room" => sun_room(),
         _ => {
             return Err(UnknownBuiltin {
                 name: name.to_owned(),
@@ -569,6 +578,147 @@ fn cornell_spot() -> Scene {
         properties: Vec::new(),
     });
     b.finish("builtin:cornell-spot")
+}
+
+/// The room of `builtin:sun-room` (see the module doc).
+fn sun_room() -> Scene {
+    let mut b = SceneBuilder::new();
+    let wall = b.material(lambert("wall", [0.7, 0.68, 0.62], false));
+    let floor = b.material(lambert("floor", [0.55, 0.4, 0.25], false));
+    let red = b.material(lambert("cabinet", [0.7, 0.12, 0.1], false));
+    let wood = b.material(lambert("table", [0.45, 0.3, 0.18], false));
+    let blue = b.material(lambert("box", [0.1, 0.2, 0.7], false));
+    // Slabs of outward-facing boxes: (name, material, centre, half sizes).
+    let slab = |b: &mut SceneBuilder,
+                name: &str,
+                m: MaterialId,
+                c: [f32; 3],
+                h: [f32; 3],
+                dynamic: bool| {
+        let mesh = b.mesh(unit_box(m, false));
+        b.placed(
+            name,
+            mesh,
+            Trs {
+                translation: Vec3::from(c),
+                rotation: Quat::IDENTITY,
+                scale: Vec3::from(h),
+            },
+            dynamic,
+        );
+    };
+    let t = 0.1; // wall half thickness
+    slab(
+        &mut b,
+        "floor",
+        floor,
+        [0.0, -t, 0.0],
+        [2.0 + 2.0 * t, t, 2.0 + 2.0 * t],
+        false,
+    );
+    slab(
+        &mut b,
+        "ceiling",
+        wall,
+        [0.0, 3.0 + t, 0.0],
+        [2.0 + 2.0 * t, t, 2.0 + 2.0 * t],
+        false,
+    );
+    slab(
+        &mut b,
+        "west",
+        wall,
+        [-2.0 - t, 1.5, 0.0],
+        [t, 1.5, 2.0],
+        false,
+    );
+    slab(
+        &mut b,
+        "east",
+        wall,
+        [2.0 + t, 1.5, 0.0],
+        [t, 1.5, 2.0],
+        false,
+    );
+    slab(
+        &mut b,
+        "north",
+        wall,
+        [0.0, 1.5, -2.0 - t],
+        [2.0, 1.5, t],
+        false,
+    );
+    // South wall around a window x∈[−1, 1], y∈[0.8, 2.4].
+    slab(
+        &mut b,
+        "south_low",
+        wall,
+        [0.0, 0.4, 2.0 + t],
+        [2.0, 0.4, t],
+        false,
+    );
+    slab(
+        &mut b,
+        "south_high",
+        wall,
+        [0.0, 2.7, 2.0 + t],
+        [2.0, 0.3, t],
+        false,
+    );
+    slab(
+        &mut b,
+        "south_west",
+        wall,
+        [-1.5, 1.6, 2.0 + t],
+        [0.5, 0.8, t],
+        false,
+    );
+    slab(
+        &mut b,
+        "south_east",
+        wall,
+        [1.5, 1.6, 2.0 + t],
+        [0.5, 0.8, t],
+        false,
+    );
+    slab(
+        &mut b,
+        "table",
+        wood,
+        [0.3, 0.38, -0.6],
+        [0.7, 0.38, 0.45],
+        false,
+    );
+    slab(
+        &mut b,
+        "cabinet",
+        red,
+        [-1.6, 0.9, -1.2],
+        [0.35, 0.9, 0.6],
+        false,
+    );
+    slab(&mut b, "box", blue, [0.9, 0.2, 0.6], [0.2, 0.2, 0.2], true);
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_y(-8f32.to_radians())
+                * Quat::from_rotation_x(-14f32.to_radians()),
+            ..Trs::from_translation(Vec3::new(0.3, 1.6, 1.8))
+        },
+    );
+    b.camera("camera", 70f32.to_radians(), cam);
+    b.scene.sky = Some(Sky::Uniform {
+        radiance: Rgb::splat(0.05),
+    });
+    let mut scene = b.finish("builtin:sun-room");
+    let sun = crate::sun::SunSettings {
+        scale: 1e-3,
+        ..Default::default()
+    };
+    // The defaults are valid.
+    let _ = scene.attach_sun(sun);
+    scene
 }
 
 fn cube_in_box() -> Scene {

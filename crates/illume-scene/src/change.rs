@@ -150,6 +150,20 @@ pub enum EditError {
     },
 }
 
+/// `sky` with its radiance multiplied by `scale` (same angular distribution).
+fn scaled_sky(sky: &Sky, scale: f32) -> Sky {
+    match sky {
+        Sky::Uniform { radiance } => Sky::Uniform {
+            radiance: *radiance * scale,
+        },
+        Sky::Equirect(map) => {
+            let mut map = (**map).clone();
+            map.texels.iter_mut().for_each(|t| *t *= scale);
+            Sky::Equirect(std::sync::Arc::new(map))
+        }
+    }
+}
+
 /// Sets a light's radiometric quantity (intensity or irradiance) to `value`.
 fn set_light_quantity(kind: &mut LightKind, value: illume_core::Rgb) {
     match kind {
@@ -209,6 +223,119 @@ impl Scene {
     /// Evaluates the active animation at time `t` \[s\] and returns what changed since the
     /// scene's previous state. Nodes not driven by the animation keep their transforms.
     pub fn set_time(&mut self, t: f64) -> Vec<SceneChange> {
+        let mut changes = self.set_animation_time(t);
+        self.apply_sun(&mut changes);
+        changes
+    }
+
+    /// Binds a `[sun]` table to the directional light named `settings.light` (created,
+    /// with its own root node, if the scene has no light of that name) and poses it at the
+    /// scene's current time. Returns the light.
+    pub fn attach_sun(
+        &mut self,
+        settings: crate::sun::SunSettings,
+    ) -> Result<LightId, crate::sun::SunError> {
+        settings.validate()?;
+        let existing = self.lights.iter().position(|l| l.name == settings.light);
+        let light = match existing {
+            Some(i) => {
+                if !matches!(self.lights[i].kind, LightKind::Directional { .. }) {
+                    return Err(crate::sun::SunError::NotDirectional(settings.light.clone()));
+                }
+                // The sun sets the node's rotation in world space: give it a root node.
+                let node = NodeId(self.nodes.len() as u32);
+                let old = self.lights[i].node;
+                let translation = self
+                    .nodes
+                    .get(old.index())
+                    .map(|n| n.world_from_node.translation.into())
+                    .unwrap_or(glam::Vec3::ZERO);
+                self.nodes.push(Node {
+                    name: format!("{} (sun path)", settings.light),
+                    parent: None,
+                    local: Trs {
+                        translation,
+                        ..Trs::IDENTITY
+                    },
+                    world_from_node: glam::Affine3A::from_translation(translation),
+                });
+                self.lights[i].node = node;
+                LightId(i as u32)
+            }
+            None => {
+                let node = NodeId(self.nodes.len() as u32);
+                self.nodes.push(Node {
+                    name: settings.light.clone(),
+                    parent: None,
+                    local: Trs::IDENTITY,
+                    world_from_node: glam::Affine3A::IDENTITY,
+                });
+                self.lights.push(Light {
+                    name: settings.light.clone(),
+                    kind: LightKind::Directional {
+                        irradiance: illume_core::Rgb::ZERO,
+                    },
+                    node,
+                    world_from_light: glam::Affine3A::IDENTITY,
+                });
+                LightId(self.lights.len() as u32 - 1)
+            }
+        };
+        self.sun = Some(SunPath {
+            settings,
+            light,
+            sky_base: self.sky.clone(),
+        });
+        let mut ignored = Vec::new();
+        self.apply_sun(&mut ignored);
+        Ok(light)
+    }
+
+    /// Poses the sun's light for the current time (if the scene has a sun), merging its
+    /// change into `changes` as one `LightChanged` from the state before.
+    fn apply_sun(&mut self, changes: &mut Vec<SceneChange>) {
+        let Some(sun) = &self.sun else {
+            return;
+        };
+        // A table that passed `attach_sun` always evaluates.
+        let Ok(state) = crate::sun::evaluate(&sun.settings, self.time) else {
+            return;
+        };
+        let id = sun.light;
+        self.sky = sun
+            .sky_base
+            .as_ref()
+            .map(|sky| scaled_sky(sky, state.sky_scale));
+        let Some(light) = self.lights.get(id.index()) else {
+            return;
+        };
+        let before = light.clone();
+        let node = light.node.index();
+        self.nodes[node].local.rotation = state.rotation;
+        self.nodes[node].world_from_node = self.nodes[node].local.to_affine();
+        let light = &mut self.lights[id.index()];
+        light.world_from_light = self.nodes[node].world_from_node;
+        set_light_quantity(&mut light.kind, state.irradiance);
+        if *light == before {
+            return;
+        }
+        let now = light.clone();
+        let existing = changes.iter_mut().find_map(|c| match c {
+            SceneChange::LightChanged { light: l, to, .. } if *l == id => Some(to),
+            _ => None,
+        });
+        match existing {
+            Some(to) => **to = now,
+            None => changes.push(SceneChange::LightChanged {
+                light: id,
+                from: Box::new(before),
+                to: Box::new(now),
+            }),
+        }
+    }
+
+    /// [`Scene::set_time`] without the sun: the active animation only.
+    fn set_animation_time(&mut self, t: f64) -> Vec<SceneChange> {
         self.time = t;
         let Some(a) = self.active_animation else {
             return self.update_world_transforms();

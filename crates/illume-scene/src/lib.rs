@@ -24,6 +24,7 @@ pub mod change;
 pub mod cutout;
 pub mod load;
 pub mod model;
+pub mod sun;
 pub mod timeline;
 
 pub use animation::{

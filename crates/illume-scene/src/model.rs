@@ -756,6 +756,22 @@ pub struct Scene {
     pub time: f64,
     /// Non-fatal problems found while loading (unsupported features ignored, defaults used).
     pub warnings: Vec<String>,
+    /// The sun path ([`crate::sun`]) that [`Scene::set_time`] applies to one directional
+    /// light, if the scene has a `[sun]` table (attached by [`Scene::attach_sun`]).
+    pub sun: Option<SunPath>,
+}
+
+/// A `[sun]` table bound to the directional light it drives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SunPath {
+    /// Where, when and how bright.
+    pub settings: crate::sun::SunSettings,
+    /// The directional light it drives (its node is a root node the sun owns).
+    pub light: LightId,
+    /// The scene's sky when the sun was attached: [`Scene::set_time`] sets the sky to it
+    /// scaled by [`crate::sun::sky_scale`] (a fixed angular distribution, so a sky image
+    /// rendered once scales exactly; Bahnsen et al. §2).
+    pub sky_base: Option<Sky>,
 }
 
 impl Default for Camera {

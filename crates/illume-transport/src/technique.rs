@@ -115,6 +115,14 @@ pub trait Technique: Send {
     fn interactive(&self) -> bool {
         false
     }
+
+    /// True when [`Technique::indirect`] already holds the sky's whole light at surface
+    /// points (direct and indirect, e.g. a precomputed sky image scaled in time): the
+    /// renderer then skips its own sky term so that nothing is counted twice. Pixels that
+    /// see nothing still show the sky. Default false.
+    fn supplies_sky_light(&self) -> bool {
+        false
+    }
 }
 
 /// A technique's settings: one serde struct, one TOML table named

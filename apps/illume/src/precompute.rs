@@ -1,0 +1,406 @@
+//! `illume precompute`: the offline part of `precomputed` (Bahnsen et al. 2012) — render
+//! a day's indirect-light keys (or one shard of them), merge shards, describe a file.
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use illume_precomputed::file::PcFile;
+use illume_precomputed::settings::{Colour, PrecomputedSettings, ScheduleKind};
+use illume_precomputed::shard::{Shard, merge, precompute_shard};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// `illume precompute SCENE … --output FILE`, or `merge` / `info`.
+#[derive(Args)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct PrecomputeArgs {
+    #[command(subcommand)]
+    action: Option<Action>,
+    #[command(flatten)]
+    run: RunArgs,
+}
+
+#[derive(Subcommand)]
+enum Action {
+    /// Check that shard files agree, gather their keys and run the PCA.
+    Merge(MergeArgs),
+    /// Describe a .illumepc file: keys, keys per hour, variance curve; --dump writes EXRs.
+    Info(InfoArgs),
+}
+
+/// Rendering the keys.
+#[derive(Args)]
+struct RunArgs {
+    /// Scene file (.gltf, .glb, .obj, .ply) or builtin:NAME (builtin:sun-room).
+    scene: Option<PathBuf>,
+    /// Latitude [degrees, north positive] (default: the scene's [sun], else 55.49).
+    #[arg(long, allow_negative_numbers = true)]
+    latitude: Option<f64>,
+    /// Longitude [degrees, east positive] (default: the scene's [sun], else 9.47).
+    #[arg(long, allow_negative_numbers = true)]
+    longitude: Option<f64>,
+    /// Date YYYY-MM-DD (default: the scene's [sun], else 2026-06-21).
+    #[arg(long)]
+    date: Option<String>,
+    /// First clock hour [hours] (default 0).
+    #[arg(long)]
+    from: Option<f64>,
+    /// Last clock hour [hours] (default 24).
+    #[arg(long)]
+    to: Option<f64>,
+    /// screen (default); cube and atlas are not implemented yet.
+    #[arg(long)]
+    domain: Option<String>,
+    /// adaptive (default) or uniform.
+    #[arg(long)]
+    schedule: Option<String>,
+    /// Key interval (uniform) or smallest interval (adaptive) [minutes] (default 5).
+    #[arg(long)]
+    step_min: Option<f64>,
+    /// Samples per pixel of each key (default 256).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// PCA components k (default 10).
+    #[arg(long)]
+    components: Option<usize>,
+    /// per-channel (default) or joint.
+    #[arg(long)]
+    colour: Option<String>,
+    /// Image width [pixels] (default: the [render] table's).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height [pixels].
+    #[arg(long)]
+    height: Option<u32>,
+    /// Render only the keys with index mod N = K into a partial file (merge them with
+    /// `illume precompute merge`).
+    #[arg(long)]
+    shard: Option<Shard>,
+    /// Extra settings, as in render: `--set precomputed.KEY=VALUE`.
+    #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
+    sets: Vec<String>,
+    /// Output file (.illumepc).
+    #[arg(long, short)]
+    output: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// The shard files.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// Output file (.illumepc).
+    #[arg(long, short)]
+    output: PathBuf,
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    /// The .illumepc file.
+    file: PathBuf,
+    /// Write each key as restored from the file (and the sky image) as EXR into DIR.
+    #[arg(long)]
+    dump: Option<PathBuf>,
+    /// Write the plots into DIR: `variance.svg` (captured variance vs k, Fig. 5) and
+    /// `keys_per_hour.svg` (Fig. 6).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+}
+
+/// Runs `illume precompute`.
+pub fn run(a: PrecomputeArgs) -> Result<()> {
+    match a.action {
+        Some(Action::Merge(m)) => run_merge(m),
+        Some(Action::Info(i)) => run_info(i),
+        None => run_precompute(a.run),
+    }
+}
+
+fn run_precompute(a: RunArgs) -> Result<()> {
+    let scene_path = a
+        .scene
+        .clone()
+        .context("illume precompute: give a SCENE (or the subcommand merge / info)")?;
+    let output = a
+        .output
+        .clone()
+        .context("illume precompute: give --output FILE")?;
+    let sets = a.sets.clone();
+    let config = illume_engine::Config::layered(&illume_engine::ConfigLayers {
+        technique: Some(illume_engine::TechniqueKind::Precomputed),
+        sets: &sets,
+        ..Default::default()
+    })?;
+    let mut s: PrecomputedSettings = config.precomputed.clone();
+    let width = a.width.unwrap_or(config.render.width);
+    let height = a.height.unwrap_or(config.render.height);
+    illume_render::check_image_size(width, height)
+        .map_err(|m| anyhow::anyhow!("--width/--height: {m}"))?;
+    if let Some(v) = a.from {
+        s.from_h = v;
+    }
+    if let Some(v) = a.to {
+        s.to_h = v;
+    }
+    if let Some(v) = a.step_min {
+        s.step_min = v;
+    }
+    if let Some(v) = a.spp {
+        s.spp = v;
+    }
+    if let Some(v) = a.components {
+        s.components = v;
+    }
+    if let Some(d) = &a.domain {
+        s.domain = toml::Value::String(d.clone())
+            .try_into()
+            .map_err(|_| anyhow::anyhow!("--domain {d}: expected screen, cube or atlas"))?;
+    }
+    if let Some(v) = &a.schedule {
+        s.schedule = match v.as_str() {
+            "uniform" => ScheduleKind::Uniform,
+            "adaptive" => ScheduleKind::Adaptive,
+            _ => anyhow::bail!("--schedule {v}: expected adaptive or uniform"),
+        };
+    }
+    if let Some(v) = &a.colour {
+        s.colour = match v.as_str() {
+            "per-channel" => Colour::PerChannel,
+            "joint" => Colour::Joint,
+            _ => anyhow::bail!("--colour {v}: expected per-channel or joint"),
+        };
+    }
+    s.validate()?;
+    let mut scene = crate::render::load_scene_with(&scene_path, None, 0.0, false, &Default::default())?;
+    // The sun: the scene's [sun] with the flags on top (or the defaults).
+    let mut sun = scene
+        .sun
+        .as_ref()
+        .map(|p| p.settings.clone())
+        .unwrap_or_default();
+    if let Some(v) = a.latitude {
+        sun.latitude_deg = v;
+    }
+    if let Some(v) = a.longitude {
+        sun.longitude_deg = v;
+    }
+    if let Some(v) = &a.date {
+        sun.date = v.clone();
+    }
+    if let Some(path) = scene.sun.take() {
+        scene.sky = path.sky_base;
+    }
+    scene.attach_sun(sun)?;
+    let world = illume_transport::World::new(scene);
+    let start = Instant::now();
+    let mut bars = crate::progress::Bars::with_spinner("precomputed PCA");
+    let file = match a.shard {
+        Some(shard) => precompute_shard(&world, &s, (width, height), shard, &mut bars)?,
+        None => illume_precomputed::precompute::precompute(&world, &s, (width, height), &mut bars)?,
+    };
+    bars.finish();
+    file.write(&output)?;
+    let bytes = std::fs::metadata(&output).map(|m| m.len()).unwrap_or(0);
+    eprintln!(
+        "{}: {} keys ({} dark), {:.1} s, {:.1} MB{}",
+        output.display(),
+        file.header.keys.len(),
+        file.header.keys.iter().filter(|k| k.dark).count(),
+        start.elapsed().as_secs_f64(),
+        bytes as f64 / 1e6,
+        match a.shard {
+            Some(sh) => format!(", shard {}/{}", sh.index, sh.count),
+            None => String::new(),
+        }
+    );
+    Ok(())
+}
+
+fn run_merge(m: MergeArgs) -> Result<()> {
+    let parts = m
+        .parts
+        .iter()
+        .map(|p| Ok((p.clone(), PcFile::read(p)?)))
+        .collect::<Result<Vec<_>>>()?;
+    let start = Instant::now();
+    let mut spinner = crate::progress::spinner("precomputed PCA");
+    let file = merge(&parts)?;
+    spinner.finish_and_clear();
+    let _ = &mut spinner;
+    file.write(&m.output)?;
+    eprintln!(
+        "{}: merged {} shards, {} keys, k = {}, PCA {:.2} s",
+        m.output.display(),
+        parts.len(),
+        file.header.keys.len(),
+        file.header.components,
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+fn run_info(i: InfoArgs) -> Result<()> {
+    let start = Instant::now();
+    let file = PcFile::read(&i.file)?;
+    let load_s = start.elapsed().as_secs_f64();
+    let h = &file.header;
+    let bytes = std::fs::metadata(&i.file).map(|m| m.len()).unwrap_or(0);
+    println!(
+        "file        {} ({:.2} MB, read in {load_s:.3} s)",
+        i.file.display(),
+        bytes as f64 / 1e6
+    );
+    println!(
+        "kind        {} (shard {}/{})",
+        h.kind, h.shard[0], h.shard[1]
+    );
+    println!(
+        "scene       {} (fingerprint {})",
+        h.scene_source, h.scene_fingerprint
+    );
+    println!("domain      {} {}×{}", h.domain, h.width, h.height);
+    println!("exposure    {}", h.exposure);
+    let dark = h.keys.iter().filter(|k| k.dark).count();
+    println!(
+        "keys        {} ({} dark, {} in the PCA)",
+        h.keys.len(),
+        dark,
+        h.keys.len() - dark
+    );
+    // Keys per clock hour (Fig. 6).
+    let mut per_hour = std::collections::BTreeMap::<i64, usize>::new();
+    for k in h.keys.iter().filter(|k| !k.dark) {
+        *per_hour.entry(k.hours.floor() as i64).or_default() += 1;
+    }
+    let line: Vec<String> = per_hour
+        .iter()
+        .map(|(hr, n)| format!("{hr:02}h:{n}"))
+        .collect();
+    println!("keys/hour   {}", line.join(" "));
+    println!("components  {} ({})", h.components, h.colour);
+    for (g, eig) in h.eigenvalues.iter().enumerate() {
+        let curve: Vec<String> = [1, 2, 5, 10, 20]
+            .iter()
+            .filter(|&&k| k <= eig.len())
+            .map(|&k| {
+                format!(
+                    "k={k}: {:.2} %",
+                    100.0 * illume_precomputed::pca::variance_captured(eig, k)
+                )
+            })
+            .collect();
+        println!("variance[{g}] {}", curve.join(", "));
+    }
+    let raw = (h.keys.len() - dark) as f64 * h.width as f64 * h.height as f64 * 3.0 * 4.0;
+    let stored: f64 = file
+        .sections
+        .iter()
+        .map(|s| s.values.len() as f64 * 4.0)
+        .sum();
+    if h.kind == "pca" && raw > 0.0 {
+        println!(
+            "compression {:.1} % (raw keys {:.2} MB, stored {:.2} MB)",
+            100.0 * (1.0 - stored / raw),
+            raw / 1e6,
+            stored / 1e6
+        );
+    }
+    if let Some(dir) = &i.dump {
+        dump(&file, dir)?;
+    }
+    if let Some(dir) = &i.plot {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let names = ["r", "g", "b"];
+        let series: Vec<illume_metrics::report::Series> = h
+            .eigenvalues
+            .iter()
+            .enumerate()
+            .map(|(g, eig)| illume_metrics::report::Series {
+                name: if h.eigenvalues.len() == 1 {
+                    "rgb".into()
+                } else {
+                    names.get(g).copied().unwrap_or("?").into()
+                },
+                points: (1..=eig.len().min(40))
+                    .map(|k| {
+                        (
+                            k as f64,
+                            100.0 * illume_precomputed::pca::variance_captured(eig, k),
+                        )
+                    })
+                    .collect(),
+            })
+            .collect();
+        illume_metrics::report::plot_lines(
+            &dir.join("variance.svg"),
+            "variance captured by the first k eigenvectors",
+            "k",
+            "variance [%]",
+            &series,
+        )?;
+        let bars: Vec<illume_metrics::report::Bar> = (0..24)
+            .map(|hr| illume_metrics::report::Bar {
+                label: format!("{hr:02}"),
+                value: per_hour.get(&hr).copied().unwrap_or(0) as f64,
+            })
+            .collect();
+        illume_metrics::report::plot_bars(
+            &dir.join("keys_per_hour.svg"),
+            "keys per clock hour",
+            "keys",
+            &bars,
+        )?;
+        eprintln!(
+            "wrote variance.svg and keys_per_hour.svg into {}",
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Restored keys (mean + Σ images · coefficients, clamped at 0) and the sky as EXR.
+fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
+    use illume_core::Rgb;
+    use illume_core::image::RgbImage;
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let h = &file.header;
+    let pixels = h.width as usize * h.height as usize;
+    let keys = h.keys.len();
+    let k = h.components as usize;
+    let joint = h.colour == "joint";
+    let names: &[&str] = if joint { &["rgb"] } else { &["r", "g", "b"] };
+    let section = |name: &str| {
+        file.section(name)
+            .map(|s| s.values.as_slice())
+            .with_context(|| format!("section {name} missing"))
+    };
+    for t in 0..keys {
+        let mut px = vec![Rgb::ZERO; pixels];
+        for (g, name) in names.iter().enumerate() {
+            let mean = section(&format!("mean.{name}"))?;
+            let temporal = section(&format!("temporal.{name}"))?;
+            let images = section(&format!("images.{name}"))?;
+            let rows = if joint { 3 * pixels } else { pixels };
+            for r in 0..rows {
+                let mut v = mean[t];
+                for c in 0..k {
+                    v += images.get(c * rows + r).copied().unwrap_or(0.0) * temporal[c * keys + t];
+                }
+                let (p, ch) = if joint { (r / 3, r % 3) } else { (r, g) };
+                px[p][ch] = v.max(0.0);
+            }
+        }
+        let img = RgbImage::from_vec(h.width, h.height, px).context("image size")?;
+        let path = dir.join(format!("key_{t:03}_{:05.2}h.exr", h.keys[t].hours));
+        img.write(&path, &Default::default())?;
+    }
+    if let Ok(sky) = section("sky") {
+        let px = sky
+            .chunks_exact(3)
+            .map(|c| Rgb::new(c[0], c[1], c[2]))
+            .collect();
+        let img = RgbImage::from_vec(h.width, h.height, px).context("image size")?;
+        img.write(&dir.join("sky.exr"), &Default::default())?;
+    }
+    eprintln!("wrote {} keys and the sky into {}", keys, dir.display());
+    Ok(())
+}

@@ -1,0 +1,490 @@
+//! The `.illumepc` file: precomputed keys (a shard's raw key images, `kind = "partial"`)
+//! or their PCA (`kind = "pca"`), versioned and checksummed.
+//!
+//! # Layout (all integers little-endian)
+//!
+//! | bytes | content |
+//! | --- | --- |
+//! | 8 | magic `ILLUMEPC` |
+//! | 4 | format version, u32 ([`VERSION`]) |
+//! | 4 | header length H, u32 |
+//! | H | the header: UTF-8 TOML ([`Header`]) |
+//! | 8 | FNV-1a 64 of the header bytes, u64 |
+//! | … | the sections, back to back, in the header's order: `values` numbers each, f32 (4 bytes) or IEEE half f16 (2 bytes) |
+//!
+//! The header lists every section (name, format, number of values, FNV-1a 64 of its bytes
+//! as 16 hex digits), the settings, the sun, the domain and sizes, the keys with their
+//! dark flags, the eigenvalues, the exposure and the static-scene fingerprint
+//! ([`scene_fingerprint`]). A reader checks, in this order: magic, version, header
+//! checksum, header, total length, each section's checksum; each failure is its own
+//! [`FileError`] naming the file. Files are written to a temporary sibling and renamed.
+
+use illume_scene::Scene;
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The 8 bytes every `.illumepc` file starts with.
+pub const MAGIC: &[u8; 8] = b"ILLUMEPC";
+/// The format version this build reads and writes.
+pub const VERSION: u32 = 1;
+/// Largest file read \[bytes\] (an 8K atlas of 288 keys is ~40 GB raw; PCA files are small).
+pub const MAX_FILE_BYTES: u64 = 64 << 30;
+
+/// What can be wrong with a `.illumepc` file. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    /// It could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// It does not start with `ILLUMEPC`.
+    #[error("{path}: not an .illumepc file (the first 8 bytes are not ILLUMEPC)")]
+    Magic {
+        /// The file.
+        path: PathBuf,
+    },
+    /// It was written by another format version.
+    #[error(
+        "{path}: .illumepc format version {found}; this build reads version {expected} (precompute it again)"
+    )]
+    Version {
+        /// The file.
+        path: PathBuf,
+        /// Its version.
+        found: u32,
+        /// Ours.
+        expected: u32,
+    },
+    /// It ends early.
+    #[error("{path}: truncated: {needed} bytes needed for {what}, the file has {got}")]
+    Truncated {
+        /// The file.
+        path: PathBuf,
+        /// What was being read.
+        what: String,
+        /// Bytes needed up to the end of it.
+        needed: u64,
+        /// Bytes in the file.
+        got: u64,
+    },
+    /// A checksum does not match (a flipped byte).
+    #[error(
+        "{path}: checksum of {what} does not match (expected {expected:016x}, found {found:016x}): the file is corrupt"
+    )]
+    Checksum {
+        /// The file.
+        path: PathBuf,
+        /// The header or a section name.
+        what: String,
+        /// Stored checksum.
+        expected: u64,
+        /// Checksum of the bytes read.
+        found: u64,
+    },
+    /// The header is not valid TOML of the expected shape.
+    #[error("{path}: header: {message}")]
+    Header {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// Bytes after the last section.
+    #[error("{path}: {extra} bytes after the last section")]
+    Trailing {
+        /// The file.
+        path: PathBuf,
+        /// How many.
+        extra: u64,
+    },
+    /// It was precomputed for another scene (or the static scene changed since).
+    #[error(
+        "{path}: precomputed for another scene: the file's static-scene fingerprint is {found} ({found_source}), the scene's is {expected} ({expected_source})"
+    )]
+    OtherScene {
+        /// The file.
+        path: PathBuf,
+        /// The scene's fingerprint.
+        expected: String,
+        /// Where the scene came from.
+        expected_source: String,
+        /// The file's fingerprint.
+        found: String,
+        /// The source named in the file.
+        found_source: String,
+    },
+    /// The file's camera or image size differs from the run's (screen and cube domains).
+    #[error("{path}: {what} differs: the file has {found}, this run has {expected}")]
+    Mismatch {
+        /// The file.
+        path: PathBuf,
+        /// What differs.
+        what: String,
+        /// The run's value.
+        expected: String,
+        /// The file's value.
+        found: String,
+    },
+}
+
+/// How a section's numbers are stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SectionFormat {
+    /// 4-byte IEEE single.
+    F32,
+    /// 2-byte IEEE half (values rounded to nearest; 11 significant bits).
+    F16,
+}
+
+/// One section as listed in the header.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SectionInfo {
+    /// Name (`mean.r`, `temporal.r`, `images.r`, `key.12`, `sky`, …).
+    pub name: String,
+    /// Storage.
+    pub format: SectionFormat,
+    /// Number of values.
+    pub values: u64,
+    /// FNV-1a 64 of the stored bytes, 16 hex digits.
+    pub fnv1a64: String,
+}
+
+/// One key as listed in the header.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeyInfo {
+    /// Local clock time \[hours\].
+    pub hours: f64,
+    /// Adaptive level that added it (0 for uniform keys).
+    pub level: u32,
+    /// Sun below the horizon: exactly black, not rendered, not in the PCA.
+    pub dark: bool,
+}
+
+/// The TOML header.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Header {
+    /// `partial` (a shard's raw keys) or `pca` (the merged, compressed file).
+    pub kind: String,
+    /// The scene's source (`builtin:sun-room`, a path), for messages.
+    pub scene_source: String,
+    /// Static-scene fingerprint ([`scene_fingerprint`]), 16 hex digits.
+    pub scene_fingerprint: String,
+    /// The technique settings used (the `[precomputed]` table).
+    pub settings: toml::Table,
+    /// The `[sun]` table.
+    pub sun: toml::Table,
+    /// `screen`, `cube` or `atlas`.
+    pub domain: String,
+    /// Width of one key image (screen: pixels; cube: face side; atlas: texels).
+    pub width: u32,
+    /// Height of one key image.
+    pub height: u32,
+    /// Values per texel (3: RGB).
+    pub channels: u32,
+    /// The camera the keys were rendered from (screen and cube): `world_from_camera` as
+    /// 12 numbers (column-major 3×4) and the vertical field of view \[rad\].
+    pub camera: Vec<f32>,
+    /// Exposure at which key images are compared with the Yee metric (`to_srgb8`).
+    pub exposure: f32,
+    /// Shard `[K, N]` of a partial file (`[0, 1]`: unsharded).
+    pub shard: [u32; 2],
+    /// The keys, sorted by time.
+    pub keys: Vec<KeyInfo>,
+    /// PCA: kept components k.
+    pub components: u32,
+    /// PCA: `per-channel` or `joint`.
+    pub colour: String,
+    /// PCA: all eigenvalues, largest first, per channel group.
+    pub eigenvalues: Vec<Vec<f64>>,
+    /// The sections that follow the header, in order.
+    pub sections: Vec<SectionInfo>,
+}
+
+/// A section's name and numbers, in memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Section {
+    /// Its name.
+    pub name: String,
+    /// Storage on disk.
+    pub format: SectionFormat,
+    /// Its numbers (f16 sections hold the rounded values).
+    pub values: Vec<f32>,
+}
+
+/// A whole file in memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PcFile {
+    /// The header (its `sections` list is rebuilt on write).
+    pub header: Header,
+    /// The sections.
+    pub sections: Vec<Section>,
+}
+
+/// FNV-1a 64 (as `illume-bench`'s cache keys).
+pub fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}
+
+/// The canonical text of the static scene (built like `illume-bench`'s `CacheKey`: one
+/// line per item, f32 in Debug form, which round-trips exactly) and its FNV-1a 64 as 16
+/// hex digits. Covers static instances (name, mesh, transform), every mesh's vertices and
+/// indices (as a hash), materials and the sky; not dynamic instances, lights or camera.
+pub fn scene_fingerprint(scene: &Scene) -> (String, String) {
+    let mut text = String::new();
+    let _ = writeln!(text, "illumepc {VERSION}");
+    for inst in scene.instances.iter().filter(|i| !i.dynamic) {
+        let _ = writeln!(
+            text,
+            "instance {:?} mesh {} mask {} {:?}",
+            inst.name,
+            inst.mesh.index(),
+            inst.mask,
+            inst.world_from_object
+        );
+    }
+    for (i, mesh) in scene.meshes.iter().enumerate() {
+        let mut bytes = Vec::with_capacity(mesh.positions.len() * 12 + mesh.indices.len() * 12);
+        for p in &mesh.positions {
+            for c in p.to_array() {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        for t in &mesh.indices {
+            for v in t {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        for m in &mesh.triangle_materials {
+            bytes.extend_from_slice(&m.0.to_le_bytes());
+        }
+        let _ = writeln!(text, "mesh {i} {:?} {:016x}", mesh.name, fnv1a64(&bytes));
+    }
+    for m in &scene.materials {
+        let _ = writeln!(text, "material {m:?}");
+    }
+    // The sky at scale 1: a sun path scales the scene's sky with the time of day.
+    let sky = scene.sun.as_ref().map_or(&scene.sky, |sun| &sun.sky_base);
+    let _ = writeln!(text, "sky {sky:?}");
+    let hash = format!("{:016x}", fnv1a64(text.as_bytes()));
+    (text, hash)
+}
+
+fn encode(section: &Section) -> Vec<u8> {
+    match section.format {
+        SectionFormat::F32 => section
+            .values
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect(),
+        SectionFormat::F16 => section
+            .values
+            .iter()
+            .flat_map(|v| half::f16::from_f32(*v).to_le_bytes())
+            .collect(),
+    }
+}
+
+impl PcFile {
+    /// The file's bytes (the header's section list rebuilt from `sections`).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let encoded: Vec<Vec<u8>> = self.sections.iter().map(encode).collect();
+        let mut header = self.header.clone();
+        header.sections = self
+            .sections
+            .iter()
+            .zip(&encoded)
+            .map(|(s, bytes)| SectionInfo {
+                name: s.name.clone(),
+                format: s.format,
+                values: s.values.len() as u64,
+                fnv1a64: format!("{:016x}", fnv1a64(bytes)),
+            })
+            .collect();
+        // A header always serialises (plain data, finite or not: TOML has nan/inf).
+        let text = toml::to_string(&header).unwrap_or_default();
+        let mut out =
+            Vec::with_capacity(24 + text.len() + encoded.iter().map(Vec::len).sum::<usize>());
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&VERSION.to_le_bytes());
+        out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+        out.extend_from_slice(text.as_bytes());
+        out.extend_from_slice(&fnv1a64(text.as_bytes()).to_le_bytes());
+        for bytes in encoded {
+            out.extend_from_slice(&bytes);
+        }
+        out
+    }
+
+    /// Writes the file (temporary sibling, then rename).
+    pub fn write(&self, path: &Path) -> Result<(), FileError> {
+        illume_core::atomic::write_file(path, self.to_bytes()).map_err(|source| FileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    /// Reads and checks a file.
+    pub fn read(path: &Path) -> Result<Self, FileError> {
+        let bytes = illume_core::files::read_regular(path, MAX_FILE_BYTES).map_err(|source| {
+            FileError::Io {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+        Self::from_bytes(path, &bytes)
+    }
+
+    /// Parses and checks a file's bytes; `path` is only named in errors.
+    pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
+        let p = || path.to_path_buf();
+        let got = bytes.len() as u64;
+        let truncated = |what: &str, needed: u64| FileError::Truncated {
+            path: p(),
+            what: what.to_string(),
+            needed,
+            got,
+        };
+        if bytes.len() < 8 {
+            // Too short even for the magic: call it what it starts like.
+            if MAGIC.starts_with(bytes) && !bytes.is_empty() {
+                return Err(truncated("the magic", 8));
+            }
+            return Err(FileError::Magic { path: p() });
+        }
+        if &bytes[..8] != MAGIC {
+            return Err(FileError::Magic { path: p() });
+        }
+        if bytes.len() < 16 {
+            return Err(truncated("the version and header length", 16));
+        }
+        let u32_at =
+            |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+        let version = u32_at(8);
+        if version != VERSION {
+            return Err(FileError::Version {
+                path: p(),
+                found: version,
+                expected: VERSION,
+            });
+        }
+        let header_len = u32_at(12) as usize;
+        let header_end = 16 + header_len;
+        if bytes.len() < header_end + 8 {
+            return Err(truncated("the header", header_end as u64 + 8));
+        }
+        let header_bytes = &bytes[16..header_end];
+        let mut sum = [0u8; 8];
+        sum.copy_from_slice(&bytes[header_end..header_end + 8]);
+        let (expected, found) = (u64::from_le_bytes(sum), fnv1a64(header_bytes));
+        if expected != found {
+            return Err(FileError::Checksum {
+                path: p(),
+                what: "the header".into(),
+                expected,
+                found,
+            });
+        }
+        let text = std::str::from_utf8(header_bytes).map_err(|e| FileError::Header {
+            path: p(),
+            message: format!("not UTF-8: {e}"),
+        })?;
+        let header: Header = toml::from_str(text).map_err(|e| FileError::Header {
+            path: p(),
+            message: e.to_string(),
+        })?;
+        let mut offset = header_end as u64 + 8;
+        let mut sections = Vec::with_capacity(header.sections.len());
+        for info in &header.sections {
+            let size = match info.format {
+                SectionFormat::F32 => 4,
+                SectionFormat::F16 => 2,
+            };
+            let end = info
+                .values
+                .checked_mul(size)
+                .and_then(|n| n.checked_add(offset))
+                .ok_or_else(|| FileError::Header {
+                    path: p(),
+                    message: format!("section {} is too large", info.name),
+                })?;
+            if end > got {
+                return Err(truncated(&format!("section {}", info.name), end));
+            }
+            let data = &bytes[offset as usize..end as usize];
+            let expected =
+                u64::from_str_radix(&info.fnv1a64, 16).map_err(|_| FileError::Header {
+                    path: p(),
+                    message: format!(
+                        "section {}: checksum {:?} is not 16 hex digits",
+                        info.name, info.fnv1a64
+                    ),
+                })?;
+            let found = fnv1a64(data);
+            if expected != found {
+                return Err(FileError::Checksum {
+                    path: p(),
+                    what: format!("section {}", info.name),
+                    expected,
+                    found,
+                });
+            }
+            let values = match info.format {
+                SectionFormat::F32 => data
+                    .chunks_exact(4)
+                    .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                    .collect(),
+                SectionFormat::F16 => data
+                    .chunks_exact(2)
+                    .map(|c| half::f16::from_le_bytes([c[0], c[1]]).to_f32())
+                    .collect(),
+            };
+            sections.push(Section {
+                name: info.name.clone(),
+                format: info.format,
+                values,
+            });
+            offset = end;
+        }
+        if offset < got {
+            return Err(FileError::Trailing {
+                path: p(),
+                extra: got - offset,
+            });
+        }
+        Ok(Self { header, sections })
+    }
+
+    /// The section called `name`.
+    pub fn section(&self, name: &str) -> Option<&Section> {
+        self.sections.iter().find(|s| s.name == name)
+    }
+
+    /// Checks that the file was precomputed for `scene`'s static part.
+    pub fn check_scene(&self, path: &Path, scene: &Scene) -> Result<(), FileError> {
+        let (_, fingerprint) = scene_fingerprint(scene);
+        if fingerprint == self.header.scene_fingerprint {
+            return Ok(());
+        }
+        Err(FileError::OtherScene {
+            path: path.to_path_buf(),
+            expected: fingerprint,
+            expected_source: scene.source.clone(),
+            found: self.header.scene_fingerprint.clone(),
+            found_source: self.header.scene_source.clone(),
+        })
+    }
+}

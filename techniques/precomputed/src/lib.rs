@@ -1,0 +1,37 @@
+//! `precomputed`: precomputed indirect light for a day of sun, PCA-compressed, interpolated
+//! at run time — Bahnsen, Dewilde, Pedersen, Tranchet & Madsen, *Realtime global
+//! illumination using compressed pre-computed indirect illumination textures*, WSCG 2012.
+//!
+//! A frame at time t is Eq. 2 of the paper:
+//! `L(t) = L_direct(t) + s(t)·L_sky + (1 − α)·L_N + α·L_{N+1}`:
+//! the sun's direct light and shadows are the renderer's, the sky is rendered once and
+//! scaled by s(t) ([`illume_scene::sun::sky_scale`]), and the sun's indirect light is
+//! interpolated between the two nearest precomputed key frames.
+//!
+//! This crate holds the parts that do not need a renderer:
+//!
+//! - [`pca`]: the PCA of the key images (§3.2, Fig. 5);
+//! - [`schedule`]: uniform (Eq. 1, 3) and adaptive (§3.2, Fig. 6) key times, and the
+//!   binary search + α of non-uniform keys;
+//! - [`file`]: the versioned `.illumepc` file (magic, TOML header, checksummed sections).
+//!
+//! # Limits (as in the paper)
+//! One day and one place per file; static geometry; Lambertian materials only (§3.1: no
+//! reflective objects); dynamic objects leave the indirect light unchanged (they neither
+//! block it nor bleed colour).
+
+pub mod error;
+pub mod file;
+pub mod pca;
+pub mod precompute;
+pub mod schedule;
+pub mod settings;
+pub mod shard;
+pub mod state;
+
+pub use error::PrecomputedError;
+pub use settings::PrecomputedSettings;
+pub use state::Precomputed;
+
+/// The technique's one name.
+pub const NAME: &str = "precomputed";

@@ -1,0 +1,423 @@
+//! Rendering the keys and the sky image, and compressing them into a file
+//! (Bahnsen et al. §3.1 "Tips and tricks", §3.2).
+//!
+//! A key is the reference path tracer's indirect image (light reflected ≥ 2 times) of the
+//! sun alone at the key's time: the paper subtracted direct-only renders from GI renders,
+//! [`ReferenceRenderer::images`]'s `indirect` is that difference without the noise of a
+//! subtraction. The precompute works on a private copy of the scene:
+//! - dynamic instances are masked out (like the paper's teapot, they neither block nor
+//!   bleed indirect light);
+//! - the sky is off for keys, and the sun off for the one sky image;
+//! - a key whose sun is at or below the horizon is exactly black, flagged dark, not
+//!   rendered and kept out of the PCA;
+//! - key t's samples are seeded from (seed, time): any machine renders the same key.
+
+use crate::PrecomputedError;
+use crate::file::{Header, KeyInfo, PcFile, Section, SectionFormat, scene_fingerprint};
+use crate::pca::{self, Components, Precision};
+use crate::schedule::KeyTime;
+use crate::settings::{Colour, PrecomputedSettings};
+use illume_core::image::RgbImage;
+use illume_core::sampling::mix64;
+use illume_reference::{ReferenceRenderer, ReferenceSettings};
+use illume_scene::sun::SunSettings;
+use illume_scene::{LightKind, Scene};
+use illume_transport::World;
+
+/// One rendered (or dark) key.
+#[derive(Clone, Debug)]
+pub struct Key {
+    /// When.
+    pub time: KeyTime,
+    /// Sun at or below the horizon: black, not rendered.
+    pub dark: bool,
+    /// The indirect image (all zero when dark).
+    pub image: RgbImage,
+}
+
+/// The scene's sun table, or an error naming the scene.
+pub fn sun_of(scene: &Scene) -> Result<SunSettings, PrecomputedError> {
+    scene
+        .sun
+        .as_ref()
+        .map(|s| s.settings.clone())
+        .ok_or_else(|| PrecomputedError::NoSun(scene.source.clone()))
+}
+
+/// The precompute's private scene: dynamic instances masked out.
+fn static_scene(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    for inst in s.instances.iter_mut().filter(|i| i.dynamic) {
+        inst.mask = 0;
+    }
+    s
+}
+
+/// Samples' seed of the key at `hours`.
+pub fn key_seed(seed: u64, hours: f64) -> u64 {
+    mix64(seed ^ mix64(hours.to_bits()))
+}
+
+fn indirect(world: &World, scene: Scene, spp: u32, seed: u64, size: (u32, u32)) -> RgbImage {
+    let w = world.with_scene(scene);
+    let mut r = ReferenceRenderer::new(
+        ReferenceSettings {
+            spp,
+            seed,
+            ..Default::default()
+        },
+        size.0,
+        size.1,
+    );
+    r.add_samples(&w, spp);
+    r.images().indirect
+}
+
+/// Renders the key at clock time `time.hours` (sun only, sky off, dynamic masked).
+pub fn render_key(
+    world: &World,
+    settings: &PrecomputedSettings,
+    time: KeyTime,
+    size: (u32, u32),
+) -> Result<Key, PrecomputedError> {
+    let sun = sun_of(&world.scene)?;
+    let state = illume_scene::sun::evaluate(&sun, sun.scene_time(time.hours))?;
+    if state.position.elevation_deg <= 0.0 {
+        return Ok(Key {
+            time,
+            dark: true,
+            image: RgbImage::filled(size.0, size.1, illume_core::Rgb::ZERO),
+        });
+    }
+    let mut scene = static_scene(&world.scene);
+    if let Some(path) = scene.sun.as_mut() {
+        path.sky_base = None;
+    }
+    scene.sky = None;
+    scene.set_time(sun.scene_time(time.hours));
+    let image = indirect(
+        world,
+        scene,
+        settings.spp,
+        key_seed(settings.seed, time.hours),
+        size,
+    );
+    Ok(Key {
+        time,
+        dark: false,
+        image,
+    })
+}
+
+/// Renders the sky's whole light (direct and indirect, Bahnsen et al. §2 "the skylight
+/// … precomputed … which we scale") at sky scale 1, sun off, dynamic instances masked,
+/// emission off (the renderer adds emission): at run time it is multiplied by s(t) and
+/// the renderer skips its own sky term ([`illume_transport::Technique::supplies_sky_light`]).
+pub fn render_sky(
+    world: &World,
+    settings: &PrecomputedSettings,
+    size: (u32, u32),
+) -> Result<RgbImage, PrecomputedError> {
+    let mut scene = static_scene(&world.scene);
+    let path = scene
+        .sun
+        .take()
+        .ok_or_else(|| PrecomputedError::NoSun(scene.source.clone()))?;
+    scene.sky = path.sky_base.clone();
+    if let Some(light) = scene.lights.get_mut(path.light.index()) {
+        light.kind = LightKind::Directional {
+            irradiance: illume_core::Rgb::ZERO,
+        };
+    }
+    for m in scene.materials.iter_mut() {
+        m.emission = illume_core::Rgb::ZERO;
+        m.emissive_texture = None;
+    }
+    if scene.sky.is_none() {
+        return Ok(RgbImage::filled(size.0, size.1, illume_core::Rgb::ZERO));
+    }
+    let w = world.with_scene(scene);
+    let spp = settings.spp;
+    let mut r = ReferenceRenderer::new(
+        ReferenceSettings {
+            spp,
+            seed: mix64(settings.seed ^ 0x0073_6b79),
+            ..Default::default()
+        },
+        size.0,
+        size.1,
+    );
+    r.add_samples(&w, spp);
+    Ok(r.images().full)
+}
+
+/// The 8-bit sRGB encoding (clamped, no tone curve) of an image at `exposure` (for the Yee metric).
+pub fn to_srgb8(image: &RgbImage, exposure: f32) -> Vec<u8> {
+    illume_core::image::to_srgb8(
+        image,
+        &illume_core::image::ToneMap {
+            exposure_ev: exposure.max(1e-30).log2(),
+            curve: illume_core::image::ToneCurve::Clamp,
+        },
+    )
+}
+
+/// The header of a file for `world` with `settings` at `size`: everything but the keys
+/// and the PCA results.
+pub fn base_header(
+    world: &World,
+    settings: &PrecomputedSettings,
+    size: (u32, u32),
+) -> Result<Header, PrecomputedError> {
+    let sun = sun_of(&world.scene)?;
+    let (_, fingerprint) = scene_fingerprint(&world.scene);
+    let camera = &world.scene.camera;
+    let mut cam: Vec<f32> = camera.world_from_camera.to_cols_array().to_vec();
+    cam.push(camera.yfov_rad);
+    let table = |v: &dyn erased::Ser| v.table();
+    // The data path is where a file is read from, not how it was made.
+    let mut settings_table = table(settings);
+    settings_table.remove("data");
+    Ok(Header {
+        kind: "pca".into(),
+        scene_source: world.scene.source.clone(),
+        scene_fingerprint: fingerprint,
+        settings: settings_table,
+        sun: table(&sun),
+        domain: "screen".into(),
+        width: size.0,
+        height: size.1,
+        channels: 3,
+        camera: cam,
+        exposure: settings.exposure,
+        shard: [0, 1],
+        keys: Vec::new(),
+        components: 0,
+        colour: match settings.colour {
+            Colour::PerChannel => "per-channel".into(),
+            Colour::Joint => "joint".into(),
+        },
+        eigenvalues: Vec::new(),
+        sections: Vec::new(),
+    })
+}
+
+/// Runs the PCA over the non-dark keys and assembles the file from `base`
+/// ([`base_header`]). `keys` sorted by time.
+pub fn compress(
+    base: Header,
+    settings: &PrecomputedSettings,
+    keys: &[Key],
+    sky: &RgbImage,
+) -> Result<PcFile, PrecomputedError> {
+    let bright: Vec<usize> = (0..keys.len()).filter(|&i| !keys[i].dark).collect();
+    let channel =
+        |key: &Key, c: usize| -> Vec<f32> { key.image.pixels().iter().map(|p| p[c]).collect() };
+    let components = match settings.variance_target {
+        Some(target) => Components::VarianceTarget {
+            target,
+            max: settings.components,
+        },
+        None => Components::Fixed(settings.components),
+    };
+    let mut sections = Vec::new();
+    let mut eigenvalues = Vec::new();
+    let mut k_kept = 0;
+    // Fits of the channel groups: per channel (r, g, b) or one joint fit.
+    let groups: Vec<(String, Vec<Vec<f32>>)> = match settings.colour {
+        Colour::PerChannel => ["r", "g", "b"]
+            .iter()
+            .enumerate()
+            .map(|(c, name)| {
+                (
+                    name.to_string(),
+                    bright.iter().map(|&i| channel(&keys[i], c)).collect(),
+                )
+            })
+            .collect(),
+        Colour::Joint => vec![(
+            "rgb".to_string(),
+            bright
+                .iter()
+                .map(|&i| {
+                    keys[i]
+                        .image
+                        .pixels()
+                        .iter()
+                        .flat_map(|p| p.to_array())
+                        .collect()
+                })
+                .collect(),
+        )],
+    };
+    for (name, data) in groups {
+        let (mean, temporal_bright, images, k, eig) = if data.is_empty() {
+            (Vec::new(), Vec::new(), Vec::new(), 0, Vec::new())
+        } else {
+            let refs: Vec<&[f32]> = data.iter().map(Vec::as_slice).collect();
+            let basis = pca::fit(&refs, components, Precision::F32)?;
+            let k = basis.components();
+            (
+                basis.mean,
+                basis.temporal,
+                basis.images,
+                k,
+                basis.eigenvalues,
+            )
+        };
+        k_kept = k;
+        // Spread over all keys: dark keys get mean 0 and coefficients 0 (exactly black).
+        let t_all = keys.len();
+        let mut mean_all = vec![0f32; t_all];
+        let mut temporal_all = vec![0f32; k * t_all];
+        for (j, &i) in bright.iter().enumerate() {
+            mean_all[i] = mean[j];
+            for c in 0..k {
+                temporal_all[c * t_all + i] = temporal_bright[c * bright.len() + j];
+            }
+        }
+        sections.push(Section {
+            name: format!("mean.{name}"),
+            format: SectionFormat::F32,
+            values: mean_all,
+        });
+        sections.push(Section {
+            name: format!("temporal.{name}"),
+            format: SectionFormat::F32,
+            values: temporal_all,
+        });
+        sections.push(Section {
+            name: format!("images.{name}"),
+            format: SectionFormat::F32,
+            values: images,
+        });
+        eigenvalues.push(eig);
+    }
+    sections.push(Section {
+        name: "sky".into(),
+        format: SectionFormat::F32,
+        values: sky.pixels().iter().flat_map(|p| p.to_array()).collect(),
+    });
+    Ok(PcFile {
+        header: Header {
+            kind: "pca".into(),
+            shard: [0, 1],
+            keys: keys
+                .iter()
+                .map(|k| KeyInfo {
+                    hours: k.time.hours,
+                    level: k.time.level,
+                    dark: k.dark,
+                })
+                .collect(),
+            components: k_kept as u32,
+            eigenvalues,
+            sections: Vec::new(),
+            ..base
+        },
+        sections,
+    })
+}
+
+mod erased {
+    /// Serialises plain settings to a TOML table (empty if they cannot be).
+    pub trait Ser {
+        fn table(&self) -> toml::Table;
+    }
+    impl<T: serde::Serialize> Ser for T {
+        fn table(&self) -> toml::Table {
+            toml::Table::try_from(self).unwrap_or_default()
+        }
+    }
+}
+
+/// Whether two key images differ visibly (Yee & Newman at the file's exposure, pdiff's
+/// defaults): the adaptive schedule's test.
+pub fn differs_visibly(a: &RgbImage, b: &RgbImage, exposure: f32) -> bool {
+    let (w, h) = (a.width(), a.height());
+    illume_metrics::yee_diff(
+        w,
+        h,
+        &to_srgb8(a, exposure),
+        &to_srgb8(b, exposure),
+        &illume_metrics::YeeSettings::default(),
+    )
+    .is_ok_and(|r| r.visible)
+}
+
+fn lerp(a: &RgbImage, b: &RgbImage, alpha: f32) -> RgbImage {
+    let px = a
+        .pixels()
+        .iter()
+        .zip(b.pixels())
+        .map(|(x, y)| *x * (1.0 - alpha) + *y * alpha)
+        .collect();
+    RgbImage::from_vec(a.width(), a.height(), px).expect("same size")
+}
+
+/// The whole precompute in one process: the sky image, the keys (uniform or adaptive),
+/// the PCA. `progress` counts keys (adaptive: the total grows as levels add keys).
+pub fn precompute(
+    world: &World,
+    settings: &PrecomputedSettings,
+    size: (u32, u32),
+    progress: &mut dyn illume_core::Progress,
+) -> Result<PcFile, PrecomputedError> {
+    settings.validate()?;
+    sun_of(&world.scene)?;
+    let sky = render_sky(world, settings, size)?;
+    let keys = match settings.schedule {
+        crate::settings::ScheduleKind::Uniform => {
+            let times = crate::schedule::uniform(settings.from_h, settings.to_h, settings.step_min);
+            progress.begin("precomputed keys", times.len() as u64);
+            let mut keys = Vec::with_capacity(times.len());
+            for (i, t) in times.into_iter().enumerate() {
+                keys.push(render_key(world, settings, t, size)?);
+                progress.set(i as u64 + 1);
+            }
+            progress.end();
+            keys
+        }
+        crate::settings::ScheduleKind::Adaptive => {
+            let criterion = if settings.verify_midpoint {
+                crate::schedule::Criterion::VerifyMidpoint
+            } else {
+                crate::schedule::Criterion::Ends
+            };
+            let mut done = 0u64;
+            progress.begin("precomputed keys (adaptive)", 3);
+            let exposure = settings.exposure;
+            let keys = crate::schedule::adaptive(
+                settings.from_h,
+                settings.to_h,
+                settings.step_min,
+                criterion,
+                |times| {
+                    progress.begin("precomputed keys (adaptive)", done + times.len() as u64);
+                    progress.set(done);
+                    let mut out = Vec::with_capacity(times.len());
+                    for &hours in times {
+                        let key = render_key(world, settings, KeyTime { hours, level: 0 }, size)?;
+                        out.push(key.image);
+                        done += 1;
+                        progress.set(done);
+                    }
+                    Ok::<_, PrecomputedError>(out)
+                },
+                |a, b| differs_visibly(a, b, exposure),
+                lerp,
+            )?;
+            progress.end();
+            let sun = sun_of(&world.scene)?;
+            keys.into_iter()
+                .map(|(time, image)| {
+                    let dark = illume_scene::sun::solar_position(&sun, time.hours)
+                        .map(|p| p.elevation_deg <= 0.0)
+                        .unwrap_or(true);
+                    Key { time, dark, image }
+                })
+                .collect()
+        }
+    };
+    compress(base_header(world, settings, size)?, settings, &keys, &sky)
+}

@@ -1,0 +1,250 @@
+//! When to render keys (Bahnsen et al. Eq. 1, Eq. 3, §3.2 "Dynamically select the sampling
+//! interval", Fig. 6), and how to find the two keys around a time.
+//!
+//! Times here are local clock hours ([`illume_scene::sun::SunSettings::clock_hours`]).
+//!
+//! - **Uniform** (Eq. 1): a key every ΔT (5 min: 288 keys a day), at `from + i·ΔT` for
+//!   `i < ⌈(to − from)/ΔT⌉`.
+//! - **Adaptive** (§3.2): start from two equal intervals (keys at `from`, the middle and
+//!   `to`: level 0). At each level, every interval made at the previous level whose length
+//!   is at least 2 ΔT_min is tested: its ends are interpolated to its middle, and if the
+//!   result differs noticeably (PerceptualDiff, [`illume_metrics::yee`]) from either end,
+//!   the middle is rendered (this level's keys) and the interval splits. Keys therefore stay
+//!   ≥ ΔT_min apart. Beyond the paper, [`Criterion::VerifyMidpoint`] renders every tested
+//!   middle and keeps it only if the interpolation differs from it.
+//!
+//! Running level by level lets each level shard over machines (`--level L`).
+
+/// A key time and the adaptive level that added it (0: the three first keys; uniform
+/// keys are all level 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KeyTime {
+    /// Local clock time \[hours\].
+    pub hours: f64,
+    /// Adaptive level that added it.
+    pub level: u32,
+}
+
+/// What decides that an interval splits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Criterion {
+    /// The paper's: the ends' interpolation at the middle differs from either end.
+    #[default]
+    Ends,
+    /// Beyond the paper: the middle is rendered and the interpolation differs from it.
+    VerifyMidpoint,
+}
+
+/// Uniform keys from `from_h` to `to_h` every `step_min` minutes (Eq. 1).
+pub fn uniform(from_h: f64, to_h: f64, step_min: f64) -> Vec<KeyTime> {
+    let step = step_min / 60.0;
+    let n = ((to_h - from_h) / step - 1e-9).ceil().max(1.0) as usize;
+    (0..n)
+        .map(|i| KeyTime {
+            hours: from_h + i as f64 * step,
+            level: 0,
+        })
+        .collect()
+}
+
+/// The three keys of adaptive level 0: both ends and the middle.
+pub fn adaptive_start(from_h: f64, to_h: f64) -> Vec<KeyTime> {
+    [from_h, 0.5 * (from_h + to_h), to_h]
+        .into_iter()
+        .map(|hours| KeyTime { hours, level: 0 })
+        .collect()
+}
+
+/// Intervals (pairs of indices into `keys`, sorted by time) to test at level `level + 1`:
+/// consecutive keys of which at least one was added at `level` (older intervals passed
+/// already) and that are at least `2 · min_step_min` minutes long.
+pub fn open_intervals(keys: &[KeyTime], level: u32, min_step_min: f64) -> Vec<(usize, usize)> {
+    let min_len = 2.0 * min_step_min / 60.0 - 1e-9;
+    (1..keys.len())
+        .filter(|&i| {
+            let (a, b) = (keys[i - 1], keys[i]);
+            (a.level == level || b.level == level) && b.hours - a.hours >= min_len
+        })
+        .map(|i| (i - 1, i))
+        .collect()
+}
+
+/// The whole adaptive schedule in one process: `render` makes the images of a batch of
+/// times (it may run them in parallel), `differs(a, b)` says whether two images differ
+/// noticeably, `interpolate(a, b, α)` blends two images. Returns the keys (sorted) with
+/// their images.
+///
+/// With [`Criterion::Ends`] (the paper's), a middle is rendered only when its interval
+/// splits; with [`Criterion::VerifyMidpoint`] every tested middle is rendered and kept only
+/// if `differs(interpolation, middle)`.
+pub fn adaptive<T, E>(
+    from_h: f64,
+    to_h: f64,
+    min_step_min: f64,
+    criterion: Criterion,
+    mut render: impl FnMut(&[f64]) -> Result<Vec<T>, E>,
+    mut differs: impl FnMut(&T, &T) -> bool,
+    mut interpolate: impl FnMut(&T, &T, f32) -> T,
+) -> Result<Vec<(KeyTime, T)>, E> {
+    let start = adaptive_start(from_h, to_h);
+    let hours: Vec<f64> = start.iter().map(|k| k.hours).collect();
+    let mut keys: Vec<(KeyTime, T)> = start.into_iter().zip(render(&hours)?).collect();
+    let mut level = 0;
+    loop {
+        let times: Vec<KeyTime> = keys.iter().map(|k| k.0).collect();
+        let open = open_intervals(&times, level, min_step_min);
+        let mut middles = Vec::new();
+        match criterion {
+            Criterion::Ends => {
+                for &(a, b) in &open {
+                    let mid = interpolate(&keys[a].1, &keys[b].1, 0.5);
+                    if differs(&mid, &keys[a].1) || differs(&mid, &keys[b].1) {
+                        middles.push(0.5 * (times[a].hours + times[b].hours));
+                    }
+                }
+                let images = render(&middles)?;
+                keys.extend(middles.iter().zip(images).map(|(&hours, image)| {
+                    (
+                        KeyTime {
+                            hours,
+                            level: level + 1,
+                        },
+                        image,
+                    )
+                }));
+            }
+            Criterion::VerifyMidpoint => {
+                let candidates: Vec<f64> = open
+                    .iter()
+                    .map(|&(a, b)| 0.5 * (times[a].hours + times[b].hours))
+                    .collect();
+                let images = render(&candidates)?;
+                for ((&(a, b), &hours), image) in open.iter().zip(&candidates).zip(images) {
+                    let mid = interpolate(&keys[a].1, &keys[b].1, 0.5);
+                    if differs(&mid, &image) {
+                        middles.push(hours);
+                        keys.push((
+                            KeyTime {
+                                hours,
+                                level: level + 1,
+                            },
+                            image,
+                        ));
+                    }
+                }
+            }
+        }
+        if middles.is_empty() {
+            break;
+        }
+        keys.sort_by(|a, b| a.0.hours.total_cmp(&b.0.hours));
+        level += 1;
+    }
+    Ok(keys)
+}
+
+/// The keys around `hours` and the blend weight α of the later one (Eq. 3 generalised
+/// to non-uniform keys: a binary search, then `α = (t − t_N)/(t_{N+1} − t_N)`). Times
+/// before the first key or after the last clamp to it (α = 0 or 1). `times` must be
+/// sorted and non-empty.
+pub fn bracket(times: &[f64], hours: f64) -> (usize, usize, f32) {
+    let last = times.len().saturating_sub(1);
+    if times.is_empty() || hours <= times[0] {
+        return (0, 0, 0.0);
+    }
+    if hours >= times[last] {
+        return (last, last, 0.0);
+    }
+    // First index with times[i] > hours.
+    let next = times.partition_point(|&t| t <= hours);
+    let n = next - 1;
+    let alpha = ((hours - times[n]) / (times[next] - times[n])) as f32;
+    (n, next, alpha.clamp(0.0, 1.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A synthetic "image": one value, rendered from a function of the time.
+    fn run(f: impl Fn(f64) -> f32, criterion: Criterion) -> Vec<KeyTime> {
+        let keys = adaptive::<f32, ()>(
+            0.0,
+            24.0,
+            5.0,
+            criterion,
+            |times| Ok(times.iter().map(|&t| f(t)).collect()),
+            |a, b| (a - b).abs() > 0.01,
+            |a, b, alpha| a + (b - a) * alpha,
+        )
+        .unwrap();
+        keys.into_iter().map(|k| k.0).collect()
+    }
+
+    #[test]
+    fn uniform_has_288_keys_a_day() {
+        let keys = uniform(0.0, 24.0, 5.0);
+        assert_eq!(keys.len(), 288);
+        assert!((keys[287].hours - (24.0 - 5.0 / 60.0)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn constant_sequence_keeps_only_the_first_keys() {
+        let keys = run(|_| 0.5, Criterion::Ends);
+        let hours: Vec<f64> = keys.iter().map(|k| k.hours).collect();
+        assert_eq!(hours, vec![0.0, 12.0, 24.0]);
+        let keys = run(|_| 0.5, Criterion::VerifyMidpoint);
+        assert_eq!(keys.len(), 3);
+    }
+
+    /// A smooth step from 0 to 1 over [10 h, 10.8 h]: keys gather there, none closer than
+    /// 5 min. (A linear ramp would fool [`Criterion::VerifyMidpoint`] once an interval's
+    /// middle lands where the interpolation happens to be exact.)
+    #[test]
+    fn fast_change_puts_keys_only_there() {
+        let (a, b) = (10.0, 10.8);
+        let ramp = move |t: f64| {
+            let x = ((t - a) / (b - a)).clamp(0.0, 1.0);
+            (x * x * (3.0 - 2.0 * x)) as f32
+        };
+        for criterion in [Criterion::Ends, Criterion::VerifyMidpoint] {
+            let keys = run(ramp, criterion);
+            for w in keys.windows(2) {
+                assert!(
+                    w[1].hours - w[0].hours >= 5.0 / 60.0 - 1e-9,
+                    "{criterion:?}: keys {} and {} closer than 5 min",
+                    w[0].hours,
+                    w[1].hours
+                );
+            }
+            let inside = keys.iter().filter(|k| (a..=b).contains(&k.hours)).count();
+            let outside: Vec<f64> = keys
+                .iter()
+                .filter(|k| !(a - 1.0..=b + 1.0).contains(&k.hours))
+                .map(|k| k.hours)
+                .collect();
+            eprintln!("{criterion:?}: {} keys, {inside} in the step", keys.len());
+            assert!(inside >= 6, "{criterion:?}: only {inside} keys in the step");
+            // Outside only the bisection's way in: the three first keys and one per level
+            // down to the ramp (0, 6, 12, 24 here).
+            assert!(outside.len() <= 4, "{criterion:?}: {outside:?}");
+        }
+    }
+
+    #[test]
+    fn bracket_finds_neighbours_and_alpha() {
+        let times = [0.0, 1.0, 3.0, 7.0];
+        assert_eq!(bracket(&times, 2.0), (1, 2, 0.5));
+        assert_eq!(bracket(&times, 6.0), (2, 3, 0.75));
+        assert_eq!(bracket(&times, 1.0), (1, 2, 0.0));
+        assert_eq!(bracket(&times, -1.0), (0, 0, 0.0));
+        assert_eq!(bracket(&times, 9.0), (3, 3, 0.0));
+        // Uniform keys: the same as Eq. 1 and 3.
+        let keys: Vec<f64> = uniform(0.0, 24.0, 5.0).iter().map(|k| k.hours).collect();
+        let t = 13.0 + 17.0 / 60.0; // 13:17
+        let (n, m, alpha) = bracket(&keys, t);
+        assert_eq!(n, ((13 * 60 + 17) as f64 / 5.0).floor() as usize);
+        assert_eq!(m, n + 1);
+        assert!((alpha - 2.0 / 5.0).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,193 @@
+//! Settings of `precomputed` (the `[precomputed]` table), written as a tuning guide.
+
+use illume_transport::{Budget, Pacing, TechniqueSettings};
+use serde::{Deserialize, Serialize};
+
+/// Where key images live (Bahnsen et al. §3.1, Fig. 4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Domain {
+    /// One image from the fixed camera (the paper's implementation). Default.
+    Screen,
+    /// Six faces around a camera that rotates in place. Not implemented yet.
+    Cube,
+    /// A world-space lightmap of static geometry (free camera). Not implemented yet.
+    Atlas,
+}
+
+/// Key times (§3.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ScheduleKind {
+    /// A key every `step_min` (Eq. 1: 288 a day at 5 min).
+    Uniform,
+    /// Split intervals while PerceptualDiff sees the interpolation (Fig. 6). Default.
+    Adaptive,
+}
+
+/// How the k temporal coefficients are interpolated between keys (§4.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Interpolation {
+    /// `(1 − α)·L_N + α·L_{N+1}` (Eq. 2; the paper's). Default.
+    Linear,
+    /// Catmull–Rom on the coefficients and the mean over the four nearest keys
+    /// (beyond the paper; §4.2 found non-linear barely better).
+    Cubic,
+}
+
+/// How colour channels share the PCA (§3.2 leaves it unstated).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Colour {
+    /// One PCA per channel: k components each. Default.
+    PerChannel,
+    /// One PCA over all three channels (3P samples): the same k temporal eigenvectors.
+    Joint,
+}
+
+/// The `[precomputed]` table. Defaults are the paper's where it has one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PrecomputedSettings {
+    /// The `.illumepc` file to load at construction (`--data FILE`). Empty: precompute
+    /// in memory at the first frame (slow; for tests and tiny scenes).
+    pub data: String,
+    /// Where key images live. Default `screen` (§3.1, the paper's implementation).
+    pub domain: Domain,
+    /// Key times. Default `adaptive` (§3.2).
+    pub schedule: ScheduleKind,
+    /// Key interval of `uniform` and the smallest interval of `adaptive` \[minutes\].
+    /// Lower: more keys, finer in time, longer precompute and larger file. Default 5 (§3.1).
+    pub step_min: f64,
+    /// First clock hour of the precomputed span \[hours\]. Default 0.
+    pub from_h: f64,
+    /// Last clock hour \[hours\]. Default 24.
+    pub to_h: f64,
+    /// Beyond the paper: adaptive splits compare the interpolation with a rendered middle
+    /// (more renders, catches non-linear changes the ends' test misses). Default false.
+    pub verify_midpoint: bool,
+    /// Samples per pixel of each key (and the sky image). Noise falls as 1/√spp; PCA
+    /// removes some of it. Default 256.
+    pub spp: u32,
+    /// Kept PCA components k. Higher: more variance kept (98.6 % at 10, 99.83 % at 20 in
+    /// the paper), larger file and O(k) run time per texel. Default 10 (§3.2).
+    pub components: usize,
+    /// If set (0–1), the fewest components (≤ `components`) capturing this fraction of
+    /// the variance. Default none.
+    pub variance_target: Option<f64>,
+    /// PCA colour handling. Default `per-channel`.
+    pub colour: Colour,
+    /// Interpolation of coefficients. Default `linear` (§3.1, §4.2).
+    pub interpolation: Interpolation,
+    /// Exposure the Yee metric sees key images at (`to_srgb8` of radiance × exposure);
+    /// stored in the file. Default 1.
+    pub exposure: f32,
+    /// Seed; key t's samples are seeded from (seed, time), reproducible on any machine.
+    /// Default 0.
+    pub seed: u64,
+}
+
+impl Default for PrecomputedSettings {
+    fn default() -> Self {
+        Self {
+            data: String::new(),
+            domain: Domain::Screen,
+            schedule: ScheduleKind::Adaptive,
+            step_min: 5.0,
+            from_h: 0.0,
+            to_h: 24.0,
+            verify_midpoint: false,
+            spp: 256,
+            components: 10,
+            variance_target: None,
+            colour: Colour::PerChannel,
+            interpolation: Interpolation::Linear,
+            exposure: 1.0,
+            seed: 0,
+        }
+    }
+}
+
+impl PrecomputedSettings {
+    /// Checks every value; the error names the field.
+    pub fn validate(&self) -> Result<(), crate::PrecomputedError> {
+        let bad = |field: &'static str, reason: &str| {
+            Err(crate::PrecomputedError::InvalidSetting {
+                field,
+                reason: reason.to_owned(),
+            })
+        };
+        if !(self.step_min.is_finite() && self.step_min > 0.0) {
+            return bad("step_min", "must be > 0 minutes");
+        }
+        if !(self.from_h.is_finite() && self.to_h.is_finite() && self.to_h > self.from_h) {
+            return bad("to_h", "must be finite and after from_h");
+        }
+        if self.spp == 0 {
+            return bad("spp", "must be at least 1");
+        }
+        if self.components == 0 {
+            return bad("components", "must be at least 1");
+        }
+        if let Some(v) = self.variance_target
+            && !(v > 0.0 && v <= 1.0)
+        {
+            return bad("variance_target", "must be in (0, 1]");
+        }
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            return bad("exposure", "must be > 0");
+        }
+        if self.domain != Domain::Screen {
+            return bad(
+                "domain",
+                "only `screen` is implemented so far (cube, atlas: planned)",
+            );
+        }
+        Ok(())
+    }
+}
+
+impl TechniqueSettings for PrecomputedSettings {
+    const NAME: &'static str = crate::NAME;
+    const WORK_UNIT: &'static str = "frames (run time does no work per frame)";
+
+    fn presets() -> &'static [(&'static str, &'static str)] {
+        &[
+            (
+                "default",
+                "the paper's: adaptive keys ≥ 5 min apart, k = 10, linear",
+            ),
+            (
+                "k20",
+                "k = 20: no perceptual difference from the keys (§4.3)",
+            ),
+        ]
+    }
+
+    fn preset(name: &str) -> Option<Self> {
+        match name {
+            "default" => Some(Self::default()),
+            "k20" => Some(Self {
+                components: 20,
+                ..Self::default()
+            }),
+            _ => None,
+        }
+    }
+
+    fn pace(&mut self, _pacing: Pacing) {}
+
+    fn default_budget(&self) -> Budget {
+        Budget::default()
+    }
+
+    fn set_seed(&mut self, seed: u64) {
+        self.seed = seed;
+    }
+
+    fn set_samples_per_pixel(&mut self, spp: u32) -> bool {
+        self.spp = spp;
+        true
+    }
+}

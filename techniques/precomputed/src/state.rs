@@ -1,0 +1,399 @@
+//! Run time (Bahnsen et al. §3.1, Eq. 2, §4.2): everything is loaded at construction (the
+//! paper pre-loads); each frame interpolates the k temporal coefficients and the mean
+//! between the two keys around the clock time, reconstructs every pixel in O(k), clamps at
+//! 0 and adds the sky image (its direct and indirect light) scaled by s(t).
+
+use crate::PrecomputedError;
+use crate::file::{FileError, PcFile};
+use crate::schedule::bracket;
+use crate::settings::{Interpolation, PrecomputedSettings};
+use illume_core::image::RgbImage;
+use illume_core::{Counters, Rgb};
+use illume_scene::SceneChange;
+use illume_scene::sun::SunSettings;
+use illume_transport::{Budget, ChangeResponse, GBuffer, Technique, World};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// One PCA group (a channel, or all three joint) ready to reconstruct.
+#[derive(Clone, Debug)]
+struct Group {
+    /// Mean per key (all keys; dark keys 0).
+    mean: Vec<f32>,
+    /// k × keys coefficients.
+    temporal: Vec<f32>,
+    /// k × rows projected images.
+    images: Vec<f32>,
+    /// Values per image.
+    rows: usize,
+}
+
+/// The loaded `precomputed` technique.
+pub struct Precomputed {
+    settings: PrecomputedSettings,
+    file: PathBuf,
+    sun: SunSettings,
+    times: Vec<f64>,
+    k: usize,
+    groups: Vec<Group>,
+    joint: bool,
+    sky: Vec<Rgb>,
+    width: u32,
+    height: u32,
+    load_s: f64,
+    last_ms: f64,
+    stale: u64,
+    /// No file yet: [`Technique::precompute`] makes one in memory.
+    pending: bool,
+}
+
+impl Precomputed {
+    /// The technique for the engine: loads `settings.data` if set, else precomputes in
+    /// memory at [`Technique::precompute`] (for tests and tiny scenes).
+    pub fn new(
+        world: &World,
+        settings: PrecomputedSettings,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, PrecomputedError> {
+        settings.validate()?;
+        if !settings.data.is_empty() {
+            let path = PathBuf::from(&settings.data);
+            return Self::load(world, settings, &path, width, height);
+        }
+        crate::precompute::sun_of(&world.scene)?;
+        Ok(Self {
+            file: PathBuf::from("(precomputed in memory)"),
+            sun: crate::precompute::sun_of(&world.scene)?,
+            settings,
+            times: Vec::new(),
+            k: 0,
+            groups: Vec::new(),
+            joint: false,
+            sky: Vec::new(),
+            width,
+            height,
+            load_s: 0.0,
+            last_ms: 0.0,
+            stale: 0,
+            pending: true,
+        })
+    }
+
+    /// Loads `path` for `world`: checks the file, the static scene, and (screen domain)
+    /// the camera and the image size `width × height`.
+    pub fn load(
+        world: &World,
+        settings: PrecomputedSettings,
+        path: &Path,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, PrecomputedError> {
+        let start = std::time::Instant::now();
+        let file = PcFile::read(path)?;
+        Self::from_file(world, settings, path, file, width, height, start)
+    }
+
+    /// As [`Precomputed::load`], from a file already in memory (`path` only for errors).
+    pub fn from_file(
+        world: &World,
+        settings: PrecomputedSettings,
+        path: &Path,
+        file: PcFile,
+        width: u32,
+        height: u32,
+        start: std::time::Instant,
+    ) -> Result<Self, PrecomputedError> {
+        settings.validate()?;
+        let h = &file.header;
+        let mismatch = |what: &str, expected: String, found: String| {
+            PrecomputedError::File(FileError::Mismatch {
+                path: path.to_path_buf(),
+                what: what.into(),
+                expected,
+                found,
+            })
+        };
+        if h.kind != "pca" {
+            return Err(mismatch("file kind", "pca".into(), h.kind.clone()));
+        }
+        file.check_scene(path, &world.scene)?;
+        if (h.width, h.height) != (width, height) {
+            return Err(mismatch(
+                "image size",
+                format!("{width}×{height}"),
+                format!("{}×{}", h.width, h.height),
+            ));
+        }
+        let camera = &world.scene.camera;
+        let mut cam: Vec<f32> = camera.world_from_camera.to_cols_array().to_vec();
+        cam.push(camera.yfov_rad);
+        if h.domain == "screen" && cam != h.camera {
+            return Err(mismatch(
+                "camera (a screen file needs its fixed camera)",
+                format!("{cam:?}"),
+                format!("{:?}", h.camera),
+            ));
+        }
+        let sun: SunSettings = h.sun.clone().try_into().map_err(|e: toml::de::Error| {
+            mismatch("[sun] table", "a valid [sun]".into(), e.to_string())
+        })?;
+        let joint = h.colour == "joint";
+        let names: &[&str] = if joint { &["rgb"] } else { &["r", "g", "b"] };
+        let pixels = width as usize * height as usize;
+        let rows = if joint { 3 * pixels } else { pixels };
+        let keys = h.keys.len();
+        let k = h.components as usize;
+        let mut groups = Vec::new();
+        for name in names {
+            let get = |what: &str, len: usize| -> Result<Vec<f32>, PrecomputedError> {
+                let section = file.section(&format!("{what}.{name}")).ok_or_else(|| {
+                    mismatch(
+                        &format!("section {what}.{name}"),
+                        "present".into(),
+                        "missing".into(),
+                    )
+                })?;
+                if section.values.len() != len {
+                    return Err(mismatch(
+                        &format!("length of section {what}.{name}"),
+                        len.to_string(),
+                        section.values.len().to_string(),
+                    ));
+                }
+                Ok(section.values.clone())
+            };
+            let bright = h.keys.iter().any(|k| !k.dark);
+            groups.push(Group {
+                mean: get("mean", keys)?,
+                temporal: get("temporal", k * keys)?,
+                images: get("images", if bright { k * rows } else { 0 })?,
+                rows,
+            });
+        }
+        let sky_values = file
+            .section("sky")
+            .map(|s| s.values.clone())
+            .unwrap_or_default();
+        if sky_values.len() != 3 * pixels {
+            return Err(mismatch(
+                "length of section sky",
+                (3 * pixels).to_string(),
+                sky_values.len().to_string(),
+            ));
+        }
+        let sky = sky_values
+            .chunks_exact(3)
+            .map(|c| Rgb::new(c[0], c[1], c[2]))
+            .collect();
+        Ok(Self {
+            settings,
+            file: path.to_path_buf(),
+            sun,
+            times: h.keys.iter().map(|k| k.hours).collect(),
+            k,
+            groups,
+            joint,
+            sky,
+            width,
+            height,
+            load_s: start.elapsed().as_secs_f64(),
+            last_ms: 0.0,
+            stale: 0,
+            pending: false,
+        })
+    }
+
+    /// Seconds the load took (reported as `load_s`).
+    pub fn load_seconds(&self) -> f64 {
+        self.load_s
+    }
+
+    /// Weights of the keys around clock time `hours`: (key index, weight) pairs.
+    fn weights(&self, hours: f64) -> Vec<(usize, f32)> {
+        let (n, m, alpha) = bracket(&self.times, hours);
+        match self.settings.interpolation {
+            Interpolation::Linear => vec![(n, 1.0 - alpha), (m, alpha)],
+            Interpolation::Cubic => {
+                // Catmull–Rom in the key index (uniform parameter), ends repeated.
+                let last = self.times.len() - 1;
+                let p0 = n.saturating_sub(1);
+                let p3 = (m + 1).min(last);
+                let t = alpha;
+                let (t2, t3) = (t * t, t * t * t);
+                vec![
+                    (p0, 0.5 * (-t3 + 2.0 * t2 - t)),
+                    (n, 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0)),
+                    (m, 0.5 * (-3.0 * t3 + 4.0 * t2 + t)),
+                    (p3, 0.5 * (t3 - t2)),
+                ]
+            }
+        }
+    }
+
+    /// The sun's indirect light at clock time `hours` plus the sky's whole light (direct
+    /// and indirect) at scale `sky_scale`, one value per pixel of the file's image.
+    pub fn reconstruct(&self, hours: f64, sky_scale: f32) -> Vec<Rgb> {
+        let weights = self.weights(hours);
+        let keys = self.times.len();
+        let blend = |values: &[f32], offset: usize| -> f32 {
+            weights.iter().map(|&(i, w)| w * values[offset + i]).sum()
+        };
+        let per_group: Vec<(f32, Vec<f32>)> = self
+            .groups
+            .iter()
+            .map(|g| {
+                (
+                    blend(&g.mean, 0),
+                    (0..self.k).map(|c| blend(&g.temporal, c * keys)).collect(),
+                )
+            })
+            .collect();
+        let pixels = self.width as usize * self.height as usize;
+        // Channel planes, filled in cache-sized chunks: per chunk, mean then one
+        // multiply-add pass per component (vectorised), then clamp at 0.
+        const CHUNK: usize = 4096;
+        let mut planes = vec![vec![0f32; pixels]; 3];
+        for (c, plane) in planes.iter_mut().enumerate() {
+            let g = if self.joint { 0 } else { c };
+            let group = &self.groups[g];
+            let (mean, coefficients) = &per_group[g];
+            plane
+                .par_chunks_mut(CHUNK)
+                .enumerate()
+                .for_each(|(chunk, out)| {
+                    let first = chunk * CHUNK;
+                    out.fill(*mean);
+                    for (i, coefficient) in coefficients.iter().enumerate() {
+                        let image = &group.images[i * group.rows..(i + 1) * group.rows];
+                        if self.joint {
+                            for (j, o) in out.iter_mut().enumerate() {
+                                *o += image[3 * (first + j) + c] * coefficient;
+                            }
+                        } else {
+                            let src = &image[first..first + out.len()];
+                            for (o, x) in out.iter_mut().zip(src) {
+                                *o += x * coefficient;
+                            }
+                        }
+                    }
+                });
+        }
+        (0..pixels)
+            .into_par_iter()
+            .with_min_len(CHUNK)
+            .map(|p| {
+                Rgb::new(
+                    planes[0][p].max(0.0),
+                    planes[1][p].max(0.0),
+                    planes[2][p].max(0.0),
+                ) + self.sky[p] * sky_scale
+            })
+            .collect()
+    }
+}
+
+impl Technique for Precomputed {
+    fn name(&self) -> &'static str {
+        crate::NAME
+    }
+
+    /// The sun's motion is on the file's timeline; a moved static instance or a changed
+    /// material makes the file stale (a warning and `stale` counted, never a rebuild).
+    fn scene_changed(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        for c in changes {
+            let stale = match c {
+                SceneChange::InstanceMoved { instance, .. } => world
+                    .scene
+                    .instances
+                    .get(instance.index())
+                    .is_some_and(|i| !i.dynamic),
+                SceneChange::MaterialChanged { .. } => true,
+                _ => false,
+            };
+            if stale {
+                self.stale += 1;
+                log::warn!(
+                    "precomputed: {} no longer matches the scene (a static instance moved or a material changed): indirect light is stale",
+                    self.file.display()
+                );
+            }
+        }
+        ChangeResponse::Updated
+    }
+
+    fn precompute(
+        &mut self,
+        world: &World,
+        progress: &mut dyn illume_core::Progress,
+    ) -> Result<(), illume_transport::TechniqueError> {
+        if !self.pending {
+            return Ok(());
+        }
+        let start = std::time::Instant::now();
+        let size = (self.width, self.height);
+        let file = crate::precompute::precompute(world, &self.settings, size, progress)?;
+        let path = self.file.clone();
+        *self = Self::from_file(
+            world,
+            self.settings.clone(),
+            &path,
+            file,
+            size.0,
+            size.1,
+            start,
+        )?;
+        Ok(())
+    }
+
+    fn advance(&mut self, _world: &World, _budget: &Budget) {}
+
+    fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
+        if self.pending || self.times.is_empty() {
+            let n = gbuffer.width as usize * gbuffer.height as usize;
+            return RgbImage::from_vec(gbuffer.width, gbuffer.height, vec![Rgb::ZERO; n])
+                .expect("one value per pixel");
+        }
+        let start = std::time::Instant::now();
+        let hours = self.sun.clock_hours(world.scene.time);
+        let elevation = illume_scene::sun::solar_position(&self.sun, hours)
+            .map(|p| p.elevation_deg)
+            .unwrap_or(-90.0);
+        let values = self.reconstruct(hours, illume_scene::sun::sky_scale(elevation));
+        // Pixels that see nothing get nothing. A G-buffer of another size than the file's
+        // was refused at load; keep black rather than a wrong image if it happens anyway.
+        let out = if (gbuffer.width, gbuffer.height) == (self.width, self.height) {
+            values
+                .into_iter()
+                .zip(&gbuffer.pixels)
+                .map(|(v, px)| if px.is_some() { v } else { Rgb::ZERO })
+                .collect()
+        } else {
+            vec![Rgb::ZERO; gbuffer.width as usize * gbuffer.height as usize]
+        };
+        self.last_ms = start.elapsed().as_secs_f64() * 1e3;
+        RgbImage::from_vec(gbuffer.width, gbuffer.height, out).expect("one value per pixel")
+    }
+
+    fn stats(&self) -> Counters {
+        let mut c = Counters::new();
+        c.set("keys", self.times.len() as f64);
+        c.set("components", self.k as f64);
+        c.set("load_s", self.load_s);
+        c.set("indirect_ms", self.last_ms);
+        c.set("stale", self.stale as f64);
+        c
+    }
+
+    fn reset(&mut self) {}
+
+    /// Shadow maps for the sun, as in the paper's demo.
+    fn interactive(&self) -> bool {
+        true
+    }
+
+    /// The precomputed sky image holds the sky's direct light too (Eq. 2's s(t)·L_sky).
+    fn supplies_sky_light(&self) -> bool {
+        true
+    }
+}

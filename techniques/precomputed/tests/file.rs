@@ -1,0 +1,138 @@
+//! The `.illumepc` file: round trip, and each kind of bad file gives its own error that
+//! names the file.
+
+use illume_precomputed::file::{
+    FileError, Header, KeyInfo, PcFile, Section, SectionFormat, VERSION, scene_fingerprint,
+};
+use std::path::Path;
+
+fn sample(scene: &illume_scene::Scene) -> PcFile {
+    let (_, fingerprint) = scene_fingerprint(scene);
+    PcFile {
+        header: Header {
+            kind: "pca".into(),
+            scene_source: scene.source.clone(),
+            scene_fingerprint: fingerprint,
+            settings: toml::toml! { components = 10 },
+            sun: toml::toml! { latitude_deg = 55.49 },
+            domain: "screen".into(),
+            width: 4,
+            height: 2,
+            channels: 3,
+            camera: vec![
+                1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 2.0, 0.7,
+            ],
+            exposure: 1.0,
+            shard: [0, 1],
+            keys: vec![
+                KeyInfo {
+                    hours: 0.0,
+                    level: 0,
+                    dark: true,
+                },
+                KeyInfo {
+                    hours: 12.0,
+                    level: 0,
+                    dark: false,
+                },
+            ],
+            components: 1,
+            colour: "per-channel".into(),
+            eigenvalues: vec![vec![2.5, 0.0]],
+            sections: vec![],
+        },
+        sections: vec![
+            Section {
+                name: "mean.r".into(),
+                format: SectionFormat::F32,
+                values: vec![0.25, -1.5e-7],
+            },
+            Section {
+                name: "images.r".into(),
+                format: SectionFormat::F16,
+                values: (0..8).map(|i| i as f32 * 0.5).collect(),
+            },
+        ],
+    }
+}
+
+fn scene() -> illume_scene::Scene {
+    illume_scene::builtin::load("cornell-spot").unwrap()
+}
+
+#[test]
+fn round_trip() {
+    let dir = std::env::temp_dir().join(format!("illumepc-rt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("a.illumepc");
+    let file = sample(&scene());
+    file.write(&path).unwrap();
+    let back = PcFile::read(&path).unwrap();
+    assert_eq!(back.header.keys, file.header.keys);
+    assert_eq!(back.header.sections.len(), 2);
+    assert_eq!(back.sections, file.sections); // f16 values here are exact in half
+    // Writing again gives the same bytes.
+    assert_eq!(back.to_bytes(), file.to_bytes());
+    back.check_scene(&path, &scene()).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn each_bad_file_has_its_own_error() {
+    let path = Path::new("bad.illumepc");
+    let bytes = sample(&scene()).to_bytes();
+    let named = |e: &FileError| assert!(e.to_string().contains("bad.illumepc"), "{e}");
+
+    // A flipped byte in the last section, and one in the header.
+    let mut flipped = bytes.clone();
+    *flipped.last_mut().unwrap() ^= 0x10;
+    let e = PcFile::from_bytes(path, &flipped).unwrap_err();
+    named(&e);
+    assert!(
+        matches!(&e, FileError::Checksum { what, .. } if what == "section images.r"),
+        "{e}"
+    );
+    let mut flipped = bytes.clone();
+    flipped[30] ^= 0x01;
+    let e = PcFile::from_bytes(path, &flipped).unwrap_err();
+    assert!(
+        matches!(&e, FileError::Checksum { what, .. } if what == "the header"),
+        "{e}"
+    );
+
+    // Another version.
+    let mut other = bytes.clone();
+    other[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
+    let e = PcFile::from_bytes(path, &other).unwrap_err();
+    named(&e);
+    assert!(matches!(e, FileError::Version { found, .. } if found == VERSION + 1));
+
+    // Truncated: inside a section, inside the header, inside the magic.
+    for cut in [bytes.len() - 1, 40, 5] {
+        let e = PcFile::from_bytes(path, &bytes[..cut]).unwrap_err();
+        named(&e);
+        assert!(
+            matches!(e, FileError::Truncated { .. }),
+            "cut at {cut}: {e}"
+        );
+    }
+    // Not ours at all, and bytes after the end.
+    let e = PcFile::from_bytes(path, b"P6\n4 4\n255\n........").unwrap_err();
+    assert!(matches!(e, FileError::Magic { .. }), "{e}");
+    let mut longer = bytes.clone();
+    longer.push(0);
+    let e = PcFile::from_bytes(path, &longer).unwrap_err();
+    assert!(matches!(e, FileError::Trailing { extra: 1, .. }), "{e}");
+
+    // Another scene.
+    let file = PcFile::from_bytes(path, &bytes).unwrap();
+    let other_scene = illume_scene::builtin::load("cube-in-box").unwrap();
+    let e = file.check_scene(path, &other_scene).unwrap_err();
+    named(&e);
+    assert!(matches!(e, FileError::OtherScene { .. }), "{e}");
+    // A moved static instance is another scene too; a moved dynamic one is not.
+    let mut moved = scene();
+    let i = moved.instances.iter().position(|i| !i.dynamic).unwrap();
+    moved.instances[i].world_from_object.translation.x += 0.01;
+    assert!(file.check_scene(path, &moved).is_err());
+}
