@@ -6,6 +6,7 @@
 //! * `illume animate SCENE` — an animation: numbered frames, a preview, a per-frame CSV;
 //! * `illume demo` — photon streaming on `builtin:cornell-spot` in real time.
 //! * `illume bench SCENARIO.toml` — run a benchmark scenario and write its report.
+//! * `illume view SCENE` — an interactive window (default feature `view`).
 //!
 //! SCENE is a file (`.gltf`, `.glb`, `.obj`, `.ply`) or `builtin:NAME`
 //! (`builtin:cornell-spot`, `builtin:cube-in-box`, `builtin:furnace`).
@@ -23,6 +24,8 @@ mod info;
 mod progress;
 mod render;
 mod setup;
+#[cfg(feature = "view")]
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -57,6 +60,10 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Run a benchmark scenario: techniques vs the converged reference, report and plots.
     Bench(bench::BenchArgs),
+    /// Open a window on a scene: the engine's frames as they render, camera and scene
+    /// edits, techniques and the reference one toggle away (docs/viewer.md).
+    #[cfg(feature = "view")]
+    View(view::ViewArgs),
 }
 
 fn main() {
@@ -68,6 +75,8 @@ fn main() {
         Command::Animate(a) => animate::run(a),
         Command::Demo(a) => animate::demo(a),
         Command::Bench(a) => bench::run_bench(a),
+        #[cfg(feature = "view")]
+        Command::View(a) => view::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {}", error_message(&e));

@@ -209,6 +209,22 @@ impl Engine {
         }
     }
 
+    /// Moves the scene to time `t` \[s\] and hands the changes to the technique (the first
+    /// half of [`Engine::step`], without rendering): for viewers that show another image
+    /// (the progressive reference) while the animation plays. Returns the changes.
+    pub fn set_time(&mut self, t: f64) -> Result<Vec<SceneChange>, EngineError> {
+        self.precompute(&mut Silent)?;
+        self.technique.before_world_write();
+        let changes = write_world(&self.world).set_time(t);
+        self.propagate(&changes)?;
+        Ok(changes)
+    }
+
+    /// The technique this engine runs.
+    pub fn kind(&self) -> TechniqueKind {
+        self.kind
+    }
+
     /// One frame at scene time `t` \[s\]: advance time, propagate changes, advance the
     /// technique within its budget, render, collect counters. Fails only when the
     /// technique's precompute (first frame) or a rebuild fails.
