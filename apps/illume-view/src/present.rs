@@ -261,23 +261,33 @@ impl Gpu {
         &mut self,
         viewport: &Viewport,
         paint: &[egui::ClippedPrimitive],
-        textures: &egui::TexturesDelta,
+        textures: &mut egui::TexturesDelta,
         pixels_per_point: f32,
     ) -> Result<(), ViewError> {
+        for (id, deltas) in textures.set.drain() {
+            for delta in deltas {
+                self.egui
+                    .update_texture(&self.device, &self.queue, id, &delta);
+            }
+        }
+        let frees: Vec<egui::TextureId> = textures.free.drain().collect();
         let surface_texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 self.surface.configure(&self.device, &self.config);
+                for id in &frees {
+                    self.egui.free_texture(id);
+                }
                 return Ok(());
             }
-            _ => return Ok(()),
+            _ => {
+                for id in &frees {
+                    self.egui.free_texture(id);
+                }
+                return Ok(());
+            }
         };
         let target = surface_texture.texture.create_view(&Default::default());
-        for (id, deltas) in &textures.set {
-            for delta in deltas {
-                self.egui.update_texture(&self.device, &self.queue, *id, delta);
-            }
-        }
         let screen = egui_wgpu::ScreenDescriptor {
             size_in_pixels: [self.config.width, self.config.height],
             pixels_per_point,
@@ -342,7 +352,7 @@ impl Gpu {
         self.queue
             .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
         self.queue.present(surface_texture);
-        for id in &textures.free {
+        for id in &frees {
             self.egui.free_texture(id);
         }
         Ok(())

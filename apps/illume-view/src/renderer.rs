@@ -218,9 +218,26 @@ impl RenderThread {
         let (tx, rx) = channel();
         let slot = FrameSlot::default();
         let out = slot.clone();
+        // The renderer's threads run below the window's priority: on a machine whose cores
+        // the renderer fills, input is still handled at once.
+        let lower = || {
+            let _ = thread_priority::set_current_thread_priority(
+                thread_priority::ThreadPriority::Min,
+            );
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .thread_name(|i| format!("illume-render-{i}"))
+            .start_handler(move |_| lower())
+            .build();
         let handle = std::thread::Builder::new()
             .name("illume-render".into())
-            .spawn(move || State::new(setup, out).run(rx))
+            .spawn(move || {
+                lower();
+                match pool {
+                    Ok(pool) => pool.install(|| State::new(setup, out).run(rx)),
+                    Err(_) => State::new(setup, out).run(rx),
+                }
+            })
             .ok();
         Self {
             commands: tx,

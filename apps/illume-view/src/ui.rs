@@ -352,7 +352,7 @@ impl App {
         let input = state.take_egui_input(&window);
         let mut actions = Actions::default();
         let ctx = self.ctx.clone();
-        let full = ctx.run_ui(input, |ui| self.build_ui(ui, &mut actions));
+        let mut full = ctx.run_ui(input, |ui| self.build_ui(ui, &mut actions));
         if let Some(state) = self.egui_state.as_mut() {
             state.handle_platform_output(&window, full.platform_output);
         }
@@ -378,10 +378,11 @@ impl App {
                 exposure_ev: tone.unwrap_or(0.0),
                 curve: self.curve,
             };
-            if let Err(e) = gpu.draw(&viewport, &paint, &full.textures_delta, ppp) {
+            if let Err(e) = gpu.draw(&viewport, &paint, &mut full.textures_delta, ppp) {
                 self.message(e.to_string());
             }
         }
+        full.textures_delta.clear();
         self.present_ms = 0.9 * self.present_ms + 0.1 * t0.elapsed().as_secs_f64() * 1e3;
         if self.shown.is_some() {
             self.displayed += 1;
