@@ -640,8 +640,16 @@ impl State {
         let mut stats = Vec::new();
         let mut csv_row = String::new();
         let mut time_changed = false;
+        // The scene is evaluated at `t` only when the time moved: edits to animated
+        // objects hold while the animation is paused.
+        let time_moved = t != self.time_s;
         if wants_technique {
-            match engine.step(t) {
+            let step = if time_moved {
+                engine.step(t)
+            } else {
+                engine.step_held()
+            };
+            match step {
                 Ok(out) => {
                     let ft = out.frame.timings;
                     times.update_ms += out.update_ms;
@@ -677,7 +685,7 @@ impl State {
                     return;
                 }
             }
-        } else {
+        } else if time_moved {
             match engine.set_time(t) {
                 Ok(c) => time_changed = !c.is_empty(),
                 Err(e) => self.message(format!("time step failed: {e}")),

@@ -3,7 +3,7 @@
 //! X server. Without them these tests fail, naming what is missing; they never skip.
 #![cfg(feature = "view")]
 
-use illume_core::image::read_ldr;
+use illume_core::image::{RgbImage, read_ldr};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -374,4 +374,72 @@ fn the_window_handles_input_while_a_frame_takes_seconds() {
     let worst = latencies.iter().cloned().fold(0.0, f64::max);
     eprintln!("input latencies {latencies:?} ms while frames take {frame_ms:.0} ms; {frames} frames shown");
     assert!(worst < 50.0, "input handled after {worst:.1} ms (all: {latencies:?})");
+}
+
+/// Mean absolute luminance difference of two linear images over pixels `[x0, x1) × [y0, y1)`.
+fn region_change(a: &RgbImage, b: &RgbImage, (x0, x1, y0, y1): (u32, u32, u32, u32)) -> f64 {
+    let mut sum = 0.0;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            sum += (illume_core::luminance(*a.get(x, y)) - illume_core::luminance(*b.get(x, y)))
+                .abs() as f64;
+        }
+    }
+    sum / ((x1 - x0) * (y1 - y0)) as f64
+}
+
+#[test]
+fn keys_move_the_clicked_object_and_only_its_light_changes() {
+    let _display = display();
+    let dir = out_dir("edit");
+    // Noise of the reference at these samples: two seeds of the unchanged scene (far
+    // apart: seed s + 1 shares all but one sample sequence with seed s).
+    let mut args = vec!["builtin:cornell-spot", "--technique", "reference", "--spp", "64"];
+    args.extend(SIZE);
+    render(&[args.as_slice(), &["--seed", "1"]].concat(), &dir.join("seed1.exr"));
+    render(&[args.as_slice(), &["--seed", "100000"]].concat(), &dir.join("seed2.exr"));
+    let mut view_args = args.clone();
+    view_args.extend(["--log-input", "--output", dir.to_str().unwrap()]);
+    let mut viewer = Viewer::start(&view_args);
+    let id = viewer.window();
+    viewer.wait_converged(0);
+    focus(&id);
+    xdotool(&["key", "p"]);
+    viewer.wait_for(Duration::from_secs(10), "screenshot 1", |l| {
+        l.contains("screenshot_001.png")
+    });
+    // Click the sphere (it sits at about (50, 85) of the 160×120 image), then → → →.
+    xdotool(&["mousemove", "--window", &id, "50", "85", "click", "1"]);
+    viewer.wait_for(Duration::from_secs(10), "the click", |l| l.contains("input click"));
+    for _ in 0..3 {
+        xdotool(&["key", "Right"]);
+        viewer.wait_for(Duration::from_secs(10), "→", |l| l.contains("key ArrowRight"));
+    }
+    // The reference restarts, then converges on the moved scene.
+    viewer.wait_for(Duration::from_secs(30), "a restarted reference", |l| {
+        spp(l).is_some_and(|(s, t)| s < t)
+    });
+    viewer.wait_converged(0);
+    xdotool(&["key", "p"]);
+    viewer.wait_for(Duration::from_secs(10), "screenshot 2", |l| {
+        l.contains("screenshot_002.png")
+    });
+    let log = viewer.finish();
+    assert!(
+        !log.iter().any(|l| l.contains("nothing selected")),
+        "the click did not select the sphere:\n{}",
+        log.join("\n")
+    );
+    let read = |name: &str| illume_core::image::read_exr(&dir.join(name)).unwrap();
+    let (before, after) = (read("screenshot_001.exr"), read("screenshot_002.exr"));
+    let noise = region_change(&read("seed1.exr"), &read("seed2.exr"), (0, 160, 0, 45));
+    let sphere_was = region_change(&before, &after, (38, 62, 72, 100));
+    let right_of_it = region_change(&before, &after, (62, 100, 72, 112));
+    let far = region_change(&before, &after, (0, 160, 0, 45));
+    eprintln!(
+        "luminance change: sphere's old place {sphere_was:.4}, right of it {right_of_it:.4}, upper image {far:.4}; noise {noise:.4}"
+    );
+    assert!(sphere_was > 20.0 * noise.max(far), "the sphere did not move away");
+    assert!(right_of_it > 5.0 * far, "nothing changed where the sphere went");
+    assert!(far <= noise, "the upper image changed beyond noise: {far} vs noise {noise}");
 }
