@@ -20,7 +20,9 @@ impl OrbitCamera {
     /// The orbit that reproduces `world_from_camera`, orbiting a point `distance` ahead.
     pub fn from_transform(world_from_camera: Affine3A, distance: f32) -> Self {
         let eye = Vec3::from(world_from_camera.translation);
-        let forward = world_from_camera.transform_vector3(-Vec3::Z).normalize_or(-Vec3::Z);
+        let forward = world_from_camera
+            .transform_vector3(-Vec3::Z)
+            .normalize_or(-Vec3::Z);
         let distance = if distance.is_finite() && distance > 1e-3 {
             distance
         } else {

@@ -33,6 +33,18 @@ pub struct Gpu {
     staging: Vec<[f32; 4]>,
 }
 
+/// Times of one [`Gpu::draw`] \[ms\].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DrawTimes {
+    /// Waiting for the surface's next image.
+    pub acquire_ms: f64,
+    /// Recording and running the tone map and egui passes (run to completion only when
+    /// measured, see [`Gpu::draw`]).
+    pub render_ms: f64,
+    /// Handing the image to the window system.
+    pub present_ms: f64,
+}
+
 /// Where and how the frame is drawn.
 pub struct Viewport {
     /// Physical pixels: x, y, width, height.
@@ -47,7 +59,8 @@ impl Gpu {
     /// Creates the surface of `window` on the first adapter that can present to it
     /// (Vulkan, then GL; `WGPU_BACKEND` overrides).
     pub fn new(window: Arc<Window>) -> Result<Self, ViewError> {
-        let backends = wgpu::Backends::from_env().unwrap_or(wgpu::Backends::VULKAN | wgpu::Backends::GL);
+        let backends =
+            wgpu::Backends::from_env().unwrap_or(wgpu::Backends::VULKAN | wgpu::Backends::GL);
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends,
             ..wgpu::InstanceDescriptor::new_without_display_handle()
@@ -70,8 +83,8 @@ impl Gpu {
         let adapter_name = format!("{} ({:?})", info.name, info.backend);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("illume view"),
-            required_limits: wgpu::Limits::downlevel_webgl2_defaults()
-                .using_resolution(adapter.limits()),
+            required_limits:
+                wgpu::Limits::downlevel_webgl2_defaults().using_resolution(adapter.limits()),
             ..Default::default()
         }))
         .map_err(|e| ViewError::Gpu(format!("{adapter_name}: cannot open the device: {e}")))?;
@@ -85,18 +98,20 @@ impl Gpu {
             .or_else(|| caps.formats.first().copied())
             .ok_or_else(|| ViewError::Gpu(format!("{adapter_name}: the surface has no format")))?;
         let size = window.inner_size();
-        let present_mode = if caps.present_modes.contains(&wgpu::PresentMode::Fifo) {
-            wgpu::PresentMode::Fifo
-        } else {
-            caps.present_modes[0]
-        };
+        // Never block the window's thread on a vertical blank it does not need: the window
+        // paces itself (one redraw per refresh at most).
+        let present_mode = [wgpu::PresentMode::Immediate, wgpu::PresentMode::Mailbox]
+            .into_iter()
+            .find(|m| caps.present_modes.contains(m))
+            .unwrap_or(wgpu::PresentMode::Fifo);
+        let adapter_name = format!("{adapter_name}, present mode {present_mode:?} of {:?}", caps.present_modes);
         let config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             format,
             width: size.width.max(1),
             height: size.height.max(1),
             present_mode,
-            desired_maximum_frame_latency: 1,
+            desired_maximum_frame_latency: 2,
             alpha_mode: caps.alpha_modes[0],
             view_formats: vec![],
             color_space: wgpu::SurfaceColorSpace::Auto,
@@ -263,7 +278,10 @@ impl Gpu {
         paint: &[egui::ClippedPrimitive],
         textures: &mut egui::TexturesDelta,
         pixels_per_point: f32,
-    ) -> Result<(), ViewError> {
+        measure: bool,
+    ) -> Result<DrawTimes, ViewError> {
+        let mut times = DrawTimes::default();
+        let t0 = std::time::Instant::now();
         for (id, deltas) in textures.set.drain() {
             for delta in deltas {
                 self.egui
@@ -272,30 +290,33 @@ impl Gpu {
         }
         let frees: Vec<egui::TextureId> = textures.free.drain().collect();
         let surface_texture = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 self.surface.configure(&self.device, &self.config);
                 for id in &frees {
                     self.egui.free_texture(id);
                 }
-                return Ok(());
+                return Ok(times);
             }
             _ => {
                 for id in &frees {
                     self.egui.free_texture(id);
                 }
-                return Ok(());
+                return Ok(times);
             }
         };
+        let t1 = std::time::Instant::now();
+        times.acquire_ms = (t1 - t0).as_secs_f64() * 1e3;
         let target = surface_texture.texture.create_view(&Default::default());
         let screen = egui_wgpu::ScreenDescriptor {
             size_in_pixels: [self.config.width, self.config.height],
             pixels_per_point,
         };
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        let extra = self
-            .egui
-            .update_buffers(&self.device, &self.queue, &mut encoder, paint, &screen);
+        let extra =
+            self.egui
+                .update_buffers(&self.device, &self.queue, &mut encoder, paint, &screen);
         if let Some((_, _, w, h)) = &self.frame {
             let curve = match viewport.curve {
                 ToneCurve::Clamp => 0,
@@ -351,11 +372,18 @@ impl Gpu {
         }
         self.queue
             .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+        if measure {
+            // Wait for the passes to finish so that their time is measured, not queued.
+            let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+        }
+        let t2 = std::time::Instant::now();
+        times.render_ms = (t2 - t1).as_secs_f64() * 1e3;
         self.queue.present(surface_texture);
+        times.present_ms = t2.elapsed().as_secs_f64() * 1e3;
         for id in &frees {
             self.egui.free_texture(id);
         }
-        Ok(())
+        Ok(times)
     }
 
     /// The largest texture side the device takes (for egui).

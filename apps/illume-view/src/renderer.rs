@@ -221,9 +221,8 @@ impl RenderThread {
         // The renderer's threads run below the window's priority: on a machine whose cores
         // the renderer fills, input is still handled at once.
         let lower = || {
-            let _ = thread_priority::set_current_thread_priority(
-                thread_priority::ThreadPriority::Min,
-            );
+            let _ =
+                thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min);
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .thread_name(|i| format!("illume-render-{i}"))
@@ -372,7 +371,9 @@ impl State {
     }
 
     fn reference_target(&self) -> u32 {
-        self.reference_spp.unwrap_or(self.config.reference.spp).max(1)
+        self.reference_spp
+            .unwrap_or(self.config.reference.spp)
+            .max(1)
     }
 
     fn restart_reference(&mut self) {
@@ -540,32 +541,31 @@ impl State {
                 * Affine3A::from_translation(-origin)
                 * m
         };
-        let edit = {
-            let world = read_world(engine.world());
-            match self.selection {
-                Some(Selection::Instance(i)) => {
-                    world
-                        .scene
-                        .instances
-                        .get(i as usize)
-                        .map(|inst| Edit::SetInstanceTransform {
-                            instance: illume_scene::InstanceId(i),
-                            world_from_object: motion(inst.world_from_object),
+        let edit =
+            {
+                let world = read_world(engine.world());
+                match self.selection {
+                    Some(Selection::Instance(i)) => {
+                        world.scene.instances.get(i as usize).map(|inst| {
+                            Edit::SetInstanceTransform {
+                                instance: illume_scene::InstanceId(i),
+                                world_from_object: motion(inst.world_from_object),
+                            }
                         })
+                    }
+                    Some(Selection::Light(i)) => {
+                        world
+                            .scene
+                            .lights
+                            .get(i as usize)
+                            .map(|l| Edit::SetLightTransform {
+                                light: illume_scene::LightId(i),
+                                world_from_light: motion(l.world_from_light),
+                            })
+                    }
+                    None => None,
                 }
-                Some(Selection::Light(i)) => {
-                    world
-                        .scene
-                        .lights
-                        .get(i as usize)
-                        .map(|l| Edit::SetLightTransform {
-                            light: illume_scene::LightId(i),
-                            world_from_light: motion(l.world_from_light),
-                        })
-                }
-                None => None,
-            }
-        };
+            };
         match edit {
             Some(e) => self.apply_edit(&e),
             None => self.message("nothing selected: click an object first".into()),
@@ -576,7 +576,10 @@ impl State {
         let mut last = Instant::now();
         loop {
             // Idle (nothing to add) waits for commands; otherwise takes what is queued.
-            let idle = !self.dirty && !self.playing && self.reference_done() && self.split.is_none()
+            let idle = !self.dirty
+                && !self.playing
+                && self.reference_done()
+                && self.split.is_none()
                 && self.shows_reference();
             let mut pending: Vec<Command> = Vec::new();
             if idle {
@@ -710,7 +713,9 @@ impl State {
         // FLIP between technique and reference, at most twice a second.
         if let (Some(ti), Some((ri, spp))) = (&technique_image, &reference_image)
             && *spp >= 16.min(target)
-            && self.last_flip.is_none_or(|l| l.elapsed() > Duration::from_millis(500))
+            && self
+                .last_flip
+                .is_none_or(|l| l.elapsed() > Duration::from_millis(500))
         {
             self.last_flip = Some(Instant::now());
             let ev = auto_exposure_ev(ri).unwrap_or(0.0);

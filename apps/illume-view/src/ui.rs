@@ -2,9 +2,7 @@
 
 use crate::camera::OrbitCamera;
 use crate::present::{Gpu, Viewport};
-use crate::renderer::{
-    AnimationCommand, Command, RenderSetup, RenderThread, Selection, Shown,
-};
+use crate::renderer::{AnimationCommand, Command, RenderSetup, RenderThread, Selection, Shown};
 use crate::{ViewError, ViewOptions, unix_ms};
 use egui::{Key, Sense};
 use glam::{Vec2, Vec3};
@@ -26,9 +24,11 @@ const PANEL_WIDTH: f32 = 260.0;
 const REFRESH: Duration = Duration::from_millis(16);
 
 pub fn run(options: ViewOptions) -> Result<(), ViewError> {
-    let event_loop = EventLoop::<()>::with_user_event()
-        .build()
-        .map_err(|e| ViewError::Window(format!("{e} (is DISPLAY set and an X or Wayland server running?)")))?;
+    let event_loop = EventLoop::<()>::with_user_event().build().map_err(|e| {
+        ViewError::Window(format!(
+            "{e} (is DISPLAY set and an X or Wayland server running?)"
+        ))
+    })?;
     let proxy = event_loop.create_proxy();
     let mut app = App::new(options, proxy);
     event_loop
@@ -40,10 +40,13 @@ pub fn run(options: ViewOptions) -> Result<(), ViewError> {
     }
 }
 
+/// A clip frame for the writer thread: index, sRGB bytes, width, height.
+type ClipFrame = (u64, Vec<u8>, u32, u32);
+
 /// A clip being recorded: PNG frames and the CSV of `animate`, written on a thread.
 struct Recorder {
     dir: PathBuf,
-    frames: Sender<(u64, Vec<u8>, u32, u32)>,
+    frames: Sender<ClipFrame>,
     csv: String,
     index: u64,
     writer: Option<std::thread::JoinHandle<()>>,
@@ -52,7 +55,7 @@ struct Recorder {
 impl Recorder {
     fn start(dir: PathBuf) -> Result<Self, String> {
         std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        let (tx, rx): (Sender<(u64, Vec<u8>, u32, u32)>, Receiver<_>) = channel();
+        let (tx, rx): (Sender<ClipFrame>, Receiver<ClipFrame>) = channel();
         let d = dir.clone();
         let writer = std::thread::spawn(move || {
             for (i, bytes, w, h) in rx {
@@ -155,6 +158,24 @@ struct App {
     selected_material: usize,
     settings_edit: Vec<(String, String)>,
     settings_for: String,
+    commands_sent: u64,
+    /// A new frame waits for the next refresh.
+    frame_pending: bool,
+    /// egui asked to be redrawn at this time.
+    egui_repaint_at: Option<Instant>,
+    /// The last event egui wanted a repaint for.
+    last_input: Instant,
+    input_log: Vec<String>,
+    /// For the summary at exit: redraws, their total time and the upload's \[ms\].
+    redraws: u64,
+    redraw_ms_total: f64,
+    upload_ms_total: f64,
+    gpu_ms_total: f64,
+    acquire_ms_total: f64,
+    render_ms_total: f64,
+    present_call_ms_total: f64,
+    started: Instant,
+    frames_received: u64,
 }
 
 impl App {
@@ -192,12 +213,27 @@ impl App {
             selected_material: 0,
             settings_edit: Vec::new(),
             settings_for: String::new(),
+            commands_sent: 0,
+            frame_pending: false,
+            egui_repaint_at: None,
+            last_input: Instant::now(),
+            input_log: Vec::new(),
+            redraws: 0,
+            redraw_ms_total: 0.0,
+            upload_ms_total: 0.0,
+            gpu_ms_total: 0.0,
+            acquire_ms_total: 0.0,
+            render_ms_total: 0.0,
+            present_call_ms_total: 0.0,
+            started: Instant::now(),
+            frames_received: 0,
         }
     }
 
-    fn send(&self, c: Command) {
+    fn send(&mut self, c: Command) {
         if let Some(r) = &self.render {
             r.send(c);
+            self.commands_sent += 1;
         }
     }
 
@@ -210,9 +246,20 @@ impl App {
         }
     }
 
-    fn log(&self, what: &str) {
+    /// Notes an input event for `--log-input`; printed once its commands are sent.
+    fn log(&mut self, what: &str) {
         if self.options.log_input {
-            eprintln!("illume view: input {what} handled_unix_ms={:.1}", unix_ms());
+            self.input_log.push(what.to_owned());
+        }
+    }
+
+    fn flush_log(&mut self) {
+        for what in std::mem::take(&mut self.input_log) {
+            eprintln!(
+                "illume view: input {what} handled_unix_ms={:.1} sent={}",
+                unix_ms(),
+                self.commands_sent
+            );
         }
     }
 
@@ -240,10 +287,13 @@ impl App {
             if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
                 let _ = std::fs::create_dir_all(dir);
             }
-            shown.image.write(path, &tone).map_err(|e| ViewError::Output {
-                path: path.to_owned(),
-                message: e.to_string(),
-            })
+            shown
+                .image
+                .write(path, &tone)
+                .map_err(|e| ViewError::Output {
+                    path: path.to_owned(),
+                    message: e.to_string(),
+                })
         };
         out(png)?;
         out(&png.with_extension("exr"))?;
@@ -272,7 +322,11 @@ impl App {
             return 0.0;
         }
         let span = (self.new_frames[n - 1] - self.new_frames[0]).as_secs_f64();
-        if span > 0.0 { (n - 1) as f64 / span } else { 0.0 }
+        if span > 0.0 {
+            (n - 1) as f64 / span
+        } else {
+            0.0
+        }
     }
 
     /// Takes the newest frame from the render thread.
@@ -285,6 +339,7 @@ impl App {
             return;
         }
         let now = Instant::now();
+        self.frames_received += 1;
         self.new_frames.push(now);
         self.new_frames
             .retain(|t| now.duration_since(*t) < Duration::from_secs(2));
@@ -293,9 +348,10 @@ impl App {
                 "illume view: frame {} technique={} spp={} commands={} render_ms={:.1} shown_unix_ms={:.1}",
                 latest.index,
                 latest.technique,
-                latest
-                    .reference_spp
-                    .map_or("none".to_owned(), |s| format!("{s}/{}", latest.reference_target)),
+                latest.reference_spp.map_or("none".to_owned(), |s| format!(
+                    "{s}/{}",
+                    latest.reference_target
+                )),
                 latest.commands_applied,
                 latest.times.total_ms,
                 unix_ms()
@@ -345,6 +401,7 @@ impl App {
 
     fn redraw(&mut self, event_loop: &ActiveEventLoop) {
         self.last_redraw = Instant::now();
+        let redraw_start = self.last_redraw;
         self.poll_frame();
         let (Some(window), Some(state)) = (self.window.clone(), self.egui_state.as_mut()) else {
             return;
@@ -357,13 +414,24 @@ impl App {
             state.handle_platform_output(&window, full.platform_output);
         }
         let ppp = full.pixels_per_point;
+        if let Some(delay) = full
+            .viewport_output
+            .get(&egui::ViewportId::ROOT)
+            .map(|v| v.repaint_delay)
+            && delay < Duration::from_secs(3600)
+        {
+            let at = Instant::now() + delay;
+            self.egui_repaint_at = Some(self.egui_repaint_at.map_or(at, |t| t.min(at)));
+        }
         let paint = self.ctx.tessellate(full.shapes, ppp);
         let t0 = Instant::now();
         if let Some(gpu) = self.gpu.as_mut() {
             if let Some(shown) = &self.shown
                 && self.uploaded != Some(shown.index)
             {
+                let tu = Instant::now();
                 gpu.upload(&shown.image);
+                self.upload_ms_total += tu.elapsed().as_secs_f64() * 1e3;
                 self.uploaded = Some(shown.index);
             }
             let tone = self.shown.as_ref().map(|s| {
@@ -378,12 +446,25 @@ impl App {
                 exposure_ev: tone.unwrap_or(0.0),
                 curve: self.curve,
             };
-            if let Err(e) = gpu.draw(&viewport, &paint, &mut full.textures_delta, ppp) {
-                self.message(e.to_string());
+            match gpu.draw(
+                &viewport,
+                &paint,
+                &mut full.textures_delta,
+                ppp,
+                self.options.log_input,
+            ) {
+                Ok(t) => {
+                    self.acquire_ms_total += t.acquire_ms;
+                    self.render_ms_total += t.render_ms;
+                    self.present_call_ms_total += t.present_ms;
+                }
+                Err(e) => self.message(e.to_string()),
             }
         }
         full.textures_delta.clear();
-        self.present_ms = 0.9 * self.present_ms + 0.1 * t0.elapsed().as_secs_f64() * 1e3;
+        let gpu_ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.gpu_ms_total += gpu_ms;
+        self.present_ms = 0.9 * self.present_ms + 0.1 * gpu_ms;
         if self.shown.is_some() {
             self.displayed += 1;
         }
@@ -403,15 +484,15 @@ impl App {
             }
         }
         self.apply(actions, event_loop);
+        self.flush_log();
+        self.redraws += 1;
+        self.redraw_ms_total += redraw_start.elapsed().as_secs_f64() * 1e3;
         self.test_mode(event_loop);
     }
 
     /// Test mode: screenshot after N displayed frames (and the reference's samples).
     fn test_mode(&mut self, event_loop: &ActiveEventLoop) {
-        if let Some(at) = self.exit_at {
-            if Instant::now() >= at {
-                event_loop.exit();
-            }
+        if self.exit_at.is_some() {
             return;
         }
         let Some(n) = self.options.exit_after_frames else {
@@ -485,7 +566,9 @@ impl App {
             ui.label(format!("reference: {spp} / {} spp", shown.reference_target));
         }
         if let Some((flip, spp)) = shown.flip {
-            ui.label(format!("FLIP technique vs reference: {flip:.4} (at {spp} spp)"));
+            ui.label(format!(
+                "FLIP technique vs reference: {flip:.4} (at {spp} spp)"
+            ));
         }
         ui.horizontal(|ui| {
             ui.label("Resolution");
@@ -695,15 +778,14 @@ impl App {
             self.options.config.render.height as f32,
         );
         let fit = ((avail.width() * ppp) / w).min((avail.height() * ppp) / h);
-        let scale = if fit >= 1.0 { fit.floor() } else { fit.max(0.01) };
+        let scale = if fit >= 1.0 {
+            fit.floor()
+        } else {
+            fit.max(0.01)
+        };
         let size_px = egui::vec2(w * scale, h * scale);
         let rect = egui::Rect::from_min_size(avail.min, size_px / ppp);
-        actions.image_rect_px = [
-            rect.min.x * ppp,
-            rect.min.y * ppp,
-            size_px.x,
-            size_px.y,
-        ];
+        actions.image_rect_px = [rect.min.x * ppp, rect.min.y * ppp, size_px.x, size_px.y];
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
         let Some(shown) = self.shown.clone() else {
             return;
@@ -847,8 +929,12 @@ impl App {
                 Key::Plus | Key::Equals => self.exposure_ev += 0.5,
                 Key::Minus => self.exposure_ev -= 0.5,
                 Key::Escape => actions.commands.push(Command::Select(None)),
-                Key::ArrowLeft | Key::ArrowRight | Key::ArrowUp | Key::ArrowDown
-                | Key::PageUp | Key::PageDown => {
+                Key::ArrowLeft
+                | Key::ArrowRight
+                | Key::ArrowUp
+                | Key::ArrowDown
+                | Key::PageUp
+                | Key::PageDown => {
                     self.move_key(key, shift, actions);
                 }
                 _ => handled = !self.fly || !matches!(key, Key::W | Key::A | Key::S | Key::D),
@@ -863,13 +949,17 @@ impl App {
         {
             let speed = orbit.distance.max(0.1) * dt;
             let (f, r, u) = ctx.input(|i| {
-                let axis = |a: Key, b: Key| {
-                    (i.key_down(a) as i32 - i.key_down(b) as i32) as f32
-                };
-                (axis(Key::W, Key::S), axis(Key::D, Key::A), axis(Key::E, Key::Q))
+                let axis = |a: Key, b: Key| (i.key_down(a) as i32 - i.key_down(b) as i32) as f32;
+                (
+                    axis(Key::W, Key::S),
+                    axis(Key::D, Key::A),
+                    axis(Key::E, Key::Q),
+                )
             });
             if f != 0.0 || r != 0.0 || u != 0.0 {
                 orbit.fly(f * speed, r * speed, u * speed);
+                // Keys held: keep moving at every refresh.
+                ctx.request_repaint();
                 self.set_camera(orbit);
             }
         }
@@ -1100,18 +1190,21 @@ impl ApplicationHandler for App {
     }
 
     fn user_event(&mut self, _: &ActiveEventLoop, _: ()) {
-        if let Some(w) = &self.window {
-            w.request_redraw();
-        }
+        // A new frame: shown at the next refresh (at most one redraw per refresh however
+        // fast frames come, so the window leaves the CPU to the renderer).
+        self.frame_pending = true;
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         let Some(window) = self.window.clone() else {
             return;
         };
-        if let Some(state) = self.egui_state.as_mut() {
+        if let Some(state) = self.egui_state.as_mut()
+            && !matches!(event, WindowEvent::RedrawRequested)
+        {
             let r = state.on_window_event(&window, &event);
             if r.repaint {
+                self.last_input = Instant::now();
                 window.request_redraw();
             }
         }
@@ -1133,17 +1226,63 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
-        // Redraw every display refresh whether or not a frame arrived: input is handled
-        // at each redraw, so it never waits for the renderer.
-        if self.last_redraw.elapsed() >= REFRESH
-            && let Some(w) = &self.window
+        // Input events redraw at once (egui-winit asks for it in `window_event`); a new
+        // frame or egui's own repaint waits for the next refresh. Nothing else wakes the
+        // window: an idle window costs nothing.
+        if let Some(at) = self.exit_at
+            && Instant::now() >= at
         {
-            w.request_redraw();
+            event_loop.exit();
+            return;
         }
-        event_loop.set_control_flow(ControlFlow::WaitUntil(self.last_redraw + REFRESH));
+        // Test mode counts displayed frames: it redraws at every refresh.
+        if self.options.exit_after_frames.is_some() {
+            self.frame_pending = true;
+        }
+        let next_refresh = self.last_redraw + REFRESH;
+        let mut wake = self.exit_at;
+        let due = [
+            self.frame_pending.then_some(next_refresh),
+            // egui's animations (hover, menus) follow input: honoured for a second after it.
+            self.egui_repaint_at
+                .filter(|_| self.last_input.elapsed() < Duration::from_secs(1))
+                .map(|t| t.max(next_refresh)),
+        ]
+        .into_iter()
+        .flatten()
+        .min();
+        if let Some(due) = due {
+            if Instant::now() >= due {
+                self.frame_pending = false;
+                self.egui_repaint_at = None;
+                if let Some(w) = &self.window {
+                    w.request_redraw();
+                }
+            } else {
+                wake = Some(wake.map_or(due, |w| w.min(due)));
+            }
+        }
+        event_loop.set_control_flow(match wake {
+            Some(t) => ControlFlow::WaitUntil(t),
+            None => ControlFlow::Wait,
+        });
     }
 
     fn exiting(&mut self, _: &ActiveEventLoop) {
+        let secs = self.started.elapsed().as_secs_f64();
+        let n = self.redraws.max(1) as f64;
+        eprintln!(
+            "illume view: summary: {} redraws, {:.3} ms each: egui layout {:.3} ms, upload {:.3} ms, acquire {:.3} ms, tone map + egui passes {:.3} ms, present {:.3} ms; {} frames from the renderer in {secs:.2} s ({:.2} fps)",
+            self.redraws,
+            self.redraw_ms_total / n,
+            (self.redraw_ms_total - self.gpu_ms_total) / n,
+            self.upload_ms_total / n,
+            self.acquire_ms_total / n,
+            self.render_ms_total / n,
+            self.present_call_ms_total / n,
+            self.frames_received,
+            self.frames_received as f64 / secs.max(1e-9)
+        );
         if let Some(r) = self.recorder.take() {
             let _ = r.finish();
         }

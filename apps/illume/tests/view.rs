@@ -205,7 +205,6 @@ fn render(args: &[&str], out: &Path) {
     assert!(st.success(), "illume render {args:?} failed");
 }
 
-
 /// Largest and mean difference \[8-bit levels\] between the PNG at `a` and the
 /// `w × h` block of `b` at (`x0`, `y0`).
 fn diff_levels(a: &Path, b: &image::RgbImage, x0: u32, y0: u32) -> (f64, f64) {
@@ -229,7 +228,13 @@ fn screenshot_equals_render_and_the_window_shows_it() {
     let _display = display();
     let dir = out_dir("screenshot");
     let rendered = dir.join("render.png");
-    let mut args = vec!["builtin:cornell-spot", "--technique", "reference", "--spp", "64"];
+    let mut args = vec![
+        "builtin:cornell-spot",
+        "--technique",
+        "reference",
+        "--spp",
+        "64",
+    ];
     args.extend(SIZE);
     render(&args, &rendered);
     let shot = dir.join("view.png");
@@ -286,7 +291,13 @@ fn keys_switch_technique_and_reference_converges_to_render() {
     let _display = display();
     let dir = out_dir("keys");
     let rendered = dir.join("reference.png");
-    let mut args = vec!["builtin:cornell-spot", "--technique", "reference", "--spp", "16"];
+    let mut args = vec![
+        "builtin:cornell-spot",
+        "--technique",
+        "reference",
+        "--spp",
+        "16",
+    ];
     args.extend(SIZE);
     render(&args, &rendered);
     let mut view_args = vec![
@@ -309,7 +320,9 @@ fn keys_switch_technique_and_reference_converges_to_render() {
     focus(&id);
     // R: reference mode; it converges to the render of the reference.
     xdotool(&["key", "r"]);
-    viewer.wait_for(Duration::from_secs(10), "R handled", |l| l.contains("key R"));
+    viewer.wait_for(Duration::from_secs(10), "R handled", |l| {
+        l.contains("key R")
+    });
     viewer.wait_converged(1);
     xdotool(&["key", "p"]);
     viewer.wait_for(Duration::from_secs(10), "the screenshot", |l| {
@@ -318,7 +331,10 @@ fn keys_switch_technique_and_reference_converges_to_render() {
     let a = read_ldr(&rendered).unwrap();
     let b = read_ldr(&dir.join("screenshot_001.png")).unwrap();
     let rmse = illume_metrics::rmse(&a, &b).unwrap();
-    assert!(rmse < 1e-3, "reference mode vs render --technique reference: RMSE {rmse}");
+    assert!(
+        rmse < 1e-3,
+        "reference mode vs render --technique reference: RMSE {rmse}"
+    );
     // R again: back to the technique, whose image differs from the reference.
     xdotool(&["key", "r"]);
     viewer.wait_for(Duration::from_secs(30), "the technique again", |l| {
@@ -357,7 +373,10 @@ fn the_window_handles_input_while_a_frame_takes_seconds() {
         l.contains("render_ms=")
     });
     let frame_ms = field(&first, "render_ms").unwrap();
-    assert!(frame_ms >= 1000.0, "a frame should take ≥ 1 s here: {first}");
+    assert!(
+        frame_ms >= 1000.0,
+        "a frame should take ≥ 1 s here: {first}"
+    );
     focus(&id);
     let mut latencies = Vec::new();
     for _ in 0..5 {
@@ -372,8 +391,13 @@ fn the_window_handles_input_while_a_frame_takes_seconds() {
     let log = viewer.finish();
     let frames = log.iter().filter(|l| l.contains("render_ms=")).count();
     let worst = latencies.iter().cloned().fold(0.0, f64::max);
-    eprintln!("input latencies {latencies:?} ms while frames take {frame_ms:.0} ms; {frames} frames shown");
-    assert!(worst < 50.0, "input handled after {worst:.1} ms (all: {latencies:?})");
+    eprintln!(
+        "input latencies {latencies:?} ms while frames take {frame_ms:.0} ms; {frames} frames shown"
+    );
+    assert!(
+        worst < 50.0,
+        "input handled after {worst:.1} ms (all: {latencies:?})"
+    );
 }
 
 /// Mean absolute luminance difference of two linear images over pixels `[x0, x1) × [y0, y1)`.
@@ -394,10 +418,22 @@ fn keys_move_the_clicked_object_and_only_its_light_changes() {
     let dir = out_dir("edit");
     // Noise of the reference at these samples: two seeds of the unchanged scene (far
     // apart: seed s + 1 shares all but one sample sequence with seed s).
-    let mut args = vec!["builtin:cornell-spot", "--technique", "reference", "--spp", "64"];
+    let mut args = vec![
+        "builtin:cornell-spot",
+        "--technique",
+        "reference",
+        "--spp",
+        "64",
+    ];
     args.extend(SIZE);
-    render(&[args.as_slice(), &["--seed", "1"]].concat(), &dir.join("seed1.exr"));
-    render(&[args.as_slice(), &["--seed", "100000"]].concat(), &dir.join("seed2.exr"));
+    render(
+        &[args.as_slice(), &["--seed", "1"]].concat(),
+        &dir.join("seed1.exr"),
+    );
+    render(
+        &[args.as_slice(), &["--seed", "100000"]].concat(),
+        &dir.join("seed2.exr"),
+    );
     let mut view_args = args.clone();
     view_args.extend(["--log-input", "--output", dir.to_str().unwrap()]);
     let mut viewer = Viewer::start(&view_args);
@@ -410,10 +446,14 @@ fn keys_move_the_clicked_object_and_only_its_light_changes() {
     });
     // Click the sphere (it sits at about (50, 85) of the 160×120 image), then → → →.
     xdotool(&["mousemove", "--window", &id, "50", "85", "click", "1"]);
-    viewer.wait_for(Duration::from_secs(10), "the click", |l| l.contains("input click"));
+    viewer.wait_for(Duration::from_secs(10), "the click", |l| {
+        l.contains("input click")
+    });
     for _ in 0..3 {
         xdotool(&["key", "Right"]);
-        viewer.wait_for(Duration::from_secs(10), "→", |l| l.contains("key ArrowRight"));
+        viewer.wait_for(Duration::from_secs(10), "→", |l| {
+            l.contains("key ArrowRight")
+        });
     }
     // The reference restarts, then converges on the moved scene.
     viewer.wait_for(Duration::from_secs(30), "a restarted reference", |l| {
@@ -439,7 +479,16 @@ fn keys_move_the_clicked_object_and_only_its_light_changes() {
     eprintln!(
         "luminance change: sphere's old place {sphere_was:.4}, right of it {right_of_it:.4}, upper image {far:.4}; noise {noise:.4}"
     );
-    assert!(sphere_was > 20.0 * noise.max(far), "the sphere did not move away");
-    assert!(right_of_it > 5.0 * far, "nothing changed where the sphere went");
-    assert!(far <= noise, "the upper image changed beyond noise: {far} vs noise {noise}");
+    assert!(
+        sphere_was > 20.0 * noise.max(far),
+        "the sphere did not move away"
+    );
+    assert!(
+        right_of_it > 5.0 * far,
+        "nothing changed where the sphere went"
+    );
+    assert!(
+        far <= noise,
+        "the upper image changed beyond noise: {far} vs noise {noise}"
+    );
 }
