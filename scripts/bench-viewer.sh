@@ -20,7 +20,7 @@ echo "## viewer fps vs animate --realtime (photon_stream, 800x600, animation mov
     --ping-pong --duration 10 --width 800 --height 600 -o "$out/anim" 2>&1 | grep "frames per second"
 echo "   load: $(uptime | sed 's/.*load/load/')"
 "$bin" view builtin:cornell-spot --technique photon_stream --play --animation move \
-    --width 800 --height 600 --exit-after-frames 600 2>&1 | grep summary
+    --width 800 --height 600 --duration 10 2>&1 | grep summary
 echo "   load: $(uptime | sed 's/.*load/load/')"
 echo "## input-to-photon latency (photon_stream, 800x600): click the sphere, then → five times"
 log="$out/latency.log"

@@ -64,6 +64,9 @@ pub struct ViewOptions {
     /// Print a line with a timestamp for every input event handled (tests measure
     /// latency with it) and for every new frame shown.
     pub log_input: bool,
+    /// Close the window after this many seconds (benchmarks; unlike the test mode it
+    /// redraws only for new frames and input, as an interactive session does).
+    pub duration_s: Option<f64>,
     /// Folder that screenshots (P) and clips (K) go to.
     pub output_dir: PathBuf,
 }

@@ -104,7 +104,10 @@ impl Gpu {
             .into_iter()
             .find(|m| caps.present_modes.contains(m))
             .unwrap_or(wgpu::PresentMode::Fifo);
-        let adapter_name = format!("{adapter_name}, present mode {present_mode:?} of {:?}", caps.present_modes);
+        let adapter_name = format!(
+            "{adapter_name}, present mode {present_mode:?} of {:?}",
+            caps.present_modes
+        );
         let config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             format,

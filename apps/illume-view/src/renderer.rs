@@ -218,11 +218,17 @@ impl RenderThread {
         let (tx, rx) = channel();
         let slot = FrameSlot::default();
         let out = slot.clone();
-        // The renderer's threads run below the window's priority: on a machine whose cores
-        // the renderer fills, input is still handled at once.
+        // The renderer's threads run a little below the window's priority (nice 3 on
+        // Linux): on a machine whose cores the renderer fills, input is still handled at
+        // once, while the renderer keeps a fair share against other programs (at the
+        // lowest priority, any other load on the machine starved it).
         let lower = || {
-            let _ =
-                thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min);
+            let _ = thread_priority::set_current_thread_priority(
+                thread_priority::ThreadPriority::Crossplatform(
+                    thread_priority::ThreadPriorityValue::try_from(40u8)
+                        .unwrap_or(thread_priority::ThreadPriorityValue::MIN),
+                ),
+            );
         };
         let pool = rayon::ThreadPoolBuilder::new()
             .thread_name(|i| format!("illume-render-{i}"))

@@ -414,6 +414,10 @@ impl App {
             state.handle_platform_output(&window, full.platform_output);
         }
         let ppp = full.pixels_per_point;
+        // Input is handled here, before drawing: its commands go to the render thread now.
+        let image_rect_px = actions.image_rect_px;
+        self.apply(actions, event_loop);
+        self.flush_log();
         if let Some(delay) = full
             .viewport_output
             .get(&egui::ViewportId::ROOT)
@@ -442,7 +446,7 @@ impl App {
                 }
             });
             let viewport = Viewport {
-                rect: actions.image_rect_px,
+                rect: image_rect_px,
                 exposure_ev: tone.unwrap_or(0.0),
                 curve: self.curve,
             };
@@ -483,8 +487,6 @@ impl App {
                 ));
             }
         }
-        self.apply(actions, event_loop);
-        self.flush_log();
         self.redraws += 1;
         self.redraw_ms_total += redraw_start.elapsed().as_secs_f64() * 1e3;
         self.test_mode(event_loop);
@@ -1229,6 +1231,11 @@ impl ApplicationHandler for App {
         // Input events redraw at once (egui-winit asks for it in `window_event`); a new
         // frame or egui's own repaint waits for the next refresh. Nothing else wakes the
         // window: an idle window costs nothing.
+        if let Some(d) = self.options.duration_s
+            && self.exit_at.is_none()
+        {
+            self.exit_at = Some(self.started + Duration::from_secs_f64(d.max(0.0)));
+        }
         if let Some(at) = self.exit_at
             && Instant::now() >= at
         {

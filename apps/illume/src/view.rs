@@ -50,6 +50,9 @@ pub struct ViewArgs {
     /// Test mode: keep the window open this long after the screenshot [ms].
     #[arg(long, default_value_t = 0)]
     pub linger_ms: u64,
+    /// Close the window after this many seconds [s] (benchmarks).
+    #[arg(long, value_parser = crate::setup::finite_f64)]
+    pub duration: Option<f64>,
     /// Print a timestamped line for each input event handled and each frame shown.
     #[arg(long)]
     pub log_input: bool,
@@ -85,6 +88,7 @@ pub fn run(a: ViewArgs) -> Result<()> {
         exit_after_frames: a.exit_after_frames,
         linger_ms: a.linger_ms,
         log_input: a.log_input,
+        duration_s: a.duration,
         output_dir: a.output,
     })?;
     Ok(())
