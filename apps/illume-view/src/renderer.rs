@@ -258,11 +258,11 @@ impl RenderThread {
 }
 
 impl Drop for RenderThread {
+    /// Asks the thread to stop after its current frame, without waiting for it: closing
+    /// the window never waits for a frame of seconds (the process ends it).
     fn drop(&mut self) {
         let _ = self.commands.send(Command::Quit);
-        if let Some(h) = self.handle.take() {
-            let _ = h.join();
-        }
+        drop(self.handle.take());
     }
 }
 
@@ -472,6 +472,7 @@ impl State {
                 self.clock_s = scene.time;
                 self.time_s = scene.time;
                 self.selection = None;
+                self.pick = None;
                 self.engine = None;
                 self.scene = *scene;
                 self.rebuild();

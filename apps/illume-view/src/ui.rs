@@ -357,6 +357,15 @@ impl App {
                 unix_ms()
             );
         }
+        // A new scene (dropped file): its camera starts a new orbit.
+        if self
+            .shown
+            .as_ref()
+            .is_some_and(|s| s.scene_camera != latest.scene_camera)
+        {
+            self.orbit = None;
+            self.focus_pick = None;
+        }
         // The first frame's camera starts the orbit: orbit the point at the centre.
         if self.orbit.is_none() && self.focus_pick.is_none() {
             self.focus_pick = Some(0);
