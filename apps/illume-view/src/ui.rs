@@ -625,7 +625,16 @@ impl App {
             }
             ui.checkbox(&mut self.fly, "Fly (F)");
         });
-        ui.label(format!("field of view {:.1}°", shown.camera.1.to_degrees()));
+        let mut fov = shown.camera.1.to_degrees();
+        if ui
+            .add(egui::Slider::new(&mut fov, 5.0..=120.0).text("field of view °"))
+            .on_hover_text("vertical field of view [degrees]")
+            .changed()
+        {
+            actions.commands.push(Command::Edit(Edit::SetCameraFov {
+                yfov_rad: fov.to_radians(),
+            }));
+        }
         ui.separator();
         ui.heading("Animation");
         ui.horizontal(|ui| {
