@@ -677,6 +677,16 @@ impl App {
         });
         ui.separator();
         ui.heading("Selection");
+        ui.horizontal_wrapped(|ui| {
+            ui.label("lights:");
+            for (i, (name, _)) in shown.lights.iter().enumerate() {
+                if ui.small_button(name.as_str()).clicked() {
+                    actions
+                        .commands
+                        .push(Command::Select(Some(Selection::Light(i as u32))));
+                }
+            }
+        });
         match &shown.selection {
             None => {
                 ui.label("click an object (or near a light)");
