@@ -357,7 +357,7 @@ fn the_window_handles_input_while_a_frame_takes_seconds() {
         "--technique",
         "reference",
         "--set",
-        "reference.spp_per_frame=48",
+        "reference.spp_per_frame=128",
         "--spp",
         "100000",
         "--log-input",
