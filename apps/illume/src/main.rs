@@ -8,6 +8,7 @@
 //! * `illume bench SCENARIO.toml` — run a benchmark scenario and write its report.
 //! * `illume precompute SCENE --output FILE` — a day of precomputed indirect light
 //!   (`--shard K/N` for one shard; `precompute merge`, `precompute info`).
+//! * `illume view SCENE` — an interactive window (default feature `view`).
 //!
 //! SCENE is a file (`.gltf`, `.glb`, `.obj`, `.ply`) or `builtin:NAME`
 //! (`builtin:cornell-spot`, `builtin:cube-in-box`, `builtin:furnace`).
@@ -26,6 +27,8 @@ mod precompute;
 mod progress;
 mod render;
 mod setup;
+#[cfg(feature = "view")]
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -63,6 +66,10 @@ enum Command {
     /// Precompute a day of indirect light for the technique `precomputed` (or one shard
     /// of it with --shard K/N); `merge` shards; `info` describes a .illumepc file.
     Precompute(precompute::PrecomputeArgs),
+    /// Open a window on a scene: the engine's frames as they render, camera and scene
+    /// edits, techniques and the reference one toggle away (docs/viewer.md).
+    #[cfg(feature = "view")]
+    View(view::ViewArgs),
 }
 
 fn main() {
@@ -75,6 +82,8 @@ fn main() {
         Command::Demo(a) => animate::demo(a),
         Command::Bench(a) => bench::run_bench(a),
         Command::Precompute(a) => precompute::run(a),
+        #[cfg(feature = "view")]
+        Command::View(a) => view::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {}", error_message(&e));

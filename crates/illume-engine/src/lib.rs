@@ -209,14 +209,46 @@ impl Engine {
         }
     }
 
+    /// Moves the scene to time `t` \[s\] and hands the changes to the technique (the first
+    /// half of [`Engine::step`], without rendering): for viewers that show another image
+    /// (the progressive reference) while the animation plays. Returns the changes.
+    pub fn set_time(&mut self, t: f64) -> Result<Vec<SceneChange>, EngineError> {
+        self.precompute(&mut Silent)?;
+        self.technique.before_world_write();
+        let changes = write_world(&self.world).set_time(t);
+        self.propagate(&changes)?;
+        Ok(changes)
+    }
+
+    /// The technique this engine runs.
+    pub fn kind(&self) -> TechniqueKind {
+        self.kind
+    }
+
     /// One frame at scene time `t` \[s\]: advance time, propagate changes, advance the
     /// technique within its budget, render, collect counters. Fails only when the
     /// technique's precompute (first frame) or a rebuild fails.
     pub fn step(&mut self, t: f64) -> Result<StepOutput, EngineError> {
+        self.step_inner(Some(t))
+    }
+
+    /// One frame at the scene's current time, which is not evaluated again: edits made
+    /// since the last step (to animated nodes too) stay as they are. For viewers whose
+    /// animation is paused.
+    pub fn step_held(&mut self) -> Result<StepOutput, EngineError> {
+        self.step_inner(None)
+    }
+
+    fn step_inner(&mut self, t: Option<f64>) -> Result<StepOutput, EngineError> {
         let mut precompute_ms = self.precompute(&mut Silent)?;
         let t0 = Instant::now();
-        self.technique.before_world_write();
-        let changes = write_world(&self.world).set_time(t);
+        let changes = match t {
+            Some(t) => {
+                self.technique.before_world_write();
+                write_world(&self.world).set_time(t)
+            }
+            None => Vec::new(),
+        };
         let (rebuilt, rebuild_ms) = self.propagate(&changes)?;
         precompute_ms += rebuild_ms;
         let world = read_world(&self.world);

@@ -87,6 +87,11 @@ pub enum Edit {
         /// New `world_from_camera`.
         world_from_camera: Affine3A,
     },
+    /// Set the camera's vertical field of view \[rad\], within (0, π).
+    SetCameraFov {
+        /// New vertical field of view \[rad\].
+        yfov_rad: f32,
+    },
     /// Replace a material's parameters.
     SetMaterial {
         /// Which material.
@@ -488,6 +493,19 @@ impl Scene {
                 self.place_node(node, world_from_camera, "camera transform")?;
                 Ok(self.update_world_transforms())
             }
+            Edit::SetCameraFov { yfov_rad } => {
+                if !(yfov_rad.is_finite() && *yfov_rad > 0.0 && *yfov_rad < std::f32::consts::PI) {
+                    return Err(EditError::NotFinite {
+                        what: "camera field of view (must be within (0, π))",
+                    });
+                }
+                if *yfov_rad == self.camera.yfov_rad {
+                    return Ok(Vec::new());
+                }
+                self.camera.yfov_rad = *yfov_rad;
+                let at = self.camera.world_from_camera;
+                Ok(vec![SceneChange::CameraMoved { from: at, to: at }])
+            }
             Edit::SetLightKind { light, kind } => {
                 let l = self
                     .lights
@@ -665,6 +683,18 @@ mod tests {
         );
         // Same time again: nothing changes.
         assert!(s.set_time(1.0).is_empty());
+    }
+
+    #[test]
+    fn fov_edit_is_a_camera_change_and_refuses_nonsense() {
+        let mut s = crate::builtin::load("cornell-spot").unwrap();
+        let ch = s.apply_edit(&Edit::SetCameraFov { yfov_rad: 0.5 }).unwrap();
+        assert!(matches!(ch[..], [SceneChange::CameraMoved { .. }]));
+        assert_eq!(s.camera.yfov_rad, 0.5);
+        for bad in [f32::NAN, 0.0, 4.0] {
+            assert!(s.apply_edit(&Edit::SetCameraFov { yfov_rad: bad }).is_err());
+        }
+        assert_eq!(s.camera.yfov_rad, 0.5);
     }
 
     #[test]

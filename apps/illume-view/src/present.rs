@@ -1,0 +1,396 @@
+//! The GPU side of the window: the surface, the HDR frame's texture, the tone-map pass
+//! (`tonemap.wgsl`, the curve of PNG output) and egui's pass.
+
+use crate::ViewError;
+use illume_core::image::{RgbImage, ToneCurve};
+use std::sync::Arc;
+use winit::window::Window;
+
+/// The tone-map shader's uniforms (mirrors `Params` in `tonemap.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    scale: f32,
+    curve: u32,
+    size: [u32; 2],
+}
+const _: () = assert!(std::mem::size_of::<Params>() == 16);
+
+/// Surface, device and the two passes.
+pub struct Gpu {
+    surface: wgpu::Surface<'static>,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    config: wgpu::SurfaceConfiguration,
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    frame: Option<(wgpu::Texture, wgpu::BindGroup, u32, u32)>,
+    /// egui's renderer.
+    pub egui: egui_wgpu::Renderer,
+    /// The adapter's name and backend, for logs.
+    pub adapter: String,
+    staging: Vec<[f32; 4]>,
+}
+
+/// Times of one [`Gpu::draw`] \[ms\].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct DrawTimes {
+    /// Waiting for the surface's next image.
+    pub acquire_ms: f64,
+    /// Recording and running the tone map and egui passes (run to completion only when
+    /// measured, see [`Gpu::draw`]).
+    pub render_ms: f64,
+    /// Handing the image to the window system.
+    pub present_ms: f64,
+}
+
+/// Where and how the frame is drawn.
+pub struct Viewport {
+    /// Physical pixels: x, y, width, height.
+    pub rect: [f32; 4],
+    /// Exposure \[stops\].
+    pub exposure_ev: f32,
+    /// Tone curve.
+    pub curve: ToneCurve,
+}
+
+impl Gpu {
+    /// Creates the surface of `window` on the first adapter that can present to it
+    /// (Vulkan, then GL; `WGPU_BACKEND` overrides).
+    pub fn new(window: Arc<Window>) -> Result<Self, ViewError> {
+        let backends =
+            wgpu::Backends::from_env().unwrap_or(wgpu::Backends::VULKAN | wgpu::Backends::GL);
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends,
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| ViewError::Gpu(format!("cannot create a surface: {e}")))?;
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::default(),
+            force_fallback_adapter: false,
+            compatible_surface: Some(&surface),
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| {
+            ViewError::Gpu(format!(
+                "no Vulkan or GL adapter can present to the window ({e}); on Debian install mesa-vulkan-drivers and libvulkan1 (scripts/ci/install-viewer-deps.sh)"
+            ))
+        })?;
+        let info = adapter.get_info();
+        let adapter_name = format!("{} ({:?})", info.name, info.backend);
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("illume view"),
+            required_limits:
+                wgpu::Limits::downlevel_webgl2_defaults().using_resolution(adapter.limits()),
+            ..Default::default()
+        }))
+        .map_err(|e| ViewError::Gpu(format!("{adapter_name}: cannot open the device: {e}")))?;
+        let caps = surface.get_capabilities(&adapter);
+        // A non-sRGB format: the shader encodes sRGB itself, exactly as PNG output does.
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| !f.is_srgb())
+            .or_else(|| caps.formats.first().copied())
+            .ok_or_else(|| ViewError::Gpu(format!("{adapter_name}: the surface has no format")))?;
+        let size = window.inner_size();
+        // Never block the window's thread on a vertical blank it does not need: the window
+        // paces itself (one redraw per refresh at most).
+        let present_mode = [wgpu::PresentMode::Immediate, wgpu::PresentMode::Mailbox]
+            .into_iter()
+            .find(|m| caps.present_modes.contains(m))
+            .unwrap_or(wgpu::PresentMode::Fifo);
+        let adapter_name = format!(
+            "{adapter_name}, present mode {present_mode:?} of {:?}",
+            caps.present_modes
+        );
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes[0],
+            view_formats: vec![],
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        surface.configure(&device, &config);
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("tonemap"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("tonemap.wgsl").into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("tonemap"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("tonemap"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("tonemap"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[Some(format.into())],
+            }),
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            multiview_mask: None,
+            cache: None,
+        });
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tonemap params"),
+            size: std::mem::size_of::<Params>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let egui = egui_wgpu::Renderer::new(
+            &device,
+            format,
+            egui_wgpu::RendererOptions {
+                dithering: false,
+                ..Default::default()
+            },
+        );
+        Ok(Self {
+            surface,
+            device,
+            queue,
+            config,
+            pipeline,
+            layout,
+            params,
+            frame: None,
+            egui,
+            adapter: adapter_name,
+            staging: Vec::new(),
+        })
+    }
+
+    /// Follows a window resize.
+    pub fn resize(&mut self, width: u32, height: u32) {
+        if width > 0 && height > 0 {
+            self.config.width = width;
+            self.config.height = height;
+            self.surface.configure(&self.device, &self.config);
+        }
+    }
+
+    /// Uploads a new HDR frame (RGBA 32-bit float texels).
+    pub fn upload(&mut self, image: &RgbImage) {
+        let (w, h) = (image.width(), image.height());
+        if !matches!(&self.frame, Some((_, _, fw, fh)) if *fw == w && *fh == h) {
+            let texture = self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("hdr frame"),
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&Default::default());
+            let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("tonemap"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: self.params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    },
+                ],
+            });
+            self.frame = Some((texture, bind, w, h));
+        }
+        self.staging.clear();
+        self.staging
+            .extend(image.pixels().iter().map(|p| [p.x, p.y, p.z, 1.0]));
+        if let Some((texture, _, _, _)) = &self.frame {
+            self.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                bytemuck::cast_slice(&self.staging),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(w * 16),
+                    rows_per_image: Some(h),
+                },
+                wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+            );
+        }
+    }
+
+    /// Draws the frame into `viewport` and egui's shapes over everything; presents.
+    pub fn draw(
+        &mut self,
+        viewport: &Viewport,
+        paint: &[egui::ClippedPrimitive],
+        textures: &mut egui::TexturesDelta,
+        pixels_per_point: f32,
+        measure: bool,
+    ) -> Result<DrawTimes, ViewError> {
+        let mut times = DrawTimes::default();
+        let t0 = std::time::Instant::now();
+        for (id, deltas) in textures.set.drain() {
+            for delta in deltas {
+                self.egui
+                    .update_texture(&self.device, &self.queue, id, &delta);
+            }
+        }
+        let frees: Vec<egui::TextureId> = textures.free.drain().collect();
+        let surface_texture = match self.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                self.surface.configure(&self.device, &self.config);
+                for id in &frees {
+                    self.egui.free_texture(id);
+                }
+                return Ok(times);
+            }
+            _ => {
+                for id in &frees {
+                    self.egui.free_texture(id);
+                }
+                return Ok(times);
+            }
+        };
+        let t1 = std::time::Instant::now();
+        times.acquire_ms = (t1 - t0).as_secs_f64() * 1e3;
+        let target = surface_texture.texture.create_view(&Default::default());
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [self.config.width, self.config.height],
+            pixels_per_point,
+        };
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        let extra =
+            self.egui
+                .update_buffers(&self.device, &self.queue, &mut encoder, paint, &screen);
+        if let Some((_, _, w, h)) = &self.frame {
+            let curve = match viewport.curve {
+                ToneCurve::Clamp => 0,
+                ToneCurve::Reinhard => 1,
+                ToneCurve::Aces => 2,
+            };
+            let params = Params {
+                scale: 2f32.powf(viewport.exposure_ev),
+                curve,
+                size: [*w, *h],
+            };
+            self.queue
+                .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        }
+        {
+            let mut pass = encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("frame + egui"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &target,
+                        resolve_target: None,
+                        depth_slice: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color {
+                                r: 0.02,
+                                g: 0.02,
+                                b: 0.02,
+                                a: 1.0,
+                            }),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    ..Default::default()
+                })
+                .forget_lifetime();
+            let [x, y, w, h] = viewport.rect;
+            let (sw, sh) = (self.config.width as f32, self.config.height as f32);
+            let x0 = x.clamp(0.0, sw - 1.0);
+            let y0 = y.clamp(0.0, sh - 1.0);
+            let w = w.min(sw - x0);
+            let h = h.min(sh - y0);
+            if let Some((_, bind, _, _)) = &self.frame
+                && w >= 1.0
+                && h >= 1.0
+            {
+                pass.set_viewport(x0, y0, w, h, 0.0, 1.0);
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, bind, &[]);
+                pass.draw(0..3, 0..1);
+                pass.set_viewport(0.0, 0.0, sw, sh, 0.0, 1.0);
+            }
+            self.egui.render(&mut pass, paint, &screen);
+        }
+        self.queue
+            .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+        if measure {
+            // Wait for the passes to finish so that their time is measured, not queued.
+            let _ = self.device.poll(wgpu::PollType::wait_indefinitely());
+        }
+        let t2 = std::time::Instant::now();
+        times.render_ms = (t2 - t1).as_secs_f64() * 1e3;
+        self.queue.present(surface_texture);
+        times.present_ms = t2.elapsed().as_secs_f64() * 1e3;
+        for id in &frees {
+            self.egui.free_texture(id);
+        }
+        Ok(times)
+    }
+
+    /// The largest texture side the device takes (for egui).
+    pub fn max_texture_side(&self) -> usize {
+        self.device.limits().max_texture_dimension_2d as usize
+    }
+}

@@ -1,0 +1,503 @@
+//! `illume view` in a real window: an X server (Xvfb in CI, started by `.ci/run`), Mesa's
+//! software Vulkan, xdotool for input and ImageMagick's `import` for screenshots of the
+//! X server. Without them these tests fail, naming what is missing; they never skip.
+#![cfg(feature = "view")]
+
+use illume_core::image::{RgbImage, read_ldr};
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::sync::{Mutex, MutexGuard};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+/// One window at a time: the tests share one X server and its keyboard focus.
+static DISPLAY_LOCK: Mutex<()> = Mutex::new(());
+
+fn exe() -> &'static str {
+    env!("CARGO_BIN_EXE_illume")
+}
+
+/// The display lock, after checking that a display and the tools are there.
+fn display() -> MutexGuard<'static, ()> {
+    let guard = DISPLAY_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let display = std::env::var("DISPLAY").unwrap_or_default();
+    assert!(
+        !display.is_empty(),
+        "DISPLAY is not set: the viewer tests need an X server (.ci/run starts `Xvfb :99`; \
+         locally: `Xvfb :99 -screen 0 1280x1024x24 & export DISPLAY=:99`)"
+    );
+    for tool in ["xdotool", "import"] {
+        let found = Command::new("sh")
+            .args(["-c", &format!("command -v {tool}")])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        assert!(
+            found,
+            "{tool} is missing: run scripts/ci/install-viewer-deps.sh (xdotool, imagemagick)"
+        );
+    }
+    guard
+}
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("illume-view-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn now_ms() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64()
+        * 1e3
+}
+
+/// A running viewer with its stderr lines on a channel.
+struct Viewer {
+    child: Child,
+    lines: Receiver<String>,
+    log: Vec<String>,
+}
+
+impl Viewer {
+    fn start(args: &[&str]) -> Self {
+        let mut child = Command::new(exe())
+            .arg("view")
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("illume view starts");
+        let stderr = child.stderr.take().unwrap();
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        Self {
+            child,
+            lines: rx,
+            log: Vec::new(),
+        }
+    }
+
+    /// Waits (at most `timeout`) for a line satisfying `f`; returns it.
+    fn wait_for(&mut self, timeout: Duration, what: &str, f: impl Fn(&str) -> bool) -> String {
+        let end = Instant::now() + timeout;
+        loop {
+            let left = end.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    self.log.push(line.clone());
+                    if f(&line) {
+                        return line;
+                    }
+                }
+                Err(_) => {
+                    let _ = self.child.kill();
+                    panic!(
+                        "timed out waiting for {what}; the viewer said:\n{}",
+                        self.log.join("\n")
+                    );
+                }
+            }
+        }
+    }
+
+    /// Waits for a shown frame whose reference has all its samples.
+    fn wait_converged(&mut self, after_commands: u64) -> String {
+        self.wait_for(Duration::from_secs(60), "a converged frame", |l| {
+            field(l, "commands").is_some_and(|c| c >= after_commands as f64)
+                && l.contains(" spp=")
+                && spp(l).is_some_and(|(s, t)| s >= t)
+        })
+    }
+
+    fn window(&mut self) -> String {
+        // The window exists once the adapter line is printed.
+        self.wait_for(Duration::from_secs(30), "the adapter line", |l| {
+            l.contains("adapter")
+        });
+        let end = Instant::now() + Duration::from_secs(10);
+        loop {
+            let out = Command::new("xdotool")
+                .args(["search", "--name", "illume view"])
+                .output()
+                .unwrap();
+            let id = String::from_utf8_lossy(&out.stdout)
+                .lines()
+                .next()
+                .map(str::to_owned);
+            if let Some(id) = id {
+                return id;
+            }
+            assert!(Instant::now() < end, "no window named 'illume view'");
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
+    fn finish(mut self) -> Vec<String> {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        self.log.extend(self.lines.try_iter());
+        self.log
+    }
+}
+
+/// `name=value` of a log line, as a number.
+fn field(line: &str, name: &str) -> Option<f64> {
+    line.split_whitespace()
+        .find_map(|w| w.strip_prefix(&format!("{name}=")))
+        .and_then(|v| v.parse().ok())
+}
+
+/// `spp=S/T` of a frame line.
+fn spp(line: &str) -> Option<(u32, u32)> {
+    let v = line
+        .split_whitespace()
+        .find_map(|w| w.strip_prefix("spp="))?;
+    let (s, t) = v.split_once('/')?;
+    Some((s.parse().ok()?, t.parse().ok()?))
+}
+
+fn xdotool(args: &[&str]) {
+    let st = Command::new("xdotool").args(args).status().unwrap();
+    assert!(st.success(), "xdotool {args:?} failed");
+}
+
+/// Gives the window the keyboard focus (xdotool's synthetic `--window` events are
+/// ignored by winit; real key events go to the focused window).
+fn focus(id: &str) {
+    xdotool(&["windowfocus", "--sync", id]);
+}
+
+/// Window position on the root window (no window manager: the client area's origin).
+fn window_origin(id: &str) -> (u32, u32) {
+    let out = Command::new("xdotool")
+        .args(["getwindowgeometry", "--shell", id])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let get = |k: &str| {
+        text.lines()
+            .find_map(|l| l.strip_prefix(&format!("{k}=")))
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(0)
+    };
+    (get("X"), get("Y"))
+}
+
+fn render(args: &[&str], out: &Path) {
+    let st = Command::new(exe())
+        .arg("render")
+        .args(args)
+        .arg("-o")
+        .arg(out)
+        .stderr(Stdio::null())
+        .status()
+        .unwrap();
+    assert!(st.success(), "illume render {args:?} failed");
+}
+
+/// Largest and mean difference \[8-bit levels\] between the PNG at `a` and the
+/// `w × h` block of `b` at (`x0`, `y0`).
+fn diff_levels(a: &Path, b: &image::RgbImage, x0: u32, y0: u32) -> (f64, f64) {
+    let a = image::open(a).unwrap().to_rgb8();
+    let (mut max, mut sum) = (0.0f64, 0.0f64);
+    for (x, y, p) in a.enumerate_pixels() {
+        let q = b.get_pixel(x0 + x, y0 + y);
+        for c in 0..3 {
+            let d = (p[c] as f64 - q[c] as f64).abs();
+            max = max.max(d);
+            sum += d;
+        }
+    }
+    (max, sum / (3 * a.width() * a.height()) as f64)
+}
+
+const SIZE: [&str; 4] = ["--width", "160", "--height", "120"];
+
+#[test]
+fn screenshot_equals_render_and_the_window_shows_it() {
+    let _display = display();
+    let dir = out_dir("screenshot");
+    let rendered = dir.join("render.png");
+    let mut args = vec![
+        "builtin:cornell-spot",
+        "--technique",
+        "reference",
+        "--spp",
+        "64",
+    ];
+    args.extend(SIZE);
+    render(&args, &rendered);
+    let shot = dir.join("view.png");
+    let mut viewer = Viewer::start(
+        &[
+            args.as_slice(),
+            &[
+                "--screenshot",
+                shot.to_str().unwrap(),
+                "--exit-after-frames",
+                "3",
+                "--linger-ms",
+                "3000",
+            ],
+        ]
+        .concat(),
+    );
+    let id = viewer.window();
+    viewer.wait_for(Duration::from_secs(60), "the screenshot", |l| {
+        l.contains("wrote") && l.contains("view.png")
+    });
+    // The window shows the frame: a screenshot of the X server, cropped to the viewport.
+    std::thread::sleep(Duration::from_millis(300));
+    let root = dir.join("root.png");
+    let st = Command::new("import")
+        .args(["-window", "root"])
+        .arg(&root)
+        .status()
+        .unwrap();
+    assert!(st.success(), "import -window root failed");
+    let status = viewer.child.wait().unwrap();
+    assert!(status.success(), "illume view exited with {status}");
+
+    // Same view, same settings: the same image within noise (same samples: identical).
+    let a = read_ldr(&rendered).unwrap();
+    let b = read_ldr(&shot).unwrap();
+    let rmse = illume_metrics::rmse(&a, &b).unwrap();
+    assert!(rmse < 1e-3, "view screenshot vs render: RMSE {rmse}");
+    assert!(a.mean().length() > 0.01, "the render is black");
+    let exr = illume_core::image::read_exr(&shot.with_extension("exr")).unwrap();
+    assert_eq!((exr.width(), exr.height()), (160, 120));
+
+    let (x, y) = window_origin(&id);
+    let root_img = image::open(&root).unwrap().to_rgb8();
+    let (max, mean) = diff_levels(&shot, &root_img, x, y);
+    assert!(
+        mean < 0.5 && max <= 2.0,
+        "the window's viewport differs from the screenshot: mean {mean:.2}, max {max} levels (window at {x},{y})"
+    );
+}
+
+#[test]
+fn keys_switch_technique_and_reference_converges_to_render() {
+    let _display = display();
+    let dir = out_dir("keys");
+    let rendered = dir.join("reference.png");
+    let mut args = vec![
+        "builtin:cornell-spot",
+        "--technique",
+        "reference",
+        "--spp",
+        "16",
+    ];
+    args.extend(SIZE);
+    render(&args, &rendered);
+    let mut view_args = vec![
+        "builtin:cornell-spot",
+        "--technique",
+        "photon_stream",
+        "--spp",
+        "16",
+        "--log-input",
+        "--output",
+    ];
+    view_args.push(dir.to_str().unwrap());
+    view_args.extend(SIZE);
+    let mut viewer = Viewer::start(&view_args);
+    let id = viewer.window();
+    let first = viewer.wait_for(Duration::from_secs(60), "a photon_stream frame", |l| {
+        l.contains("technique=photon_stream")
+    });
+    assert!(first.contains("spp=none"), "{first}");
+    focus(&id);
+    // R: reference mode; it converges to the render of the reference.
+    xdotool(&["key", "r"]);
+    viewer.wait_for(Duration::from_secs(10), "R handled", |l| {
+        l.contains("key R")
+    });
+    viewer.wait_converged(1);
+    xdotool(&["key", "p"]);
+    viewer.wait_for(Duration::from_secs(10), "the screenshot", |l| {
+        l.contains("wrote") && l.contains("screenshot_001.png")
+    });
+    let a = read_ldr(&rendered).unwrap();
+    let b = read_ldr(&dir.join("screenshot_001.png")).unwrap();
+    let rmse = illume_metrics::rmse(&a, &b).unwrap();
+    assert!(
+        rmse < 1e-3,
+        "reference mode vs render --technique reference: RMSE {rmse}"
+    );
+    // R again: back to the technique, whose image differs from the reference.
+    xdotool(&["key", "r"]);
+    viewer.wait_for(Duration::from_secs(30), "the technique again", |l| {
+        l.contains("technique=photon_stream") && l.contains("spp=none")
+    });
+    // T: the next technique.
+    xdotool(&["key", "t"]);
+    let next = viewer.wait_for(Duration::from_secs(60), "another technique", |l| {
+        l.contains("technique=") && !l.contains("technique=photon_stream")
+    });
+    assert!(next.contains("technique=selective"), "{next}");
+    viewer.finish();
+}
+
+#[test]
+fn the_window_handles_input_while_a_frame_takes_seconds() {
+    let _display = display();
+    let mut args = vec![
+        "builtin:cornell-spot",
+        "--technique",
+        "reference",
+        "--set",
+        "reference.spp_per_frame=128",
+        "--spp",
+        "100000",
+        "--log-input",
+        "--width",
+        "200",
+        "--height",
+        "150",
+    ];
+    args.extend(["--exposure", "0"]);
+    let mut viewer = Viewer::start(&args);
+    let id = viewer.window();
+    let first = viewer.wait_for(Duration::from_secs(120), "a first frame", |l| {
+        l.contains("render_ms=")
+    });
+    let frame_ms = field(&first, "render_ms").unwrap();
+    assert!(
+        frame_ms >= 1000.0,
+        "a frame should take ≥ 1 s here: {first}"
+    );
+    focus(&id);
+    // Latency: from the key's sending to the viewer's log line. xdotool sends the key
+    // at the end of its run, after starting up and connecting to the X server; that cost
+    // is measured before each key with a no-op run (`getmouselocation`) and taken off.
+    let mut latencies = Vec::new();
+    let mut raw = Vec::new();
+    for _ in 0..5 {
+        let t = now_ms();
+        xdotool(&["getmouselocation"]);
+        let startup = now_ms() - t;
+        let sent = now_ms() + startup;
+        xdotool(&["key", "equal"]);
+        let line = viewer.wait_for(Duration::from_secs(5), "the key handled", |l| {
+            l.contains("input key") && l.contains("handled_unix_ms=")
+        });
+        let handled = field(&line, "handled_unix_ms").unwrap();
+        latencies.push(handled - sent);
+        raw.push(handled - (sent - startup));
+        std::thread::sleep(Duration::from_millis(150));
+    }
+    let log = viewer.finish();
+    let frames = log.iter().filter(|l| l.contains("render_ms=")).count();
+    let worst = latencies.iter().cloned().fold(0.0, f64::max);
+    eprintln!(
+        "input latencies {latencies:?} ms (with xdotool's start-up: {raw:?}) while frames take {frame_ms:.0} ms; {frames} frames shown"
+    );
+    assert!(
+        worst < 50.0,
+        "input handled after {worst:.1} ms (all: {latencies:?})"
+    );
+}
+
+/// Mean absolute luminance difference of two linear images over pixels `[x0, x1) × [y0, y1)`.
+fn region_change(a: &RgbImage, b: &RgbImage, (x0, x1, y0, y1): (u32, u32, u32, u32)) -> f64 {
+    let mut sum = 0.0;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            sum += (illume_core::luminance(*a.get(x, y)) - illume_core::luminance(*b.get(x, y)))
+                .abs() as f64;
+        }
+    }
+    sum / ((x1 - x0) * (y1 - y0)) as f64
+}
+
+#[test]
+fn keys_move_the_clicked_object_and_only_its_light_changes() {
+    let _display = display();
+    let dir = out_dir("edit");
+    // Noise of the reference at these samples: two seeds of the unchanged scene (far
+    // apart: seed s + 1 shares all but one sample sequence with seed s).
+    let mut args = vec![
+        "builtin:cornell-spot",
+        "--technique",
+        "reference",
+        "--spp",
+        "64",
+    ];
+    args.extend(SIZE);
+    render(
+        &[args.as_slice(), &["--seed", "1"]].concat(),
+        &dir.join("seed1.exr"),
+    );
+    render(
+        &[args.as_slice(), &["--seed", "100000"]].concat(),
+        &dir.join("seed2.exr"),
+    );
+    let mut view_args = args.clone();
+    view_args.extend(["--log-input", "--output", dir.to_str().unwrap()]);
+    let mut viewer = Viewer::start(&view_args);
+    let id = viewer.window();
+    viewer.wait_converged(0);
+    focus(&id);
+    xdotool(&["key", "p"]);
+    viewer.wait_for(Duration::from_secs(10), "screenshot 1", |l| {
+        l.contains("screenshot_001.png")
+    });
+    // Click the sphere (it sits at about (50, 85) of the 160×120 image), then → → →.
+    xdotool(&["mousemove", "--window", &id, "50", "85", "click", "1"]);
+    viewer.wait_for(Duration::from_secs(10), "the click", |l| {
+        l.contains("input click")
+    });
+    for _ in 0..3 {
+        xdotool(&["key", "Right"]);
+        viewer.wait_for(Duration::from_secs(10), "→", |l| {
+            l.contains("key ArrowRight")
+        });
+    }
+    // The reference restarts, then converges on the moved scene.
+    viewer.wait_for(Duration::from_secs(30), "a restarted reference", |l| {
+        spp(l).is_some_and(|(s, t)| s < t)
+    });
+    viewer.wait_converged(0);
+    xdotool(&["key", "p"]);
+    viewer.wait_for(Duration::from_secs(10), "screenshot 2", |l| {
+        l.contains("screenshot_002.png")
+    });
+    let log = viewer.finish();
+    assert!(
+        !log.iter().any(|l| l.contains("nothing selected")),
+        "the click did not select the sphere:\n{}",
+        log.join("\n")
+    );
+    let read = |name: &str| illume_core::image::read_exr(&dir.join(name)).unwrap();
+    let (before, after) = (read("screenshot_001.exr"), read("screenshot_002.exr"));
+    let noise = region_change(&read("seed1.exr"), &read("seed2.exr"), (0, 160, 0, 45));
+    let sphere_was = region_change(&before, &after, (38, 62, 72, 100));
+    let right_of_it = region_change(&before, &after, (62, 100, 72, 112));
+    let far = region_change(&before, &after, (0, 160, 0, 45));
+    eprintln!(
+        "luminance change: sphere's old place {sphere_was:.4}, right of it {right_of_it:.4}, upper image {far:.4}; noise {noise:.4}"
+    );
+    assert!(
+        sphere_was > 20.0 * noise.max(far),
+        "the sphere did not move away"
+    );
+    assert!(
+        right_of_it > 5.0 * far,
+        "nothing changed where the sphere went"
+    );
+    assert!(
+        far <= noise,
+        "the upper image changed beyond noise: {far} vs noise {noise}"
+    );
+}
