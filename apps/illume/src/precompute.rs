@@ -170,7 +170,8 @@ fn run_precompute(a: RunArgs) -> Result<()> {
         };
     }
     s.validate()?;
-    let mut scene = crate::render::load_scene_with(&scene_path, None, 0.0, false, &Default::default())?;
+    let mut scene =
+        crate::render::load_scene_with(&scene_path, None, 0.0, false, &Default::default())?;
     // The sun: the scene's [sun] with the flags on top (or the defaults).
     let mut sun = scene
         .sun
