@@ -98,14 +98,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         bail!("--fps must be positive, got {}", a.fps);
     }
     let (w, h) = (config.render.width, config.render.height);
-    let mut scene = crate::render::load_scene_with(
-        &a.scene,
-        a.animation.as_deref(),
-        0.0,
-        a.setup.spot_from_above,
-        &a.setup.load_options(),
-    )?;
-    a.setup.place_camera(&mut scene)?;
+    let scene = a.setup.load_scene(&a.scene, a.animation.as_deref(), 0.0)?;
     let animation_s = scene.animation_duration();
     let duration = a
         .duration

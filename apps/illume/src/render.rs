@@ -142,14 +142,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if let Some(s) = a.seed {
         config.set_seed(s);
     }
-    let mut scene = load_scene_with(
-        &a.scene,
-        a.animation.as_deref(),
-        a.time,
-        a.setup.spot_from_above,
-        &a.setup.load_options(),
-    )?;
-    a.setup.place_camera(&mut scene)?;
+    let scene = a
+        .setup
+        .load_scene(&a.scene, a.animation.as_deref(), a.time)?;
     let t0 = Instant::now();
     let mut bars = progress::Bars::with_spinner(&format!("{}: rendering", config.technique));
     let still = render_still(scene, &config, &mut bars);

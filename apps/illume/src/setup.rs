@@ -204,6 +204,26 @@ fn parse_point(s: &str) -> Result<Vec3, String> {
 }
 
 impl SetupArgs {
+    /// Loads the scene `path` with these arguments' load options (`--strict`,
+    /// `--units`, `--spot-from-above`), selects `animation`, moves it to `time` and
+    /// places the camera (`--look-from`/`--look-at`).
+    pub fn load_scene(
+        &self,
+        path: &std::path::Path,
+        animation: Option<&str>,
+        time: f64,
+    ) -> Result<illume_scene::Scene> {
+        let mut scene = crate::render::load_scene_with(
+            path,
+            animation,
+            time,
+            self.spot_from_above,
+            &self.load_options(),
+        )?;
+        self.place_camera(&mut scene)?;
+        Ok(scene)
+    }
+
     /// The scene loader's options from `--strict` and `--units`.
     pub fn load_options(&self) -> illume_scene::LoadOptions {
         illume_scene::LoadOptions {

@@ -1,6 +1,5 @@
 //! `illume view`: the interactive window (crate `illume-view`).
 
-use crate::render::load_scene_with;
 use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -69,14 +68,9 @@ pub fn run(a: ViewArgs) -> Result<()> {
     if let Some(s) = a.seed {
         config.set_seed(s);
     }
-    let mut scene = load_scene_with(
-        &a.scene,
-        a.animation.as_deref(),
-        a.time,
-        a.setup.spot_from_above,
-        &a.setup.load_options(),
-    )?;
-    a.setup.place_camera(&mut scene)?;
+    let scene = a
+        .setup
+        .load_scene(&a.scene, a.animation.as_deref(), a.time)?;
     illume_view::run(illume_view::ViewOptions {
         scene,
         config,
