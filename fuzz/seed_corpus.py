@@ -115,15 +115,13 @@ def main():
                 n += 1
                 put("config", f"doc{n}.toml", block.encode())
         for w, h in [(8, 6), (16, 12)]:
-            png = os.path.join(tmp, f"r{w}.png")
-            subprocess.run([args.illume, "render", "builtin:cornell-spot", "--technique", "reference",
-                            "--spp", "1", "--width", str(w), "--height", str(h), "-o", png],
-                           check=True, capture_output=True)
             for ext, target in [("png", "read_png"), ("exr", "read_exr")]:
-                src = png[:-3] + ext
-                if os.path.exists(src):
-                    with open(src, "rb") as f:
-                        put(target, f"r{w}.{ext}", f.read())
+                out = os.path.join(tmp, f"r{w}.{ext}")
+                subprocess.run([args.illume, "render", "builtin:cornell-spot", "--technique", "reference",
+                                "--spp", "1", "--width", str(w), "--height", str(h), "-o", out],
+                               check=True, capture_output=True)
+                with open(out, "rb") as f:
+                    put(target, f"r{w}.{ext}", f.read())
     for target in sorted(os.listdir(CORPUS)):
         print(f"{target}: {len(os.listdir(os.path.join(CORPUS, target)))} seeds")
 

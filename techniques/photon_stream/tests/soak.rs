@@ -14,7 +14,7 @@ use illume_render::{RenderSettings, Renderer};
 use illume_scene::{Edit, InstanceId, LightId};
 use illume_transport::{Budget, Technique, World};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, mpsc};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Resident memory of this process [bytes] (Linux: `/proc/self/statm`).
@@ -90,7 +90,6 @@ fn streaming_soak_keeps_memory_flat_and_books_exact_without_deadlock() {
             w.scene.nodes[node.index()].world_from_node,
         )
     };
-    let (tx, rx) = mpsc::channel::<(f64, u64)>();
     let mut frames = 0u64;
     let mut moves = 0u64;
     let mut next_move = 0.0;
@@ -144,16 +143,16 @@ fn streaming_soak_keeps_memory_flat_and_books_exact_without_deadlock() {
             }
         }
         if t >= next_print {
-            tx.send((t, rss)).unwrap();
+            // Printed as it goes, so that a long run's curve survives an interruption.
+            eprintln!(
+                "soak: t = {t:7.1} s, resident {:.1} MB, frames {frames}",
+                rss as f64 / 1e6
+            );
             next_print += 10.0;
         }
     }
     done.store(true, Ordering::Release);
     watchdog.join().unwrap();
-    drop(tx);
-    for (t, rss) in rx {
-        eprintln!("soak: t = {t:7.1} s, resident {:.1} MB", rss as f64 / 1e6);
-    }
     eprintln!("soak: {frames} frames, {moves} moves in {seconds} s");
 
     ps.pause();
