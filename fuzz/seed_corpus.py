@@ -88,6 +88,12 @@ def main():
     for path in small_files(args.scenes, ".obj", 200_000):
         with open(path, "rb") as f:
             put("load_obj", os.path.basename(path), f.read())
+    # OBJ + MTL pairs, split by the load_obj_mtl target at its separator line.
+    for path in small_files(args.scenes, ".obj", 200_000):
+        mtl = path[:-4] + ".mtl"
+        if os.path.exists(mtl):
+            with open(path, "rb") as f, open(mtl, "rb") as g:
+                put("load_obj_mtl", os.path.basename(path), f.read() + b"\n%%MTL%%\n" + g.read())
     for path in small_files(args.scenes, ".ply", 300_000):
         with open(path, "rb") as f:
             put("load_ply", os.path.basename(path), f.read())
