@@ -55,6 +55,10 @@ pub struct SetupArgs {
     /// settings; unknown keys are errors), e.g. `photon_stream.vsl_count=50`.
     #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
     pub sets: Vec<String>,
+    /// The `.illumepc` file of `--technique precomputed` (written by `illume
+    /// precompute`); the same as `--set precomputed.data=FILE`.
+    #[arg(long, value_name = "FILE")]
+    pub data: Option<PathBuf>,
     /// Replace the scene's lights and emitters by one spot light near the top of its
     /// bounds, shining down (the photon-streaming paper's setup; for files without
     /// lights, such as Sponza, the bunny and the dragon).
@@ -250,6 +254,16 @@ impl SetupArgs {
             preset,
             sets: &self.sets,
         })?;
+        if let Some(file) = &self.data {
+            if config.technique != TechniqueKind::Precomputed {
+                anyhow::bail!(
+                    "--data {}: a data file is read by --technique precomputed, not {}",
+                    file.display(),
+                    config.technique.name()
+                );
+            }
+            config.precomputed.data = file.to_string_lossy().into_owned();
+        }
         if let Some(w) = self.width {
             config.render.width = w;
         }

@@ -908,3 +908,71 @@ fn png_exposure_is_automatic_by_default_and_fixed_on_request() {
         assert!(got == want, "{extra:?}: the PNG is not exposed at {ev} EV");
     }
 }
+
+#[test]
+fn data_flag_reads_a_precomputed_file_like_the_set_key() {
+    // A tiny day of sun-room (the Slurm test's settings), then one frame between two keys
+    // through `--data FILE` and through `--set precomputed.data=FILE`: the same image.
+    let dir = scratch("data-flag");
+    let day = dir.join("day.illumepc");
+    let size = ["--width", "24", "--height", "16"];
+    let mut args = vec!["precompute", "builtin:sun-room", "--schedule", "uniform"];
+    args.extend([
+        "--from",
+        "3",
+        "--to",
+        "15",
+        "--step-min",
+        "120",
+        "--spp",
+        "4",
+        "--components",
+        "4",
+    ]);
+    args.extend(size);
+    args.extend(["--output", path(&day)]);
+    ok(&illume(&args));
+    let set = format!("precomputed.data={}", path(&day));
+    let render = |extra: &[&str], out: &Path| {
+        let mut a = vec!["render", "builtin:sun-room", "--time", "30000"];
+        a.extend(["--technique", "precomputed"]);
+        a.extend(size);
+        a.extend(extra);
+        a.extend(["-o", path(out)]);
+        illume(&a)
+    };
+    let by_flag = dir.join("flag.exr");
+    let by_set = dir.join("set.exr");
+    ok(&render(&["--data", path(&day)], &by_flag));
+    ok(&render(&["--set", &set], &by_set));
+    let (a, b) = (
+        RgbImage::read(&by_flag).unwrap(),
+        RgbImage::read(&by_set).unwrap(),
+    );
+    assert!(a.mean().max_element() > 0.0, "the frame is black");
+    assert_eq!(a.pixels(), b.pixels(), "--data and --set give other images");
+
+    // A missing file is an error naming it; --data with another technique is refused.
+    let missing = dir.join("missing.illumepc");
+    let out = render(&["--data", path(&missing)], &dir.join("x.exr"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("missing.illumepc"),
+        "{err}"
+    );
+    let out = illume(&[
+        "render",
+        "builtin:sun-room",
+        "--technique",
+        "reference",
+        "--data",
+        path(&day),
+        "-o",
+        path(&dir.join("y.exr")),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--data") && err.contains("precomputed"),
+        "{err}"
+    );
+}
