@@ -300,3 +300,48 @@ fn interpolation_returns_keys_at_key_times() {
         }
     }
 }
+
+/// `colour = "joint"` (one PCA over the three channels) through a file: with as many
+/// components as keys both fits are exact, so joint and per-channel restore the same
+/// frames (a wrong channel layout, basis or header in the joint path breaks this).
+#[test]
+fn joint_colour_restores_the_keys_through_a_file() {
+    use illume_precomputed::settings::Colour;
+    let world = world();
+    let size = (8, 6);
+    let dir = std::env::temp_dir().join(format!("illumepc-joint-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let fit = |colour, components| {
+        let s = PrecomputedSettings {
+            from_h: 10.0,
+            to_h: 14.0,
+            step_min: 60.0,
+            spp: 4,
+            components,
+            colour,
+            ..settings()
+        };
+        let file = precompute(&world, &s, size, &mut illume_core::progress::Silent).unwrap();
+        let path = dir.join(format!("{colour:?}-{components}.illumepc"));
+        file.write(&path).unwrap();
+        Precomputed::load(&world, s, &path, size.0, size.1).unwrap()
+    };
+    let keys = 5; // 10:00 … 14:00 hourly
+    let (joint, per_channel) = (fit(Colour::Joint, keys), fit(Colour::PerChannel, keys));
+    for hours in [10.0, 11.0, 12.0, 13.0, 14.0] {
+        let (a, b) = (
+            joint.reconstruct(hours, 0.0),
+            per_channel.reconstruct(hours, 0.0),
+        );
+        assert!(
+            a.iter().any(|p| p.max_element() > 0.0),
+            "{hours} h is black"
+        );
+        for (x, y) in a.iter().zip(&b) {
+            assert!(
+                (*x - *y).abs().max_element() <= 1e-4 * (1.0 + y.max_element()),
+                "{hours} h: joint {x} vs per-channel {y}"
+            );
+        }
+    }
+}
