@@ -15,6 +15,11 @@ use std::sync::{Arc, RwLock};
 pub type SharedWorld = Arc<RwLock<World>>;
 
 /// A scene, its acceleration structure and its lights, always mutually consistent.
+///
+/// A clone shares every mesh BVH, mesh and texture (`Arc`) and copies the instance
+/// level, the light set and the scene's tables: a snapshot for a thread that must not
+/// hold the shared world's lock (photon streaming).
+#[derive(Clone)]
 pub struct World {
     /// The scene at [`Scene::time`].
     pub scene: Scene,
@@ -24,6 +29,18 @@ pub struct World {
     pub lights: LightSet,
     /// Instance frames and packed textures for [`World::photon_hit`].
     hit_tables: HitTables,
+}
+
+impl std::fmt::Debug for World {
+    /// The scene's source, time and sizes (not its contents).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("World")
+            .field("source", &self.scene.source)
+            .field("time", &self.scene.time)
+            .field("instances", &self.scene.instances.len())
+            .field("lights", &self.scene.lights.len())
+            .finish_non_exhaustive()
+    }
 }
 
 impl World {

@@ -97,9 +97,9 @@ pub struct PhotonStreamSettings {
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
     /// cost linear in the count. Default 20 000.
     pub photons_per_frame: u64,
-    /// Photons the streaming thread traces per world read-lock (one batch, about a
-    /// millisecond of work). Higher: less locking overhead, at the cost of longer waits
-    /// for scene updates (the frame loop's write lock). Default 256.
+    /// Photons the streaming thread traces per batch (one pool update under the pool's
+    /// mutex, about a millisecond of work). Higher: less locking overhead, at the cost
+    /// of coarser pool updates; a batch ends early when the scene changes. Default 256.
     pub batch_photons: u32,
     /// What a scene change does to the pool. Default [`ChangePolicy::AgeOut`].
     pub on_change: ChangePolicy,

@@ -46,7 +46,8 @@ pub fn fluxes(snapshot: &PoolSnapshot) -> (Vec<Rgb>, Vec<Rgb>) {
 
 impl PhotonStream {
     /// Places the VSLs on `world`'s scene and, in [`StreamMode::Streaming`], starts the
-    /// simulation thread (which keeps a clone of `world` and read-locks it per batch).
+    /// simulation thread (which traces in its own snapshot of `world`, renewed at each
+    /// scene change that affects light: [`Technique::scene_changed`]).
     pub fn new(
         world: &SharedWorld,
         settings: PhotonStreamSettings,
@@ -81,12 +82,17 @@ impl PhotonStream {
         };
         let vsls = Arc::new(vsls);
         let pool = PhotonPool::new(settings.pool_size as usize, vsls.len(), quantum_w);
-        let shared = Arc::new(SharedPool::new(pool, settings.start_paused));
+        let snapshot = Arc::new(
+            world
+                .read()
+                .map_err(|_| PhotonStreamError::PoisonedWorld)?
+                .clone(),
+        );
+        let shared = Arc::new(SharedPool::new(pool, settings.start_paused, snapshot));
         let inv_quantum = 1.0 / quantum_w;
         let thread = match settings.mode {
             StreamMode::Streaming => Some(
                 spawn(
-                    Arc::clone(world),
                     Arc::clone(&vsls),
                     Arc::clone(&shared),
                     StreamConfig {
@@ -220,7 +226,12 @@ impl Technique for PhotonStream {
         crate::NAME
     }
 
-    fn scene_changed(&mut self, _world: &World, changes: &[SceneChange]) -> ChangeResponse {
+    fn scene_changed(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        // The thread's next batches trace in the changed world (published before the
+        // policy's flush; see `SharedPool::publish_world`). A camera move changes no photon.
+        if self.thread.is_some() && changes.iter().any(update::affects_lighting) {
+            self.shared.publish_world(Arc::new(world.clone()));
+        }
         update::on_changes(&self.shared, self.settings.on_change, changes)
     }
 
@@ -286,12 +297,6 @@ impl Technique for PhotonStream {
             c.set(name, x);
         }
         c
-    }
-
-    /// The streaming thread ends its batch at the next photon (see
-    /// [`SharedPool::want_world`](crate::stream::SharedPool::want_world)).
-    fn before_world_write(&self) {
-        self.shared.want_world();
     }
 
     /// Photon streaming is the interactive technique (the paper renders with shadow maps).

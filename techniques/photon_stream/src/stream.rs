@@ -2,10 +2,14 @@
 //! forever while the frame loop renders.
 //!
 //! Each batch of [`PhotonStreamSettings::batch_photons`](crate::PhotonStreamSettings)
-//! photons is traced under a *read* lock of the shared world (so the frame loop's write
-//! lock for a scene update waits at most one batch), then applied to the pool under the
-//! pool mutex — the mutual exclusion of §0.7.2 that keeps every VSL's red, green and
-//! blue coherent. The renderer copies all VSL powers under the same mutex
+//! photons is traced in the thread's own snapshot of the world (an `Arc<World>` that the
+//! frame loop publishes after each scene change, [`SharedPool::publish_world`]; a clone
+//! shares the mesh BVHs and textures), then applied to the pool under the pool mutex —
+//! the mutual exclusion of §0.7.2 that keeps every VSL's red, green and blue coherent.
+//! The thread never holds the shared world's lock, so a scene update never waits for it:
+//! with the thread at the lowest OS priority (the default), waiting for it to release a
+//! read lock on a busy machine stalled the frame loop for seconds (priority inversion,
+//! found by the soak test under load). The renderer copies all VSL powers under the same mutex
 //! ([`SharedPool::snapshot`]): a consistent snapshot of the whole field, never a torn
 //! RGB. A flush bumps an epoch so a batch traced before it is discarded, not applied.
 
@@ -13,7 +17,7 @@ use crate::emit::{Emitter, PhotonBatch};
 use crate::placement::VslSet;
 use crate::pool::PhotonPool;
 use crate::settings::StreamPriority;
-use illume_transport::SharedWorld;
+use illume_transport::World;
 use illume_transport::photon::PhotonPathSettings;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
@@ -57,16 +61,19 @@ pub struct SharedPool {
     paused: Mutex<bool>,
     wake: Condvar,
     stop: AtomicBool,
-    /// Counts the frame loop's announcements that it is about to take the world's write
-    /// lock: a batch during which it changes ends after the current photon.
-    world_requests: AtomicU64,
+    /// The world the thread traces in, replaced by [`SharedPool::publish_world`].
+    world: Mutex<Arc<World>>,
+    /// Counts published worlds: a batch during which a new one arrives ends after the
+    /// current photon.
+    world_generation: AtomicU64,
     next_seq: AtomicU64,
     start: Instant,
 }
 
 impl SharedPool {
-    /// A shared pool around `pool`.
-    pub fn new(pool: PhotonPool, paused: bool) -> Self {
+    /// A shared pool around `pool`; the thread traces in `world` until another is
+    /// published.
+    pub fn new(pool: PhotonPool, paused: bool, world: Arc<World>) -> Self {
         Self {
             state: Mutex::new(PoolState {
                 pool,
@@ -81,7 +88,8 @@ impl SharedPool {
             paused: Mutex::new(paused),
             wake: Condvar::new(),
             stop: AtomicBool::new(false),
-            world_requests: AtomicU64::new(0),
+            world: Mutex::new(world),
+            world_generation: AtomicU64::new(0),
             next_seq: AtomicU64::new(0),
             start: Instant::now(),
         }
@@ -170,12 +178,17 @@ impl SharedPool {
         *self.paused.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// The frame loop is about to write the world: the simulation thread stops its
-    /// batch after the photon in flight (a path, microseconds) instead of finishing it,
-    /// so the writer waits for one photon rather than a batch — or, when the thread was
-    /// preempted mid-batch on a busy machine, for its time slice (milliseconds, measured).
-    pub fn want_world(&self) {
-        self.world_requests.fetch_add(1, Ordering::AcqRel);
+    /// Gives the thread `world` (the world after a scene change) for its next batches;
+    /// the batch in flight ends after its current photon. Call before a flush, so that a
+    /// batch that reads the flushed epoch also reads this world.
+    pub fn publish_world(&self, world: Arc<World>) {
+        *self.world.lock().unwrap_or_else(|e| e.into_inner()) = world;
+        self.world_generation.fetch_add(1, Ordering::AcqRel);
+    }
+
+    /// The world the thread traces in now.
+    pub fn world(&self) -> Arc<World> {
+        Arc::clone(&self.world.lock().unwrap_or_else(|e| e.into_inner()))
     }
 
     /// Asks the simulation thread to end.
@@ -196,7 +209,7 @@ impl SharedPool {
 
 /// What the simulation thread needs.
 pub struct StreamConfig {
-    /// Photons per world read-lock.
+    /// Photons per batch (one pool update).
     pub batch_photons: u64,
     /// OS priority of the thread.
     pub priority: StreamPriority,
@@ -210,7 +223,6 @@ pub struct StreamConfig {
 
 /// Starts the simulation thread; it runs until [`SharedPool::request_stop`].
 pub fn spawn(
-    world: SharedWorld,
     vsls: Arc<VslSet>,
     shared: Arc<SharedPool>,
     config: StreamConfig,
@@ -228,22 +240,17 @@ pub fn spawn(
                 }
             }
             while shared.wait_running() {
-                let (batch, epoch) = {
-                    let w = world.read().unwrap_or_else(|e| e.into_inner());
-                    let epoch = shared.epoch();
-                    let emitter =
-                        Emitter::new(&w, &vsls, config.inv_quantum, config.path, config.seed);
-                    let first = shared.reserve(config.batch_photons);
-                    let requests = shared.world_requests.load(Ordering::Acquire);
-                    let wanted = || shared.world_requests.load(Ordering::Acquire) != requests;
-                    (
-                        emitter.trace_until(&w, first, config.batch_photons, wanted),
-                        epoch,
-                    )
-                };
-                // Read lock released. A writer waiting for it goes first (std's RwLock
-                // lets no new reader in ahead of a waiting writer); photon indices
-                // reserved but not traced are simply skipped.
+                // The epoch before the world: a flush publishes its world first, so a
+                // batch that reads the new epoch traces in the new world.
+                let epoch = shared.epoch();
+                let generation = shared.world_generation.load(Ordering::Acquire);
+                let w = shared.world();
+                let emitter = Emitter::new(&w, &vsls, config.inv_quantum, config.path, config.seed);
+                let first = shared.reserve(config.batch_photons);
+                let wanted = || shared.world_generation.load(Ordering::Acquire) != generation;
+                let batch = emitter.trace_until(&w, first, config.batch_photons, wanted);
+                drop(w);
+                // Photon indices reserved but not traced are simply skipped.
                 shared.apply(&batch, epoch);
             }
         })

@@ -13,8 +13,8 @@ use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
 use illume_render::{RenderSettings, Renderer};
 use illume_scene::{Edit, InstanceId, LightId};
 use illume_transport::{Budget, Technique, World};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 /// Resident memory of this process [bytes] (Linux: `/proc/self/statm`).
