@@ -127,8 +127,10 @@ mod tests {
     /// file dropped next leaves it running with a message.
     #[test]
     fn a_dropped_scene_is_rendered_and_a_bad_one_is_reported() {
-        let mut config = Config::default();
-        config.technique = TechniqueKind::Reference;
+        let mut config = Config {
+            technique: TechniqueKind::Reference,
+            ..Default::default()
+        };
         config.render.width = 32;
         config.render.height = 24;
         let render = RenderThread::start(RenderSetup {

@@ -1563,13 +1563,43 @@ fn short_number(v: f64) -> String {
     }
 }
 
+/// The gizmo's handles: X red, Y green, Z blue, the turning ring yellow; the handle under
+/// the pointer (or dragged) drawn thicker.
+fn draw_gizmo(painter: &egui::Painter, g: &Gizmo, active: Option<Handle>) {
+    let pos = |v: Vec2| egui::pos2(v.x, v.y);
+    let width = |h: Handle| if active == Some(h) { 4.0 } else { 2.0 };
+    let ring = Handle::Turn;
+    let points: Vec<egui::Pos2> = g.ring.iter().map(|&p| pos(p)).collect();
+    painter.add(egui::Shape::line(
+        points,
+        egui::Stroke::new(width(ring), egui::Color32::from_rgb(240, 200, 40)),
+    ));
+    let colours = [
+        egui::Color32::from_rgb(235, 60, 60),
+        egui::Color32::from_rgb(60, 210, 60),
+        egui::Color32::from_rgb(70, 120, 255),
+    ];
+    for (i, end) in g.axes.iter().enumerate() {
+        if let Some(end) = end {
+            let h = Handle::Axis(i);
+            painter.line_segment(
+                [pos(g.centre), pos(*end)],
+                egui::Stroke::new(width(h), colours[i]),
+            );
+            painter.circle_filled(pos(*end), width(h) + 2.0, colours[i]);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn default_table(kind: TechniqueKind) -> String {
-        let mut config = illume_engine::Config::default();
-        config.technique = kind;
+        let config = illume_engine::Config {
+            technique: kind,
+            ..Default::default()
+        };
         let value = toml::Value::try_from(&config).unwrap();
         toml::to_string(value.get(kind.name()).unwrap()).unwrap()
     }
@@ -1634,33 +1664,5 @@ mod tests {
             setting_applies(TechniqueKind::Reference, "reference.spp_per_frame=8"),
             Applies::PerFrame
         );
-    }
-}
-
-/// The gizmo's handles: X red, Y green, Z blue, the turning ring yellow; the handle under
-/// the pointer (or dragged) drawn thicker.
-fn draw_gizmo(painter: &egui::Painter, g: &Gizmo, active: Option<Handle>) {
-    let pos = |v: Vec2| egui::pos2(v.x, v.y);
-    let width = |h: Handle| if active == Some(h) { 4.0 } else { 2.0 };
-    let ring = Handle::Turn;
-    let points: Vec<egui::Pos2> = g.ring.iter().map(|&p| pos(p)).collect();
-    painter.add(egui::Shape::line(
-        points,
-        egui::Stroke::new(width(ring), egui::Color32::from_rgb(240, 200, 40)),
-    ));
-    let colours = [
-        egui::Color32::from_rgb(235, 60, 60),
-        egui::Color32::from_rgb(60, 210, 60),
-        egui::Color32::from_rgb(70, 120, 255),
-    ];
-    for (i, end) in g.axes.iter().enumerate() {
-        if let Some(end) = end {
-            let h = Handle::Axis(i);
-            painter.line_segment(
-                [pos(g.centre), pos(*end)],
-                egui::Stroke::new(width(h), colours[i]),
-            );
-            painter.circle_filled(pos(*end), width(h) + 2.0, colours[i]);
-        }
     }
 }

@@ -420,8 +420,10 @@ mod tests {
                     continue;
                 }
                 let budget = |pacing: Pacing, v: i64| {
-                    let mut config = Config::default();
-                    config.technique = kind;
+                    let mut config = Config {
+                        technique: kind,
+                        ..Default::default()
+                    };
                     config.technique_settings_mut().pace(pacing);
                     let mut value = toml::Value::try_from(&config).unwrap();
                     let table = value
