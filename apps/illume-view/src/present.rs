@@ -62,19 +62,29 @@ pub fn display_bytes(image: &RgbImage, tone: &ToneMap, out: &mut Vec<u8>) {
     let n = image.pixels().len();
     out.resize(n * 4, 255);
     let quantize = |v: f32| (srgb_encode(v) * 255.0 + 0.5).clamp(0.0, 255.0) as u8;
+    let convert = |o: &mut [u8], px: &[illume_core::Rgb]| {
+        for (o, &p) in o.chunks_exact_mut(4).zip(px) {
+            let d = tone.apply(p);
+            o[0] = quantize(d.x);
+            o[1] = quantize(d.y);
+            o[2] = quantize(d.z);
+            o[3] = 255;
+        }
+    };
+    // A small frame on the window's thread: waiting for rayon's workers on a loaded
+    // machine costs more than the conversion.
+    if n < PARALLEL_PIXELS {
+        convert(out, image.pixels());
+        return;
+    }
     let row = image.width().max(1) as usize;
     out.par_chunks_mut(row * 4)
         .zip(image.pixels().par_chunks(row))
-        .for_each(|(o, px)| {
-            for (o, &p) in o.chunks_exact_mut(4).zip(px) {
-                let d = tone.apply(p);
-                o[0] = quantize(d.x);
-                o[1] = quantize(d.y);
-                o[2] = quantize(d.z);
-                o[3] = 255;
-            }
-        });
+        .for_each(|(o, px)| convert(o, px));
 }
+
+/// Frames of at least this many pixels are converted in parallel rows.
+const PARALLEL_PIXELS: usize = 1 << 16;
 
 impl Gpu {
     /// Creates the surface of `window` on the first adapter that can present to it
@@ -408,10 +418,17 @@ mod tests {
     use super::*;
     use illume_core::image::{ToneCurve, to_srgb8};
 
-    /// The window's bytes are PNG output's bytes, for every curve and exposure.
+    /// The window's bytes are PNG output's bytes, for every curve and exposure, on the
+    /// window's thread (small frames) and in parallel rows (large ones).
     #[test]
     fn display_bytes_are_the_png_bytes() {
-        let (w, h) = (37, 23);
+        assert!(37 * 23 < PARALLEL_PIXELS && 300 * 250 >= PARALLEL_PIXELS);
+        for (w, h) in [(37, 23), (300, 250)] {
+            check_display_bytes(w, h);
+        }
+    }
+
+    fn check_display_bytes(w: u32, h: u32) {
         let mut image = RgbImage::filled(w, h, illume_core::Rgb::ZERO);
         let mut state = 12345u32;
         for p in image.pixels_mut() {
