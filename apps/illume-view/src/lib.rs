@@ -5,12 +5,16 @@
 //!   shader with the curve of PNG output (`tonemap.wgsl`); egui draws the panels.
 //! * The engine runs on its own thread ([`renderer`]); the window shows the newest
 //!   finished frame and never waits for the renderer.
-//! * Edits (camera, objects, lights, materials) go to the render thread as commands and
-//!   through [`illume_engine::Engine::apply_edit`], the scene-change path of animations.
+//! * Edits (camera, objects, lights, materials; keys or the [`gizmo`]) go to the render
+//!   thread as commands and through [`illume_engine::Engine::apply_edit`], the
+//!   scene-change path of animations.
+//! * Files dropped on the window open through [`dropped::open_dropped`].
 //!
 //! Controls are listed in `docs/viewer.md`.
 
 pub mod camera;
+pub mod dropped;
+pub mod gizmo;
 mod present;
 pub mod renderer;
 mod ui;
@@ -53,6 +57,8 @@ pub struct ViewOptions {
     pub play: bool,
     /// Exposure added to the automatic one \[stops\].
     pub exposure_ev: f32,
+    /// Start with the stats overlay on the image hidden (O shows it).
+    pub hide_stats: bool,
     /// Test mode: write this screenshot (PNG, tone-mapped as `render` writes it; an EXR
     /// beside it) once [`ViewOptions::exit_after_frames`] frames were displayed and the
     /// reference has its samples, then exit.

@@ -1,18 +1,23 @@
-//! The GPU side of the window: the surface, the HDR frame's texture, the tone-map pass
-//! (`tonemap.wgsl`, the curve of PNG output) and egui's pass.
+//! The GPU side of the window: the surface, the frame's texture, the pass that draws it
+//! (`display.wgsl`) and egui's pass.
+//!
+//! The frame is tone-mapped on the CPU by PNG output's own code ([`display_bytes`]: the
+//! bytes of `to_srgb8`), once per new frame or tone change, and uploaded as 8-bit RGBA:
+//! the window shows exactly the bytes a PNG would hold, a quarter of the float upload,
+//! and a redraw without a new frame does no per-pixel work beyond a texel copy.
 
 use crate::ViewError;
-use illume_core::image::{RgbImage, ToneCurve};
+use illume_core::image::{RgbImage, ToneMap, srgb_encode};
+use rayon::prelude::*;
 use std::sync::Arc;
 use winit::window::Window;
 
-/// The tone-map shader's uniforms (mirrors `Params` in `tonemap.wgsl`).
+/// The display shader's uniforms (mirrors `Params` in `display.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct Params {
-    scale: f32,
-    curve: u32,
     size: [u32; 2],
+    pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<Params>() == 16);
 
@@ -30,7 +35,6 @@ pub struct Gpu {
     pub egui: egui_wgpu::Renderer,
     /// The adapter's name and backend, for logs.
     pub adapter: String,
-    staging: Vec<[f32; 4]>,
 }
 
 /// Times of one [`Gpu::draw`] \[ms\].
@@ -45,15 +49,42 @@ pub struct DrawTimes {
     pub present_ms: f64,
 }
 
-/// Where and how the frame is drawn.
+/// Where the frame is drawn.
 pub struct Viewport {
     /// Physical pixels: x, y, width, height.
     pub rect: [f32; 4],
-    /// Exposure \[stops\].
-    pub exposure_ev: f32,
-    /// Tone curve.
-    pub curve: ToneCurve,
 }
+
+/// The display bytes of `image` (8-bit sRGB RGBA, row-major) into `out`: for each pixel
+/// the bytes `illume_core::image::to_srgb8` writes to a PNG, alpha 255. Rows in
+/// parallel.
+pub fn display_bytes(image: &RgbImage, tone: &ToneMap, out: &mut Vec<u8>) {
+    let n = image.pixels().len();
+    out.resize(n * 4, 255);
+    let quantize = |v: f32| (srgb_encode(v) * 255.0 + 0.5).clamp(0.0, 255.0) as u8;
+    let convert = |o: &mut [u8], px: &[illume_core::Rgb]| {
+        for (o, &p) in o.chunks_exact_mut(4).zip(px) {
+            let d = tone.apply(p);
+            o[0] = quantize(d.x);
+            o[1] = quantize(d.y);
+            o[2] = quantize(d.z);
+            o[3] = 255;
+        }
+    };
+    // A small frame on the window's thread: waiting for rayon's workers on a loaded
+    // machine costs more than the conversion.
+    if n < PARALLEL_PIXELS {
+        convert(out, image.pixels());
+        return;
+    }
+    let row = image.width().max(1) as usize;
+    out.par_chunks_mut(row * 4)
+        .zip(image.pixels().par_chunks(row))
+        .for_each(|(o, px)| convert(o, px));
+}
+
+/// Frames of at least this many pixels are converted in parallel rows.
+const PARALLEL_PIXELS: usize = 1 << 16;
 
 impl Gpu {
     /// Creates the surface of `window` on the first adapter that can present to it
@@ -122,7 +153,7 @@ impl Gpu {
         surface.configure(&device, &config);
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("tonemap"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("tonemap.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(include_str!("display.wgsl").into()),
         });
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("tonemap"),
@@ -200,7 +231,6 @@ impl Gpu {
             frame: None,
             egui,
             adapter: adapter_name,
-            staging: Vec::new(),
         })
     }
 
@@ -213,9 +243,8 @@ impl Gpu {
         }
     }
 
-    /// Uploads a new HDR frame (RGBA 32-bit float texels).
-    pub fn upload(&mut self, image: &RgbImage) {
-        let (w, h) = (image.width(), image.height());
+    /// Uploads a frame's display bytes (8-bit RGBA, `w × h`, from [`display_bytes`]).
+    pub fn upload(&mut self, rgba: &[u8], w: u32, h: u32) {
         if !matches!(&self.frame, Some((_, _, fw, fh)) if *fw == w && *fh == h) {
             let texture = self.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("hdr frame"),
@@ -227,7 +256,7 @@ impl Gpu {
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba32Float,
+                format: wgpu::TextureFormat::Rgba8Unorm,
                 usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
                 view_formats: &[],
             });
@@ -247,10 +276,13 @@ impl Gpu {
                 ],
             });
             self.frame = Some((texture, bind, w, h));
+            let params = Params {
+                size: [w, h],
+                pad: [0; 2],
+            };
+            self.queue
+                .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         }
-        self.staging.clear();
-        self.staging
-            .extend(image.pixels().iter().map(|p| [p.x, p.y, p.z, 1.0]));
         if let Some((texture, _, _, _)) = &self.frame {
             self.queue.write_texture(
                 wgpu::TexelCopyTextureInfo {
@@ -259,10 +291,10 @@ impl Gpu {
                     origin: wgpu::Origin3d::ZERO,
                     aspect: wgpu::TextureAspect::All,
                 },
-                bytemuck::cast_slice(&self.staging),
+                rgba,
                 wgpu::TexelCopyBufferLayout {
                     offset: 0,
-                    bytes_per_row: Some(w * 16),
+                    bytes_per_row: Some(w * 4),
                     rows_per_image: Some(h),
                 },
                 wgpu::Extent3d {
@@ -320,20 +352,6 @@ impl Gpu {
         let extra =
             self.egui
                 .update_buffers(&self.device, &self.queue, &mut encoder, paint, &screen);
-        if let Some((_, _, w, h)) = &self.frame {
-            let curve = match viewport.curve {
-                ToneCurve::Clamp => 0,
-                ToneCurve::Reinhard => 1,
-                ToneCurve::Aces => 2,
-            };
-            let params = Params {
-                scale: 2f32.powf(viewport.exposure_ev),
-                curve,
-                size: [*w, *h],
-            };
-            self.queue
-                .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        }
         {
             let mut pass = encoder
                 .begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -392,5 +410,52 @@ impl Gpu {
     /// The largest texture side the device takes (for egui).
     pub fn max_texture_side(&self) -> usize {
         self.device.limits().max_texture_dimension_2d as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use illume_core::image::{ToneCurve, to_srgb8};
+
+    /// The window's bytes are PNG output's bytes, for every curve and exposure, on the
+    /// window's thread (small frames) and in parallel rows (large ones).
+    #[test]
+    fn display_bytes_are_the_png_bytes() {
+        const { assert!(37 * 23 < PARALLEL_PIXELS && 300 * 250 >= PARALLEL_PIXELS) };
+        for (w, h) in [(37, 23), (300, 250)] {
+            check_display_bytes(w, h);
+        }
+    }
+
+    fn check_display_bytes(w: u32, h: u32) {
+        let mut image = RgbImage::filled(w, h, illume_core::Rgb::ZERO);
+        let mut state = 12345u32;
+        for p in image.pixels_mut() {
+            let mut next = || {
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                // Radiances over 8 decades, a few negative and zero.
+                let u = (state >> 8) as f32 / (1 << 24) as f32;
+                if u < 0.02 {
+                    -u
+                } else {
+                    10f32.powf(u * 8.0 - 5.0)
+                }
+            };
+            *p = illume_core::Rgb::new(next(), next(), next());
+        }
+        let mut out = Vec::new();
+        for curve in [ToneCurve::Aces, ToneCurve::Reinhard, ToneCurve::Clamp] {
+            for exposure_ev in [-3.3, 0.0, 1.7] {
+                let tone = ToneMap { exposure_ev, curve };
+                display_bytes(&image, &tone, &mut out);
+                let png = to_srgb8(&image, &tone);
+                assert_eq!(out.len(), png.len() / 3 * 4);
+                for (i, (d, p)) in out.chunks_exact(4).zip(png.chunks_exact(3)).enumerate() {
+                    assert_eq!(&d[..3], p, "pixel {i}, {tone:?}");
+                    assert_eq!(d[3], 255);
+                }
+            }
+        }
     }
 }

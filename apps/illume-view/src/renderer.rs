@@ -7,6 +7,7 @@
 
 use glam::{Affine3A, Vec2, Vec3};
 use illume_core::image::{RgbImage, ToneMap, auto_exposure_ev};
+use illume_engine::settings_doc::Applies;
 use illume_engine::{Config, Engine, TechniqueKind, read_world};
 use illume_reference::ReferenceRenderer;
 use illume_scene::timeline::ping_pong_time;
@@ -45,11 +46,12 @@ pub enum Command {
         /// Select what the ray hits (false: only report the point).
         select: bool,
     },
-    /// Move the selection by `translate` \[m, world\] and turn it by `turn_rad` about +Y.
+    /// Move the selection by `translate` \[m, world\] and turn it by `turn_rad` about the
+    /// vertical through its pivot ([`Shown::selection_pivot`]).
     MoveSelected {
         /// World-space offset \[m\].
         translate: Vec3,
-        /// Rotation about the world's +Y axis through the object's origin \[rad\].
+        /// Rotation about the world's +Y axis through the pivot \[rad\].
         turn_rad: f32,
     },
     /// Change a material's base colour (an [`Edit::SetMaterial`] of the rest unchanged).
@@ -61,7 +63,9 @@ pub enum Command {
     },
     /// Switch the technique (the scene, with its edits, is kept).
     Technique(TechniqueKind),
-    /// Change a technique setting, `TABLE.KEY=VALUE`; rebuilds the technique.
+    /// Change a technique setting, `TABLE.KEY=VALUE`: a per-frame field
+    /// ([`Applies::PerFrame`]) reaches the running technique through its budget; any
+    /// other rebuilds it.
     Set(String),
     /// Show the progressive reference instead of the technique.
     Reference(bool),
@@ -151,6 +155,9 @@ pub struct Shown {
     pub playing: bool,
     /// Current selection, with its name.
     pub selection: Option<(Selection, String)>,
+    /// Where the selection sits \[m, world\]: an object's bounding-box centre, a light's
+    /// position. Moves turn about the vertical through it; the gizmo is drawn there.
+    pub selection_pivot: Option<Vec3>,
     /// Number of commands handled before this frame was rendered.
     pub commands_applied: u64,
     /// The last pick's result.
@@ -493,10 +500,20 @@ impl State {
         // Re-layer the one setting over the current configuration, through its TOML.
         match config_with_set(&self.config, &layers) {
             Ok(c) => {
+                let applies = setting_applies(self.config.technique, kv);
                 self.config = c;
                 self.config.technique_settings_mut().pace(Pacing::RealTime);
-                self.message(format!("{kv}: technique rebuilt"));
-                self.rebuild();
+                match (applies, &mut self.engine) {
+                    (Applies::PerFrame, Some(engine)) => {
+                        engine.set_budget(self.config.budget());
+                        self.dirty = true;
+                        self.message(format!("{kv}: applied at the next frame"));
+                    }
+                    _ => {
+                        self.message(format!("{kv}: {} rebuilt", self.config.technique));
+                        self.rebuild();
+                    }
+                }
             }
             Err(e) => self.message(format!("{kv}: {e}")),
         }
@@ -541,16 +558,19 @@ impl State {
 
     fn move_selected(&mut self, translate: Vec3, turn_rad: f32) {
         let Some(engine) = &self.engine else { return };
-        let motion = |m: Affine3A| {
-            let origin = Vec3::from(m.translation);
-            Affine3A::from_translation(origin + translate)
-                * Affine3A::from_rotation_y(turn_rad)
-                * Affine3A::from_translation(-origin)
-                * m
-        };
         let edit =
             {
                 let world = read_world(engine.world());
+                let pivot = self
+                    .selection
+                    .and_then(|s| selection_pivot(&world.scene, s))
+                    .unwrap_or(Vec3::ZERO);
+                let motion = |m: Affine3A| {
+                    Affine3A::from_translation(pivot + translate)
+                        * Affine3A::from_rotation_y(turn_rad)
+                        * Affine3A::from_translation(-pivot)
+                        * m
+                };
                 match self.selection {
                     Some(Selection::Instance(i)) => {
                         world.scene.instances.get(i as usize).map(|inst| {
@@ -756,6 +776,7 @@ impl State {
             };
             Some((s, name))
         });
+        let selection_pivot = self.selection.and_then(|s| selection_pivot(scene, s));
         let shown = Shown {
             index: self.index,
             auto_exposure_ev: auto_exposure_ev(&image).unwrap_or(0.0),
@@ -772,6 +793,7 @@ impl State {
             duration_s: duration,
             playing: self.playing,
             selection,
+            selection_pivot,
             commands_applied: self.commands_applied,
             pick: self.pick.clone(),
             messages: self.messages.clone(),
@@ -797,6 +819,35 @@ impl State {
         self.out.publish(shown);
         (self.on_frame)();
     }
+}
+
+/// Where a selection sits \[m, world\]: an object's bounding-box centre, a light's position.
+fn selection_pivot(scene: &Scene, selection: Selection) -> Option<Vec3> {
+    match selection {
+        Selection::Instance(i) => {
+            let inst = scene.instances.get(i as usize)?;
+            let mesh = scene.meshes.get(inst.mesh.index())?;
+            Some(mesh.bounds().transformed(&inst.world_from_object).center())
+        }
+        Selection::Light(i) => scene.lights.get(i as usize).map(|l| l.position()),
+    }
+}
+
+/// Whether `TABLE.KEY=VALUE` of `technique`'s table applies at the next frame or rebuilds
+/// the technique (from the settings' documentation, `illume_engine::settings_doc`).
+pub fn setting_applies(technique: TechniqueKind, kv: &str) -> Applies {
+    let key = kv
+        .split_once('=')
+        .map_or(kv, |(k, _)| k)
+        .trim()
+        .strip_prefix(technique.name())
+        .and_then(|k| k.strip_prefix('.'))
+        .unwrap_or("");
+    technique
+        .settings_docs()
+        .iter()
+        .find(|d| d.key == key)
+        .map_or(Applies::Rebuild, |d| d.applies)
 }
 
 /// The technique's settings table as TOML text.

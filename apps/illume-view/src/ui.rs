@@ -1,17 +1,20 @@
 //! The window: winit's event loop, input, egui's panels, screenshots and clips.
 
 use crate::camera::OrbitCamera;
-use crate::present::{Gpu, Viewport};
+use crate::dropped::{Messages, open_dropped};
+use crate::gizmo::{Gizmo, Handle, View};
+use crate::present::{Gpu, Viewport, display_bytes};
 use crate::renderer::{AnimationCommand, Command, RenderSetup, RenderThread, Selection, Shown};
 use crate::{ViewError, ViewOptions, unix_ms};
 use egui::{Key, Sense};
 use glam::{Vec2, Vec3};
 use illume_core::image::{ToneCurve, ToneMap};
 use illume_engine::TechniqueKind;
+use illume_engine::settings_doc::Applies;
 use illume_scene::{Edit, LightKind};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, channel};
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use winit::application::ApplicationHandler;
 use winit::event::WindowEvent;
@@ -131,7 +134,12 @@ struct App {
     ctx: egui::Context,
     render: Option<RenderThread>,
     shown: Option<Arc<Shown>>,
-    uploaded: Option<u64>,
+    /// The frame and tone whose display bytes the GPU has.
+    uploaded: Option<(u64, ToneMap)>,
+    /// The display bytes (8-bit RGBA) of the shown frame.
+    display: Vec<u8>,
+    /// Display conversions and uploads so far (a new frame or a tone change each).
+    uploads: u64,
     /// Frames presented so far.
     displayed: u64,
     orbit: Option<OrbitCamera>,
@@ -142,7 +150,7 @@ struct App {
     auto_exposure: bool,
     curve: ToneCurve,
     /// Messages shown in the window (errors never crash it).
-    messages: Arc<Mutex<Vec<String>>>,
+    messages: Messages,
     recorder: Option<Recorder>,
     record_start: Instant,
     screenshots: u32,
@@ -156,8 +164,18 @@ struct App {
     last_redraw: Instant,
     split_drag: bool,
     selected_material: usize,
-    settings_edit: Vec<(String, String)>,
+    /// The settings panel's rows and the text being edited in each.
+    settings_rows: Vec<(SettingRow, String)>,
     settings_for: String,
+    /// A setting sent that rebuilds the technique: the commands sent with it, and the
+    /// notice shown until a frame after it arrives.
+    rebuilding: Option<(u64, String)>,
+    /// The stats overlay on the image is shown (O).
+    overlay: bool,
+    /// The gizmo handle being dragged.
+    gizmo_drag: Option<Handle>,
+    /// The gizmo last printed by `--log-input` (centre and X handle's end).
+    gizmo_logged: Option<[f32; 4]>,
     commands_sent: u64,
     /// A new frame waits for the next refresh.
     frame_pending: bool,
@@ -181,6 +199,7 @@ struct App {
 impl App {
     fn new(options: ViewOptions, proxy: EventLoopProxy<()>) -> Self {
         let exposure_ev = options.exposure_ev;
+        let overlay = !options.hide_stats;
         Self {
             options,
             proxy,
@@ -191,6 +210,8 @@ impl App {
             render: None,
             shown: None,
             uploaded: None,
+            display: Vec::new(),
+            uploads: 0,
             displayed: 0,
             orbit: None,
             fly: false,
@@ -199,7 +220,7 @@ impl App {
             exposure_ev,
             auto_exposure: true,
             curve: ToneCurve::Aces,
-            messages: Arc::default(),
+            messages: Messages::default(),
             recorder: None,
             record_start: Instant::now(),
             screenshots: 0,
@@ -211,8 +232,12 @@ impl App {
             last_redraw: Instant::now(),
             split_drag: false,
             selected_material: 0,
-            settings_edit: Vec::new(),
+            settings_rows: Vec::new(),
             settings_for: String::new(),
+            rebuilding: None,
+            overlay,
+            gizmo_drag: None,
+            gizmo_logged: None,
             commands_sent: 0,
             frame_pending: false,
             egui_repaint_at: None,
@@ -238,12 +263,7 @@ impl App {
     }
 
     fn message(&self, m: String) {
-        eprintln!("illume view: {m}");
-        let mut v = self.messages.lock().unwrap_or_else(|e| e.into_inner());
-        v.push(m);
-        if v.len() > 6 {
-            v.remove(0);
-        }
+        self.messages.push(m);
     }
 
     /// Notes an input event for `--log-input`; printed once its commands are sent.
@@ -345,7 +365,7 @@ impl App {
             .retain(|t| now.duration_since(*t) < Duration::from_secs(2));
         if self.options.log_input {
             eprintln!(
-                "illume view: frame {} technique={} spp={} commands={} render_ms={:.1} shown_unix_ms={:.1}",
+                "illume view: frame {} technique={} spp={} commands={} render_ms={:.1} pivot={} shown_unix_ms={:.1}",
                 latest.index,
                 latest.technique,
                 latest.reference_spp.map_or("none".to_owned(), |s| format!(
@@ -354,6 +374,10 @@ impl App {
                 )),
                 latest.commands_applied,
                 latest.times.total_ms,
+                latest.selection_pivot.map_or("none".into(), |p| format!(
+                    "{:.5},{:.5},{:.5}",
+                    p.x, p.y, p.z
+                )),
                 unix_ms()
             );
         }
@@ -393,6 +417,13 @@ impl App {
                 }
                 (_, None) => {}
             }
+        }
+        if self
+            .rebuilding
+            .as_ref()
+            .is_some_and(|(n, _)| latest.commands_applied >= *n)
+        {
+            self.rebuilding = None;
         }
         if let Some(rec) = &mut self.recorder {
             let tone = ToneMap {
@@ -438,26 +469,21 @@ impl App {
         }
         let paint = self.ctx.tessellate(full.shapes, ppp);
         let t0 = Instant::now();
+        let tone = self.shown.as_ref().map(|s| (s.index, self.tone(s)));
         if let Some(gpu) = self.gpu.as_mut() {
-            if let Some(shown) = &self.shown
-                && self.uploaded != Some(shown.index)
+            // A new frame or a new tone: PNG output's bytes, uploaded once.
+            if let (Some(shown), Some((index, tone))) = (&self.shown, tone)
+                && self.uploaded != Some((index, tone))
             {
                 let tu = Instant::now();
-                gpu.upload(&shown.image);
+                display_bytes(&shown.image, &tone, &mut self.display);
+                gpu.upload(&self.display, shown.image.width(), shown.image.height());
                 self.upload_ms_total += tu.elapsed().as_secs_f64() * 1e3;
-                self.uploaded = Some(shown.index);
+                self.uploads += 1;
+                self.uploaded = Some((index, tone));
             }
-            let tone = self.shown.as_ref().map(|s| {
-                if self.auto_exposure {
-                    s.auto_exposure_ev + self.exposure_ev
-                } else {
-                    self.exposure_ev
-                }
-            });
             let viewport = Viewport {
                 rect: image_rect_px,
-                exposure_ev: tone.unwrap_or(0.0),
-                curve: self.curve,
             };
             match gpu.draw(
                 &viewport,
@@ -513,7 +539,7 @@ impl App {
         let complete = shown
             .reference_spp
             .is_none_or(|s| s >= shown.reference_target);
-        if self.displayed < n || !complete || self.uploaded != Some(shown.index) {
+        if self.displayed < n || !complete || self.uploaded.map(|u| u.0) != Some(shown.index) {
             return;
         }
         if let Some(path) = self.options.screenshot.clone()
@@ -597,6 +623,8 @@ impl App {
         ui.add(egui::Slider::new(&mut self.exposure_ev, -10.0..=10.0).text("exposure EV"))
             .on_hover_text("stops added to the automatic exposure (render's rule); + / - keys");
         ui.checkbox(&mut self.auto_exposure, "automatic exposure");
+        ui.checkbox(&mut self.overlay, "Stats on the image (O)")
+            .on_hover_text("frame time by stage, the technique's counters, resolution scale");
         egui::ComboBox::from_id_salt("curve")
             .selected_text(format!("{:?}", self.curve))
             .show_ui(ui, |ui| {
@@ -756,46 +784,54 @@ impl App {
                 }
             });
         let mut all: Vec<String> = shown.messages.clone();
-        all.extend(
-            self.messages
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .iter()
-                .cloned(),
-        );
+        all.extend(self.messages.all());
         for m in all.iter().rev().take(6) {
             ui.colored_label(egui::Color32::YELLOW, m);
         }
     }
 
-    /// The technique's settings as editable fields; a change sets `TABLE.KEY=VALUE` and
-    /// rebuilds the technique.
+    /// The technique's settings as editable fields, each with its documentation
+    /// (meaning, unit, range, default) as a tooltip. An edited field says what applying
+    /// it will do — at the next frame, or a rebuild of the technique — before Enter
+    /// applies it as `--set TABLE.KEY=VALUE`.
     fn settings(&mut self, ui: &mut egui::Ui, shown: &Shown, actions: &mut Actions) {
         if self.settings_for != shown.settings_toml {
             self.settings_for = shown.settings_toml.clone();
-            self.settings_edit = shown
-                .settings_toml
-                .parse::<toml::Table>()
-                .map(|t| {
-                    t.iter()
-                        .filter(|(_, v)| !v.is_table() && !v.is_array())
-                        .map(|(k, v)| (k.clone(), v.to_string()))
-                        .collect()
+            self.settings_rows = setting_rows(shown.technique, &shown.settings_toml)
+                .into_iter()
+                .map(|r| {
+                    let v = r.value.clone();
+                    (r, v)
                 })
-                .unwrap_or_default();
+                .collect();
         }
-        ui.label("Enter applies; the technique is rebuilt.");
+        ui.label("Hover a name for its meaning, unit and range; Enter applies.");
+        if let Some((_, notice)) = &self.rebuilding {
+            ui.colored_label(egui::Color32::from_rgb(255, 170, 60), notice.as_str());
+        }
         let table = shown.technique.name();
-        for (k, v) in &mut self.settings_edit {
+        for (row, text) in &mut self.settings_rows {
             ui.horizontal(|ui| {
-                ui.label(k.as_str());
-                let r = ui.text_edit_singleline(v);
+                ui.label(row.label.as_str())
+                    .on_hover_text(row.tooltip.as_str());
+                let r = ui
+                    .add(egui::TextEdit::singleline(text).desired_width(f32::INFINITY))
+                    .on_hover_text(row.tooltip.as_str());
                 if r.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter)) {
-                    actions
-                        .commands
-                        .push(Command::Set(format!("{table}.{k}={}", v.trim())));
+                    actions.commands.push(Command::Set(format!(
+                        "{table}.{}={}",
+                        row.key,
+                        text.trim()
+                    )));
                 }
             });
+            if let Some(notice) = pending_notice(shown.technique, row, text) {
+                let colour = match row.applies {
+                    Applies::Rebuild => egui::Color32::from_rgb(255, 170, 60),
+                    Applies::PerFrame => egui::Color32::LIGHT_GREEN,
+                };
+                ui.colored_label(colour, notice);
+            }
         }
     }
 
@@ -826,6 +862,54 @@ impl App {
                 (p.y - rect.min.y) / rect.height(),
             )
         };
+        let view = View {
+            world_from_camera: shown.camera.0,
+            yfov_rad: shown.camera.1,
+            origin: Vec2::new(rect.min.x, rect.min.y),
+            size: Vec2::new(rect.width(), rect.height()),
+        };
+        let gizmo = shown
+            .selection_pivot
+            .filter(|_| !self.fly)
+            .and_then(|p| Gizmo::new(view, p));
+        let painter = ui.painter_at(rect);
+        if self.overlay {
+            self.draw_overlay(&painter, rect, &shown);
+        }
+        let pointer = |p: egui::Pos2| Vec2::new(p.x, p.y);
+        if let Some(g) = &gizmo {
+            let hovered = self
+                .gizmo_drag
+                .or_else(|| response.hover_pos().and_then(|p| g.hit(pointer(p))));
+            draw_gizmo(&painter, g, hovered);
+            self.log_gizmo(g, ppp);
+            if response.drag_started()
+                && let Some(origin) = ui.input(|i| i.pointer.press_origin())
+            {
+                self.gizmo_drag = g.hit(pointer(origin));
+            }
+            if let Some(handle) = self.gizmo_drag
+                && response.dragged()
+                && let Some(p) = response.interact_pointer_pos()
+            {
+                let to = pointer(p);
+                let d = response.drag_delta();
+                let (translate, turn_rad) = g.drag(handle, to - Vec2::new(d.x, d.y), to);
+                if translate != Vec3::ZERO || turn_rad != 0.0 {
+                    self.log(&format!("gizmo {handle:?}"));
+                    actions.commands.push(Command::MoveSelected {
+                        translate,
+                        turn_rad,
+                    });
+                }
+            }
+        }
+        if response.drag_stopped() || gizmo.is_none() {
+            self.gizmo_drag = None;
+        }
+        if self.gizmo_drag.is_some() {
+            return;
+        }
         // Split divider: drawn, and dragged when grabbed near it.
         if let Some(split) = shown.split {
             let x = rect.min.x + split * rect.width();
@@ -870,6 +954,7 @@ impl App {
             });
         } else if response.clicked()
             && let Some(p) = response.interact_pointer_pos()
+            && gizmo.as_ref().is_none_or(|g| g.hit(pointer(p)).is_none())
         {
             self.log("click");
             let id = self.next_pick;
@@ -908,6 +993,83 @@ impl App {
         if moved {
             self.set_camera(orbit);
         }
+    }
+
+    /// `--log-input`: the gizmo's place on the window \[physical pixels\] when it moved.
+    fn log_gizmo(&mut self, g: &Gizmo, ppp: f32) {
+        let Some(x_end) = g.axes[0] else { return };
+        let now = [g.centre.x, g.centre.y, x_end.x, x_end.y].map(|v| v * ppp);
+        if !self.options.log_input || self.gizmo_logged == Some(now) {
+            return;
+        }
+        self.gizmo_logged = Some(now);
+        let ends: Vec<String> = g
+            .axes
+            .iter()
+            .map(|e| {
+                e.map_or("none".into(), |e| {
+                    format!("{:.1},{:.1}", e.x * ppp, e.y * ppp)
+                })
+            })
+            .collect();
+        eprintln!(
+            "illume view: gizmo centre_px={:.1},{:.1} axes_px={} length_m={:.5}",
+            now[0],
+            now[1],
+            ends.join(";"),
+            g.length_m
+        );
+    }
+
+    /// The stats overlay in the image's top-left corner: frame time by stage, the
+    /// technique's counters, resolution scale.
+    fn draw_overlay(&self, painter: &egui::Painter, rect: egui::Rect, shown: &Shown) {
+        let t = shown.times;
+        let mut text = format!(
+            "{}{} · {:.1} fps · 1/{} ({}×{})\n",
+            shown.technique,
+            match shown.reference_spp {
+                Some(s) if shown.split.is_none() =>
+                    format!(" (reference {s}/{} spp)", shown.reference_target),
+                Some(s) => format!(" | reference {s}/{} spp", shown.reference_target),
+                None => String::new(),
+            },
+            self.fps(),
+            shown.scale,
+            shown.image.width(),
+            shown.image.height()
+        );
+        text += &format!(
+            "G-buffer {:.1} · direct {:.1} · indirect {:.1} · present {:.2} ms\n",
+            t.gbuffer_ms, t.direct_ms, t.indirect_ms, self.present_ms
+        );
+        text += &format!(
+            "frame {:.1} ms: update {:.1} · advance {:.1} · reference {:.1}",
+            t.total_ms, t.update_ms, t.advance_ms, t.reference_ms
+        );
+        let prefix = format!("{}.", shown.technique);
+        for (k, v) in &shown.stats {
+            text += &format!(
+                "\n{} {}",
+                k.strip_prefix(&prefix).unwrap_or(k),
+                short_number(*v)
+            );
+        }
+        if let Some((_, notice)) = &self.rebuilding {
+            text += &format!("\n{notice}");
+        }
+        let galley = painter.layout_no_wrap(
+            text,
+            egui::FontId::monospace(11.0),
+            egui::Color32::from_gray(235),
+        );
+        let at = rect.min + egui::vec2(6.0, 6.0);
+        painter.rect_filled(
+            egui::Rect::from_min_size(at, galley.size() + egui::vec2(8.0, 6.0)),
+            3.0,
+            egui::Color32::from_black_alpha(170),
+        );
+        painter.galley(at + egui::vec2(4.0, 3.0), galley, egui::Color32::WHITE);
     }
 
     fn keys(&mut self, ctx: &egui::Context, actions: &mut Actions) {
@@ -951,6 +1113,7 @@ impl App {
                     .push(Command::Animation(AnimationCommand::Play(!shown.playing))),
                 Key::Home | Key::C => actions.reset_camera = true,
                 Key::F => self.fly = !self.fly,
+                Key::O => self.overlay = !self.overlay,
                 Key::P => actions.screenshot = true,
                 Key::K => actions.record = true,
                 Key::Num1 => actions.commands.push(Command::Scale(1)),
@@ -1023,7 +1186,19 @@ impl App {
 
     fn apply(&mut self, actions: Actions, event_loop: &ActiveEventLoop) {
         for c in actions.commands {
+            let rebuild = match (&c, &self.shown) {
+                (Command::Set(kv), Some(shown))
+                    if crate::renderer::setting_applies(shown.technique, kv)
+                        == Applies::Rebuild =>
+                {
+                    Some(format!("⟳ rebuilding {} for {kv}…", shown.technique))
+                }
+                _ => None,
+            };
             self.send(c);
+            if let Some(notice) = rebuild {
+                self.rebuilding = Some((self.commands_sent, notice));
+            }
         }
         if let (Some((i, rgb)), Some(render)) = (actions.material, &self.render)
             && let Some(shown) = &self.shown
@@ -1082,20 +1257,7 @@ impl App {
 
     fn open_dropped(&self, path: PathBuf) {
         let Some(render) = &self.render else { return };
-        let tx = render.commands.clone();
-        let messages = self.messages.clone();
-        std::thread::spawn(move || {
-            match illume_scene::load_scene_with(&path, &illume_scene::LoadOptions::default()) {
-                Ok(scene) => {
-                    let _ = tx.send(Command::Scene(Box::new(scene)));
-                }
-                Err(e) => {
-                    let m = format!("{}: {e}", path.display());
-                    eprintln!("illume view: {m}");
-                    messages.lock().unwrap_or_else(|e| e.into_inner()).push(m);
-                }
-            }
-        });
+        open_dropped(path, render.commands.clone(), self.messages.clone());
     }
 }
 
@@ -1307,7 +1469,7 @@ impl ApplicationHandler for App {
         let secs = self.started.elapsed().as_secs_f64();
         let n = self.redraws.max(1) as f64;
         eprintln!(
-            "illume view: summary: {} redraws, {:.3} ms each: egui layout {:.3} ms, upload {:.3} ms, acquire {:.3} ms, tone map + egui passes {:.3} ms, present {:.3} ms; {} frames from the renderer in {secs:.2} s ({:.2} fps)",
+            "illume view: summary: {} redraws, {:.3} ms each: egui layout {:.3} ms, upload {:.3} ms, acquire {:.3} ms, frame + egui passes {:.3} ms, present {:.3} ms; {} uploads of {:.3} ms (tone map + upload of a new frame); {} frames from the renderer in {secs:.2} s ({:.2} fps)",
             self.redraws,
             self.redraw_ms_total / n,
             (self.redraw_ms_total - self.gpu_ms_total) / n,
@@ -1315,6 +1477,8 @@ impl ApplicationHandler for App {
             self.acquire_ms_total / n,
             self.render_ms_total / n,
             self.present_call_ms_total / n,
+            self.uploads,
+            self.upload_ms_total / self.uploads.max(1) as f64,
             self.frames_received,
             self.frames_received as f64 / secs.max(1e-9)
         );
@@ -1323,5 +1487,182 @@ impl ApplicationHandler for App {
         }
         // Stop the render thread before the window goes.
         self.render = None;
+    }
+}
+
+/// One row of the settings panel: a field of the technique's table.
+#[derive(Clone, Debug)]
+struct SettingRow {
+    /// The key in the technique's table.
+    key: String,
+    /// The current value as TOML text.
+    value: String,
+    /// The key and its unit.
+    label: String,
+    /// Meaning, unit, range, default and what a change does.
+    tooltip: String,
+    /// Whether a change applies at the next frame or rebuilds the technique.
+    applies: Applies,
+}
+
+/// The settings panel's rows for `technique`, whose table is `settings_toml`: every
+/// field but sub-tables, in the settings struct's order, with its documentation
+/// (`illume_engine::settings_doc`).
+fn setting_rows(technique: TechniqueKind, settings_toml: &str) -> Vec<SettingRow> {
+    let Ok(table) = settings_toml.parse::<toml::Table>() else {
+        return Vec::new();
+    };
+    let docs = technique.settings_docs();
+    let mut keys: Vec<&String> = docs
+        .iter()
+        .map(|d| &d.key)
+        .filter(|k| table.contains_key(*k))
+        .collect();
+    keys.extend(table.keys().filter(|k| !docs.iter().any(|d| &d.key == *k)));
+    keys.into_iter()
+        .filter(|k| !table[*k].is_table())
+        .map(|k| {
+            let doc = docs.iter().find(|d| &d.key == k);
+            let value = match &table[k] {
+                toml::Value::String(s) => s.clone(),
+                v => v.to_string(),
+            };
+            SettingRow {
+                key: k.clone(),
+                value,
+                label: match doc.and_then(|d| d.unit.as_deref()) {
+                    Some(u) => format!("{k} [{u}]"),
+                    None => k.clone(),
+                },
+                tooltip: doc.map_or_else(|| format!("{k}: undocumented"), |d| d.tooltip(technique)),
+                applies: doc.map_or(Applies::Rebuild, |d| d.applies),
+            }
+        })
+        .collect()
+}
+
+/// What applying `edited` to `row` will do, said before it is applied (None when the
+/// text is the current value).
+fn pending_notice(technique: TechniqueKind, row: &SettingRow, edited: &str) -> Option<String> {
+    (edited.trim() != row.value).then(|| match row.applies {
+        Applies::Rebuild => format!(
+            "⟳ Enter rebuilds {technique}: its state (photons, caches, placements) starts again"
+        ),
+        Applies::PerFrame => "Enter applies it at the next frame (no rebuild)".to_owned(),
+    })
+}
+
+/// A counter's value, short.
+fn short_number(v: f64) -> String {
+    if v != 0.0 && (v.abs() >= 1e5 || v.abs() < 1e-3) {
+        format!("{v:.3e}")
+    } else if v.fract() == 0.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
+/// The gizmo's handles: X red, Y green, Z blue, the turning ring yellow; the handle under
+/// the pointer (or dragged) drawn thicker.
+fn draw_gizmo(painter: &egui::Painter, g: &Gizmo, active: Option<Handle>) {
+    let pos = |v: Vec2| egui::pos2(v.x, v.y);
+    let width = |h: Handle| if active == Some(h) { 4.0 } else { 2.0 };
+    let ring = Handle::Turn;
+    let points: Vec<egui::Pos2> = g.ring.iter().map(|&p| pos(p)).collect();
+    painter.add(egui::Shape::line(
+        points,
+        egui::Stroke::new(width(ring), egui::Color32::from_rgb(240, 200, 40)),
+    ));
+    let colours = [
+        egui::Color32::from_rgb(235, 60, 60),
+        egui::Color32::from_rgb(60, 210, 60),
+        egui::Color32::from_rgb(70, 120, 255),
+    ];
+    for (i, end) in g.axes.iter().enumerate() {
+        if let Some(end) = end {
+            let h = Handle::Axis(i);
+            painter.line_segment(
+                [pos(g.centre), pos(*end)],
+                egui::Stroke::new(width(h), colours[i]),
+            );
+            painter.circle_filled(pos(*end), width(h) + 2.0, colours[i]);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn default_table(kind: TechniqueKind) -> String {
+        let config = illume_engine::Config {
+            technique: kind,
+            ..Default::default()
+        };
+        let value = toml::Value::try_from(&config).unwrap();
+        toml::to_string(value.get(kind.name()).unwrap()).unwrap()
+    }
+
+    /// Every field of every technique's table has a row whose tooltip carries its doc,
+    /// default and what a change does; units show in the label.
+    #[test]
+    fn every_setting_has_a_documented_tooltip() {
+        for &kind in TechniqueKind::ALL {
+            let text = default_table(kind);
+            let table: toml::Table = text.parse().unwrap();
+            let rows = setting_rows(kind, &text);
+            for key in table.keys() {
+                let row = rows
+                    .iter()
+                    .find(|r| &r.key == key)
+                    .unwrap_or_else(|| panic!("{kind}.{key} has no row"));
+                assert!(
+                    !row.tooltip.contains("undocumented") && row.tooltip.len() > 60,
+                    "{kind}.{key}: {}",
+                    row.tooltip
+                );
+                assert!(row.tooltip.contains("default: "), "{}", row.tooltip);
+                assert!(row.tooltip.contains("change: "), "{}", row.tooltip);
+            }
+        }
+        let rows = setting_rows(
+            TechniqueKind::PhotonStream,
+            &default_table(TechniqueKind::PhotonStream),
+        );
+        let tile = rows.iter().find(|r| r.key == "tile_size").unwrap();
+        assert_eq!(tile.label, "tile_size [pixels]");
+        let stride = rows.iter().find(|r| r.key == "shading_stride").unwrap();
+        assert!(stride.tooltip.contains("range: 1–8"), "{}", stride.tooltip);
+    }
+
+    /// Editing `photon_stream.vsl_count` says it rebuilds before it is applied; a
+    /// per-frame field says it does not; an unchanged field says nothing.
+    #[test]
+    fn a_change_that_rebuilds_says_so_before_it_is_applied() {
+        let kind = TechniqueKind::PhotonStream;
+        let rows = setting_rows(kind, &default_table(kind));
+        let row = |k: &str| rows.iter().find(|r| r.key == k).unwrap();
+        let vsl = row("vsl_count");
+        assert_eq!(vsl.value, "100");
+        assert_eq!(pending_notice(kind, vsl, "100"), None);
+        let notice = pending_notice(kind, vsl, "200").expect("a notice");
+        assert!(notice.contains("rebuilds photon_stream"), "{notice}");
+        let per_frame = pending_notice(kind, row("photons_per_frame"), "5000").unwrap();
+        assert!(per_frame.contains("no rebuild"), "{per_frame}");
+        // The render thread takes the same decision from the same docs.
+        use crate::renderer::setting_applies;
+        assert_eq!(
+            setting_applies(kind, "photon_stream.vsl_count=200"),
+            Applies::Rebuild
+        );
+        assert_eq!(
+            setting_applies(kind, "photon_stream.photons_per_frame=5000"),
+            Applies::PerFrame
+        );
+        assert_eq!(
+            setting_applies(TechniqueKind::Reference, "reference.spp_per_frame=8"),
+            Applies::PerFrame
+        );
     }
 }

@@ -32,6 +32,9 @@ pub struct ViewArgs {
     /// Exposure [stops] added to the automatic one, within ±64.
     #[arg(long, default_value_t = 0.0, value_parser = crate::setup::exposure_stops, allow_hyphen_values = true)]
     pub exposure: f32,
+    /// Start with the stats overlay on the image hidden (O shows it).
+    #[arg(long)]
+    pub hide_stats: bool,
     /// Random seed of the renderer and the technique.
     #[arg(long)]
     pub seed: Option<u64>,
@@ -78,6 +81,7 @@ pub fn run(a: ViewArgs) -> Result<()> {
         reference: a.reference,
         play: a.play,
         exposure_ev: a.exposure,
+        hide_stats: a.hide_stats,
         screenshot: a.screenshot,
         exit_after_frames: a.exit_after_frames,
         linger_ms: a.linger_ms,

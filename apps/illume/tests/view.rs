@@ -248,6 +248,8 @@ fn screenshot_equals_render_and_the_window_shows_it() {
                 "3",
                 "--linger-ms",
                 "3000",
+                // The viewport compared with the X server's image: no overlay on it.
+                "--hide-stats",
             ],
         ]
         .concat(),
@@ -499,5 +501,108 @@ fn keys_move_the_clicked_object_and_only_its_light_changes() {
     assert!(
         far <= noise,
         "the upper image changed beyond noise: {far} vs noise {noise}"
+    );
+}
+
+/// `x,y[,z]` numbers of a `name=` field of a log line.
+fn numbers(line: &str, name: &str) -> Option<Vec<f64>> {
+    line.split_whitespace()
+        .find_map(|w| w.strip_prefix(&format!("{name}=")))
+        .map(|v| v.split([',', ';']).filter_map(|x| x.parse().ok()).collect())
+}
+
+#[test]
+fn dragging_the_gizmo_moves_the_selection_along_the_axis() {
+    let _display = display();
+    let mut args = vec![
+        "builtin:cornell-spot",
+        "--technique",
+        "reference",
+        "--spp",
+        "2",
+        "--log-input",
+    ];
+    args.extend(SIZE);
+    let mut viewer = Viewer::start(&args);
+    let id = viewer.window();
+    viewer.wait_for(Duration::from_secs(60), "a first frame", |l| {
+        l.contains("render_ms=")
+    });
+    focus(&id);
+    // Select the sphere (about (50, 85) of the 160×120 image); its gizmo appears.
+    xdotool(&["mousemove", "--window", &id, "50", "85", "click", "1"]);
+    // The frame with the selection is shown, then its gizmo drawn.
+    let before = viewer.wait_for(Duration::from_secs(20), "a frame with the selection", |l| {
+        l.contains("render_ms=") && !l.contains("pivot=none")
+    });
+    let gizmo = viewer.wait_for(Duration::from_secs(20), "the gizmo", |l| {
+        l.contains("gizmo centre_px=")
+    });
+    let pivot0 = numbers(&before, "pivot").unwrap();
+    let c = numbers(&gizmo, "centre_px").unwrap();
+    let axes = numbers(&gizmo, "axes_px").unwrap();
+    let length_m = field(&gizmo, "length_m").unwrap();
+    // Grab the X handle at 3/4 of its length and drag 40 px along it, in steps.
+    let h = (axes[0] - c[0], axes[1] - c[1]);
+    let h_len = (h.0 * h.0 + h.1 * h.1).sqrt();
+    assert!(h_len > 20.0, "X handle too short on screen: {gizmo}");
+    let grab = (c[0] + 0.75 * h.0, c[1] + 0.75 * h.1);
+    let drag_px = 40.0;
+    let to = |f: f64| {
+        let p = (
+            grab.0 + f * drag_px * h.0 / h_len,
+            grab.1 + f * drag_px * h.1 / h_len,
+        );
+        [format!("{:.0}", p.0), format!("{:.0}", p.1)]
+    };
+    let [x, y] = to(0.0);
+    xdotool(&["mousemove", "--window", &id, &x, &y, "mousedown", "1"]);
+    for i in 1..=8 {
+        std::thread::sleep(Duration::from_millis(60));
+        let [x, y] = to(i as f64 / 8.0);
+        xdotool(&["mousemove", "--window", &id, &x, &y]);
+    }
+    std::thread::sleep(Duration::from_millis(100));
+    xdotool(&["mouseup", "1"]);
+    viewer.wait_for(Duration::from_secs(10), "the drag handled", |l| {
+        l.contains("input gizmo Axis(0)")
+    });
+    // The pivot moves along +X by the dragged length (a handle length per handle length
+    // dragged; the handle's screen length changes a little as the sphere moves).
+    let expected = drag_px / h_len * length_m;
+    let after = viewer.wait_for(
+        Duration::from_secs(30),
+        "a frame of the moved sphere",
+        |l| {
+            l.contains("render_ms=")
+                && numbers(l, "pivot")
+                    .is_some_and(|p| p.len() == 3 && p[0] - pivot0[0] > 0.6 * expected)
+        },
+    );
+    std::thread::sleep(Duration::from_millis(500));
+    let log = viewer.finish();
+    let last = log
+        .iter()
+        .rev()
+        .find(|l| l.contains("render_ms=") && l.contains("pivot="))
+        .unwrap_or(&after);
+    let pivot1 = numbers(last, "pivot").unwrap();
+    let moved = [
+        pivot1[0] - pivot0[0],
+        pivot1[1] - pivot0[1],
+        pivot1[2] - pivot0[2],
+    ];
+    eprintln!("gizmo drag: moved {moved:?} m, expected {expected:.4} m along X");
+    assert!(
+        (moved[0] - expected).abs() < 0.3 * expected,
+        "moved {moved:?} m, expected {expected:.4} m along X"
+    );
+    assert!(
+        moved[1].abs() < 1e-4 && moved[2].abs() < 1e-4,
+        "the X handle moved the sphere off its axis: {moved:?}"
+    );
+    assert!(
+        !log.iter().any(|l| l.contains("input wheel")),
+        "no camera input expected"
     );
 }

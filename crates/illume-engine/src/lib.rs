@@ -20,6 +20,7 @@
 //! ```
 
 pub mod config;
+pub mod settings_doc;
 pub mod still;
 pub mod technique_kind;
 

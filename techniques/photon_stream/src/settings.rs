@@ -366,3 +366,12 @@ impl TechniqueSettings for PhotonStreamSettings {
         self.seed = seed;
     }
 }
+
+/// This file's text: the field docs of [`PhotonStreamSettings`] are the settings' documentation in
+/// tools that show them (`illume_engine::settings_doc`, the viewer's tooltips).
+pub const SOURCE: &str = include_str!("settings.rs");
+
+/// Fields read through the frame budget ([`TechniqueSettings::default_budget`]), not
+/// when the technique is built: a change applies to a running technique without a
+/// rebuild. Every other field rebuilds it.
+pub const PER_FRAME_FIELDS: &[&str] = &["photons_per_frame"];
