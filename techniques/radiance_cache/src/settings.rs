@@ -151,6 +151,18 @@ pub struct RadianceCacheSettings {
     /// instead of replaced (the paper reports −25–30 % storage, −20–30 % time). False:
     /// every expired record is replaced. Default true.
     pub deletion: bool,
+    /// Most records a frame computes (new records and replacements; pass 1 of
+    /// `interpolated` and the planned records pass 2 admits are not counted), the
+    /// technique's `Budget::work` in records when the frame loop sets none
+    /// (`--work-per-frame N` sets this). Not in the paper, whose frames compute every
+    /// record they need. 0: no limit (the default). When a frame needs more, the
+    /// replacements come first (in record order), the rest wait a frame (their
+    /// records live one frame longer); new records go to the coarsest placement grids
+    /// first, spread evenly over a grid's pixels, and pixels no record reaches take the
+    /// irradiance of neighbouring pixels on the same surface (image-space fill). Lower:
+    /// bounded frame times, at the cost of coarser indirect light for as many frames as
+    /// the backlog takes to clear. Records per frame.
+    pub records_per_frame_max: u64,
     /// Reflections after which Russian roulette may end a gather ray's path
     /// (`continue_path`). Lower: faster, noisier records (still unbiased). Default 3.
     pub rr_start_depth: u32,
@@ -176,8 +188,8 @@ pub const MAX_STRATA: u32 = 1024;
 
 impl TechniqueSettings for RadianceCacheSettings {
     const NAME: &'static str = crate::NAME;
-    /// Records are computed where the G-buffer needs them; [`Budget::work`] is not
-    /// honoured yet.
+    /// Records computed in a frame (new records and replacements); [`Budget::work`]
+    /// caps them (see [`RadianceCacheSettings::records_per_frame_max`]).
     const WORK_UNIT: &'static str = "records";
 
     fn presets() -> &'static [(&'static str, &'static str)] {
@@ -188,16 +200,26 @@ impl TechniqueSettings for RadianceCacheSettings {
         RadianceCacheSettings::preset(name)
     }
 
-    /// Records are computed where each frame's G-buffer needs them (`work_per_frame` is
-    /// ignored). Real-time pacing is remembered: the modes that need the frames known
-    /// in advance (`extrapolated`, `interpolated`) are then refused at construction.
+    /// `work_per_frame` sets `records_per_frame_max`. Real-time pacing is remembered:
+    /// the modes that need the frames known in advance (`extrapolated`,
+    /// `interpolated`) are then refused at construction.
     fn pace(&mut self, pacing: Pacing) {
         self.paced_real_time = matches!(pacing, Pacing::RealTime);
+        if let Pacing::FixedWork {
+            work_per_frame: Some(n),
+        } = pacing
+        {
+            self.records_per_frame_max = n;
+        }
     }
 
-    /// Unlimited: a frame computes every record its G-buffer needs.
+    /// `records_per_frame_max` records per frame (none when it is 0: a frame computes
+    /// every record its G-buffer needs).
     fn default_budget(&self) -> Budget {
-        Budget::default()
+        Budget {
+            work: (self.records_per_frame_max > 0).then_some(self.records_per_frame_max),
+            time_ms: None,
+        }
     }
 
     fn set_seed(&mut self, seed: u64) {
@@ -229,6 +251,7 @@ impl RadianceCacheSettings {
             expire_on_surprise: true,
             neighbour_aging: false,
             deletion: true,
+            records_per_frame_max: 0,
             rr_start_depth: 3,
             max_depth: 1024,
             seed: 0,
