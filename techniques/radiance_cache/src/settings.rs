@@ -163,6 +163,12 @@ pub struct RadianceCacheSettings {
     /// bounded frame times, at the cost of coarser indirect light for as many frames as
     /// the backlog takes to clear. Records per frame.
     pub records_per_frame_max: u64,
+    /// A diagnostic view, not a tuning setting (the paper's Fig. 1c): the indirect image
+    /// also shows each live record the camera sees as one pixel at its position,
+    /// coloured by its lifespan from red (1 frame) to blue (`max_age_frames`), at 8 ×
+    /// the image's mean luminance. `--set radiance_cache.show_records=true`. Default
+    /// false.
+    pub show_records: bool,
     /// Reflections after which Russian roulette may end a gather ray's path
     /// (`continue_path`). Lower: faster, noisier records (still unbiased). Default 3.
     pub rr_start_depth: u32,
@@ -252,6 +258,7 @@ impl RadianceCacheSettings {
             neighbour_aging: false,
             deletion: true,
             records_per_frame_max: 0,
+            show_records: false,
             rr_start_depth: 3,
             max_depth: 1024,
             seed: 0,

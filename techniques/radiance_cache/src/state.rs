@@ -964,12 +964,54 @@ impl RadianceCache {
         c.replaced_total += c.replaced;
         c.deleted_total += c.deleted;
         let t2 = Instant::now();
-        let img = self.shade(world, gbuffer);
+        let mut img = self.shade(world, gbuffer);
+        if self.settings.show_records {
+            self.draw_records(world, gbuffer, &mut img);
+        }
         self.counters.record_ms = (t1 - t0).as_secs_f64() * 1e3;
         self.counters.place_ms = (t2 - t1).as_secs_f64() * 1e3;
         self.counters.shade_ms = t2.elapsed().as_secs_f64() * 1e3;
         self.frame += 1;
         img
+    }
+
+    /// Marks each live record the camera sees on `img` (`show_records`, the paper's
+    /// Fig. 1c): the pixel its position projects to, coloured from red (a lifespan of
+    /// one frame) to blue (`max_age_frames`), at 8 × the image's mean luminance. A
+    /// record counts as seen when its pixel's surface is not nearer the camera than the
+    /// record by more than 2 R_min.
+    fn draw_records(&self, world: &World, gbuffer: &GBuffer, img: &mut RgbImage) {
+        let camera = &world.scene.camera;
+        let camera_from_world = camera.world_from_camera.inverse();
+        let eye = Vec3::from(camera.world_from_camera.translation);
+        let (w, h) = (gbuffer.width, gbuffer.height);
+        let tan_half_y = (camera.yfov_rad * 0.5).tan();
+        let aspect = w as f32 / h.max(1) as f32;
+        let level = 8.0 * illume_core::luminance(img.mean()).max(1e-6);
+        let max_age = self.settings.max_age_frames.max(2) as f32;
+        let slack = 2.0 * self.record_settings.r_min_m;
+        for slot in self.slots.iter().flatten() {
+            let r = &slot.record;
+            let q = camera_from_world.transform_point3(r.position);
+            if q.z >= 0.0 {
+                continue;
+            }
+            let ndc_x = q.x / (-q.z * tan_half_y * aspect);
+            let ndc_y = q.y / (-q.z * tan_half_y);
+            if !(ndc_x.abs() < 1.0 && ndc_y.abs() < 1.0) {
+                continue;
+            }
+            let x = (((ndc_x + 1.0) * 0.5 * w as f32) as u32).min(w - 1);
+            let y = (((1.0 - ndc_y) * 0.5 * h as f32) as u32).min(h - 1);
+            let Some(px) = gbuffer.get(x, y) else {
+                continue;
+            };
+            if (px.hit.position - eye).length() < (r.position - eye).length() - slack {
+                continue;
+            }
+            let t = ((r.lifespan_frames as f32 - 1.0) / (max_age - 1.0)).clamp(0.0, 1.0);
+            *img.get_mut(x, y) = Rgb::new(1.0 - t, 0.0, t) * level;
+        }
     }
 
     /// Drops the cache (records, octree, frame count, pending expiries), keeping the

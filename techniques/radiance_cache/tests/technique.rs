@@ -200,3 +200,43 @@ fn bad_settings_are_refused_by_name() {
         .to_string();
     assert!(e.starts_with("radiance_cache.accuracy: "), "{e}");
 }
+
+#[test]
+fn show_records_marks_records_coloured_by_lifespan() {
+    let (world, g) = cornell();
+    for (mode, red) in [(TemporalMode::PerFrame, true), (TemporalMode::Reuse, false)] {
+        let plain = cache(&world, quick(mode)).indirect(&world, &g);
+        let mut rc = cache(
+            &world,
+            RadianceCacheSettings {
+                show_records: true,
+                ..quick(mode)
+            },
+        );
+        let shown = rc.indirect(&world, &g);
+        let marked: Vec<Rgb> = plain
+            .pixels()
+            .iter()
+            .zip(shown.pixels())
+            .filter(|(a, b)| a != b)
+            .map(|(_, b)| *b)
+            .collect();
+        // Most records lie on surfaces the camera sees (they were placed from its
+        // G-buffer); several may share a pixel.
+        let alive = rc.records_alive();
+        assert!(
+            marked.len() * 4 >= alive && marked.len() <= alive,
+            "{mode:?}: {} marked, {alive} records",
+            marked.len()
+        );
+        for c in marked {
+            assert_eq!(c.y, 0.0, "{mode:?}: {c}");
+            // per_frame: lifespan 1, red; reuse on a still frame: δt_max, blue.
+            if red {
+                assert!(c.x > 0.0 && c.z == 0.0, "{mode:?}: {c}");
+            } else {
+                assert!(c.x == 0.0 && c.z > 0.0, "{mode:?}: {c}");
+            }
+        }
+    }
+}
