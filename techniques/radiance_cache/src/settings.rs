@@ -142,10 +142,12 @@ pub struct RadianceCacheSettings {
     /// material change). False: such records live out their lifespan (ghosts). Default
     /// true. Changes on the timeline expire nothing: τ and the lifespans handle them.
     pub expire_on_surprise: bool,
-    /// §7's future work: a new record whose lifespan is short shortens the lifespans of
-    /// the records whose spheres of influence contain it to its own, so a change seen by
-    /// one record ages its neighbours faster. Default false (the paper's behaviour).
-    /// Not built yet: `true` is refused.
+    /// §7's future work, beyond the paper: a new record (or replacement) whose lifespan
+    /// is shorter than `max_age_frames` ends the lives of the records usable at its
+    /// position (w ≥ 1/a there) no later than its own, so a change seen by one record
+    /// ages its neighbours too. True: fewer ghosts next to changes a record's own rays
+    /// did not see, at the cost of more replacements. Default false (the paper's
+    /// behaviour).
     pub neighbour_aging: bool,
     /// §5, Fig. 9: an expired record that no pixel of its last frame used is deleted
     /// instead of replaced (the paper reports −25–30 % storage, −20–30 % time). False:
@@ -165,7 +167,7 @@ pub struct RadianceCacheSettings {
     pub records_per_frame_max: u64,
     /// A diagnostic view, not a tuning setting (the paper's Fig. 1c): the indirect image
     /// also shows each live record the camera sees as one pixel at its position,
-    /// coloured by its lifespan from red (1 frame) to blue (`max_age_frames`), at 8 ×
+    /// coloured by its lifespan from red (1 frame) to green (`max_age_frames`), at 8 ×
     /// the image's mean luminance. `--set radiance_cache.show_records=true`. Default
     /// false.
     pub show_records: bool,
@@ -433,12 +435,6 @@ impl RadianceCacheSettings {
         }
         if self.max_depth == 0 {
             return bad("max_depth", "must be at least 1".into());
-        }
-        if self.neighbour_aging {
-            return bad(
-                "neighbour_aging",
-                "is not built yet (§7's future work); leave it false".into(),
-            );
         }
         if self.paced_real_time
             && matches!(

@@ -45,6 +45,10 @@
 //! expire nothing (records are world-space). Changes on the timeline are what τ and
 //! the lifespans are for, and expire nothing.
 //!
+//! **Neighbour aging** (`neighbour_aging`, §7's future work): a new record whose
+//! lifespan is shorter than δt_max ends the lives of the records usable at its position
+//! no later than its own.
+//!
 //! **Glossy surfaces** ([`crate::radiance`]): the BRDF's Lambertian part ρ_d/π·E comes
 //! from irradiance records; the specular part from radiance records (hemispherical
 //! harmonics; a record made at a glossy pixel carries both, from one gather, and its
@@ -100,6 +104,8 @@ struct FrameCounters {
     surprise_expired: u64,
     failed: u64,
     holes: u64,
+    /// Records whose lives a new neighbour shortened (`neighbour_aging`).
+    aged: u64,
     /// Replacements the work budget put off to a later frame.
     deferred: u64,
     /// New records the work budget left out of the placement passes.
@@ -438,7 +444,43 @@ impl RadianceCache {
         }
         self.counters.lifespan_sum += slot.record.lifespan_frames as u64;
         self.counters.lifespan_count += 1;
-        self.insert(slot)
+        let id = self.insert(slot)?;
+        if self.settings.neighbour_aging {
+            self.age_neighbours(id);
+        }
+        Ok(id)
+    }
+
+    /// `neighbour_aging`: the records usable at new record `id`'s position end their
+    /// lives no later than it, when its lifespan is shorter than `max_age_frames`.
+    fn age_neighbours(&mut self, id: u32) {
+        let Some(new) = self.slots[id as usize].as_ref().map(|s| s.record.clone()) else {
+            return;
+        };
+        if new.lifespan_frames >= self.settings.max_age_frames {
+            return;
+        }
+        let end = new.frame + new.lifespan_frames;
+        let mut neighbours = Vec::new();
+        self.octree.for_each_containing(new.position, |k| {
+            if k != id {
+                neighbours.push(k);
+            }
+        });
+        neighbours.sort_unstable();
+        for k in neighbours {
+            let accuracy = self.settings.accuracy;
+            let Some(slot) = self.slots[k as usize].as_mut() else {
+                continue;
+            };
+            let r = &mut slot.record;
+            if usable(r.ward_error(new.position, new.normal), accuracy)
+                && r.frame + r.lifespan_frames > end
+            {
+                r.lifespan_frames = end.saturating_sub(r.frame).max(1);
+                self.counters.aged += 1;
+            }
+        }
     }
 
     /// The world of timeline frame `frame + 1`, for reprojecting records made at
@@ -977,7 +1019,7 @@ impl RadianceCache {
 
     /// Marks each live record the camera sees on `img` (`show_records`, the paper's
     /// Fig. 1c): the pixel its position projects to, coloured from red (a lifespan of
-    /// one frame) to blue (`max_age_frames`), at 8 × the image's mean luminance. A
+    /// one frame) to green (`max_age_frames`), as in the paper, at 8 × the image's mean luminance. A
     /// record counts as seen when its pixel's surface is not nearer the camera than the
     /// record by more than 2 R_min.
     fn draw_records(&self, world: &World, gbuffer: &GBuffer, img: &mut RgbImage) {
@@ -1010,7 +1052,7 @@ impl RadianceCache {
                 continue;
             }
             let t = ((r.lifespan_frames as f32 - 1.0) / (max_age - 1.0)).clamp(0.0, 1.0);
-            *img.get_mut(x, y) = Rgb::new(1.0 - t, 0.0, t) * level;
+            *img.get_mut(x, y) = Rgb::new(1.0 - t, t, 0.0) * level;
         }
     }
 
@@ -1193,6 +1235,7 @@ impl Technique for RadianceCache {
             ("records_expired", c.expired as f64),
             ("records_surprise_expired", c.surprise_expired as f64),
             ("records_failed", c.failed as f64),
+            ("records_aged", c.aged as f64),
             ("records_deferred", c.deferred as f64),
             ("records_skipped", c.skipped as f64),
             ("pixels_filled", c.filled as f64),
