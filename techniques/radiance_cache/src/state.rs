@@ -454,7 +454,7 @@ impl RadianceCache {
     /// `neighbour_aging`: the records usable at new record `id`'s position end their
     /// lives no later than it, when its lifespan is shorter than `max_age_frames`.
     fn age_neighbours(&mut self, id: u32) {
-        let Some(new) = self.slots[id as usize].as_ref().map(|s| s.record.clone()) else {
+        let Some(new) = self.slots[id as usize].as_ref().map(|s| s.record) else {
             return;
         };
         if new.lifespan_frames >= self.settings.max_age_frames {
