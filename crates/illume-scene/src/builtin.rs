@@ -12,6 +12,10 @@
 //!   the floor (animation `move`, 0–4 s), lit by a point light (temporal radiance
 //!   caching's Cube in a Box); `move_light` (0–4 s) leaves the cube at its start and
 //!   moves the light along a square below the ceiling (its Moving Light).
+//! * `moving-light` — the cube-in-box with a tiled (checker-textured) floor and the cube
+//!   at rest; animation `move_light` (0–4 s) moves the point light along cube-in-box's
+//!   square below the ceiling (temporal radiance caching's Moving Light: "the bottom of
+//!   the box is tiled to highlight the change of indirect lighting").
 //! * `kite` — the same white box with a tiled (checker-textured) floor and a flat
 //!   two-coloured kite flying a loop through the room (animation `fly`, 0–4 s): a textured
 //!   scene with a flying object (temporal radiance caching's Flying Kite, in kind).
@@ -34,10 +38,11 @@ use crate::model::*;
 use illume_core::{Affine3A, PI, Quat, Rgb, Vec2, Vec3};
 
 /// Names accepted by [`load`].
-pub const NAMES: [&str; 6] = [
+pub const NAMES: [&str; 7] = [
     "furnace",
     "cornell-spot",
     "cube-in-box",
+    "moving-light",
     "kite",
     "glossy-box",
     "sun-room",
@@ -57,6 +62,7 @@ pub fn load(name: &str) -> Result<Scene, UnknownBuiltin> {
         "furnace" => furnace(0.5, Rgb::ONE),
         "cornell-spot" => cornell_spot(),
         "cube-in-box" => cube_in_box(),
+        "moving-light" => moving_light(),
         "kite" => kite(),
         "glossy-box" => glossy_box(),
         "sun-room" => sun_room(),
@@ -721,12 +727,24 @@ fn sun_room() -> Scene {
     scene
 }
 
+/// Where the Cube in a Box's cube starts (its centre; half size 0.2 m).
+const CUBE_START: Vec3 = Vec3::new(-0.5, 0.2, -0.4);
+
+/// The Moving Light's key positions at 0, 1, 2, 3 and 4 s: a square below the ceiling.
+const MOVING_LIGHT_PATH: [Vec3; 5] = [
+    Vec3::new(0.0, 1.8, -0.2),
+    Vec3::new(0.6, 1.6, -0.5),
+    Vec3::new(0.6, 1.6, 0.4),
+    Vec3::new(-0.6, 1.6, 0.4),
+    Vec3::new(0.0, 1.8, -0.2),
+];
+
 fn cube_in_box() -> Scene {
     let mut b = SceneBuilder::new();
     let light = white_room(&mut b);
     let orange = b.material(lambert("orange", [0.8, 0.35, 0.08], false));
     let cube_mesh = b.mesh(unit_box(orange, false));
-    let start = Vec3::new(-0.5, 0.2, -0.4);
+    let start = CUBE_START;
     let cube = b.placed(
         "cube",
         cube_mesh,
@@ -754,19 +772,12 @@ fn cube_in_box() -> Scene {
         properties: Vec::new(),
     });
     // The paper's second row ("Moving Light"): the cube rests, the light travels.
-    let light_path = [
-        Vec3::new(0.0, 1.8, -0.2),
-        Vec3::new(0.6, 1.6, -0.5),
-        Vec3::new(0.6, 1.6, 0.4),
-        Vec3::new(-0.6, 1.6, 0.4),
-        Vec3::new(0.0, 1.8, -0.2),
-    ];
     b.animation(Animation {
         name: "move_light".into(),
         channels: vec![linear_translation(
             light,
             &[0.0, 1.0, 2.0, 3.0, 4.0],
-            &light_path,
+            &MOVING_LIGHT_PATH,
         )],
         properties: Vec::new(),
     });
@@ -830,9 +841,9 @@ fn checker(name: &str, size: u32, tiles: u32, a: Rgb, b: Rgb) -> Texture {
     }
 }
 
-fn kite() -> Scene {
-    let mut b = SceneBuilder::new();
-    white_room(&mut b);
+/// A tiled floor over the white room's: a Lambertian quad 2 mm above it, 8 × 8 checker
+/// tiles of 25 cm (light stone and slate blue).
+fn tiled_floor(b: &mut SceneBuilder) {
     let tiles = b.texture(checker(
         "tiles",
         256,
@@ -853,6 +864,41 @@ fn kite() -> Scene {
         Trs::from_translation(Vec3::new(0.0, 0.002, 0.0)),
         false,
     );
+}
+
+/// The Cube in a Box's room, cube (at rest at its start) and light path, with a tiled
+/// floor (the paper's Moving Light).
+fn moving_light() -> Scene {
+    let mut b = SceneBuilder::new();
+    let light = white_room(&mut b);
+    tiled_floor(&mut b);
+    let orange = b.material(lambert("orange", [0.8, 0.35, 0.08], false));
+    let cube_mesh = b.mesh(unit_box(orange, false));
+    b.placed(
+        "cube",
+        cube_mesh,
+        Trs {
+            scale: Vec3::splat(0.2),
+            ..Trs::from_translation(CUBE_START)
+        },
+        false,
+    );
+    b.animation(Animation {
+        name: "move_light".into(),
+        channels: vec![linear_translation(
+            light,
+            &[0.0, 1.0, 2.0, 3.0, 4.0],
+            &MOVING_LIGHT_PATH,
+        )],
+        properties: Vec::new(),
+    });
+    b.finish("builtin:moving-light")
+}
+
+fn kite() -> Scene {
+    let mut b = SceneBuilder::new();
+    white_room(&mut b);
+    tiled_floor(&mut b);
     // The kite: a flat diamond-ish slab, red on top, yellow below (two quads back to back).
     let red = b.material(lambert("kite_red", [0.8, 0.1, 0.08], false));
     let yellow = b.material(lambert("kite_yellow", [0.85, 0.7, 0.1], false));
@@ -1018,6 +1064,31 @@ mod tests {
         let e = load("nope").unwrap_err();
         assert_eq!(e.name, "nope");
         assert!(e.to_string().contains("builtin:nope") && e.to_string().contains("furnace"));
+    }
+
+    #[test]
+    fn moving_light_has_a_tiled_floor_and_moves_its_light_only() {
+        let mut s = load("moving-light").unwrap();
+        let tiles = s
+            .materials
+            .iter()
+            .position(|m| m.name == "tiles")
+            .expect("a tiles material");
+        let at = |u: f32, v: f32| s.albedo(MaterialId(tiles as u32), Vec2::new(u, v));
+        // Neighbouring tiles (1/8 of the texture apart) differ; a tile is uniform.
+        assert_ne!(at(0.06, 0.06), at(0.19, 0.06));
+        assert_eq!(at(0.06, 0.06), at(0.19, 0.19));
+        assert!(
+            s.instances
+                .iter()
+                .any(|i| s.meshes[i.mesh.index()].triangle_materials[0].index() == tiles),
+            "the tiled floor is placed"
+        );
+        let (instances, light) = (s.instances.clone(), s.lights[0].position());
+        let changes = s.set_time(0.5);
+        assert!(!changes.is_empty());
+        assert_eq!(s.instances, instances, "nothing but the light moves");
+        assert!((s.lights[0].position() - light).length() > 0.1);
     }
 
     #[test]

@@ -15,14 +15,14 @@
 //! the same place. Reused records cost nothing and keep their positions, so animations
 //! are cheaper and flicker less than with a new cache per frame.
 //!
-//! **Status (in progress).** A selectable technique (`--technique radiance_cache` in
-//! `illume render` and `illume animate`) with two temporal modes: `per_frame` (the
-//! paper's baseline, a new cache every frame) and `reuse` (records kept for δt_max
-//! frames with no temporal weighting: ghosts, see [`state`]); **the default is `reuse`
-//! for now**. `extrapolated` and `interpolated` need the §4.3 reprojection, still to
-//! come, and are refused at construction (`radiance_cache.temporal: … not built yet`);
-//! `interpolated` becomes the default with it. Glossy surfaces are shaded Lambertian
-//! (irradiance records only) until radiance records are placed and shaded.
+//! **Status.** Every mechanism of the paper is built and selectable
+//! (`--technique radiance_cache` in `illume render`, `illume animate` and `illume
+//! bench`), in four temporal modes: `per_frame` (the paper's baseline), `reuse`
+//! (Fig. 5c), `extrapolated` (one pass, Fig. 5d) and `interpolated` (two passes, Fig.
+//! 5e; the default). Glossy surfaces get radiance records (hemispherical harmonics)
+//! for their specular lobe. Beyond the paper: replacement only on a surface, replacements
+//! with their predecessor's rays, surprise expiry and a work budget in records per
+//! frame, and neighbour aging (§7's future work, off by default) ([`state`]).
 //!
 //! | paper | here |
 //! |---|---|
@@ -30,14 +30,10 @@
 //! | §5 (CPU counterpart): which records' spheres of influence contain a point (WRC88 octree) | [`octree`] |
 //! | §4.2, Eq. 5–12: change rate τ, temporal weight, lifespan | [`temporal`] |
 //! | §4.4, Eq. 13–23: contribution over time, extrapolated and interpolated temporal gradients | [`temporal`] |
-//! | §3, radiance records for glossy surfaces (KGPB05, GKPB04): hemispherical harmonics | [`hsh`] |
+//! | §3, radiance records for glossy surfaces (KGPB05, GKPB04): hemispherical harmonics | [`hsh`], [`radiance`] |
+//! | §4.3, §5, Fig. 7–8: next-frame estimate by reprojection, hole filling | [`reproject`] |
 //! | §6: the paper's parameters and the reasoned ones; presets `paper`, `still`, `fast` | [`settings`] |
-//! | §6 baseline (`per_frame`), Fig. 5c without τ (`reuse`): the `Technique`, coarse-to-fine placement over the G-buffer, shading ρ/π·E | [`state`] |
-//! | §4.3, §5, Fig. 7–8: next-frame estimate by reprojection, hole filling | to come |
-//! | §4.2, Fig. 5–6: lifespans from τ, replacement at the same place; §5, Fig. 9: deletion | to come |
-//! | §4.4 in the frame loop: `extrapolated`, `interpolated` (two passes) | to come |
-//! | radiance records: placement, translation gradients, glossy shading | to come |
-//! | bench scenario, Table 1 and Figure 10 in kind | to come |
+//! | §4–§6: the `Technique` — coarse-to-fine placement, lifespans, replacement (Fig. 5–6), deletion (Fig. 9), the four modes, surprises, glossy shading | [`state`] |
 //!
 //! **Failure modes known from the paper.** (1) Ghosts: a record reused after the light
 //! around it changed keeps showing the old light; the temporal weight sees only the

@@ -142,15 +142,35 @@ pub struct RadianceCacheSettings {
     /// material change). False: such records live out their lifespan (ghosts). Default
     /// true. Changes on the timeline expire nothing: τ and the lifespans handle them.
     pub expire_on_surprise: bool,
-    /// §7's future work: a new record whose lifespan is short shortens the lifespans of
-    /// the records whose spheres of influence contain it to its own, so a change seen by
-    /// one record ages its neighbours faster. Default false (the paper's behaviour).
-    /// Not built yet: `true` is refused.
+    /// §7's future work, beyond the paper: a new record (or replacement) whose lifespan
+    /// is shorter than `max_age_frames` ends the lives of the records usable at its
+    /// position (w ≥ 1/a there) no later than its own, so a change seen by one record
+    /// ages its neighbours too. True: fewer ghosts next to changes a record's own rays
+    /// did not see, at the cost of more replacements. Default false (the paper's
+    /// behaviour).
     pub neighbour_aging: bool,
     /// §5, Fig. 9: an expired record that no pixel of its last frame used is deleted
     /// instead of replaced (the paper reports −25–30 % storage, −20–30 % time). False:
     /// every expired record is replaced. Default true.
     pub deletion: bool,
+    /// Most records a frame computes (new records and replacements; pass 1 of
+    /// `interpolated` and the planned records pass 2 admits are not counted), the
+    /// technique's `Budget::work` in records when the frame loop sets none
+    /// (`--work-per-frame N` sets this). Not in the paper, whose frames compute every
+    /// record they need. 0: no limit (the default). When a frame needs more, the
+    /// replacements come first (in record order), the rest wait a frame (their
+    /// records live one frame longer); new records go to the coarsest placement grids
+    /// first, spread evenly over a grid's pixels, and pixels no record reaches take the
+    /// irradiance of neighbouring pixels on the same surface (image-space fill). Lower:
+    /// bounded frame times, at the cost of coarser indirect light for as many frames as
+    /// the backlog takes to clear. Records per frame.
+    pub records_per_frame_max: u64,
+    /// A diagnostic view, not a tuning setting (the paper's Fig. 1c): the indirect image
+    /// also shows each live record the camera sees as one pixel at its position,
+    /// coloured by its lifespan from red (1 frame) to green (`max_age_frames`), at 8 ×
+    /// the image's mean luminance. `--set radiance_cache.show_records=true`. Default
+    /// false.
+    pub show_records: bool,
     /// Reflections after which Russian roulette may end a gather ray's path
     /// (`continue_path`). Lower: faster, noisier records (still unbiased). Default 3.
     pub rr_start_depth: u32,
@@ -176,8 +196,8 @@ pub const MAX_STRATA: u32 = 1024;
 
 impl TechniqueSettings for RadianceCacheSettings {
     const NAME: &'static str = crate::NAME;
-    /// Records are computed where the G-buffer needs them; [`Budget::work`] is not
-    /// honoured yet.
+    /// Records computed in a frame (new records and replacements); [`Budget::work`]
+    /// caps them (see [`RadianceCacheSettings::records_per_frame_max`]).
     const WORK_UNIT: &'static str = "records";
 
     fn presets() -> &'static [(&'static str, &'static str)] {
@@ -188,16 +208,26 @@ impl TechniqueSettings for RadianceCacheSettings {
         RadianceCacheSettings::preset(name)
     }
 
-    /// Records are computed where each frame's G-buffer needs them (`work_per_frame` is
-    /// ignored). Real-time pacing is remembered: the modes that need the frames known
-    /// in advance (`extrapolated`, `interpolated`) are then refused at construction.
+    /// `work_per_frame` sets `records_per_frame_max`. Real-time pacing is remembered:
+    /// the modes that need the frames known in advance (`extrapolated`,
+    /// `interpolated`) are then refused at construction.
     fn pace(&mut self, pacing: Pacing) {
         self.paced_real_time = matches!(pacing, Pacing::RealTime);
+        if let Pacing::FixedWork {
+            work_per_frame: Some(n),
+        } = pacing
+        {
+            self.records_per_frame_max = n;
+        }
     }
 
-    /// Unlimited: a frame computes every record its G-buffer needs.
+    /// `records_per_frame_max` records per frame (none when it is 0: a frame computes
+    /// every record its G-buffer needs).
     fn default_budget(&self) -> Budget {
-        Budget::default()
+        Budget {
+            work: (self.records_per_frame_max > 0).then_some(self.records_per_frame_max),
+            time_ms: None,
+        }
     }
 
     fn set_seed(&mut self, seed: u64) {
@@ -229,6 +259,8 @@ impl RadianceCacheSettings {
             expire_on_surprise: true,
             neighbour_aging: false,
             deletion: true,
+            records_per_frame_max: 0,
+            show_records: false,
             rr_start_depth: 3,
             max_depth: 1024,
             seed: 0,
@@ -403,12 +435,6 @@ impl RadianceCacheSettings {
         }
         if self.max_depth == 0 {
             return bad("max_depth", "must be at least 1".into());
-        }
-        if self.neighbour_aging {
-            return bad(
-                "neighbour_aging",
-                "is not built yet (§7's future work); leave it false".into(),
-            );
         }
         if self.paced_real_time
             && matches!(

@@ -45,6 +45,10 @@
 //! expire nothing (records are world-space). Changes on the timeline are what τ and
 //! the lifespans are for, and expire nothing.
 //!
+//! **Neighbour aging** (`neighbour_aging`, §7's future work): a new record whose
+//! lifespan is shorter than δt_max ends the lives of the records usable at its position
+//! no later than its own.
+//!
 //! **Glossy surfaces** ([`crate::radiance`]): the BRDF's Lambertian part ρ_d/π·E comes
 //! from irradiance records; the specular part from radiance records (hemispherical
 //! harmonics; a record made at a glossy pixel carries both, from one gather, and its
@@ -52,8 +56,16 @@
 //! `traced_rays` rays per pixel below it. Surfaces rougher than `glossy_roughness_max`
 //! are shaded Lambertian with the BRDF's approximate albedo.
 //!
-//! **Budget.** All records a frame needs are computed in [`Technique::indirect`] (the
-//! G-buffer says where); [`Budget`] is not honoured and `advance` does nothing.
+//! **Budget.** A frame's records are computed in [`Technique::indirect`] (the G-buffer
+//! says where). [`Budget::work`] (from [`Technique::advance`], else the settings'
+//! `records_per_frame_max`) caps the records a frame computes: replacements first, in
+//! record order (those past the cap live one frame longer: `records_deferred`), then
+//! new records pass by pass, coarse to fine, spread evenly over a pass's pixels
+//! (`records_skipped` counts those left out; a later frame places them). Pixels that
+//! no record reaches then take the mean light of their neighbours on the same surface,
+//! pass after pass (`pixels_filled`, `pixels_unfilled`). Pass 1 of `interpolated` and
+//! the planned records pass 2 admits are not capped. [`Budget::time_ms`] is not
+//! honoured.
 
 use crate::octree::Octree;
 use crate::radiance::{GlossyShading, RadianceData, diffuse_albedo};
@@ -92,6 +104,16 @@ struct FrameCounters {
     surprise_expired: u64,
     failed: u64,
     holes: u64,
+    /// Records whose lives a new neighbour shortened (`neighbour_aging`).
+    aged: u64,
+    /// Replacements the work budget put off to a later frame.
+    deferred: u64,
+    /// New records the work budget left out of the placement passes.
+    skipped: u64,
+    /// Pixels no record reached that took their neighbours' light (budget fill).
+    filled: u64,
+    /// Pixels no record reached and the fill did not reach either.
+    unfilled: u64,
     created_total: u64,
     replaced_total: u64,
     deleted_total: u64,
@@ -122,6 +144,16 @@ struct Slot {
 struct Planned {
     slot: Slot,
     successor: Option<u32>,
+}
+
+/// A pixel of a placement pass that needs a new record.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    p: Vec3,
+    n: Vec3,
+    instance: InstanceId,
+    key: u64,
+    glossy: bool,
 }
 
 /// A new record and what its making found.
@@ -159,6 +191,11 @@ pub struct RadianceCache {
     expire_instances: Vec<InstanceId>,
     counters: FrameCounters,
     glossy: GlossyShading,
+    /// Records a frame may compute (the last `advance`'s `Budget::work`, or the
+    /// settings' `records_per_frame_max`); `None`: no limit.
+    work_cap: Option<u64>,
+    /// What is left of `work_cap` in the frame being made.
+    work_left: Option<u64>,
 }
 
 /// How a pixel's surface is shaded (see the module docs).
@@ -207,6 +244,71 @@ fn same_lighting(a: &Scene, b: &Scene) -> bool {
         && a.sky == b.sky
 }
 
+/// Largest distance of a neighbouring pixel's point from a pixel's tangent plane that
+/// the budget fill crosses, in units of R_min (`r_min_fraction` of the scene's
+/// diagonal): a pixel takes light from its own surface (however grazing the view), not
+/// across a depth jump between parallel surfaces.
+const FILL_PLANE_R_MIN: f32 = 1.0;
+
+/// Smallest cosine between neighbouring pixels' normals that the budget fill's second
+/// round crosses (60°): pixels the first round (normals within acos(1 − a²)) left
+/// without light, on curved surfaces or small faces, take it across creases.
+const FILL_CREASE_COS: f32 = 0.5;
+
+/// Fills `values` where `wants` and no value, pass after pass, with the mean of the
+/// 3×3 neighbours that have one and lie on the same surface (points at most
+/// `max_step_m` from the pixel's tangent plane, normals with a cosine of at least
+/// `min_cos`): the image-space
+/// counterpart of the reprojection's hole filling, for pixels the work budget left
+/// without records. Returns the pixels filled and those still without a value.
+fn fill_from_neighbours(
+    gbuffer: &GBuffer,
+    values: &mut [Option<Rgb>],
+    wants: &[bool],
+    max_step_m: f32,
+    min_cos: f32,
+) -> (u64, u64) {
+    let (w, h) = (gbuffer.width as usize, gbuffer.height as usize);
+    let point = |i: usize| gbuffer.pixels[i].as_ref().and_then(shading_point);
+    let mut filled = 0u64;
+    for _ in 0..w.max(h) {
+        let before: Vec<Option<Rgb>> = values.to_vec();
+        let new: Vec<(usize, Rgb)> = (0..w * h)
+            .into_par_iter()
+            .filter(|&i| wants[i] && before[i].is_none())
+            .filter_map(|i| {
+                let (p, n) = point(i)?;
+                let (x, y) = (i % w, i / w);
+                let (mut sum, mut count) = (Rgb::ZERO, 0u32);
+                for ny in y.saturating_sub(1)..(y + 2).min(h) {
+                    for nx in x.saturating_sub(1)..(x + 2).min(w) {
+                        let j = ny * w + nx;
+                        let (Some(v), Some((q, m))) = (before[j], point(j)) else {
+                            continue;
+                        };
+                        if (q - p).dot(n).abs() <= max_step_m && m.dot(n) >= min_cos {
+                            sum += v;
+                            count += 1;
+                        }
+                    }
+                }
+                (count > 0).then(|| (i, sum * (1.0 / count as f32)))
+            })
+            .collect();
+        if new.is_empty() {
+            break;
+        }
+        filled += new.len() as u64;
+        for (i, v) in new {
+            values[i] = Some(v);
+        }
+    }
+    let unfilled = (0..w * h)
+        .filter(|&i| wants[i] && values[i].is_none())
+        .count() as u64;
+    (filled, unfilled)
+}
+
 impl RadianceCache {
     /// The technique for `world` with `settings`, for the frames of `timeline` (the
     /// temporal modes reproject into its next frames; `interpolated` runs its pass 1 over
@@ -219,6 +321,8 @@ impl RadianceCache {
     ) -> Result<Self, RadianceCacheError> {
         settings.validate()?;
         let settings_order = settings.hsh_order as usize;
+        let work_cap =
+            (settings.records_per_frame_max > 0).then_some(settings.records_per_frame_max);
         let bounds = world.scene.bounds();
         let diagonal = (bounds.max - bounds.min).length();
         let diagonal = if diagonal.is_finite() && diagonal > 0.0 {
@@ -243,6 +347,8 @@ impl RadianceCache {
             expire_instances: Vec::new(),
             counters: FrameCounters::default(),
             glossy: GlossyShading::new(settings_order)?,
+            work_cap,
+            work_left: None,
         })
     }
 
@@ -338,7 +444,43 @@ impl RadianceCache {
         }
         self.counters.lifespan_sum += slot.record.lifespan_frames as u64;
         self.counters.lifespan_count += 1;
-        self.insert(slot)
+        let id = self.insert(slot)?;
+        if self.settings.neighbour_aging {
+            self.age_neighbours(id);
+        }
+        Ok(id)
+    }
+
+    /// `neighbour_aging`: the records usable at new record `id`'s position end their
+    /// lives no later than it, when its lifespan is shorter than `max_age_frames`.
+    fn age_neighbours(&mut self, id: u32) {
+        let Some(new) = self.slots[id as usize].as_ref().map(|s| s.record) else {
+            return;
+        };
+        if new.lifespan_frames >= self.settings.max_age_frames {
+            return;
+        }
+        let end = new.frame + new.lifespan_frames;
+        let mut neighbours = Vec::new();
+        self.octree.for_each_containing(new.position, |k| {
+            if k != id {
+                neighbours.push(k);
+            }
+        });
+        neighbours.sort_unstable();
+        for k in neighbours {
+            let accuracy = self.settings.accuracy;
+            let Some(slot) = self.slots[k as usize].as_mut() else {
+                continue;
+            };
+            let r = &mut slot.record;
+            if usable(r.ward_error(new.position, new.normal), accuracy)
+                && r.frame + r.lifespan_frames > end
+            {
+                r.lifespan_frames = end.saturating_sub(r.frame).max(1);
+                self.counters.aged += 1;
+            }
+        }
     }
 
     /// The world of timeline frame `frame + 1`, for reprojecting records made at
@@ -466,31 +608,55 @@ impl RadianceCache {
                 }
             }
         }
-        self.counters.expired = doomed.len() as u64;
-        // Replacements, decided and computed from the cache's state now, in id order.
+        // Which expired records are replaced (the others are deleted), decided from the
+        // cache's state now.
         let this = &*self;
-        let made: Vec<(u32, Result<Option<Made>, RadianceCacheError>)> = successors
+        let replace: Vec<bool> = successors
             .par_iter()
             .map(|&id| {
                 let slot = this.slots[id as usize].as_ref().expect("live slot");
                 let unused =
                     this.settings.deletion && this.uses[id as usize].load(Ordering::Relaxed) == 0;
-                let result = if unused
+                !(unused
                     || (this.settings.replace_only_on_surface
-                        && !this.surface_at(world, slot.record.position, slot.record.normal))
-                {
-                    Ok(None)
+                        && !this.surface_at(world, slot.record.position, slot.record.normal)))
+            })
+            .collect();
+        // The work budget: replacements in id order; those past it live one frame more.
+        let mut traced = Vec::new();
+        let mut deferred = Vec::new();
+        for (&id, replace) in successors.iter().zip(replace) {
+            if !replace {
+                self.counters.deleted += 1;
+            } else if self.take_work() {
+                traced.push(id);
+            } else {
+                deferred.push(id);
+            }
+        }
+        for &id in &deferred {
+            if let Some(slot) = self.slots[id as usize].as_mut() {
+                slot.record.lifespan_frames += 1;
+            }
+        }
+        // Both lists are in id order.
+        doomed.retain(|id| deferred.binary_search(id).is_err());
+        self.counters.deferred = deferred.len() as u64;
+        self.counters.expired = doomed.len() as u64;
+        // Replacements, computed from the cache's state now, in id order.
+        let this = &*self;
+        let made: Vec<(u32, Result<Made, RadianceCacheError>)> = traced
+            .par_iter()
+            .map(|&id| {
+                let slot = this.slots[id as usize].as_ref().expect("live slot");
+                let key = if this.settings.reuse_directions {
+                    slot.key
                 } else {
-                    let key = if this.settings.reuse_directions {
-                        slot.key
-                    } else {
-                        mix64(slot.key ^ ((frame as u64) << 40))
-                    };
-                    let r = &slot.record;
-                    let glossy = slot.radiance.is_some();
-                    this.make(world, r.position, r.normal, r.instance, key, glossy)
-                        .map(Some)
+                    mix64(slot.key ^ ((frame as u64) << 40))
                 };
+                let r = &slot.record;
+                let glossy = slot.radiance.is_some();
+                let result = this.make(world, r.position, r.normal, r.instance, key, glossy);
                 (id, result)
             })
             .collect();
@@ -498,10 +664,7 @@ impl RadianceCache {
         for (id, result) in made {
             let predecessor = self.slots[id as usize].as_ref().and_then(|s| s.history);
             match result {
-                Ok(None) => {
-                    self.counters.deleted += 1;
-                }
-                Ok(Some(m)) => {
+                Ok(m) => {
                     self.counters.holes += m.holes as u64;
                     predecessors.push((predecessor, m.slot));
                 }
@@ -562,6 +725,37 @@ impl RadianceCache {
         any && (with_radiance || !radiance)
     }
 
+    /// Takes one record from the frame's work budget; false when it is spent.
+    fn take_work(&mut self) -> bool {
+        match &mut self.work_left {
+            None => true,
+            Some(0) => false,
+            Some(n) => {
+                *n -= 1;
+                true
+            }
+        }
+    }
+
+    /// The placements of one pass the frame's work budget allows: all of them, or as
+    /// many as are left, spread evenly over the pass's list (pixel order); the others
+    /// are counted as skipped.
+    fn within_budget(&mut self, wanted: Vec<Candidate>) -> Vec<Candidate> {
+        let Some(left) = self.work_left else {
+            return wanted;
+        };
+        let (len, take) = (wanted.len() as u64, (wanted.len() as u64).min(left));
+        self.work_left = Some(left - take);
+        self.counters.skipped += len - take;
+        if take == len {
+            return wanted;
+        }
+        // The middle element of each of `take` equal runs of the list.
+        (0..take)
+            .map(|i| wanted[((2 * i + 1) * len / (2 * take)) as usize])
+            .collect()
+    }
+
     /// Step 2: coarse-to-fine placement over `gbuffer`.
     fn place(&mut self, world: &World, gbuffer: &GBuffer) {
         let (w, h) = (gbuffer.width, gbuffer.height);
@@ -578,7 +772,7 @@ impl RadianceCache {
                 .collect();
             let this = &*self;
             // Decided from the cache before the pass, computed in parallel, kept in order.
-            let new: Vec<Result<Made, RadianceCacheError>> = pixels
+            let wanted: Vec<Candidate> = pixels
                 .par_iter()
                 .filter_map(|&(x, y)| {
                     let px = gbuffer.get(x, y)?;
@@ -588,8 +782,20 @@ impl RadianceCache {
                         return None;
                     }
                     let key = ((frame as u64) << 32) | (y as u64 * w as u64 + x as u64);
-                    Some(this.make(world, p, n, Some(px.hit.instance), key, glossy))
+                    Some(Candidate {
+                        p,
+                        n,
+                        instance: px.hit.instance,
+                        key,
+                        glossy,
+                    })
                 })
+                .collect();
+            let chosen = self.within_budget(wanted);
+            let this = &*self;
+            let new: Vec<Result<Made, RadianceCacheError>> = chosen
+                .par_iter()
+                .map(|c| this.make(world, c.p, c.n, Some(c.instance), c.key, c.glossy))
                 .collect();
             for r in new {
                 match r.and_then(|m| {
@@ -604,72 +810,117 @@ impl RadianceCache {
     }
 
     /// Step 3: Eq. 1 with Eq. 17 at every pixel, times ρ/π, plus the specular part of
-    /// glossy pixels; counts each record's uses.
-    fn shade(&self, world: &World, gbuffer: &GBuffer) -> RgbImage {
+    /// glossy pixels; counts each record's uses. When the work budget left records out
+    /// of this frame, pixels no record reaches take their neighbours' light
+    /// ([`fill_from_neighbours`]).
+    fn shade(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
         let w = gbuffer.width.max(1) as usize;
-        let mut img = RgbImage::filled(gbuffer.width, gbuffer.height, Rgb::ZERO);
         let accuracy = self.settings.accuracy;
         let frame = self.frame;
         for u in &self.uses {
             u.store(0, Ordering::Relaxed);
         }
-        img.pixels_mut()
-            .par_chunks_mut(w)
-            .zip(gbuffer.pixels.par_chunks(w))
+        // Per pixel: the surface, E from the records (None: no usable record), and the
+        // specular part (None: a glossy pixel no radiance record reaches).
+        type Shaded = Option<(Surface, Option<Rgb>, Option<Rgb>)>;
+        let this = &*self;
+        let mut shaded: Vec<Shaded> = gbuffer
+            .pixels
+            .par_iter()
             .enumerate()
-            .for_each(|(y, (row, px))| {
-                for (x, (out, p)) in row.iter_mut().zip(px).enumerate() {
-                    let Some(px) = p else { continue };
-                    let Some((p, n)) = shading_point(px) else {
-                        continue;
-                    };
-                    let surface = self.surface(&px.hit);
-                    let mut sum = WeightedSum::default();
-                    self.octree.for_each_containing(p, |id| {
-                        if let Some(s) = &self.slots[id as usize] {
-                            let error = s.record.ward_error(p, n);
-                            if usable(error, accuracy) {
-                                sum.add(1.0 / error, contribution(&s.record, p, n, frame));
-                                self.uses[id as usize].fetch_add(1, Ordering::Relaxed);
-                            }
+            .map(|(i, p)| {
+                let px = p.as_ref()?;
+                let (p, n) = shading_point(px)?;
+                let surface = this.surface(&px.hit);
+                let mut sum = WeightedSum::default();
+                this.octree.for_each_containing(p, |id| {
+                    if let Some(s) = &this.slots[id as usize] {
+                        let error = s.record.ward_error(p, n);
+                        if usable(error, accuracy) {
+                            sum.add(1.0 / error, contribution(&s.record, p, n, frame));
+                            this.uses[id as usize].fetch_add(1, Ordering::Relaxed);
                         }
-                    });
-                    let e = sum.result().unwrap_or(Rgb::ZERO);
-                    *out = match surface {
-                        Surface::Diffuse(rho) => rho * INV_PI * e,
-                        Surface::Glossy {
-                            diffuse,
-                            brdf,
-                            traced,
-                        } => {
-                            let specular = if traced {
-                                let key = (y * w + x) as u64;
-                                GlossyShading::traced(
-                                    world,
-                                    p,
-                                    n,
-                                    &brdf,
-                                    px.to_camera,
-                                    self.settings.traced_rays,
-                                    self.settings.seed,
-                                    key,
-                                    &self.record_settings.path,
-                                )
-                            } else {
-                                self.specular_from_records(p, n, &brdf, px.to_camera, frame)
-                            };
-                            diffuse * INV_PI * e + specular
-                        }
-                    };
+                    }
+                });
+                let specular = match surface {
+                    Surface::Diffuse(_) => Some(Rgb::ZERO),
+                    Surface::Glossy {
+                        brdf, traced: true, ..
+                    } => Some(GlossyShading::traced(
+                        world,
+                        p,
+                        n,
+                        &brdf,
+                        px.to_camera,
+                        this.settings.traced_rays,
+                        this.settings.seed,
+                        i as u64,
+                        &this.record_settings.path,
+                    )),
+                    Surface::Glossy {
+                        brdf,
+                        traced: false,
+                        ..
+                    } => this.specular_from_records(p, n, &brdf, px.to_camera, frame),
+                };
+                Some((surface, sum.result(), specular))
+            })
+            .collect();
+        if self.counters.skipped > 0 {
+            let max_step_m = FILL_PLANE_R_MIN * self.record_settings.r_min_m;
+            let min_cos = 1.0 - accuracy * accuracy;
+            let (mut e, mut specular): (Vec<_>, Vec<_>) = shaded
+                .iter()
+                .map(|s| s.map_or((None, None), |(_, e, sp)| (e, sp)))
+                .unzip();
+            let wants_e: Vec<bool> = shaded.iter().map(Option::is_some).collect();
+            let wants_specular: Vec<bool> = shaded
+                .iter()
+                .map(|s| matches!(s, Some((Surface::Glossy { traced: false, .. }, _, _))))
+                .collect();
+            // Same surface first; then across creases and curvature (normals within 60°)
+            // for what that left.
+            let mut filled = 0;
+            let mut unfilled = 0;
+            for cos in [min_cos, FILL_CREASE_COS] {
+                (filled, unfilled) = {
+                    let (f, u) = fill_from_neighbours(gbuffer, &mut e, &wants_e, max_step_m, cos);
+                    (filled + f, u)
+                };
+                fill_from_neighbours(gbuffer, &mut specular, &wants_specular, max_step_m, cos);
+            }
+            for ((s, e), sp) in shaded.iter_mut().zip(e).zip(specular) {
+                if let Some((_, se, ssp)) = s {
+                    (*se, *ssp) = (e, sp);
                 }
+            }
+            self.counters.filled = filled;
+            self.counters.unfilled = unfilled;
+        }
+        let mut img = RgbImage::filled(gbuffer.width, gbuffer.height, Rgb::ZERO);
+        img.pixels_mut()
+            .par_iter_mut()
+            .zip(shaded.par_iter())
+            .for_each(|(out, s)| {
+                let Some((surface, e, specular)) = s else {
+                    return;
+                };
+                let e = e.unwrap_or(Rgb::ZERO);
+                *out = match surface {
+                    Surface::Diffuse(rho) => *rho * INV_PI * e,
+                    Surface::Glossy { diffuse, .. } => {
+                        *diffuse * INV_PI * e + specular.unwrap_or(Rgb::ZERO)
+                    }
+                };
             });
+        debug_assert_eq!(img.pixels().len(), w * gbuffer.height as usize);
         img
     }
 
     /// The specular part at `p` (normal `n`, view `wo`) from the usable radiance
     /// records: their coefficients moved to `p` (translation and temporal gradients),
     /// rotated into the point's frame, averaged with Ward's weights, shaded with f_s's
-    /// BRDF×cos coefficients. Black where no radiance record is usable.
+    /// BRDF×cos coefficients. `None` where no radiance record is usable.
     fn specular_from_records(
         &self,
         p: Vec3,
@@ -677,7 +928,7 @@ impl RadianceCache {
         brdf: &MetalRough,
         wo: Vec3,
         frame: u32,
-    ) -> Rgb {
+    ) -> Option<Rgb> {
         let to = Frame::from_normal(n);
         let len = self.glossy.basis().len();
         let mut acc = vec![Rgb::ZERO; len];
@@ -711,12 +962,12 @@ impl RadianceCache {
             total += weight;
         });
         if total <= 0.0 {
-            return Rgb::ZERO;
+            return None;
         }
         let b = self
             .glossy
             .specular_coefficients_tabulated(brdf, to.to_local(wo));
-        (crate::hsh::shade(&b, &acc) * (1.0 / total)).max(Rgb::ZERO)
+        Some((crate::hsh::shade(&b, &acc) * (1.0 / total)).max(Rgb::ZERO))
     }
 
     /// One frame: expiry (or the plan's admissions), placement, shading.
@@ -742,6 +993,8 @@ impl RadianceCache {
             // Past the planned frames: online from here.
             self.plan = None;
         }
+        // Pass 1 of `interpolated` is precompute work: no budget.
+        self.work_left = if self.recording { None } else { self.work_cap };
         self.prepare_next(world);
         self.expire(world);
         self.counters.reused = before - self.counters.expired;
@@ -753,12 +1006,54 @@ impl RadianceCache {
         c.replaced_total += c.replaced;
         c.deleted_total += c.deleted;
         let t2 = Instant::now();
-        let img = self.shade(world, gbuffer);
+        let mut img = self.shade(world, gbuffer);
+        if self.settings.show_records {
+            self.draw_records(world, gbuffer, &mut img);
+        }
         self.counters.record_ms = (t1 - t0).as_secs_f64() * 1e3;
         self.counters.place_ms = (t2 - t1).as_secs_f64() * 1e3;
         self.counters.shade_ms = t2.elapsed().as_secs_f64() * 1e3;
         self.frame += 1;
         img
+    }
+
+    /// Marks each live record the camera sees on `img` (`show_records`, the paper's
+    /// Fig. 1c): the pixel its position projects to, coloured from red (a lifespan of
+    /// one frame) to green (`max_age_frames`), as in the paper, at 8 × the image's mean luminance. A
+    /// record counts as seen when its pixel's surface is not nearer the camera than the
+    /// record by more than 2 R_min.
+    fn draw_records(&self, world: &World, gbuffer: &GBuffer, img: &mut RgbImage) {
+        let camera = &world.scene.camera;
+        let camera_from_world = camera.world_from_camera.inverse();
+        let eye = Vec3::from(camera.world_from_camera.translation);
+        let (w, h) = (gbuffer.width, gbuffer.height);
+        let tan_half_y = (camera.yfov_rad * 0.5).tan();
+        let aspect = w as f32 / h.max(1) as f32;
+        let level = 8.0 * illume_core::luminance(img.mean()).max(1e-6);
+        let max_age = self.settings.max_age_frames.max(2) as f32;
+        let slack = 2.0 * self.record_settings.r_min_m;
+        for slot in self.slots.iter().flatten() {
+            let r = &slot.record;
+            let q = camera_from_world.transform_point3(r.position);
+            if q.z >= 0.0 {
+                continue;
+            }
+            let ndc_x = q.x / (-q.z * tan_half_y * aspect);
+            let ndc_y = q.y / (-q.z * tan_half_y);
+            if !(ndc_x.abs() < 1.0 && ndc_y.abs() < 1.0) {
+                continue;
+            }
+            let x = (((ndc_x + 1.0) * 0.5 * w as f32) as u32).min(w - 1);
+            let y = (((1.0 - ndc_y) * 0.5 * h as f32) as u32).min(h - 1);
+            let Some(px) = gbuffer.get(x, y) else {
+                continue;
+            };
+            if (px.hit.position - eye).length() < (r.position - eye).length() - slack {
+                continue;
+            }
+            let t = ((r.lifespan_frames as f32 - 1.0) / (max_age - 1.0)).clamp(0.0, 1.0);
+            *img.get_mut(x, y) = Rgb::new(1.0 - t, t, 0.0) * level;
+        }
     }
 
     /// Drops the cache (records, octree, frame count, pending expiries), keeping the
@@ -902,7 +1197,12 @@ impl Technique for RadianceCache {
         ChangeResponse::Updated
     }
 
-    fn advance(&mut self, _world: &World, _budget: &Budget) {}
+    /// Records nothing: the frame's records are computed in `indirect`, where the
+    /// G-buffer says where. Keeps `budget.work` as the number of records the next
+    /// frames may compute (`None`: no limit), replacing `records_per_frame_max`.
+    fn advance(&mut self, _world: &World, budget: &Budget) {
+        self.work_cap = budget.work;
+    }
 
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
         self.frame_step(world, gbuffer)
@@ -935,6 +1235,11 @@ impl Technique for RadianceCache {
             ("records_expired", c.expired as f64),
             ("records_surprise_expired", c.surprise_expired as f64),
             ("records_failed", c.failed as f64),
+            ("records_aged", c.aged as f64),
+            ("records_deferred", c.deferred as f64),
+            ("records_skipped", c.skipped as f64),
+            ("pixels_filled", c.filled as f64),
+            ("pixels_unfilled", c.unfilled as f64),
             ("records_created_total", c.created_total as f64),
             ("records_replaced_total", c.replaced_total as f64),
             ("records_deleted_total", c.deleted_total as f64),

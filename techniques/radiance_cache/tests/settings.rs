@@ -51,7 +51,6 @@ fn invalid_settings_name_their_field() {
         (|s| s.hole_fill_max_passes = 0, "hole_fill_max_passes"),
         (|s| s.traced_rays = 0, "traced_rays"),
         (|s| s.max_depth = 0, "max_depth"),
-        (|s| s.neighbour_aging = true, "neighbour_aging"),
     ];
     for (edit, field) in cases {
         let mut s = RadianceCacheSettings::default();

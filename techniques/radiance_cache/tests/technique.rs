@@ -200,3 +200,87 @@ fn bad_settings_are_refused_by_name() {
         .to_string();
     assert!(e.starts_with("radiance_cache.accuracy: "), "{e}");
 }
+
+#[test]
+fn show_records_marks_records_coloured_by_lifespan() {
+    let (world, g) = cornell();
+    for (mode, red) in [(TemporalMode::PerFrame, true), (TemporalMode::Reuse, false)] {
+        let plain = cache(&world, quick(mode)).indirect(&world, &g);
+        let mut rc = cache(
+            &world,
+            RadianceCacheSettings {
+                show_records: true,
+                ..quick(mode)
+            },
+        );
+        let shown = rc.indirect(&world, &g);
+        let marked: Vec<Rgb> = plain
+            .pixels()
+            .iter()
+            .zip(shown.pixels())
+            .filter(|(a, b)| a != b)
+            .map(|(_, b)| *b)
+            .collect();
+        // Most records lie on surfaces the camera sees (they were placed from its
+        // G-buffer); several may share a pixel.
+        let alive = rc.records_alive();
+        assert!(
+            marked.len() * 4 >= alive && marked.len() <= alive,
+            "{mode:?}: {} marked, {alive} records",
+            marked.len()
+        );
+        for c in marked {
+            assert_eq!(c.z, 0.0, "{mode:?}: {c}");
+            // per_frame: lifespan 1, red; reuse on a still frame: δt_max, green.
+            if red {
+                assert!(c.x > 0.0 && c.y == 0.0, "{mode:?}: {c}");
+            } else {
+                assert!(c.x == 0.0 && c.y > 0.0, "{mode:?}: {c}");
+            }
+        }
+    }
+}
+
+#[test]
+fn neighbour_aging_ends_the_records_usable_at_a_shorter_lived_newer_one_with_it() {
+    use illume_radiance_cache::record::usable;
+    // The Cube in a Box moving at 100 fps: records next to the cube live short lives.
+    let scene = illume_scene::builtin::load("cube-in-box").unwrap();
+    let timeline = Timeline::new(scene.clone(), vec![0.35, 0.36], W, H).unwrap();
+    let mut world = World::new(scene);
+    world.set_time(0.35);
+    let g = GBuffer::render(&world, W, H, Vec2::splat(0.5));
+    let frame0 = |aging: bool| {
+        let s = RadianceCacheSettings {
+            neighbour_aging: aging,
+            ..quick(TemporalMode::Extrapolated)
+        };
+        let mut rc = RadianceCache::new(&world, &timeline, s).unwrap();
+        rc.indirect(&world, &g);
+        let aged = rc.stats().get("records_aged").unwrap();
+        // Frame 0 fills slots in admission order: id order is the order made.
+        let records: Vec<_> = rc.records().cloned().collect();
+        (records, aged)
+    };
+    let (off, aged_off) = frame0(false);
+    let (on, aged_on) = frame0(true);
+    assert_eq!(aged_off, 0.0);
+    assert_eq!(off.len(), on.len(), "aging does not move records");
+    let a = RadianceCacheSettings::paper().accuracy;
+    let mut shortened = 0;
+    for (k, rk) in off.iter().enumerate() {
+        assert_eq!(rk.position, on[k].position);
+        // Of the records made after k, those at whose position k is usable: k ends no
+        // later than the shortest-lived of them (all are made at frame 0).
+        let expected = off[k + 1..]
+            .iter()
+            .filter(|l| usable(rk.ward_error(l.position, l.normal), a))
+            .map(|l| l.lifespan_frames)
+            .fold(rk.lifespan_frames, u32::min);
+        assert_eq!(on[k].lifespan_frames, expected, "record {k}");
+        shortened += usize::from(expected < rk.lifespan_frames);
+    }
+    assert!(shortened > 0, "no record was aged");
+    // A record may be aged more than once.
+    assert!(aged_on >= shortened as f64);
+}
