@@ -473,4 +473,4 @@ pub const SOURCE: &str = include_str!("settings.rs");
 /// Fields read through the frame budget ([`TechniqueSettings::default_budget`]), not
 /// when the technique is built: a change applies to a running technique without a
 /// rebuild. Every other field rebuilds it.
-pub const PER_FRAME_FIELDS: &[&str] = &[];
+pub const PER_FRAME_FIELDS: &[&str] = &["records_per_frame_max"];

@@ -377,6 +377,15 @@ impl TechniqueSettings for SelectiveSettings {
     }
 }
 
+/// This file's text: the field docs of [`SelectiveSettings`] are the settings' documentation in
+/// tools that show them (`illume_engine::settings_doc`, the viewer's tooltips).
+pub const SOURCE: &str = include_str!("settings.rs");
+
+/// Fields read through the frame budget ([`TechniqueSettings::default_budget`]), not
+/// when the technique is built: a change applies to a running technique without a
+/// rebuild. Every other field rebuilds it.
+pub const PER_FRAME_FIELDS: &[&str] = &["frame_budget_ms", "photons_per_frame"];
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -479,12 +488,3 @@ mod tests {
         }
     }
 }
-
-/// This file's text: the field docs of [`SelectiveSettings`] are the settings' documentation in
-/// tools that show them (`illume_engine::settings_doc`, the viewer's tooltips).
-pub const SOURCE: &str = include_str!("settings.rs");
-
-/// Fields read through the frame budget ([`TechniqueSettings::default_budget`]), not
-/// when the technique is built: a change applies to a running technique without a
-/// rebuild. Every other field rebuilds it.
-pub const PER_FRAME_FIELDS: &[&str] = &["frame_budget_ms", "photons_per_frame"];
