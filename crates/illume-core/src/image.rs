@@ -358,6 +358,11 @@ pub const MAX_IMAGE_FILE_BYTES: u64 = 4 << 30;
 /// is 512 MiB).
 pub const MAX_DECODED_IMAGE_BYTES: u64 = 1 << 30;
 
+/// The largest block (tile or group of scan lines, as the file's header describes it)
+/// [`read_exr`] lets the decoder reserve \[bytes\]: 256 MiB, far above any real block
+/// (a 16 384-pixel-wide image in 256-line DWAB blocks with 16 float channels is 256 MiB).
+pub const MAX_EXR_BLOCK_BYTES: u64 = 256 << 20;
+
 /// Reads the first RGB(A) layer of an OpenEXR file as linear RGB. The header's size is
 /// checked against [`MAX_DECODED_IMAGE_BYTES`] before the pixels are allocated.
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
@@ -376,6 +381,26 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
             return Err(read_error(format!(
                 "its header claims {w}×{h} pixels, more than the {} MiB illume decodes",
                 MAX_DECODED_IMAGE_BYTES >> 20
+            )));
+        }
+        // The exr crate reserves a whole block (a tile, or the compression's group of
+        // scan lines over the full width, not clamped to the layer's height) for each
+        // chunk it reads: a 1-pixel-high, very wide layer passes the check above but asks
+        // for blocks of gigabytes (found by fuzzing: 816 bytes reserved 1.85 GB).
+        let pixels_per_block = match header.blocks {
+            exr::meta::BlockDescription::Tiles(t) => {
+                (t.tile_size.x() as u64).saturating_mul(t.tile_size.y() as u64)
+            }
+            exr::meta::BlockDescription::ScanLines => {
+                (header.compression.scan_lines_per_block() as u64).saturating_mul(w as u64)
+            }
+        };
+        let block_bytes = pixels_per_block.saturating_mul(header.channels.bytes_per_pixel as u64);
+        if block_bytes > MAX_EXR_BLOCK_BYTES {
+            return Err(read_error(format!(
+                "its header claims blocks of {} MiB, more than the {} MiB illume reads at once",
+                block_bytes >> 20,
+                MAX_EXR_BLOCK_BYTES >> 20
             )));
         }
     }
