@@ -730,6 +730,20 @@ fn sun_room() -> Scene {
 /// Where the Cube in a Box's cube starts (its centre; half size 0.2 m).
 const CUBE_START: Vec3 = Vec3::new(-0.5, 0.2, -0.4);
 
+/// The paper's "Moving Light" animation: `light`'s node along [`MOVING_LIGHT_PATH`],
+/// one key a second.
+fn move_light_animation(light: NodeId) -> Animation {
+    Animation {
+        name: "move_light".into(),
+        channels: vec![linear_translation(
+            light,
+            &[0.0, 1.0, 2.0, 3.0, 4.0],
+            &MOVING_LIGHT_PATH,
+        )],
+        properties: Vec::new(),
+    }
+}
+
 /// The Moving Light's key positions at 0, 1, 2, 3 and 4 s: a square below the ceiling.
 const MOVING_LIGHT_PATH: [Vec3; 5] = [
     Vec3::new(0.0, 1.8, -0.2),
@@ -772,15 +786,7 @@ fn cube_in_box() -> Scene {
         properties: Vec::new(),
     });
     // The paper's second row ("Moving Light"): the cube rests, the light travels.
-    b.animation(Animation {
-        name: "move_light".into(),
-        channels: vec![linear_translation(
-            light,
-            &[0.0, 1.0, 2.0, 3.0, 4.0],
-            &MOVING_LIGHT_PATH,
-        )],
-        properties: Vec::new(),
-    });
+    b.animation(move_light_animation(light));
     b.finish("builtin:cube-in-box")
 }
 
@@ -883,15 +889,7 @@ fn moving_light() -> Scene {
         },
         false,
     );
-    b.animation(Animation {
-        name: "move_light".into(),
-        channels: vec![linear_translation(
-            light,
-            &[0.0, 1.0, 2.0, 3.0, 4.0],
-            &MOVING_LIGHT_PATH,
-        )],
-        properties: Vec::new(),
-    });
+    b.animation(move_light_animation(light));
     b.finish("builtin:moving-light")
 }
 
