@@ -64,8 +64,12 @@
 //! (`records_skipped` counts those left out; a later frame places them). Pixels that
 //! no record reaches then take the mean light of their neighbours on the same surface,
 //! pass after pass (`pixels_filled`, `pixels_unfilled`). Pass 1 of `interpolated` and
-//! the planned records pass 2 admits are not capped. [`Budget::time_ms`] is not
-//! honoured.
+//! the planned records pass 2 admits are not capped. [`Budget::time_ms`] becomes a
+//! record cap the same way: the limit divided by the cost of a record measured on the
+//! previous frames (the gathers' wall time over the records made, smoothed; at least
+//! one record per frame), the smaller of the two caps when both are set. The first
+//! frame, with no cost measured yet, is capped by `Budget::work` alone. The time limit
+//! covers the records' gathers only: expiry, reprojection and shading are not in it.
 
 use crate::octree::Octree;
 use crate::radiance::{GlossyShading, RadianceData, diffuse_albedo};
@@ -122,6 +126,8 @@ struct FrameCounters {
     record_ms: f64,
     place_ms: f64,
     shade_ms: f64,
+    /// Wall time of the frame's gathers (replacements and new records).
+    gather_ms: f64,
 }
 
 /// A record in the cache, with what the frame loop needs besides Eq. 1–4.
@@ -194,7 +200,12 @@ pub struct RadianceCache {
     /// Records a frame may compute (the last `advance`'s `Budget::work`, or the
     /// settings' `records_per_frame_max`); `None`: no limit.
     work_cap: Option<u64>,
-    /// What is left of `work_cap` in the frame being made.
+    /// The last `advance`'s `Budget::time_ms`: a wall-clock limit on a frame's gathers.
+    time_cap_ms: Option<f64>,
+    /// Measured wall time of one record's gather \[ms\] (smoothed over frames), which
+    /// turns `time_cap_ms` into a record count; `None` until a frame has made some.
+    ms_per_record: Option<f64>,
+    /// What is left of the frame's record cap in the frame being made.
     work_left: Option<u64>,
 }
 
@@ -348,6 +359,8 @@ impl RadianceCache {
             counters: FrameCounters::default(),
             glossy: GlossyShading::new(settings_order)?,
             work_cap,
+            time_cap_ms: None,
+            ms_per_record: None,
             work_left: None,
         })
     }
@@ -645,6 +658,7 @@ impl RadianceCache {
         self.counters.expired = doomed.len() as u64;
         // Replacements, computed from the cache's state now, in id order.
         let this = &*self;
+        let gathers = Instant::now();
         let made: Vec<(u32, Result<Made, RadianceCacheError>)> = traced
             .par_iter()
             .map(|&id| {
@@ -660,6 +674,7 @@ impl RadianceCache {
                 (id, result)
             })
             .collect();
+        self.counters.gather_ms += gathers.elapsed().as_secs_f64() * 1e3;
         let mut predecessors = Vec::new();
         for (id, result) in made {
             let predecessor = self.slots[id as usize].as_ref().and_then(|s| s.history);
@@ -723,6 +738,33 @@ impl RadianceCache {
             }
         });
         any && (with_radiance || !radiance)
+    }
+
+    /// The records this frame may compute: the smaller of `work_cap` and the time
+    /// limit over the measured cost of a record (at least one); `None`: no limit.
+    fn frame_cap(&self) -> Option<u64> {
+        let by_time = match (self.time_cap_ms, self.ms_per_record) {
+            (Some(limit), Some(ms)) if ms > 0.0 => Some(((limit / ms).floor() as u64).max(1)),
+            _ => None,
+        };
+        match (self.work_cap, by_time) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// Folds a frame's gathers (`made` records in `ms`) into the cost per record that
+    /// turns `Budget::time_ms` into a record cap. Frames of fewer than 4 records say
+    /// too little and are skipped.
+    fn measure_gathers(&mut self, made: u64, ms: f64) {
+        if made < 4 || !ms.is_finite() {
+            return;
+        }
+        let now = ms / made as f64;
+        self.ms_per_record = Some(match self.ms_per_record {
+            Some(old) => 0.5 * (old + now),
+            None => now,
+        });
     }
 
     /// Takes one record from the frame's work budget; false when it is spent.
@@ -793,10 +835,12 @@ impl RadianceCache {
                 .collect();
             let chosen = self.within_budget(wanted);
             let this = &*self;
+            let gathers = Instant::now();
             let new: Vec<Result<Made, RadianceCacheError>> = chosen
                 .par_iter()
                 .map(|c| this.make(world, c.p, c.n, Some(c.instance), c.key, c.glossy))
                 .collect();
+            self.counters.gather_ms += gathers.elapsed().as_secs_f64() * 1e3;
             for r in new {
                 match r.and_then(|m| {
                     self.counters.holes += m.holes as u64;
@@ -994,13 +1038,22 @@ impl RadianceCache {
             self.plan = None;
         }
         // Pass 1 of `interpolated` is precompute work: no budget.
-        self.work_left = if self.recording { None } else { self.work_cap };
+        self.work_left = if self.recording {
+            None
+        } else {
+            self.frame_cap()
+        };
         self.prepare_next(world);
         self.expire(world);
         self.counters.reused = before - self.counters.expired;
         self.admit_planned();
         let t1 = Instant::now();
         self.place(world, gbuffer);
+        let (made, gather_ms) = (
+            self.counters.created + self.counters.replaced,
+            self.counters.gather_ms,
+        );
+        self.measure_gathers(made, gather_ms);
         let c = &mut self.counters;
         c.created_total += c.created;
         c.replaced_total += c.replaced;
@@ -1199,9 +1252,12 @@ impl Technique for RadianceCache {
 
     /// Records nothing: the frame's records are computed in `indirect`, where the
     /// G-buffer says where. Keeps `budget.work` as the number of records the next
-    /// frames may compute (`None`: no limit), replacing `records_per_frame_max`.
+    /// frames may compute (`None`: no limit), replacing `records_per_frame_max`, and
+    /// `budget.time_ms` as a limit on their gathers' wall time (turned into a record
+    /// count by the measured cost of a record; see the module doc).
     fn advance(&mut self, _world: &World, budget: &Budget) {
         self.work_cap = budget.work;
+        self.time_cap_ms = budget.time_ms;
     }
 
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
@@ -1250,6 +1306,7 @@ impl Technique for RadianceCache {
             ("expire_ms", c.record_ms),
             ("place_ms", c.place_ms),
             ("shade_ms", c.shade_ms),
+            ("gather_ms", c.gather_ms),
         ] {
             out.set(name, x);
         }

@@ -212,3 +212,50 @@ fn a_budgeted_frame_does_not_depend_on_the_thread_count() {
     assert_eq!(ra, rb);
     assert_eq!(a.pixels(), b.pixels());
 }
+
+#[test]
+fn a_time_budget_becomes_a_record_cap_from_the_measured_cost_of_a_record() {
+    let (world, g) = cornell();
+    let mut rc = cache(&world, TemporalMode::PerFrame);
+    // Frame 0: no cost measured yet, so the time limit cannot cap it.
+    let tiny = Budget {
+        work: None,
+        time_ms: Some(1e-9),
+    };
+    rc.advance(&world, &tiny);
+    rc.indirect(&world, &g);
+    let needed = rc.records_created();
+    let gather_ms = stat(&rc, "gather_ms");
+    assert_eq!(stat(&rc, "records_skipped"), 0.0);
+    assert!(gather_ms > 0.0);
+    // Frame 1: a quarter of frame 0's gather time buys a quarter of its records.
+    rc.advance(
+        &world,
+        &Budget {
+            work: None,
+            time_ms: Some(gather_ms / 4.0),
+        },
+    );
+    rc.indirect(&world, &g);
+    let made = stat(&rc, "records_created") as u64;
+    eprintln!("{needed} records in {gather_ms:.2} ms, then {made} under a quarter of it");
+    assert!(
+        made + 1 >= needed / 4 && made <= needed / 4,
+        "{made} records made, {needed} needed"
+    );
+    assert!(stat(&rc, "records_skipped") > 0.0);
+    // With a work cap too, the smaller of the two holds.
+    rc.advance(
+        &world,
+        &Budget {
+            work: Some(3),
+            time_ms: Some(1e9),
+        },
+    );
+    rc.indirect(&world, &g);
+    assert_eq!(stat(&rc, "records_created"), 3.0);
+    // A limit below one record's cost still makes one record a frame.
+    rc.advance(&world, &tiny);
+    rc.indirect(&world, &g);
+    assert_eq!(stat(&rc, "records_created"), 1.0);
+}
