@@ -814,6 +814,26 @@ impl App {
             ui.horizontal(|ui| {
                 ui.label(row.label.as_str())
                     .on_hover_text(row.tooltip.as_str());
+                if let Some(choices) = &row.choices {
+                    // A drop-down applies its choice at once (the notice below says
+                    // whether that rebuilt the technique).
+                    let before = text.clone();
+                    egui::ComboBox::from_id_salt(("setting", row.key.as_str()))
+                        .selected_text(text.as_str())
+                        .show_ui(ui, |ui| {
+                            for c in choices {
+                                ui.selectable_value(text, c.clone(), c.as_str());
+                            }
+                        })
+                        .response
+                        .on_hover_text(row.tooltip.as_str());
+                    if *text != before {
+                        actions
+                            .commands
+                            .push(Command::Set(format!("{table}.{}={}", row.key, text)));
+                    }
+                    return;
+                }
                 let r = ui
                     .add(egui::TextEdit::singleline(text).desired_width(f32::INFINITY))
                     .on_hover_text(row.tooltip.as_str());
@@ -1503,6 +1523,9 @@ struct SettingRow {
     tooltip: String,
     /// Whether a change applies at the next frame or rebuilds the technique.
     applies: Applies,
+    /// The values a drop-down offers (a boolean's two, an enum's as its doc lists
+    /// them); None: edited as text.
+    choices: Option<Vec<String>>,
 }
 
 /// The settings panel's rows for `technique`, whose table is `settings_toml`: every
@@ -1527,6 +1550,14 @@ fn setting_rows(technique: TechniqueKind, settings_toml: &str) -> Vec<SettingRow
                 toml::Value::String(s) => s.clone(),
                 v => v.to_string(),
             };
+            let choices = match &table[k] {
+                toml::Value::Boolean(_) => Some(vec!["true".to_owned(), "false".to_owned()]),
+                toml::Value::String(_) => doc
+                    .and_then(|d| d.range.as_deref())
+                    .filter(|r| r.contains(" | "))
+                    .map(|r| r.split(" | ").map(|v| v.trim().to_owned()).collect()),
+                _ => None,
+            };
             SettingRow {
                 key: k.clone(),
                 value,
@@ -1536,6 +1567,7 @@ fn setting_rows(technique: TechniqueKind, settings_toml: &str) -> Vec<SettingRow
                 },
                 tooltip: doc.map_or_else(|| format!("{k}: undocumented"), |d| d.tooltip(technique)),
                 applies: doc.map_or(Applies::Rebuild, |d| d.applies),
+                choices,
             }
         })
         .collect()
@@ -1664,5 +1696,39 @@ mod tests {
             setting_applies(TechniqueKind::Reference, "reference.spp_per_frame=8"),
             Applies::PerFrame
         );
+    }
+
+    /// Enum settings offer their documented values in a drop-down, booleans true and
+    /// false, numbers stay text; every enum's current value is one of its choices.
+    #[test]
+    fn enums_and_booleans_are_chosen_from_a_list() {
+        let kind = TechniqueKind::RadianceCache;
+        let rows = setting_rows(kind, &default_table(kind));
+        let row = |k: &str| rows.iter().find(|r| r.key == k).unwrap();
+        assert_eq!(
+            row("temporal").choices.as_deref(),
+            Some(
+                &[
+                    "per_frame".to_owned(),
+                    "reuse".to_owned(),
+                    "extrapolated".to_owned(),
+                    "interpolated".to_owned()
+                ][..]
+            )
+        );
+        assert_eq!(row("deletion").choices.as_ref().map(Vec::len), Some(2));
+        assert_eq!(row("theta_strata").choices, None);
+        for &kind in TechniqueKind::ALL {
+            for r in setting_rows(kind, &default_table(kind)) {
+                if let Some(c) = &r.choices {
+                    assert!(
+                        c.contains(&r.value),
+                        "{kind}.{}: {} not in {c:?}",
+                        r.key,
+                        r.value
+                    );
+                }
+            }
+        }
     }
 }
