@@ -1,10 +1,10 @@
 //! The selection's gizmo, drawn over the viewport at the selection's pivot: three axis
-//! handles that move it along world X, Y and Z, and a ring that turns it about the
-//! vertical. A drag on a handle becomes the edit the keys make
+//! handles that move it along world X, Y and Z, and three rings that turn it about those
+//! axes through the pivot. A drag on a handle becomes the edit the keys make
 //! ([`Command::MoveSelected`](crate::renderer::Command::MoveSelected), applied through
 //! `Engine::apply_edit`).
 
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Affine3A, Quat, Vec2, Vec3};
 
 /// Handle length on screen \[points\].
 const HANDLE_POINTS: f32 = 70.0;
@@ -71,8 +71,24 @@ impl View {
 pub enum Handle {
     /// Move along world axis 0 (X), 1 (Y) or 2 (Z).
     Axis(usize),
-    /// Turn about the vertical through the pivot.
-    Turn,
+    /// Turn about world axis 0 (X), 1 (Y: the vertical) or 2 (Z) through the pivot.
+    Turn(usize),
+}
+
+/// World axis `i` (0: X, 1: Y, 2: Z).
+fn axis(i: usize) -> Vec3 {
+    [Vec3::X, Vec3::Y, Vec3::Z][i]
+}
+
+/// Two unit vectors `(v, u)` spanning the plane normal to world axis `i`, ordered so
+/// that a right-handed turn by +θ about the axis adds θ to `atan2(p·u, p·v)`: (Y, Z)
+/// for X, (Z, X) for Y (the horizontal ring's `atan2(x, z)`) and (X, Y) for Z.
+fn ring_basis(i: usize) -> (Vec3, Vec3) {
+    match i {
+        0 => (Vec3::Y, Vec3::Z),
+        1 => (Vec3::Z, Vec3::X),
+        _ => (Vec3::X, Vec3::Y),
+    }
 }
 
 /// The gizmo of one frame: its handles on the screen.
@@ -86,8 +102,9 @@ pub struct Gizmo {
     pub length_m: f32,
     /// Each axis handle's far end on the screen \[points\] (None: behind the camera).
     pub axes: [Option<Vec2>; 3],
-    /// The ring (radius `0.6 × length_m` in the horizontal plane) on the screen.
-    pub ring: Vec<Vec2>,
+    /// The rings about X, Y and Z (radius `0.6 × length_m` in the plane normal to each
+    /// axis) on the screen; points behind the camera left out.
+    pub rings: [Vec<Vec2>; 3],
 }
 
 impl Gizmo {
@@ -99,66 +116,79 @@ impl Gizmo {
         let length_m = HANDLE_POINTS * m_per_point;
         let axes =
             [Vec3::X, Vec3::Y, Vec3::Z].map(|a| view.project(pivot + a * length_m).map(|(s, _)| s));
-        let ring = (0..=RING_SEGMENTS)
-            .filter_map(|i| {
-                let a = i as f32 / RING_SEGMENTS as f32 * std::f32::consts::TAU;
-                let p = pivot + Vec3::new(a.sin(), 0.0, a.cos()) * (0.6 * length_m);
-                view.project(p).map(|(s, _)| s)
-            })
-            .collect();
+        let rings = [0, 1, 2].map(|k| {
+            let (v, u) = ring_basis(k);
+            (0..=RING_SEGMENTS)
+                .filter_map(|i| {
+                    let a = i as f32 / RING_SEGMENTS as f32 * std::f32::consts::TAU;
+                    let p = pivot + (u * a.sin() + v * a.cos()) * (0.6 * length_m);
+                    view.project(p).map(|(s, _)| s)
+                })
+                .collect()
+        });
         Some(Self {
             view,
             pivot,
             centre,
             length_m,
             axes,
-            ring,
+            rings,
         })
     }
 
-    /// The handle under screen point `p` \[points\], axes first.
+    /// The handle under screen point `p` \[points\]: axes first, then the rings (Y, X,
+    /// Z).
     pub fn hit(&self, p: Vec2) -> Option<Handle> {
         let near = |a: Vec2, b: Vec2| segment_distance(p, a, b) < GRAB_POINTS;
         (0..3)
             .find(|&i| self.axes[i].is_some_and(|end| near(self.centre, end)))
             .map(Handle::Axis)
             .or_else(|| {
-                self.ring
-                    .windows(2)
-                    .any(|w| near(w[0], w[1]))
-                    .then_some(Handle::Turn)
+                [1, 0, 2]
+                    .into_iter()
+                    .find(|&k| self.rings[k].windows(2).any(|w| near(w[0], w[1])))
+                    .map(Handle::Turn)
             })
     }
 
     /// The move a pointer drag from `from` to `to` \[points\] on `handle` asks for: a
-    /// world translation \[m\] and a turn about +Y \[rad\].
-    pub fn drag(&self, handle: Handle, from: Vec2, to: Vec2) -> (Vec3, f32) {
+    /// world translation \[m\] and a rotation about the pivot.
+    pub fn drag(&self, handle: Handle, from: Vec2, to: Vec2) -> (Vec3, Quat) {
         match handle {
             Handle::Axis(i) => {
-                let axis = [Vec3::X, Vec3::Y, Vec3::Z][i];
                 let per_metre = self.axes[i].map_or(Vec2::ZERO, |end| end - self.centre)
                     / self.length_m.max(1e-9);
-                (drag_translation(axis, per_metre, to - from), 0.0)
+                (
+                    drag_translation(axis(i), per_metre, to - from),
+                    Quat::IDENTITY,
+                )
             }
-            Handle::Turn => (Vec3::ZERO, self.turn(from, to)),
+            Handle::Turn(k) => (
+                Vec3::ZERO,
+                Quat::from_axis_angle(axis(k), self.turn(k, from, to)),
+            ),
         }
     }
 
-    /// The turn about +Y that carries the pointer's point on the pivot's horizontal
-    /// plane from `from` to `to` \[rad, in (−π, π]\]; 0 when the plane is seen edge-on.
-    fn turn(&self, from: Vec2, to: Vec2) -> f32 {
+    /// The turn about world axis `k` that carries the pointer's point on the plane
+    /// through the pivot normal to that axis from `from` to `to` \[rad, in (−π, π]\]; 0
+    /// when the plane is seen edge-on.
+    fn turn(&self, k: usize, from: Vec2, to: Vec2) -> f32 {
+        let n = axis(k);
+        let (v, u) = ring_basis(k);
         let on_plane = |s: Vec2| {
             let (o, d) = self.view.ray(s);
-            if d.y.abs() < 1e-4 {
+            let dn = d.dot(n);
+            if dn.abs() < 1e-4 {
                 return None;
             }
-            let t = (self.pivot.y - o.y) / d.y;
+            let t = (self.pivot - o).dot(n) / dn;
             (t > 0.0).then(|| o + d * t - self.pivot)
         };
         match (on_plane(from), on_plane(to)) {
             (Some(a), Some(b)) => {
-                // rotation_y(θ) adds θ to atan2(x, z).
-                let d = b.x.atan2(b.z) - a.x.atan2(a.z);
+                // A rotation by θ about the axis adds θ to atan2(p·u, p·v).
+                let d = b.dot(u).atan2(b.dot(v)) - a.dot(u).atan2(a.dot(v));
                 (d + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU) - std::f32::consts::PI
             }
             _ => 0.0,
@@ -232,7 +262,7 @@ mod tests {
             (t - Vec3::X * g.length_m).length() < 1e-3 * g.length_m,
             "{t}"
         );
-        assert_eq!(turn, 0.0);
+        assert_eq!(turn, Quat::IDENTITY);
         // A drag across the axis's screen direction does not move the object.
         let across = (x_end - g.centre).perp();
         let (t, _) = g.drag(Handle::Axis(0), g.centre, g.centre + across);
@@ -257,28 +287,73 @@ mod tests {
         );
     }
 
+    /// The signed angle of the rotation `q` about world axis `k` (q must be one).
+    fn angle_about(q: Quat, k: usize) -> f32 {
+        let (a, angle) = q.to_axis_angle();
+        if angle.abs() < 1e-7 {
+            return 0.0;
+        }
+        angle * a.dot(axis(k)).signum()
+    }
+
     #[test]
-    fn dragging_along_the_ring_turns_by_the_angle_swept() {
-        let g = Gizmo::new(view(), Vec3::ZERO).unwrap();
-        let r = 0.6 * g.length_m;
-        let at = |a: f32| {
-            g.view
-                .project(Vec3::new(a.sin(), 0.0, a.cos()) * r)
-                .unwrap()
-                .0
+    fn dragging_along_a_ring_turns_about_its_axis_by_the_angle_swept() {
+        // A pivot off the origin, seen from a corner so that no ring is edge-on.
+        let v = View {
+            world_from_camera: Affine3A::look_at_rh(
+                Vec3::new(3.0, 2.5, 4.0),
+                Vec3::new(0.2, 0.1, -0.3),
+                Vec3::Y,
+            )
+            .inverse(),
+            ..view()
         };
-        assert_eq!(g.hit(at(0.3)), Some(Handle::Turn));
-        let (t, turn) = g.drag(Handle::Turn, at(0.2), at(0.2 + 0.5));
-        assert_eq!(t, Vec3::ZERO);
-        assert!((turn - 0.5).abs() < 1e-3, "{turn}");
-        let (_, back) = g.drag(Handle::Turn, at(0.7), at(0.2));
-        assert!((back + 0.5).abs() < 1e-3, "{back}");
-        // Across ±π the shorter way round.
-        let (_, wrap) = g.drag(Handle::Turn, at(3.0), at(-3.0));
-        assert!(
-            (wrap - (std::f32::consts::TAU - 6.0)).abs() < 1e-3,
-            "{wrap}"
-        );
+        let pivot = Vec3::new(0.2, 0.1, -0.3);
+        let g = Gizmo::new(v, pivot).unwrap();
+        let r = 0.6 * g.length_m;
+        for k in 0..3 {
+            let (bv, bu) = ring_basis(k);
+            let world = |a: f32| pivot + (bu * a.sin() + bv * a.cos()) * r;
+            let at = |a: f32| g.view.project(world(a)).unwrap().0;
+            // The rotation the drag asks for carries the ring's point to the other.
+            let (t, q) = g.drag(Handle::Turn(k), at(0.2), at(0.2 + 0.5));
+            assert_eq!(t, Vec3::ZERO);
+            assert!((angle_about(q, k) - 0.5).abs() < 1e-3, "axis {k}: {q}");
+            let moved = pivot + q * (world(0.2) - pivot);
+            assert!(
+                (moved - world(0.7)).length() < 1e-3 * r,
+                "axis {k}: {moved}"
+            );
+            let (_, back) = g.drag(Handle::Turn(k), at(0.7), at(0.2));
+            assert!((angle_about(back, k) + 0.5).abs() < 1e-3, "axis {k}");
+            // Across ±π the shorter way round.
+            let (_, wrap) = g.drag(Handle::Turn(k), at(3.0), at(-3.0));
+            assert!(
+                (angle_about(wrap, k) - (std::f32::consts::TAU - 6.0)).abs() < 1e-3,
+                "axis {k}: {wrap}"
+            );
+        }
+        // Each ring is grabbed where it is drawn, away from the others' crossings.
+        let on_ring = |k: usize| {
+            g.rings[k]
+                .iter()
+                .copied()
+                .find(|&p| {
+                    (0..3).all(|j| {
+                        j == k
+                            || g.rings[j]
+                                .windows(2)
+                                .all(|w| segment_distance(p, w[0], w[1]) > GRAB_POINTS + 0.5)
+                    }) && (0..3).all(|j| {
+                        g.axes[j]
+                            .is_none_or(|e| segment_distance(p, g.centre, e) > GRAB_POINTS + 0.5)
+                    })
+                })
+                .unwrap_or_else(|| panic!("ring {k} has no point of its own"))
+        };
+        for k in 0..3 {
+            assert_eq!(g.hit(on_ring(k)), Some(Handle::Turn(k)));
+        }
         assert_eq!(g.hit(g.centre + Vec2::new(300.0, 250.0)), None);
     }
 }

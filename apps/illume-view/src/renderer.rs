@@ -5,7 +5,7 @@
 //! Every edit goes through [`Engine::apply_edit`], the scene-change path of animations
 //! and bench edits, so each technique reacts to it as it does to animation.
 
-use glam::{Affine3A, Vec2, Vec3};
+use glam::{Affine3A, Quat, Vec2, Vec3};
 use illume_core::image::{RgbImage, ToneMap, auto_exposure_ev};
 use illume_engine::settings_doc::Applies;
 use illume_engine::{Config, Engine, TechniqueKind, read_world};
@@ -46,13 +46,13 @@ pub enum Command {
         /// Select what the ray hits (false: only report the point).
         select: bool,
     },
-    /// Move the selection by `translate` \[m, world\] and turn it by `turn_rad` about the
-    /// vertical through its pivot ([`Shown::selection_pivot`]).
+    /// Move the selection by `translate` \[m, world\] and turn it by `rotate` about its
+    /// pivot ([`Shown::selection_pivot`]).
     MoveSelected {
         /// World-space offset \[m\].
         translate: Vec3,
-        /// Rotation about the world's +Y axis through the pivot \[rad\].
-        turn_rad: f32,
+        /// Rotation in world axes about the pivot.
+        rotate: Quat,
     },
     /// Change a material's base colour (an [`Edit::SetMaterial`] of the rest unchanged).
     SetBaseColor {
@@ -438,10 +438,7 @@ impl State {
                 }
             }
             Command::Pick { uv, id, select } => self.pick(uv, id, select),
-            Command::MoveSelected {
-                translate,
-                turn_rad,
-            } => self.move_selected(translate, turn_rad),
+            Command::MoveSelected { translate, rotate } => self.move_selected(translate, rotate),
             Command::Technique(kind) => {
                 if kind != self.config.technique {
                     self.config.technique = kind;
@@ -556,7 +553,7 @@ impl State {
         self.pick = Some(Pick { id, position });
     }
 
-    fn move_selected(&mut self, translate: Vec3, turn_rad: f32) {
+    fn move_selected(&mut self, translate: Vec3, rotate: Quat) {
         let Some(engine) = &self.engine else { return };
         let edit =
             {
@@ -567,7 +564,7 @@ impl State {
                     .unwrap_or(Vec3::ZERO);
                 let motion = |m: Affine3A| {
                     Affine3A::from_translation(pivot + translate)
-                        * Affine3A::from_rotation_y(turn_rad)
+                        * Affine3A::from_quat(rotate)
                         * Affine3A::from_translation(-pivot)
                         * m
                 };

@@ -7,7 +7,7 @@ use crate::present::{Gpu, Viewport, display_bytes};
 use crate::renderer::{AnimationCommand, Command, RenderSetup, RenderThread, Selection, Shown};
 use crate::{ViewError, ViewOptions, unix_ms};
 use egui::{Key, Sense};
-use glam::{Vec2, Vec3};
+use glam::{Quat, Vec2, Vec3};
 use illume_core::image::{ToneCurve, ToneMap};
 use illume_engine::TechniqueKind;
 use illume_engine::settings_doc::Applies;
@@ -914,13 +914,12 @@ impl App {
             {
                 let to = pointer(p);
                 let d = response.drag_delta();
-                let (translate, turn_rad) = g.drag(handle, to - Vec2::new(d.x, d.y), to);
-                if translate != Vec3::ZERO || turn_rad != 0.0 {
+                let (translate, rotate) = g.drag(handle, to - Vec2::new(d.x, d.y), to);
+                if translate != Vec3::ZERO || rotate != Quat::IDENTITY {
                     self.log(&format!("gizmo {handle:?}"));
-                    actions.commands.push(Command::MoveSelected {
-                        translate,
-                        turn_rad,
-                    });
+                    actions
+                        .commands
+                        .push(Command::MoveSelected { translate, rotate });
                 }
             }
         }
@@ -1200,7 +1199,7 @@ impl App {
         };
         actions.commands.push(Command::MoveSelected {
             translate,
-            turn_rad,
+            rotate: Quat::from_rotation_y(turn_rad),
         });
     }
 
@@ -1595,17 +1594,24 @@ fn short_number(v: f64) -> String {
     }
 }
 
-/// The gizmo's handles: X red, Y green, Z blue, the turning ring yellow; the handle under
-/// the pointer (or dragged) drawn thicker.
+/// The gizmo's handles: X red, Y green, Z blue, each ring in a paler tint of its axis's
+/// colour (the vertical turn's ring yellow); the handle under the pointer (or dragged)
+/// drawn thicker.
 fn draw_gizmo(painter: &egui::Painter, g: &Gizmo, active: Option<Handle>) {
     let pos = |v: Vec2| egui::pos2(v.x, v.y);
     let width = |h: Handle| if active == Some(h) { 4.0 } else { 2.0 };
-    let ring = Handle::Turn;
-    let points: Vec<egui::Pos2> = g.ring.iter().map(|&p| pos(p)).collect();
-    painter.add(egui::Shape::line(
-        points,
-        egui::Stroke::new(width(ring), egui::Color32::from_rgb(240, 200, 40)),
-    ));
+    let ring_colours = [
+        egui::Color32::from_rgb(240, 140, 140),
+        egui::Color32::from_rgb(240, 200, 40),
+        egui::Color32::from_rgb(140, 170, 255),
+    ];
+    for (k, ring) in g.rings.iter().enumerate() {
+        let points: Vec<egui::Pos2> = ring.iter().map(|&p| pos(p)).collect();
+        painter.add(egui::Shape::line(
+            points,
+            egui::Stroke::new(width(Handle::Turn(k)), ring_colours[k]),
+        ));
+    }
     let colours = [
         egui::Color32::from_rgb(235, 60, 60),
         egui::Color32::from_rgb(60, 210, 60),
