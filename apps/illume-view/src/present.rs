@@ -7,7 +7,7 @@
 //! and a redraw without a new frame does no per-pixel work beyond a texel copy.
 
 use crate::ViewError;
-use illume_core::image::{RgbImage, ToneMap, srgb_encode};
+use illume_core::image::{RgbImage, ToneMap, srgb8};
 use rayon::prelude::*;
 use std::sync::Arc;
 use winit::window::Window;
@@ -61,13 +61,13 @@ pub struct Viewport {
 pub fn display_bytes(image: &RgbImage, tone: &ToneMap, out: &mut Vec<u8>) {
     let n = image.pixels().len();
     out.resize(n * 4, 255);
-    let quantize = |v: f32| (srgb_encode(v) * 255.0 + 0.5).clamp(0.0, 255.0) as u8;
+    let tone = tone.prepared();
     let convert = |o: &mut [u8], px: &[illume_core::Rgb]| {
         for (o, &p) in o.chunks_exact_mut(4).zip(px) {
             let d = tone.apply(p);
-            o[0] = quantize(d.x);
-            o[1] = quantize(d.y);
-            o[2] = quantize(d.z);
+            o[0] = srgb8(d.x);
+            o[1] = srgb8(d.y);
+            o[2] = srgb8(d.z);
             o[3] = 255;
         }
     };

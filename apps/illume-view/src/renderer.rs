@@ -746,7 +746,8 @@ impl State {
             let tone = ToneMap {
                 exposure_ev: ev,
                 ..Default::default()
-            };
+            }
+            .prepared();
             let display = |img: &RgbImage| img.map(|&p| tone.apply(p));
             if let Ok(map) = illume_metrics::ldr_flip(
                 &display(ri),
