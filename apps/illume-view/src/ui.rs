@@ -188,6 +188,8 @@ struct App {
     redraws: u64,
     redraw_ms_total: f64,
     upload_ms_total: f64,
+    /// Of which converting frames to display bytes (`present::display_bytes`).
+    tonemap_ms_total: f64,
     gpu_ms_total: f64,
     acquire_ms_total: f64,
     render_ms_total: f64,
@@ -246,6 +248,7 @@ impl App {
             redraws: 0,
             redraw_ms_total: 0.0,
             upload_ms_total: 0.0,
+            tonemap_ms_total: 0.0,
             gpu_ms_total: 0.0,
             acquire_ms_total: 0.0,
             render_ms_total: 0.0,
@@ -477,6 +480,7 @@ impl App {
             {
                 let tu = Instant::now();
                 display_bytes(&shown.image, &tone, &mut self.display);
+                self.tonemap_ms_total += tu.elapsed().as_secs_f64() * 1e3;
                 gpu.upload(&self.display, shown.image.width(), shown.image.height());
                 self.upload_ms_total += tu.elapsed().as_secs_f64() * 1e3;
                 self.uploads += 1;
@@ -1488,7 +1492,7 @@ impl ApplicationHandler for App {
         let secs = self.started.elapsed().as_secs_f64();
         let n = self.redraws.max(1) as f64;
         eprintln!(
-            "illume view: summary: {} redraws, {:.3} ms each: egui layout {:.3} ms, upload {:.3} ms, acquire {:.3} ms, frame + egui passes {:.3} ms, present {:.3} ms; {} uploads of {:.3} ms (tone map + upload of a new frame); {} frames from the renderer in {secs:.2} s ({:.2} fps)",
+            "illume view: summary: {} redraws, {:.3} ms each: egui layout {:.3} ms, upload {:.3} ms, acquire {:.3} ms, frame + egui passes {:.3} ms, present {:.3} ms; {} uploads of {:.3} ms (tone map {:.3} ms + upload of a new frame); {} frames from the renderer in {secs:.2} s ({:.2} fps)",
             self.redraws,
             self.redraw_ms_total / n,
             (self.redraw_ms_total - self.gpu_ms_total) / n,
@@ -1498,6 +1502,7 @@ impl ApplicationHandler for App {
             self.present_call_ms_total / n,
             self.uploads,
             self.upload_ms_total / self.uploads.max(1) as f64,
+            self.tonemap_ms_total / self.uploads.max(1) as f64,
             self.frames_received,
             self.frames_received as f64 / secs.max(1e-9)
         );

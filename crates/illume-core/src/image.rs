@@ -290,14 +290,39 @@ pub fn auto_exposure_ev(img: &RgbImage) -> Option<f32> {
 }
 
 /// The 8-bit sRGB code of a display-linear value: `round(255 · srgb_encode(x))` clamped
-/// to 0–255 (NaN and values ≤ 0 give 0, values ≥ 1 give 255), found by binary search
-/// in a table of the 255 smallest values that reach each code, which is exact because
-/// the formula is non-decreasing in `x` (a test checks the table against the formula).
-/// 8-bit output (PNG, the viewer's display) goes through here: three `powf` per pixel
-/// took 16 ms for an 800×600 frame; the search takes eight comparisons.
+/// to 0–255 (NaN and values ≤ 0 give 0, values ≥ 1 give 255), read from tables: the
+/// code at the start of `x`'s 1/4096-wide bucket, then stepped up past the thresholds
+/// (the smallest value reaching each code) that lie inside the bucket — at most one, as
+/// the curve rises by under one code per bucket. Exact because the formula is
+/// non-decreasing in `x` (a test checks the tables against the formula). 8-bit output
+/// (PNG, the viewer's display) goes through here instead of three `powf` per pixel.
 #[inline]
 pub fn srgb8(x: f32) -> u8 {
-    srgb8_thresholds().partition_point(|&t| t <= x) as u8
+    // Written so that NaN takes the first branch.
+    if !(x > 0.0) {
+        return 0;
+    }
+    if x >= 1.0 {
+        return 255;
+    }
+    let tables = srgb8_tables();
+    let mut code = tables.bucket_start[(x * SRGB8_BUCKETS as f32) as usize] as usize;
+    while code < 255 && tables.thresholds[code] <= x {
+        code += 1;
+    }
+    code as u8
+}
+
+/// Buckets of [0, 1) in [`srgb8`]'s first table.
+const SRGB8_BUCKETS: usize = 4096;
+
+/// [`srgb8`]'s tables.
+struct Srgb8Tables {
+    /// Entry `b − 1`: the smallest non-negative `f32` whose code is at least `b`
+    /// (b = 1…255).
+    thresholds: [f32; 255],
+    /// The code of each bucket's first value, `i / SRGB8_BUCKETS`.
+    bucket_start: [u8; SRGB8_BUCKETS],
 }
 
 /// `round(255 · srgb_encode(x))` clamped to 0–255, computed directly (the reference
@@ -306,13 +331,13 @@ fn srgb8_formula(x: f32) -> u8 {
     (srgb_encode(x) * 255.0 + 0.5).clamp(0.0, 255.0) as u8
 }
 
-/// Entry `b − 1`: the smallest non-negative `f32` whose code is at least `b`
-/// (b = 1…255), by bisection over the bit patterns of [0, 1] (ordered like the values).
-fn srgb8_thresholds() -> &'static [f32; 255] {
-    static TABLE: std::sync::OnceLock<[f32; 255]> = std::sync::OnceLock::new();
-    TABLE.get_or_init(|| {
-        let mut table = [0.0; 255];
-        for (i, t) in table.iter_mut().enumerate() {
+/// [`srgb8`]'s tables, built on first use: each threshold by bisection over the bit
+/// patterns of [0, 1] (ordered like the values), each bucket's first code by the formula.
+fn srgb8_tables() -> &'static Srgb8Tables {
+    static TABLES: std::sync::OnceLock<Box<Srgb8Tables>> = std::sync::OnceLock::new();
+    TABLES.get_or_init(|| {
+        let mut thresholds = [0.0; 255];
+        for (i, t) in thresholds.iter_mut().enumerate() {
             let code = i as u8 + 1;
             // Invariant: formula(lo) < code <= formula(hi).
             let (mut lo, mut hi) = (0u32, 1f32.to_bits());
@@ -326,7 +351,14 @@ fn srgb8_thresholds() -> &'static [f32; 255] {
             }
             *t = f32::from_bits(hi);
         }
-        table
+        let mut bucket_start = [0; SRGB8_BUCKETS];
+        for (i, b) in bucket_start.iter_mut().enumerate() {
+            *b = srgb8_formula(i as f32 / SRGB8_BUCKETS as f32);
+        }
+        Box::new(Srgb8Tables {
+            thresholds,
+            bucket_start,
+        })
     })
 }
 
@@ -647,7 +679,7 @@ mod tests {
     /// just below it, on a dense sweep of [0, 1] and on the special values.
     #[test]
     fn srgb8_by_table_equals_the_formula() {
-        let table = srgb8_thresholds();
+        let table = &srgb8_tables().thresholds;
         for (i, &t) in table.iter().enumerate() {
             assert_eq!(srgb8(t), i as u8 + 1, "threshold {t}");
             assert_eq!(srgb8_formula(t), i as u8 + 1, "threshold {t}");
@@ -675,6 +707,13 @@ mod tests {
         }
         // The formula is non-decreasing over every f32 of [0, 1] near each threshold
         // (the table's premise): 64 values either side.
+        // Every bucket boundary and the value just below it.
+        for i in 1..SRGB8_BUCKETS {
+            let x = i as f32 / SRGB8_BUCKETS as f32;
+            let below = f32::from_bits(x.to_bits() - 1);
+            assert_eq!(srgb8(x), srgb8_formula(x), "{x}");
+            assert_eq!(srgb8(below), srgb8_formula(below), "{below}");
+        }
         for &t in table {
             let b = t.to_bits();
             let codes: Vec<u8> = (b.saturating_sub(64)..b + 64)
