@@ -4,7 +4,8 @@
 
 use crate::BvhSettings;
 use crate::build::{BuildParams, build_binary};
-use crate::wide::{Bvh4, MAX_LEAF, PreparedRay, StackEntry, traverse};
+use crate::kernel::BoxKernel;
+use crate::wide::{MAX_LEAF, PreparedRay, StackEntry, WideBvh, traverse};
 use illume_core::{Aabb, Vec2, Vec3, Vec4};
 use illume_scene::{Mesh, MeshCutout};
 
@@ -107,7 +108,7 @@ impl TrianglePacket {
 #[derive(Clone, Debug)]
 pub(crate) struct Blas {
     /// The tree; leaves index `packets`.
-    pub bvh: Bvh4,
+    pub bvh: WideBvh,
     /// Triangles in leaf order, four to a packet (a leaf is a run of whole packets).
     pub packets: Vec<TrianglePacket>,
     /// Number of mesh triangles.
@@ -118,7 +119,7 @@ pub(crate) struct Blas {
 }
 
 impl Blas {
-    /// Builds the BVH of `mesh` (binned SAH, then collapsed to four-wide nodes), whose
+    /// Builds the BVH of `mesh` (binned SAH, then collapsed to eight-wide nodes), whose
     /// alpha-masked triangles have the holes of `cutout`.
     pub fn build(mesh: &Mesh, cutout: Option<MeshCutout>, settings: &BvhSettings) -> Blas {
         let boxes: Vec<Aabb> = (0..mesh.triangle_count())
@@ -143,7 +144,7 @@ impl Blas {
             node.first = first;
             node.count = packets.len() as u32 - first;
         }
-        let bvh = Bvh4::from_binary(&bin, &|_, _| u32::MAX);
+        let bvh = WideBvh::from_binary(&bin, &|_, _| u32::MAX);
         Blas {
             bvh,
             packets,
@@ -176,59 +177,69 @@ impl Blas {
 
     /// Closest hit `(t, triangle index, barycentrics, packet index, lane)` with
     /// `t < t_max`.
-    #[inline]
-    pub fn intersect(
+    #[inline(always)]
+    pub fn intersect<K: BoxKernel>(
         &self,
+        k: K,
         ray: &PreparedRay,
         t_max: f32,
         stack: &mut [StackEntry],
     ) -> Option<(f32, u32, Vec2, u32, u32)> {
         // Meshes without holes pay nothing for them: the test is compiled out.
         if self.cutout.is_some() {
-            self.intersect_with::<true>(ray, t_max, stack)
+            self.intersect_with::<K, true>(k, ray, t_max, stack)
         } else {
-            self.intersect_with::<false>(ray, t_max, stack)
+            self.intersect_with::<K, false>(k, ray, t_max, stack)
         }
     }
 
     /// [`Blas::intersect`], testing alpha-mask holes when `CUT`.
     #[inline(always)]
-    fn intersect_with<const CUT: bool>(
+    fn intersect_with<K: BoxKernel, const CUT: bool>(
         &self,
+        k: K,
         ray: &PreparedRay,
         t_max: f32,
         stack: &mut [StackEntry],
     ) -> Option<(f32, u32, Vec2, u32, u32)> {
         let mut best = None;
-        traverse::<false>(&self.bvh, ray, t_max, u32::MAX, stack, |range, t_max, _| {
-            for (k, packet) in self.packets[range.clone()].iter().enumerate() {
-                let (t, b1, b2, mut bits) = packet.intersect(ray, *t_max);
-                if CUT && bits != 0 {
-                    bits = self.keep_lanes(packet, bits, b1, b2);
-                }
-                if bits != 0 {
-                    let t = t.to_array();
-                    let mut lane = bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    while bits != 0 {
-                        let l = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        if t[l] < t[lane] {
-                            lane = l;
-                        }
+        traverse::<K, false>(
+            k,
+            &self.bvh,
+            ray,
+            t_max,
+            u32::MAX,
+            stack,
+            |range, t_max, _| {
+                for (k, packet) in self.packets[range.clone()].iter().enumerate() {
+                    let (t, b1, b2, mut bits) = packet.intersect(ray, *t_max);
+                    if CUT && bits != 0 {
+                        bits = self.keep_lanes(packet, bits, b1, b2);
                     }
-                    *t_max = t[lane];
-                    best = Some((
-                        t[lane],
-                        packet.index[lane],
-                        Vec2::new(b1.to_array()[lane], b2.to_array()[lane]),
-                        (range.start + k) as u32,
-                        lane as u32,
-                    ));
+                    if bits != 0 {
+                        let t = t.to_array();
+                        let mut lane = bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        while bits != 0 {
+                            let l = bits.trailing_zeros() as usize;
+                            bits &= bits - 1;
+                            if t[l] < t[lane] {
+                                lane = l;
+                            }
+                        }
+                        *t_max = t[lane];
+                        best = Some((
+                            t[lane],
+                            packet.index[lane],
+                            Vec2::new(b1.to_array()[lane], b2.to_array()[lane]),
+                            (range.start + k) as u32,
+                            lane as u32,
+                        ));
+                    }
                 }
-            }
-            false
-        });
+                false
+            },
+        );
         best
     }
 
@@ -254,35 +265,50 @@ impl Blas {
     }
 
     /// True when any triangle is hit with `t < t_max`.
-    #[inline]
-    pub fn occluded(&self, ray: &PreparedRay, t_max: f32, stack: &mut [StackEntry]) -> bool {
+    #[inline(always)]
+    pub fn occluded<K: BoxKernel>(
+        &self,
+        k: K,
+        ray: &PreparedRay,
+        t_max: f32,
+        stack: &mut [StackEntry],
+    ) -> bool {
         if self.cutout.is_some() {
-            self.occluded_with::<true>(ray, t_max, stack)
+            self.occluded_with::<K, true>(k, ray, t_max, stack)
         } else {
-            self.occluded_with::<false>(ray, t_max, stack)
+            self.occluded_with::<K, false>(k, ray, t_max, stack)
         }
     }
 
     /// [`Blas::occluded`], testing alpha-mask holes when `CUT`.
     #[inline(always)]
-    fn occluded_with<const CUT: bool>(
+    fn occluded_with<K: BoxKernel, const CUT: bool>(
         &self,
+        k: K,
         ray: &PreparedRay,
         t_max: f32,
         stack: &mut [StackEntry],
     ) -> bool {
         let mut hit = false;
-        traverse::<false>(&self.bvh, ray, t_max, u32::MAX, stack, |range, t_max, _| {
-            hit = self.packets[range].iter().any(|p| {
-                let (_, b1, b2, bits) = p.intersect(ray, *t_max);
-                if CUT && bits != 0 {
-                    self.keep_lanes(p, bits, b1, b2) != 0
-                } else {
-                    bits != 0
-                }
-            });
-            hit
-        });
+        traverse::<K, false>(
+            k,
+            &self.bvh,
+            ray,
+            t_max,
+            u32::MAX,
+            stack,
+            |range, t_max, _| {
+                hit = self.packets[range].iter().any(|p| {
+                    let (_, b1, b2, bits) = p.intersect(ray, *t_max);
+                    if CUT && bits != 0 {
+                        self.keep_lanes(p, bits, b1, b2) != 0
+                    } else {
+                        bits != 0
+                    }
+                });
+                hit
+            },
+        );
         hit
     }
 }

@@ -20,9 +20,13 @@
 //!
 //! * Mesh level: binned SAH (32 bins, all three axes) over triangle boxes, with the cost
 //!   of a leaf counted in packets of four triangles, builds a binary tree that is
-//!   collapsed into four-wide nodes of 128 bytes (child boxes as structure of arrays, so
-//!   one ray meets four boxes in 4-lane arithmetic). Triangles are copied in leaf order,
+//!   collapsed into eight-wide nodes of 256 bytes (child boxes as structure of arrays, so
+//!   one ray meets eight boxes in one 8-lane test). Triangles are copied in leaf order,
 //!   four to a 160-byte packet (corner and two edges per lane), and tested four at once.
+//! * Kernels ([`TraversalKernel`]): the box test of a node runs in AVX2 (one 8-lane pass,
+//!   the whole query compiled for AVX2) on CPUs that have it, detected at run time, else
+//!   in two portable 4-lane passes. Both use the same operations in the same order and
+//!   return bit-identical hits; [`KERNEL_ENV`] or [`Tracer::set_kernel`] forces one.
 //! * Instance level: the same builder over the instances' world boxes (the mesh BVH's
 //!   box under `world_from_object`), rebuilt by [`Tracer::update`] (cost linear in the
 //!   instance count, independent of triangle counts); each node keeps the union of the masks below each child, so
@@ -46,12 +50,14 @@
 mod blas;
 pub mod brute_force;
 mod build;
+mod kernel;
 pub mod ray_sets;
 mod tracer;
 pub mod triangle;
 mod validate;
 mod wide;
 
+pub use kernel::{KERNEL_ENV, KernelUnavailable, TraversalKernel};
 pub use tracer::{BvhSettings, ScopedTracer, Tracer, TracerStats};
 
 use illume_core::{Vec2, Vec3};
