@@ -68,7 +68,7 @@ impl TrianglePacket {
     /// `b2`; the bits mark lanes hit with `t` in `(ray.t_min, t_max)`. The arithmetic and
     /// the acceptance on edges are those of [`crate::triangle::intersect_triangle`].
     #[inline(always)]
-    fn intersect(&self, ray: &PreparedRay, t_max: f32) -> (Vec4, Vec4, Vec4, u32) {
+    pub(crate) fn intersect(&self, ray: &PreparedRay, t_max: f32) -> (Vec4, Vec4, Vec4, u32) {
         let c = |k: usize| Vec4::from_array(self.coords[k]);
         let (e1x, e1y, e1z) = (c(3), c(4), c(5));
         let (e2x, e2y, e2z) = (c(6), c(7), c(8));
@@ -210,37 +210,94 @@ impl Blas {
             t_max,
             u32::MAX,
             stack,
+            #[inline(always)]
             |range, t_max, _| {
-                for (k, packet) in self.packets[range.clone()].iter().enumerate() {
+                let packets = &self.packets[range.clone()];
+                let mut p = 0;
+                while p < packets.len() {
+                    if K::PAIRS && p + 1 < packets.len() {
+                        // Two packets in one pass; the closest lane, ties to the lower lane,
+                        // is the hit the two packets tested in turn would give.
+                        let (t, b1, b2, mut bits) =
+                            k.intersect_pair(&packets[p], &packets[p + 1], ray, *t_max);
+                        if CUT && bits != 0 {
+                            bits = self.keep_pair_lanes(&packets[p..p + 2], bits, &b1, &b2);
+                        }
+                        if bits != 0 {
+                            let lane = closest_lane(&t, bits);
+                            let packet = &packets[p + lane / 4];
+                            *t_max = t[lane];
+                            best = Some((
+                                t[lane],
+                                packet.index[lane % 4],
+                                Vec2::new(b1[lane], b2[lane]),
+                                (range.start + p + lane / 4) as u32,
+                                (lane % 4) as u32,
+                            ));
+                        }
+                        p += 2;
+                        continue;
+                    }
+                    let packet = &packets[p];
                     let (t, b1, b2, mut bits) = packet.intersect(ray, *t_max);
                     if CUT && bits != 0 {
                         bits = self.keep_lanes(packet, bits, b1, b2);
                     }
                     if bits != 0 {
                         let t = t.to_array();
-                        let mut lane = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        while bits != 0 {
-                            let l = bits.trailing_zeros() as usize;
-                            bits &= bits - 1;
-                            if t[l] < t[lane] {
-                                lane = l;
-                            }
-                        }
+                        let lane = closest_lane(&t, bits);
                         *t_max = t[lane];
                         best = Some((
                             t[lane],
                             packet.index[lane],
                             Vec2::new(b1.to_array()[lane], b2.to_array()[lane]),
-                            (range.start + k) as u32,
+                            (range.start + p) as u32,
                             lane as u32,
                         ));
                     }
+                    p += 1;
                 }
                 false
             },
         );
         best
+    }
+
+    /// [`Blas::keep_lanes`] for the eight lanes of two packets tested together.
+    #[cold]
+    fn keep_pair_lanes(
+        &self,
+        pair: &[TrianglePacket],
+        bits: u32,
+        b1: &[f32; 8],
+        b2: &[f32; 8],
+    ) -> u32 {
+        let half = |h: usize| {
+            let lanes = 4 * h..4 * h + 4;
+            self.keep_lanes(
+                &pair[h],
+                (bits >> (4 * h)) & 15,
+                Vec4::from_slice(&b1[lanes.clone()]),
+                Vec4::from_slice(&b2[lanes]),
+            ) << (4 * h)
+        };
+        half(0) | half(1)
+    }
+
+    /// True when `packet` has a hit with `t < t_max` (not in a hole, when `CUT`).
+    #[inline(always)]
+    fn packet_occludes<const CUT: bool>(
+        &self,
+        packet: &TrianglePacket,
+        ray: &PreparedRay,
+        t_max: f32,
+    ) -> bool {
+        let (_, b1, b2, bits) = packet.intersect(ray, t_max);
+        if CUT && bits != 0 {
+            self.keep_lanes(packet, bits, b1, b2) != 0
+        } else {
+            bits != 0
+        }
     }
 
     /// The lanes of `bits` (hits of `packet` at barycentrics `b1`, `b2`) that are not in
@@ -297,18 +354,44 @@ impl Blas {
             t_max,
             u32::MAX,
             stack,
+            #[inline(always)]
             |range, t_max, _| {
-                hit = self.packets[range].iter().any(|p| {
-                    let (_, b1, b2, bits) = p.intersect(ray, *t_max);
-                    if CUT && bits != 0 {
-                        self.keep_lanes(p, bits, b1, b2) != 0
-                    } else {
-                        bits != 0
-                    }
-                });
+                let packets = &self.packets[range];
+                hit = if K::PAIRS {
+                    packets.chunks(2).any(|pair| match pair {
+                        [a, b] => {
+                            let (_, b1, b2, bits) = k.intersect_pair(a, b, ray, *t_max);
+                            if CUT && bits != 0 {
+                                self.keep_pair_lanes(pair, bits, &b1, &b2) != 0
+                            } else {
+                                bits != 0
+                            }
+                        }
+                        _ => self.packet_occludes::<CUT>(&pair[0], ray, *t_max),
+                    })
+                } else {
+                    packets
+                        .iter()
+                        .any(|p| self.packet_occludes::<CUT>(p, ray, *t_max))
+                };
                 hit
             },
         );
         hit
     }
+}
+
+/// The lane of `bits` (at least one set) with the smallest `t`; ties go to the lower lane.
+#[inline(always)]
+fn closest_lane(t: &[f32], mut bits: u32) -> usize {
+    let mut lane = bits.trailing_zeros() as usize;
+    bits &= bits - 1;
+    while bits != 0 {
+        let l = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        if t[l] < t[lane] {
+            lane = l;
+        }
+    }
+    lane
 }

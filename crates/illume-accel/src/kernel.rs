@@ -16,6 +16,7 @@
 )]
 
 use crate::Tracer;
+use crate::blas::TrianglePacket;
 use crate::tracer::Closest;
 use crate::wide::{EXIT_SCALE, PreparedRay, StackEntry, WIDTH, WideNode};
 use illume_core::{Ray, Vec4};
@@ -121,8 +122,24 @@ impl Kernel {
     }
 }
 
-/// The box test of one wide node.
+/// The box test of one wide node and the triangle test of a leaf's packets.
 pub(crate) trait BoxKernel: Copy {
+    /// True when [`BoxKernel::intersect_pair`] tests two packets in one pass: leaves then
+    /// test their packets two at a time (else one at a time, with
+    /// `TrianglePacket::intersect`).
+    const PAIRS: bool;
+
+    /// Packets `a` and `b` at once: per lane (`a`'s in 0..4, `b`'s in 4..8) the hit
+    /// distance, barycentrics `b1` and `b2`, and the bits of lanes hit with `t` in
+    /// `(ray.t_min, t_max)`: lane for lane the results of `TrianglePacket::intersect`.
+    fn intersect_pair(
+        self,
+        a: &TrianglePacket,
+        b: &TrianglePacket,
+        ray: &PreparedRay,
+        t_max: f32,
+    ) -> PairHits;
+
     /// Entry distances of the child boxes of `node` and a bit mask of the children hit
     /// within `(ray.t_min, t_max)` (and, when `MASKED`, whose mask meets `mask`). Unused
     /// slots (empty boxes) never hit.
@@ -146,11 +163,36 @@ fn mask_bits(node: &WideNode, mut bits: u32, mask: u32) -> u32 {
     bits
 }
 
+/// Two packets' hits: `(t, b1, b2, lane bits)`, eight lanes each.
+pub(crate) type PairHits = ([f32; 8], [f32; 8], [f32; 8], u32);
+
 /// The portable kernel: two 4-lane halves per node.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Portable;
 
 impl BoxKernel for Portable {
+    const PAIRS: bool = false;
+
+    #[inline(always)]
+    fn intersect_pair(
+        self,
+        a: &TrianglePacket,
+        b: &TrianglePacket,
+        ray: &PreparedRay,
+        t_max: f32,
+    ) -> PairHits {
+        let mut out = ([0.0; 8], [0.0; 8], [0.0; 8], 0);
+        for (half, p) in [a, b].into_iter().enumerate() {
+            let (t, b1, b2, bits) = p.intersect(ray, t_max);
+            let lanes = 4 * half..4 * half + 4;
+            t.write_to_slice(&mut out.0[lanes.clone()]);
+            b1.write_to_slice(&mut out.1[lanes.clone()]);
+            b2.write_to_slice(&mut out.2[lanes]);
+            out.3 |= bits << (4 * half);
+        }
+        out
+    }
+
     #[inline(always)]
     fn hit_boxes<const MASKED: bool>(
         self,
@@ -203,6 +245,76 @@ impl Avx2 {
 
 #[cfg(target_arch = "x86_64")]
 impl BoxKernel for Avx2 {
+    const PAIRS: bool = true;
+
+    /// `TrianglePacket::intersect` on two packets in one 8-lane pass, with the same
+    /// operations in the same order (no fused multiply-add), so the same results bit for
+    /// bit; the comparisons are the same ordered ones (false on NaN).
+    #[inline(always)]
+    fn intersect_pair(
+        self,
+        a: &TrianglePacket,
+        b: &TrianglePacket,
+        ray: &PreparedRay,
+        t_max: f32,
+    ) -> PairHits {
+        use std::arch::x86_64::*;
+        let mut out = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8], 0);
+        // SAFETY: `self` exists only if `Avx2::detect` found AVX2 on this CPU, so every
+        // AVX/AVX2 intrinsic below may run. Each load reads `a.coords[k]` and
+        // `b.coords[k]`, `[f32; 4]`s (16 readable bytes each); each store writes one of
+        // `out`'s `[f32; 8]`s (32 writable bytes); none of them needs alignment.
+        unsafe {
+            let c = |k: usize| _mm256_loadu2_m128(b.coords[k].as_ptr(), a.coords[k].as_ptr());
+            let (e1x, e1y, e1z) = (c(3), c(4), c(5));
+            let (e2x, e2y, e2z) = (c(6), c(7), c(8));
+            let [dx, dy, dz] = ray.dir.to_array().map(|v| _mm256_set1_ps(v));
+            let mul = |x, y| _mm256_mul_ps(x, y);
+            let sub = |x, y| _mm256_sub_ps(x, y);
+            let add = |x, y| _mm256_add_ps(x, y);
+            let px = sub(mul(dy, e2z), mul(dz, e2y));
+            let py = sub(mul(dz, e2x), mul(dx, e2z));
+            let pz = sub(mul(dx, e2y), mul(dy, e2x));
+            let det = add(add(mul(e1x, px), mul(e1y, py)), mul(e1z, pz));
+            let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+            let [ox, oy, oz] = ray.origin.to_array().map(|v| _mm256_set1_ps(v));
+            let (tx, ty, tz) = (sub(ox, c(0)), sub(oy, c(1)), sub(oz, c(2)));
+            let b1 = mul(add(add(mul(tx, px), mul(ty, py)), mul(tz, pz)), inv_det);
+            let abs_det = _mm256_and_ps(det, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
+            let first = _mm256_and_ps(
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OS>(abs_det, _mm256_set1_ps(f32::MIN_POSITIVE)),
+                    _mm256_cmp_ps::<_CMP_GE_OS>(b1, _mm256_setzero_ps()),
+                ),
+                _mm256_cmp_ps::<_CMP_LE_OS>(b1, _mm256_set1_ps(1.0)),
+            );
+            if _mm256_movemask_ps(first) == 0 {
+                // As in `TrianglePacket::intersect`: most pairs miss on `b1`.
+                return out;
+            }
+            let qx = sub(mul(ty, e1z), mul(tz, e1y));
+            let qy = sub(mul(tz, e1x), mul(tx, e1z));
+            let qz = sub(mul(tx, e1y), mul(ty, e1x));
+            let b2 = mul(add(add(mul(dx, qx), mul(dy, qy)), mul(dz, qz)), inv_det);
+            let t = mul(add(add(mul(e2x, qx), mul(e2y, qy)), mul(e2z, qz)), inv_det);
+            let valid = _mm256_and_ps(
+                _mm256_and_ps(
+                    _mm256_and_ps(first, _mm256_cmp_ps::<_CMP_GE_OS>(b2, _mm256_setzero_ps())),
+                    _mm256_cmp_ps::<_CMP_LE_OS>(add(b1, b2), _mm256_set1_ps(1.0)),
+                ),
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GT_OS>(t, _mm256_set1_ps(ray.t_min)),
+                    _mm256_cmp_ps::<_CMP_LT_OS>(t, _mm256_set1_ps(t_max)),
+                ),
+            );
+            out.3 = _mm256_movemask_ps(valid) as u32;
+            _mm256_storeu_ps(out.0.as_mut_ptr(), t);
+            _mm256_storeu_ps(out.1.as_mut_ptr(), b1);
+            _mm256_storeu_ps(out.2.as_mut_ptr(), b2);
+        }
+        out
+    }
+
     /// [`Portable::hit_boxes`] in one 8-lane pass, with the same operations in the same
     /// order, so the same results bit for bit: `_mm256_max_ps(a, b)`/`_mm256_min_ps`
     /// return `b` when either is NaN, as `Vec4::max`/`min` (`_mm_max_ps`) do, and the

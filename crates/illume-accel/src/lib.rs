@@ -23,9 +23,10 @@
 //!   collapsed into eight-wide nodes of 256 bytes (child boxes as structure of arrays, so
 //!   one ray meets eight boxes in one 8-lane test). Triangles are copied in leaf order,
 //!   four to a 160-byte packet (corner and two edges per lane), and tested four at once.
-//! * Kernels ([`TraversalKernel`]): the box test of a node runs in AVX2 (one 8-lane pass,
-//!   the whole query compiled for AVX2) on CPUs that have it, detected at run time, else
-//!   in two portable 4-lane passes. Both use the same operations in the same order and
+//! * Kernels ([`TraversalKernel`]): on CPUs with AVX2, detected at run time, the whole
+//!   query is compiled for AVX2, the box test of a node is one 8-lane pass and a leaf's
+//!   packets are tested two at a time (eight triangles per pass); elsewhere boxes and
+//!   packets are tested in portable 4-lane passes. Both use the same operations in the same order and
 //!   return bit-identical hits; [`KERNEL_ENV`] or [`Tracer::set_kernel`] forces one.
 //! * Instance level: the same builder over the instances' world boxes (the mesh BVH's
 //!   box under `world_from_object`), rebuilt by [`Tracer::update`] (cost linear in the

@@ -425,6 +425,7 @@ impl Tracer {
             ray.t_max,
             mask,
             stack,
+            #[inline(always)]
             |range, t_max, free| {
                 for inst in &self.instances[range] {
                     if inst.mask & mask == 0 {
@@ -480,6 +481,7 @@ impl Tracer {
             ray.t_max,
             mask,
             stack,
+            #[inline(always)]
             |range, t_max, free| {
                 hit = self.instances[range].iter().any(|inst| {
                     inst.mask & mask != 0

@@ -331,6 +331,23 @@ fn soup_scene(seed: u64) -> Scene {
 
 #[test]
 fn triangle_soups_validate_and_agree_with_brute_force() {
+    let cut = cut_soup(13);
+    cut.validate().unwrap();
+    check("soup with a cut-out grid", &cut, 30_000, 14);
+    let rays = random_rays(cut.bounds(), 10_000, 15);
+    let (with_holes, without) = (
+        Tracer::new(&cut).intersect_batch(&rays, MASK_DEFAULT),
+        Tracer::new(&soup_scene(13)).intersect_batch(&rays, MASK_DEFAULT),
+    );
+    let through = with_holes
+        .iter()
+        .zip(&without)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        through > 100,
+        "only {through} rays pass through the grid's holes"
+    );
     let scene = soup_scene(11);
     scene.validate().unwrap();
     check("soup", &scene, 30_000, 12);
@@ -541,6 +558,41 @@ fn cut_outs_in(tracer: &Tracer, kernel: &str) {
     assert_eq!(seen, [800, 800]);
 }
 
+/// `soup_scene(seed)` with its grid cut out in a checker pattern: alpha-mask holes in a
+/// mesh whose leaves hold several triangle packets.
+fn cut_soup(seed: u64) -> Scene {
+    use illume_scene::{MaterialId, Texture, TextureId, WrapMode};
+    let mut scene = soup_scene(seed);
+    scene.textures.push(std::sync::Arc::new(Texture {
+        name: "checker".into(),
+        width: 4,
+        height: 4,
+        texels: vec![illume_core::Rgb::ONE; 16],
+        wrap_u: WrapMode::Repeat,
+        wrap_v: WrapMode::Repeat,
+        alpha: (0..16)
+            .map(|i| if (i + i / 4) % 2 == 0 { 0 } else { 255 })
+            .collect(),
+    }));
+    let texture = TextureId(scene.textures.len() as u32 - 1);
+    let grid = scene.meshes.iter().position(|m| m.name == "grid").unwrap();
+    let mut material = scene.materials[scene.meshes[grid].triangle_materials[0].index()].clone();
+    material.name = "checker cut-out".into();
+    material.alpha_texture = Some(texture);
+    material.alpha_cutoff = Some(0.5);
+    scene.materials.push(material);
+    let id = MaterialId(scene.materials.len() as u32 - 1);
+    let mut mesh = (*scene.meshes[grid]).clone();
+    mesh.uvs = mesh
+        .positions
+        .iter()
+        .map(|p| Vec2::new(p.x, p.z) * 1.7)
+        .collect();
+    mesh.triangle_materials.fill(id);
+    scene.meshes[grid] = std::sync::Arc::new(mesh);
+    scene
+}
+
 /// The bits of a hit, so that equality is bit-for-bit (and -0.0 differs from 0.0).
 fn hit_bits(h: &Option<Hit>) -> Option<(u32, u32, u32, u32, u32)> {
     h.map(|h| {
@@ -578,6 +630,7 @@ fn every_kernel_gives_identical_hits() {
         ("cornell-spot masked", masked, 50_000),
         ("soup moved", moved, 50_000),
         ("cut-out", cut, 20_000),
+        ("soup with a cut-out grid", cut_soup(23), 50_000),
         ("sponza", shared_scene("dabrovic_sponza/sponza.obj"), 20_000),
     ] {
         let tracers = in_every_kernel(&Tracer::new(&scene));
