@@ -348,31 +348,24 @@ pub(crate) fn traverse<K: BoxKernel, const MASKED: bool>(
                 current = Item(node.children[bits.trailing_zeros() as usize]);
                 continue;
             } else {
-                // Gather the hit children, then sort them nearest first (at most eight).
-                let mut hits = [(0u32, 0f32); WIDTH];
-                let mut n = 0;
+                // Insert the hit children into the stack sorted farthest first (an
+                // insertion sort in place: ties keep slot order), then visit the nearest.
+                let base = sp;
                 while bits != 0 {
                     let i = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    hits[n] = (node.children[i], dist[i]);
-                    n += 1;
-                }
-                if n > 0 {
-                    for i in 1..n {
-                        let mut j = i;
-                        while j > 0 && hits[j - 1].1 < hits[j].1 {
-                            hits.swap(j - 1, j);
-                            j -= 1;
-                        }
+                    let entry = (node.children[i], dist[i]);
+                    let mut j = sp;
+                    while j > base && stack[j - 1].1 < entry.1 {
+                        stack[j] = stack[j - 1];
+                        j -= 1;
                     }
-                    // Farthest first onto the stack; the nearest is visited now.
-                    for &h in &hits[..n - 1] {
-                        stack[sp] = h;
-                        sp += 1;
-                    }
-                    current = Item(hits[n - 1].0);
-                    continue;
+                    stack[j] = entry;
+                    sp += 1;
                 }
+                sp -= 1;
+                current = Item(stack[sp].0);
+                continue;
             }
         }
         // Pop the next child still nearer than the closest hit.
