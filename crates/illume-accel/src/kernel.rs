@@ -423,3 +423,42 @@ fn closest_avx2(
 fn occluded_avx2(tracer: &Tracer, k: Avx2, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> bool {
     tracer.occluded_in(k, ray, mask, stack)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_portable_kernel_is_always_available_and_avx2_where_detected() {
+        let available = TraversalKernel::available();
+        assert_eq!(available[0], TraversalKernel::Portable);
+        #[cfg(target_arch = "x86_64")]
+        assert_eq!(
+            available.contains(&TraversalKernel::Avx2),
+            is_x86_feature_detected!("avx2")
+        );
+        assert!(available.contains(&TraversalKernel::default_for_this_cpu()));
+        for k in TraversalKernel::ALL {
+            assert_eq!(
+                Kernel::new(k).map(Kernel::kind),
+                k.is_available().then_some(k)
+            );
+        }
+    }
+
+    #[test]
+    fn set_kernel_switches_or_refuses() {
+        let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+        let mut tracer = Tracer::new(&scene);
+        for k in TraversalKernel::ALL {
+            let before = tracer.kernel();
+            match tracer.set_kernel(k) {
+                Ok(()) => assert_eq!(tracer.kernel(), k),
+                Err(e) => {
+                    assert_eq!(e, KernelUnavailable(k));
+                    assert_eq!(tracer.kernel(), before, "a refused kernel changes nothing");
+                }
+            }
+        }
+    }
+}

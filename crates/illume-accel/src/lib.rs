@@ -1,6 +1,7 @@
-//! Ray queries against a [`Scene`]: a two-level acceleration structure with one BVH per
-//! mesh (built once) and an instance level over them (rebuilt from the instances' world
-//! boxes when transforms change, so a moving object never rebuilds its own BVH).
+//! Ray queries against a [`Scene`](illume_scene::Scene): a two-level acceleration
+//! structure with one BVH per mesh (built once) and an instance level over them (rebuilt
+//! from the instances' world boxes when transforms change, so a moving object never
+//! rebuilds its own BVH).
 //!
 //! Queries take an instance mask: a ray sees instance `i` when `ray_mask & i.mask != 0`
 //! (see [`illume_scene::MASK_DEFAULT`]), so a technique can include or ignore chosen

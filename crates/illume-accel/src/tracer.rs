@@ -315,7 +315,7 @@ impl Tracer {
     ///
     /// Contract: the ray enters the instance's object space and meets the triangle with
     /// exactly the arithmetic of [`Tracer::intersect`] (same object-space ray, the
-    /// Möller–Trumbore of [`triangle::intersect_triangle`]), so when the closest hit of
+    /// Möller–Trumbore of [`crate::triangle::intersect_triangle`]), so when the closest hit of
     /// `ray` is this triangle, the two results are equal bit for bit. `None` when the ray
     /// misses the triangle within `(ray.t_min, ray.t_max)` or the instance is not in the
     /// tracer (unknown id, empty mesh, singular transform). Masks and alpha-mask holes are not
