@@ -4,7 +4,7 @@
 use crate::blas::Blas;
 use crate::build::{BuildParams, build_binary};
 use crate::kernel::{self, BoxKernel, Kernel, KernelUnavailable, TraversalKernel};
-use crate::wide::{Item, PreparedRay, StackEntry, WideBvh, traverse, with_stack};
+use crate::wide::{Item, PreparedRay, StackEntry, WideBvh, new_stack, traverse, with_stack};
 use crate::{Hit, HitGeometry};
 use illume_core::{Aabb, Affine3A, Mat3A, Ray, Vec3, Vec3A};
 use illume_scene::{InstanceId, MeshCutout, MeshId, Scene};
@@ -374,23 +374,18 @@ impl Tracer {
         self.batch(rays, |r, stack| self.occluded_with(r, mask, stack))
     }
 
-    /// Runs `query` over `rays` in parallel chunks, each chunk with one traversal stack.
-    fn batch<T: Send + Clone + Default>(
+    /// Runs `query` over `rays` in parallel runs of at least `BATCH_CHUNK` rays, each run
+    /// with one traversal stack; results are written once, straight into the output (no
+    /// pre-filled vector to overwrite).
+    fn batch<T: Send>(
         &self,
         rays: &[Ray],
         query: impl Fn(&Ray, &mut [StackEntry]) -> T + Sync,
     ) -> Vec<T> {
-        let mut out = vec![T::default(); rays.len()];
-        out.par_chunks_mut(BATCH_CHUNK)
-            .zip(rays.par_chunks(BATCH_CHUNK))
-            .for_each(|(out, rays)| {
-                with_stack(|stack| {
-                    for (o, r) in out.iter_mut().zip(rays) {
-                        *o = query(r, stack);
-                    }
-                })
-            });
-        out
+        rays.par_iter()
+            .with_min_len(BATCH_CHUNK)
+            .map_init(new_stack, |stack, r| query(r, stack))
+            .collect()
     }
 
     #[inline]

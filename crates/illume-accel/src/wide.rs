@@ -299,7 +299,13 @@ pub(crate) type StackEntry = (u32, f32);
 thread_local! {
     /// Each thread's traversal stack, kept between queries (clearing a fresh one per ray
     /// would cost more than a small scene's whole query).
-    static STACK: RefCell<Vec<StackEntry>> = RefCell::new(vec![(0, 0.0); 2 * STACK_SIZE]);
+    static STACK: RefCell<Vec<StackEntry>> = RefCell::new(new_stack());
+}
+
+/// A traversal stack big enough for one tree walk plus, below it, one more (the
+/// instance level walks a mesh BVH from its leaves).
+pub(crate) fn new_stack() -> Vec<StackEntry> {
+    vec![(0, 0.0); 2 * STACK_SIZE]
 }
 
 /// Runs `f` with a stack big enough for one tree walk plus, below it, one more (the
@@ -309,7 +315,7 @@ pub(crate) fn with_stack<R>(f: impl FnOnce(&mut [StackEntry]) -> R) -> R {
     STACK.with(|stack| match stack.try_borrow_mut() {
         Ok(mut stack) => f(&mut stack),
         // Only reached if a query runs inside another on the same thread.
-        Err(_) => f(&mut vec![(0, 0.0); 2 * STACK_SIZE]),
+        Err(_) => f(&mut new_stack()),
     })
 }
 
