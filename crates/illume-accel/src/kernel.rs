@@ -124,21 +124,16 @@ impl Kernel {
 
 /// The box test of one wide node and the triangle test of a leaf's packets.
 pub(crate) trait BoxKernel: Copy {
-    /// True when [`BoxKernel::intersect_pair`] tests two packets in one pass: leaves then
-    /// test their packets two at a time (else one at a time, with
-    /// `TrianglePacket::intersect`).
-    const PAIRS: bool;
+    /// True when [`BoxKernel::intersect_packet`] tests a packet's eight lanes in one
+    /// pass: leaves then use it (else they test packets in 4-lane halves, with
+    /// `TrianglePacket::intersect_half`).
+    const WIDE_PACKETS: bool;
 
-    /// Packets `a` and `b` at once: per lane (`a`'s in 0..4, `b`'s in 4..8) the hit
-    /// distance, barycentrics `b1` and `b2`, and the bits of lanes hit with `t` in
-    /// `(ray.t_min, t_max)`: lane for lane the results of `TrianglePacket::intersect`.
-    fn intersect_pair(
-        self,
-        a: &TrianglePacket,
-        b: &TrianglePacket,
-        ray: &PreparedRay,
-        t_max: f32,
-    ) -> PairHits;
+    /// All eight lanes of `packet` at once: per lane the hit distance, barycentrics `b1`
+    /// and `b2`, and the bits of lanes hit with `t` in `(ray.t_min, t_max)`: lane for lane
+    /// the results of `TrianglePacket::intersect_half`.
+    fn intersect_packet(self, packet: &TrianglePacket, ray: &PreparedRay, t_max: f32)
+    -> PacketHits;
 
     /// Entry distances of the child boxes of `node` and a bit mask of the children hit
     /// within `(ray.t_min, t_max)` (and, when `MASKED`, whose mask meets `mask`). Unused
@@ -163,27 +158,26 @@ fn mask_bits(node: &WideNode, mut bits: u32, mask: u32) -> u32 {
     bits
 }
 
-/// Two packets' hits: `(t, b1, b2, lane bits)`, eight lanes each.
-pub(crate) type PairHits = ([f32; 8], [f32; 8], [f32; 8], u32);
+/// A packet's hits: `(t, b1, b2, lane bits)`, eight lanes each.
+pub(crate) type PacketHits = ([f32; 8], [f32; 8], [f32; 8], u32);
 
-/// The portable kernel: two 4-lane halves per node.
+/// The portable kernel: two 4-lane halves per node and per triangle packet.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Portable;
 
 impl BoxKernel for Portable {
-    const PAIRS: bool = false;
+    const WIDE_PACKETS: bool = false;
 
     #[inline(always)]
-    fn intersect_pair(
+    fn intersect_packet(
         self,
-        a: &TrianglePacket,
-        b: &TrianglePacket,
+        packet: &TrianglePacket,
         ray: &PreparedRay,
         t_max: f32,
-    ) -> PairHits {
+    ) -> PacketHits {
         let mut out = ([0.0; 8], [0.0; 8], [0.0; 8], 0);
-        for (half, p) in [a, b].into_iter().enumerate() {
-            let (t, b1, b2, bits) = p.intersect(ray, t_max);
+        for half in 0..2 {
+            let (t, b1, b2, bits) = packet.intersect_half(half, ray, t_max);
             let lanes = 4 * half..4 * half + 4;
             t.write_to_slice(&mut out.0[lanes.clone()]);
             b1.write_to_slice(&mut out.1[lanes.clone()]);
@@ -245,27 +239,26 @@ impl Avx2 {
 
 #[cfg(target_arch = "x86_64")]
 impl BoxKernel for Avx2 {
-    const PAIRS: bool = true;
+    const WIDE_PACKETS: bool = true;
 
-    /// `TrianglePacket::intersect` on two packets in one 8-lane pass, with the same
+    /// `TrianglePacket::intersect_half` on both halves in one 8-lane pass, with the same
     /// operations in the same order (no fused multiply-add), so the same results bit for
     /// bit; the comparisons are the same ordered ones (false on NaN).
     #[inline(always)]
-    fn intersect_pair(
+    fn intersect_packet(
         self,
-        a: &TrianglePacket,
-        b: &TrianglePacket,
+        packet: &TrianglePacket,
         ray: &PreparedRay,
         t_max: f32,
-    ) -> PairHits {
+    ) -> PacketHits {
         use std::arch::x86_64::*;
         let mut out = ([0.0f32; 8], [0.0f32; 8], [0.0f32; 8], 0);
         // SAFETY: `self` exists only if `Avx2::detect` found AVX2 on this CPU, so every
-        // AVX/AVX2 intrinsic below may run. Each load reads `a.coords[k]` and
-        // `b.coords[k]`, `[f32; 4]`s (16 readable bytes each); each store writes one of
-        // `out`'s `[f32; 8]`s (32 writable bytes); none of them needs alignment.
+        // AVX/AVX2 intrinsic below may run. Each load reads `packet.coords[k]`, a
+        // `[f32; 8]` (32 readable bytes); each store writes one of `out`'s `[f32; 8]`s (32
+        // writable bytes); `loadu`/`storeu` need no alignment.
         unsafe {
-            let c = |k: usize| _mm256_loadu2_m128(b.coords[k].as_ptr(), a.coords[k].as_ptr());
+            let c = |k: usize| _mm256_loadu_ps(packet.coords[k].as_ptr());
             let (e1x, e1y, e1z) = (c(3), c(4), c(5));
             let (e2x, e2y, e2z) = (c(6), c(7), c(8));
             let [dx, dy, dz] = ray.dir.to_array().map(|v| _mm256_set1_ps(v));
@@ -289,7 +282,7 @@ impl BoxKernel for Avx2 {
                 _mm256_cmp_ps::<_CMP_LE_OS>(b1, _mm256_set1_ps(1.0)),
             );
             if _mm256_movemask_ps(first) == 0 {
-                // As in `TrianglePacket::intersect`: most pairs miss on `b1`.
+                // As in `TrianglePacket::intersect_half`: most packets miss on `b1`.
                 return out;
             }
             let qx = sub(mul(ty, e1z), mul(tz, e1y));

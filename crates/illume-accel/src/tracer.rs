@@ -94,8 +94,8 @@ pub struct BvhSettings {
     /// Cost of visiting a node relative to one triangle-packet test, in the surface area
     /// heuristic. Higher: fewer, fuller leaves.
     pub node_cost: f32,
-    /// Count a leaf's cost in packets of four triangles (as they are tested) rather than
-    /// in triangles. True favours leaves of 4 and 8 triangles.
+    /// Count a leaf's cost in groups of four triangles (a packet's 4-lane halves) rather
+    /// than in triangles. True favours leaves of 4 and 8 triangles.
     pub packet_aware_sah: bool,
 }
 
