@@ -8,8 +8,10 @@
 //! in the same order (multiply, then subtract; no fused multiply-add), so they visit the
 //! same nodes in the same order and return bit-identical hits.
 //!
-//! `unsafe` is confined to this module: the loads and stores of the AVX2 box test and the
-//! calls of the AVX2 entry points, each with the argument that makes it sound.
+//! `unsafe` is confined to this module: the AVX2 intrinsics of the box and triangle tests
+//! and the calls of the AVX2 entry points, each with the argument that makes it sound. All
+//! rest on one invariant: an [`Avx2`] value exists only on a CPU with AVX2, because its one
+//! field is private to this module and only [`Avx2::detect`] makes one.
 #![expect(
     unsafe_code,
     reason = "run-time selected AVX2 kernel: std::arch loads/stores and calls of #[target_feature] functions, each proven sound below"
