@@ -15,6 +15,10 @@ each tracing half of the rays at the same time (the time of a repeat is the slow
 
 Usage (from the repository root):
   python3 benches/embree_compare.py [--rays N] [--threads T] [--scenes S ...] [--kinds K ...]
+                                    [--illume-exe PATH]
+
+--illume-exe runs a given build of the `dump_rays` example instead of `cargo run` (to
+measure an older illume against the same Embree, e.g. before and after a change).
 """
 
 import argparse
@@ -115,10 +119,10 @@ def time_embree(out_dir, threads):
     }
 
 
-def run_illume(scene, kind, rays, threads, out_dir):
+def run_illume(scene, kind, rays, threads, out_dir, exe=None):
     env = dict(os.environ)
-    cmd = ["cargo", "run", "--release", "-q", "-p", "illume-accel", "--example", "dump_rays", "--",
-           scene, kind, str(rays), str(threads), str(out_dir)]
+    prefix = [exe] if exe else ["cargo", "run", "--release", "-q", "-p", "illume-accel", "--example", "dump_rays", "--"]
+    cmd = prefix + [scene, kind, str(rays), str(threads), str(out_dir)]
     proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True)
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed:\n{proc.stderr}")
@@ -140,6 +144,7 @@ def main():
     ap.add_argument("--scenes", nargs="*", default=DEFAULT_SCENES)
     ap.add_argument("--kinds", nargs="*", default=["incoherent", "primary"])
     ap.add_argument("--rounds", type=int, default=3, help="alternating illume/Embree rounds (medians are reported)")
+    ap.add_argument("--illume-exe", default=None, help="a built dump_rays example to run instead of `cargo run`")
     args = ap.parse_args()
     try:
         import embreex  # noqa: F401
@@ -157,7 +162,7 @@ def main():
             for _ in range(args.rounds):
                 with tempfile.TemporaryDirectory(prefix="illume-embree-") as tmp:
                     out = Path(tmp)
-                    ill = run_illume(scene, kind, args.rays, args.threads, out)
+                    ill = run_illume(scene, kind, args.rays, args.threads, out, args.illume_exe)
                     emb = time_embree(out, args.threads)
                     t_illume = np.fromfile(out / "illume_t.f32", dtype="<f4")
                     agree = agreement(t_illume, emb["t"])
@@ -171,6 +176,8 @@ def main():
             row = {
                 "scene": name, "kind": kind, "rays": ill["rays"], "triangles": ill["triangles"],
                 "illume_build_ms": med([r[0]["build_ms"] for r in rounds]),
+                "illume_memory_bytes": ill["memory_bytes"],
+                "illume_kernel": ill.get("kernel", "portable"),
                 "embree_build_ms": round(med([r[1]["build_ms"] for r in rounds]), 2),
                 "illume_rays_per_s": round(ill_rps),
                 "embree_rays_per_s_1thread": round(emb_1),

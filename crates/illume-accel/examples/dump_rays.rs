@@ -12,7 +12,8 @@
 //!
 //! Files (little-endian f32): `triangles.f32` (9 per triangle), `rays.f32` (origin and
 //! direction, 6 per ray), `illume_t.f32` (illume's hit distance per ray, +∞ for a miss).
-//! The last line printed is `ILLUME {json}` with the timings.
+//! The last line printed is `ILLUME {json}` with the timings and the traversal kernel
+//! (`ILLUME_ACCEL_KERNEL=portable|avx2` forces one).
 
 use illume_accel::Tracer;
 use illume_accel::ray_sets::{incoherent_rays, primary_rays};
@@ -90,12 +91,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let hit_count = hits.iter().flatten().count();
     println!(
         "ILLUME {{\"scene\": \"{scene_arg}\", \"kind\": \"{kind}\", \"rays\": {}, \"threads\": {threads}, \"triangles\": {}, \"build_ms\": {build_ms:.2}, \
-         \"median_s\": {median:.6}, \"rays_per_s\": {:.0}, \"hits\": {hit_count}, \"nodes\": {}, \"memory_bytes\": {}, \"cpu_rays_per_s_1thread\": {cpu_rays_per_s:.0}}}",
+         \"median_s\": {median:.6}, \"rays_per_s\": {:.0}, \"hits\": {hit_count}, \"nodes\": {}, \"memory_bytes\": {}, \"cpu_rays_per_s_1thread\": {cpu_rays_per_s:.0}, \"kernel\": \"{}\"}}",
         rays.len(),
         scene.instanced_triangle_count(),
         rays.len() as f64 / median,
         stats.mesh_nodes + stats.instance_nodes,
-        stats.memory_bytes
+        stats.memory_bytes,
+        tracer.kernel().name()
     );
     Ok(())
 }

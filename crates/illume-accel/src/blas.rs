@@ -1,38 +1,44 @@
 //! The mesh level: one BVH per mesh, built once in object space, with the mesh's
-//! triangles copied in leaf order (corner plus two edges, four triangles to a packet) so a
-//! leaf is one contiguous run of packets.
+//! triangles copied in leaf order (corner plus two edges, eight triangles to a packet) so
+//! a leaf is one contiguous run of packets.
 
 use crate::BvhSettings;
 use crate::build::{BuildParams, build_binary};
-use crate::wide::{Bvh4, MAX_LEAF, PreparedRay, StackEntry, traverse};
+use crate::kernel::BoxKernel;
+use crate::wide::{MAX_LEAF, PreparedRay, StackEntry, WideBvh, traverse};
+
 use illume_core::{Aabb, Vec2, Vec3, Vec4};
 use illume_scene::{Mesh, MeshCutout};
 
-/// Up to four triangles ready for Möller–Trumbore, tested together in 4-lane arithmetic:
-/// corners `v0`, edges `e1 = v1 − v0` and `e2 = v2 − v0` (structure of arrays), and each
-/// lane's triangle index in the mesh. An unused lane has zero edges (it never hits) and
-/// index [`TrianglePacket::UNUSED`].
+/// Triangles per packet.
+pub(crate) const LANES: usize = 8;
+
+/// Up to eight triangles ready for Möller–Trumbore, tested together in one 8-lane pass
+/// (AVX2) or two 4-lane halves (portable): corners `v0`, edges `e1 = v1 − v0` and
+/// `e2 = v2 − v0` (structure of arrays), and each lane's triangle index in the mesh. Used
+/// lanes come first; an unused lane has zero edges (it never hits) and index
+/// [`TrianglePacket::UNUSED`].
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
+#[repr(C, align(32))]
 pub(crate) struct TrianglePacket {
     /// `[v0.x, v0.y, v0.z, e1.x, e1.y, e1.z, e2.x, e2.y, e2.z]`, one array lane per triangle.
-    pub coords: [[f32; 4]; 9],
+    pub coords: [[f32; LANES]; 9],
     /// Mesh triangle index per lane.
-    pub index: [u32; 4],
+    pub index: [u32; LANES],
 }
 
-const _: () = assert!(std::mem::size_of::<TrianglePacket>() == 160);
+const _: () = assert!(std::mem::size_of::<TrianglePacket>() == 320);
 
 impl TrianglePacket {
     /// Index of an unused lane.
     pub const UNUSED: u32 = u32::MAX;
 
-    /// Packs up to four triangles given as `(index, corners)`.
+    /// Packs up to eight triangles given as `(index, corners)`.
     fn new(tris: &[(u32, [Vec3; 3])]) -> Self {
-        debug_assert!(!tris.is_empty() && tris.len() <= 4);
+        debug_assert!(!tris.is_empty() && tris.len() <= LANES);
         let mut p = TrianglePacket {
-            coords: [[0.0; 4]; 9],
-            index: [Self::UNUSED; 4],
+            coords: [[0.0; LANES]; 9],
+            index: [Self::UNUSED; LANES],
         };
         for (lane, &(index, [v0, v1, v2])) in tris.iter().enumerate() {
             let (e1, e2) = (v1 - v0, v2 - v0);
@@ -50,25 +56,40 @@ impl TrianglePacket {
     /// Used lanes as `(mesh triangle index, corners)`; corners are rebuilt from the edges,
     /// so within rounding of the mesh's.
     pub fn triangles(&self) -> impl Iterator<Item = (u32, [Vec3; 3])> + '_ {
-        (0..4).filter(|&l| self.index[l] != Self::UNUSED).map(|l| {
-            let c = |k: usize| {
-                Vec3::new(
-                    self.coords[k][l],
-                    self.coords[k + 1][l],
-                    self.coords[k + 2][l],
-                )
-            };
-            let (v0, e1, e2) = (c(0), c(3), c(6));
-            (self.index[l], [v0, v0 + e1, v0 + e2])
-        })
+        (0..LANES)
+            .filter(|&l| self.index[l] != Self::UNUSED)
+            .map(|l| {
+                let c = |k: usize| {
+                    Vec3::new(
+                        self.coords[k][l],
+                        self.coords[k + 1][l],
+                        self.coords[k + 2][l],
+                    )
+                };
+                let (v0, e1, e2) = (c(0), c(3), c(6));
+                (self.index[l], [v0, v0 + e1, v0 + e2])
+            })
     }
 
-    /// Per lane: hit distance (valid where the returned bit is set), barycentrics `b1`,
-    /// `b2`; the bits mark lanes hit with `t` in `(ray.t_min, t_max)`. The arithmetic and
-    /// the acceptance on edges are those of [`crate::triangle::intersect_triangle`].
+    /// Number of 4-lane halves with a used lane (1 or 2).
     #[inline(always)]
-    fn intersect(&self, ray: &PreparedRay, t_max: f32) -> (Vec4, Vec4, Vec4, u32) {
-        let c = |k: usize| Vec4::from_array(self.coords[k]);
+    pub(crate) fn halves(&self) -> usize {
+        1 + usize::from(self.index[4] != Self::UNUSED)
+    }
+
+    /// Per lane of half `half` (lanes `4·half .. 4·half + 4`): hit distance (valid where
+    /// the returned bit is set), barycentrics `b1`, `b2`; bit `i` marks lane `4·half + i`
+    /// hit with `t` in `(ray.t_min, t_max)`. The arithmetic and the acceptance on edges
+    /// are those of [`crate::triangle::intersect_triangle`].
+    #[inline(always)]
+    pub(crate) fn intersect_half(
+        &self,
+        half: usize,
+        ray: &PreparedRay,
+        t_max: f32,
+    ) -> (Vec4, Vec4, Vec4, u32) {
+        let lanes = 4 * half..4 * half + 4;
+        let c = |k: usize| Vec4::from_slice(&self.coords[k][lanes.clone()]);
         let (e1x, e1y, e1z) = (c(3), c(4), c(5));
         let (e2x, e2y, e2z) = (c(6), c(7), c(8));
         let [dx, dy, dz] = ray.dir.to_array().map(Vec4::splat);
@@ -107,8 +128,8 @@ impl TrianglePacket {
 #[derive(Clone, Debug)]
 pub(crate) struct Blas {
     /// The tree; leaves index `packets`.
-    pub bvh: Bvh4,
-    /// Triangles in leaf order, four to a packet (a leaf is a run of whole packets).
+    pub bvh: WideBvh,
+    /// Triangles in leaf order, eight to a packet (a leaf is a run of whole packets).
     pub packets: Vec<TrianglePacket>,
     /// Number of mesh triangles.
     pub triangle_count: usize,
@@ -118,7 +139,7 @@ pub(crate) struct Blas {
 }
 
 impl Blas {
-    /// Builds the BVH of `mesh` (binned SAH, then collapsed to four-wide nodes), whose
+    /// Builds the BVH of `mesh` (binned SAH, then collapsed to eight-wide nodes), whose
     /// alpha-masked triangles have the holes of `cutout`.
     pub fn build(mesh: &Mesh, cutout: Option<MeshCutout>, settings: &BvhSettings) -> Blas {
         let boxes: Vec<Aabb> = (0..mesh.triangle_count())
@@ -131,7 +152,7 @@ impl Blas {
         };
         let mut bin = build_binary(&boxes, params);
         // Repack every leaf's triangles into whole packets; leaves then index packets.
-        let mut packets = Vec::with_capacity(mesh.triangle_count() / 3 + 1);
+        let mut packets = Vec::with_capacity(mesh.triangle_count() / 6 + 1);
         for node in bin.nodes.iter_mut().filter(|n| n.count > 0) {
             let tris: Vec<(u32, [Vec3; 3])> = bin.order
                 [node.first as usize..(node.first + node.count) as usize]
@@ -139,11 +160,11 @@ impl Blas {
                 .map(|&t| (t, mesh.triangle(t as usize)))
                 .collect();
             let first = packets.len() as u32;
-            packets.extend(tris.chunks(4).map(TrianglePacket::new));
+            packets.extend(tris.chunks(LANES).map(TrianglePacket::new));
             node.first = first;
             node.count = packets.len() as u32 - first;
         }
-        let bvh = Bvh4::from_binary(&bin, &|_, _| u32::MAX);
+        let bvh = WideBvh::from_binary(&bin, &|_, _| u32::MAX);
         Blas {
             bvh,
             packets,
@@ -176,66 +197,140 @@ impl Blas {
 
     /// Closest hit `(t, triangle index, barycentrics, packet index, lane)` with
     /// `t < t_max`.
-    #[inline]
-    pub fn intersect(
+    #[inline(always)]
+    pub fn intersect<K: BoxKernel>(
         &self,
+        k: K,
         ray: &PreparedRay,
         t_max: f32,
         stack: &mut [StackEntry],
     ) -> Option<(f32, u32, Vec2, u32, u32)> {
         // Meshes without holes pay nothing for them: the test is compiled out.
         if self.cutout.is_some() {
-            self.intersect_with::<true>(ray, t_max, stack)
+            self.intersect_with::<K, true>(k, ray, t_max, stack)
         } else {
-            self.intersect_with::<false>(ray, t_max, stack)
+            self.intersect_with::<K, false>(k, ray, t_max, stack)
         }
     }
 
     /// [`Blas::intersect`], testing alpha-mask holes when `CUT`.
     #[inline(always)]
-    fn intersect_with<const CUT: bool>(
+    fn intersect_with<K: BoxKernel, const CUT: bool>(
         &self,
+        k: K,
         ray: &PreparedRay,
         t_max: f32,
         stack: &mut [StackEntry],
     ) -> Option<(f32, u32, Vec2, u32, u32)> {
         let mut best = None;
-        traverse::<false>(&self.bvh, ray, t_max, u32::MAX, stack, |range, t_max, _| {
-            for (k, packet) in self.packets[range.clone()].iter().enumerate() {
-                let (t, b1, b2, mut bits) = packet.intersect(ray, *t_max);
-                if CUT && bits != 0 {
-                    bits = self.keep_lanes(packet, bits, b1, b2);
-                }
-                if bits != 0 {
-                    let t = t.to_array();
-                    let mut lane = bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    while bits != 0 {
-                        let l = bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        if t[l] < t[lane] {
-                            lane = l;
+        traverse::<K, false>(
+            k,
+            &self.bvh,
+            ray,
+            t_max,
+            u32::MAX,
+            stack,
+            #[inline(always)]
+            |range, t_max, _| {
+                let packets = &self.packets[range.clone()];
+                for (p, packet) in packets.iter().enumerate() {
+                    if K::WIDE_PACKETS {
+                        // All eight lanes in one pass; the closest lane, ties to the lower
+                        // lane, is the hit the two halves tested in turn would give.
+                        let (t, b1, b2, mut bits) = k.intersect_packet(packet, ray, *t_max);
+                        if CUT && bits != 0 {
+                            bits = self.keep_packet_lanes(packet, bits, &b1, &b2);
+                        }
+                        if bits != 0 {
+                            let lane = closest_lane(&t, bits);
+                            *t_max = t[lane];
+                            best = Some((
+                                t[lane],
+                                packet.index[lane],
+                                Vec2::new(b1[lane], b2[lane]),
+                                (range.start + p) as u32,
+                                lane as u32,
+                            ));
+                        }
+                        continue;
+                    }
+                    for half in 0..packet.halves() {
+                        let (t, b1, b2, mut bits) = packet.intersect_half(half, ray, *t_max);
+                        if CUT && bits != 0 {
+                            bits = self.keep_lanes(packet, half, bits, b1, b2);
+                        }
+                        if bits != 0 {
+                            let t = t.to_array();
+                            let lane = closest_lane(&t, bits);
+                            *t_max = t[lane];
+                            best = Some((
+                                t[lane],
+                                packet.index[4 * half + lane],
+                                Vec2::new(b1.to_array()[lane], b2.to_array()[lane]),
+                                (range.start + p) as u32,
+                                (4 * half + lane) as u32,
+                            ));
                         }
                     }
-                    *t_max = t[lane];
-                    best = Some((
-                        t[lane],
-                        packet.index[lane],
-                        Vec2::new(b1.to_array()[lane], b2.to_array()[lane]),
-                        (range.start + k) as u32,
-                        lane as u32,
-                    ));
                 }
-            }
-            false
-        });
+                false
+            },
+        );
         best
     }
 
-    /// The lanes of `bits` (hits of `packet` at barycentrics `b1`, `b2`) that are not in
-    /// a hole of the cut-out.
+    /// [`Blas::keep_lanes`] for all eight lanes of `packet` tested together.
     #[cold]
-    fn keep_lanes(&self, packet: &TrianglePacket, mut bits: u32, b1: Vec4, b2: Vec4) -> u32 {
+    fn keep_packet_lanes(
+        &self,
+        packet: &TrianglePacket,
+        bits: u32,
+        b1: &[f32; LANES],
+        b2: &[f32; LANES],
+    ) -> u32 {
+        let half = |h: usize| {
+            let lanes = 4 * h..4 * h + 4;
+            self.keep_lanes(
+                packet,
+                h,
+                (bits >> (4 * h)) & 15,
+                Vec4::from_slice(&b1[lanes.clone()]),
+                Vec4::from_slice(&b2[lanes]),
+            ) << (4 * h)
+        };
+        half(0) | half(1)
+    }
+
+    /// True when `packet` has a hit with `t < t_max` (not in a hole, when `CUT`), tested
+    /// in 4-lane halves.
+    #[inline(always)]
+    fn packet_occludes<const CUT: bool>(
+        &self,
+        packet: &TrianglePacket,
+        ray: &PreparedRay,
+        t_max: f32,
+    ) -> bool {
+        (0..packet.halves()).any(|half| {
+            let (_, b1, b2, bits) = packet.intersect_half(half, ray, t_max);
+            if CUT && bits != 0 {
+                self.keep_lanes(packet, half, bits, b1, b2) != 0
+            } else {
+                bits != 0
+            }
+        })
+    }
+
+    /// The lanes of `bits` (hits of half `half` of `packet` at barycentrics `b1`, `b2`)
+    /// that are not in a hole of the cut-out.
+    #[cold]
+    fn keep_lanes(
+        &self,
+        packet: &TrianglePacket,
+        half: usize,
+        mut bits: u32,
+        b1: Vec4,
+        b2: Vec4,
+    ) -> u32 {
         let Some(cutout) = &self.cutout else {
             return bits;
         };
@@ -244,7 +339,7 @@ impl Blas {
         while rest != 0 {
             let lane = rest.trailing_zeros() as usize;
             rest &= rest - 1;
-            let triangle = packet.index[lane];
+            let triangle = packet.index[4 * half + lane];
             if cutout.is_tested(triangle) && !cutout.keeps(triangle, Vec2::new(b1[lane], b2[lane]))
             {
                 bits &= !(1 << lane);
@@ -254,35 +349,71 @@ impl Blas {
     }
 
     /// True when any triangle is hit with `t < t_max`.
-    #[inline]
-    pub fn occluded(&self, ray: &PreparedRay, t_max: f32, stack: &mut [StackEntry]) -> bool {
+    #[inline(always)]
+    pub fn occluded<K: BoxKernel>(
+        &self,
+        k: K,
+        ray: &PreparedRay,
+        t_max: f32,
+        stack: &mut [StackEntry],
+    ) -> bool {
         if self.cutout.is_some() {
-            self.occluded_with::<true>(ray, t_max, stack)
+            self.occluded_with::<K, true>(k, ray, t_max, stack)
         } else {
-            self.occluded_with::<false>(ray, t_max, stack)
+            self.occluded_with::<K, false>(k, ray, t_max, stack)
         }
     }
 
     /// [`Blas::occluded`], testing alpha-mask holes when `CUT`.
     #[inline(always)]
-    fn occluded_with<const CUT: bool>(
+    fn occluded_with<K: BoxKernel, const CUT: bool>(
         &self,
+        k: K,
         ray: &PreparedRay,
         t_max: f32,
         stack: &mut [StackEntry],
     ) -> bool {
         let mut hit = false;
-        traverse::<false>(&self.bvh, ray, t_max, u32::MAX, stack, |range, t_max, _| {
-            hit = self.packets[range].iter().any(|p| {
-                let (_, b1, b2, bits) = p.intersect(ray, *t_max);
-                if CUT && bits != 0 {
-                    self.keep_lanes(p, bits, b1, b2) != 0
-                } else {
-                    bits != 0
-                }
-            });
-            hit
-        });
+        traverse::<K, false>(
+            k,
+            &self.bvh,
+            ray,
+            t_max,
+            u32::MAX,
+            stack,
+            #[inline(always)]
+            |range, t_max, _| {
+                let packets = &self.packets[range];
+                hit = packets.iter().any(|packet| {
+                    if K::WIDE_PACKETS {
+                        let (_, b1, b2, bits) = k.intersect_packet(packet, ray, *t_max);
+                        if CUT && bits != 0 {
+                            self.keep_packet_lanes(packet, bits, &b1, &b2) != 0
+                        } else {
+                            bits != 0
+                        }
+                    } else {
+                        self.packet_occludes::<CUT>(packet, ray, *t_max)
+                    }
+                });
+                hit
+            },
+        );
         hit
     }
+}
+
+/// The lane of `bits` (at least one set) with the smallest `t`; ties go to the lower lane.
+#[inline(always)]
+fn closest_lane(t: &[f32], mut bits: u32) -> usize {
+    let mut lane = bits.trailing_zeros() as usize;
+    bits &= bits - 1;
+    while bits != 0 {
+        let l = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        if t[l] < t[lane] {
+            lane = l;
+        }
+    }
+    lane
 }

@@ -2,7 +2,7 @@
 //! the mesh level (boxes of triangles) and the instance level (world boxes of instances).
 //!
 //! The binary tree is an intermediate form: [`crate::wide`] collapses it into the
-//! four-wide nodes that traversal uses.
+//! eight-wide nodes that traversal uses.
 
 use illume_core::{Aabb, Vec3A};
 

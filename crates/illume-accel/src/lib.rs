@@ -1,6 +1,7 @@
-//! Ray queries against a [`Scene`]: a two-level acceleration structure with one BVH per
-//! mesh (built once) and an instance level over them (rebuilt from the instances' world
-//! boxes when transforms change, so a moving object never rebuilds its own BVH).
+//! Ray queries against a [`Scene`](illume_scene::Scene): a two-level acceleration
+//! structure with one BVH per mesh (built once) and an instance level over them (rebuilt
+//! from the instances' world boxes when transforms change, so a moving object never
+//! rebuilds its own BVH).
 //!
 //! Queries take an instance mask: a ray sees instance `i` when `ray_mask & i.mask != 0`
 //! (see [`illume_scene::MASK_DEFAULT`]), so a technique can include or ignore chosen
@@ -19,10 +20,16 @@
 //! # Design
 //!
 //! * Mesh level: binned SAH (32 bins, all three axes) over triangle boxes, with the cost
-//!   of a leaf counted in packets of four triangles, builds a binary tree that is
-//!   collapsed into four-wide nodes of 128 bytes (child boxes as structure of arrays, so
-//!   one ray meets four boxes in 4-lane arithmetic). Triangles are copied in leaf order,
-//!   four to a 160-byte packet (corner and two edges per lane), and tested four at once.
+//!   of a leaf counted in groups of four triangles, builds a binary tree that is
+//!   collapsed into eight-wide nodes of 256 bytes (child boxes as structure of arrays, so
+//!   one ray meets eight boxes in one 8-lane test). Triangles are copied in leaf order,
+//!   eight to a 320-byte packet (corner and two edges per lane, structure of arrays), so a
+//!   leaf of up to eight triangles is one packet.
+//! * Kernels ([`TraversalKernel`]): on CPUs with AVX2, detected at run time, the whole
+//!   query is compiled for AVX2, and the box test of a node and the triangle test of a
+//!   packet are one 8-lane pass each; elsewhere boxes and packets are tested in portable
+//!   4-lane halves. Both use the same operations in the same order and return
+//!   bit-identical hits; [`KERNEL_ENV`] or [`Tracer::set_kernel`] forces one.
 //! * Instance level: the same builder over the instances' world boxes (the mesh BVH's
 //!   box under `world_from_object`), rebuilt by [`Tracer::update`] (cost linear in the
 //!   instance count, independent of triangle counts); each node keeps the union of the masks below each child, so
@@ -46,12 +53,14 @@
 mod blas;
 pub mod brute_force;
 mod build;
+mod kernel;
 pub mod ray_sets;
 mod tracer;
 pub mod triangle;
 mod validate;
 mod wide;
 
+pub use kernel::{KERNEL_ENV, KernelUnavailable, TraversalKernel};
 pub use tracer::{BvhSettings, ScopedTracer, Tracer, TracerStats};
 
 use illume_core::{Vec2, Vec3};

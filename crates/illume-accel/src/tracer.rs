@@ -3,7 +3,8 @@
 
 use crate::blas::Blas;
 use crate::build::{BuildParams, build_binary};
-use crate::wide::{Bvh4, Item, PreparedRay, StackEntry, traverse, with_stack};
+use crate::kernel::{self, BoxKernel, Kernel, KernelUnavailable, TraversalKernel};
+use crate::wide::{Item, PreparedRay, StackEntry, WideBvh, new_stack, traverse, with_stack};
 use crate::{Hit, HitGeometry};
 use illume_core::{Aabb, Affine3A, Mat3A, Ray, Vec3, Vec3A};
 use illume_scene::{InstanceId, MeshCutout, MeshId, Scene};
@@ -37,9 +38,9 @@ impl ScopedTracer<'_> {
 pub struct TracerStats {
     /// Mesh BVHs held (one per mesh).
     pub mesh_bvhs: usize,
-    /// Four-wide nodes over all mesh BVHs.
+    /// Eight-wide nodes over all mesh BVHs.
     pub mesh_nodes: usize,
-    /// Four-wide nodes of the instance level.
+    /// Eight-wide nodes of the instance level.
     pub instance_nodes: usize,
     /// Triangles stored over all mesh BVHs (each mesh once, however often instanced).
     pub triangles: usize,
@@ -93,8 +94,8 @@ pub struct BvhSettings {
     /// Cost of visiting a node relative to one triangle-packet test, in the surface area
     /// heuristic. Higher: fewer, fuller leaves.
     pub node_cost: f32,
-    /// Count a leaf's cost in packets of four triangles (as they are tested) rather than
-    /// in triangles. True favours leaves of 4 and 8 triangles.
+    /// Count a leaf's cost in groups of four triangles (a packet's 4-lane halves) rather
+    /// than in triangles. True favours leaves of 4 and 8 triangles.
     pub packet_aware_sah: bool,
 }
 
@@ -123,14 +124,19 @@ pub struct Tracer {
     /// One BVH per scene mesh, indexed like `Scene::meshes`; shared between clones.
     pub(crate) blases: Vec<Arc<Blas>>,
     /// Instance level; leaves index `instances`.
-    pub(crate) tlas: Bvh4,
+    pub(crate) tlas: WideBvh,
     /// Instances in instance-level leaf order.
     pub(crate) instances: Vec<InstanceRecord>,
     /// Position in `instances` of each scene instance (`u32::MAX`: not in the tracer).
     pub(crate) record_of_instance: Vec<u32>,
     /// Sizes and timings.
     pub(crate) stats: TracerStats,
+    /// The instruction set queries run in.
+    pub(crate) kernel: Kernel,
 }
+
+/// A closest hit with where its triangle is stored: `(hit, mesh, packet, lane)`.
+pub(crate) type Closest = (Hit, u32, u32, u32);
 
 impl Tracer {
     /// Builds the acceleration structure for `scene` at its current time.
@@ -143,7 +149,7 @@ impl Tracer {
         let mut tracer = Self {
             settings,
             blases: Vec::new(),
-            tlas: Bvh4 {
+            tlas: WideBvh {
                 root: Item::NONE,
                 bounds: Aabb::EMPTY,
                 nodes: Vec::new(),
@@ -151,6 +157,8 @@ impl Tracer {
             instances: Vec::new(),
             record_of_instance: Vec::new(),
             stats: TracerStats::default(),
+            kernel: Kernel::new(TraversalKernel::default_for_this_cpu())
+                .unwrap_or(Kernel::Portable(kernel::Portable)),
         };
         tracer.update(scene);
         tracer
@@ -206,7 +214,7 @@ impl Tracer {
             self.record_of_instance[r.id.index()] = k as u32;
         }
         let instances = &self.instances;
-        self.tlas = Bvh4::from_binary(&bin, &|first, count| {
+        self.tlas = WideBvh::from_binary(&bin, &|first, count| {
             instances[first as usize..(first + count) as usize]
                 .iter()
                 .fold(0, |m, r| m | r.mask)
@@ -225,6 +233,19 @@ impl Tracer {
     /// Sizes and build times.
     pub fn stats(&self) -> TracerStats {
         self.stats
+    }
+
+    /// The kernel queries run in (at construction:
+    /// [`TraversalKernel::default_for_this_cpu`]).
+    pub fn kernel(&self) -> TraversalKernel {
+        self.kernel.kind()
+    }
+
+    /// Makes queries run in `kernel` (every kernel gives the same hits bit for bit);
+    /// an error, leaving the kernel unchanged, when this CPU cannot run it.
+    pub fn set_kernel(&mut self, kernel: TraversalKernel) -> Result<(), KernelUnavailable> {
+        self.kernel = Kernel::new(kernel).ok_or(KernelUnavailable(kernel))?;
+        Ok(())
     }
 
     /// Address of the storage of mesh `mesh`'s BVH (stable as long as that BVH is not
@@ -294,7 +315,7 @@ impl Tracer {
     ///
     /// Contract: the ray enters the instance's object space and meets the triangle with
     /// exactly the arithmetic of [`Tracer::intersect`] (same object-space ray, the
-    /// Möller–Trumbore of [`triangle::intersect_triangle`]), so when the closest hit of
+    /// Möller–Trumbore of [`crate::triangle::intersect_triangle`]), so when the closest hit of
     /// `ray` is this triangle, the two results are equal bit for bit. `None` when the ray
     /// misses the triangle within `(ray.t_min, ray.t_max)` or the instance is not in the
     /// tracer (unknown id, empty mesh, singular transform). Masks and alpha-mask holes are not
@@ -353,23 +374,18 @@ impl Tracer {
         self.batch(rays, |r, stack| self.occluded_with(r, mask, stack))
     }
 
-    /// Runs `query` over `rays` in parallel chunks, each chunk with one traversal stack.
-    fn batch<T: Send + Clone + Default>(
+    /// Runs `query` over `rays` in parallel runs of at least `BATCH_CHUNK` rays, each run
+    /// with one traversal stack; results are written once, straight into the output (no
+    /// pre-filled vector to overwrite).
+    fn batch<T: Send>(
         &self,
         rays: &[Ray],
         query: impl Fn(&Ray, &mut [StackEntry]) -> T + Sync,
     ) -> Vec<T> {
-        let mut out = vec![T::default(); rays.len()];
-        out.par_chunks_mut(BATCH_CHUNK)
-            .zip(rays.par_chunks(BATCH_CHUNK))
-            .for_each(|(out, rays)| {
-                with_stack(|stack| {
-                    for (o, r) in out.iter_mut().zip(rays) {
-                        *o = query(r, stack);
-                    }
-                })
-            });
-        out
+        rays.par_iter()
+            .with_min_len(BATCH_CHUNK)
+            .map_init(new_stack, |stack, r| query(r, stack))
+            .collect()
     }
 
     #[inline]
@@ -377,25 +393,34 @@ impl Tracer {
         self.closest(ray, mask, stack).map(|c| c.0)
     }
 
-    /// Closest hit with where its triangle is stored: `(hit, mesh, packet, lane)`.
+    /// Closest hit with where its triangle is stored, in the tracer's kernel.
+    #[inline]
+    fn closest(&self, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> Option<Closest> {
+        kernel::closest(self, ray, mask, stack)
+    }
+
+    /// [`Tracer::closest`] with the box tests of `k`.
     #[inline(always)]
-    fn closest(
+    pub(crate) fn closest_in<K: BoxKernel>(
         &self,
+        k: K,
         ray: &Ray,
         mask: u32,
         stack: &mut [StackEntry],
-    ) -> Option<(Hit, u32, u32, u32)> {
+    ) -> Option<Closest> {
         if !usable_ray(ray) {
             return None;
         }
         let world_ray = PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min);
         let mut best = None;
-        traverse::<true>(
+        traverse::<K, true>(
+            k,
             &self.tlas,
             &world_ray,
             ray.t_max,
             mask,
             stack,
+            #[inline(always)]
             |range, t_max, free| {
                 for inst in &self.instances[range] {
                     if inst.mask & mask == 0 {
@@ -403,7 +428,7 @@ impl Tracer {
                     }
                     let local = object_ray(inst, &world_ray);
                     if let Some((t, triangle, barycentrics, packet, lane)) =
-                        self.blases[inst.mesh as usize].intersect(&local, *t_max, free)
+                        self.blases[inst.mesh as usize].intersect(k, &local, *t_max, free)
                     {
                         *t_max = t;
                         best = Some((
@@ -427,21 +452,36 @@ impl Tracer {
 
     #[inline]
     fn occluded_with(&self, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> bool {
+        kernel::occluded(self, ray, mask, stack)
+    }
+
+    /// [`Tracer::occluded`] with the box tests of `k`.
+    #[inline(always)]
+    pub(crate) fn occluded_in<K: BoxKernel>(
+        &self,
+        k: K,
+        ray: &Ray,
+        mask: u32,
+        stack: &mut [StackEntry],
+    ) -> bool {
         if !usable_ray(ray) {
             return false;
         }
         let world_ray = PreparedRay::new(ray.origin.into(), ray.dir.into(), ray.t_min);
         let mut hit = false;
-        traverse::<true>(
+        traverse::<K, true>(
+            k,
             &self.tlas,
             &world_ray,
             ray.t_max,
             mask,
             stack,
+            #[inline(always)]
             |range, t_max, free| {
                 hit = self.instances[range].iter().any(|inst| {
                     inst.mask & mask != 0
                         && self.blases[inst.mesh as usize].occluded(
+                            k,
                             &object_ray(inst, &world_ray),
                             *t_max,
                             free,

@@ -5,7 +5,7 @@
 use crate::Tracer;
 use crate::blas::Blas;
 use crate::tracer::tolerance;
-use crate::wide::{self, Bvh4, Item};
+use crate::wide::{self, Item, WideBvh};
 use illume_core::Aabb;
 
 impl Tracer {
@@ -88,7 +88,7 @@ type LeafCheck<'a> = dyn FnMut(std::ops::Range<usize>, &Aabb, u32, &str) -> Resu
 /// Walks every node of `bvh` checking that each node's child boxes lie inside the box
 /// its parent holds for it and that unused slots are empty; calls
 /// `leaf(range, box, mask, place)` for every leaf with the box and mask its parent holds.
-fn validate_tree(bvh: &Bvh4, leaf: &mut LeafCheck<'_>) -> Result<(), String> {
+fn validate_tree(bvh: &WideBvh, leaf: &mut LeafCheck<'_>) -> Result<(), String> {
     if bvh.root == Item::NONE {
         return if bvh.nodes.is_empty() {
             Ok(())

@@ -1,23 +1,26 @@
-//! The four-wide BVH that traversal walks: each 128-byte node (two cache lines) holds the
-//! boxes of its up to four children in structure-of-arrays form, so one ray is tested
-//! against four boxes with 4-lane arithmetic, and children are visited nearest first.
+//! The eight-wide BVH that traversal walks: each 256-byte node (four cache lines) holds the
+//! boxes of its up to eight children in structure-of-arrays form, so one ray is tested
+//! against eight boxes at once (one 8-lane AVX2 test or two 4-lane ones, see
+//! [`crate::kernel`]), and children are visited nearest first.
 //!
 //! A child reference ([`Item`]) is either an interior node or a leaf (a run of
 //! primitives in the owner's primitive array), encoded in one `u32`.
 
 use crate::build::{BinaryBvh, BinaryNode, MAX_DEPTH};
-use illume_core::{Aabb, Vec3, Vec3A, Vec4};
+use crate::kernel::BoxKernel;
+use illume_core::{Aabb, Vec3, Vec3A};
 use std::cell::RefCell;
 
 /// Children per node.
-pub(crate) const WIDTH: usize = 4;
+pub(crate) const WIDTH: usize = 8;
 /// Largest primitive count of a leaf (fits the 4-bit count of [`Item`]).
 pub(crate) const MAX_LEAF: usize = 16;
 /// Traversal stack entries: each level of the tree pushes at most `WIDTH - 1`.
 pub(crate) const STACK_SIZE: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 /// Relative widening of a box's exit distance that makes the slab test conservative
 /// under rounding (2γ₃ with γₙ = nε/(1 − nε), ε = 2⁻²⁴; Ize 2013, pbrt-v4 §6.8.2).
-const EXIT_SCALE: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
+pub(crate) const EXIT_SCALE: f32 =
+    1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// A child reference: bit 31 set = leaf with primitives `first .. first + count`
 /// (`first` in bits 4..31, `count − 1` in bits 0..4); clear = interior node index.
@@ -65,12 +68,12 @@ impl Item {
     }
 }
 
-/// Four children's boxes (structure of arrays: `bounds[k][i]` is coordinate `k` of child
+/// Eight children's boxes (structure of arrays: `bounds[k][i]` is coordinate `k` of child
 /// `i`, with `k` = min x, min y, min z, max x, max y, max z), references and masks. An
 /// unused slot has an empty box (min = +∞, max = −∞) and mask 0, so it never hits.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-pub(crate) struct Node4 {
+pub(crate) struct WideNode {
     /// Child boxes, structure of arrays.
     pub bounds: [[f32; WIDTH]; 6],
     /// Child references ([`Item`] bits).
@@ -79,10 +82,10 @@ pub(crate) struct Node4 {
     pub masks: [u32; WIDTH],
 }
 
-const _: () = assert!(std::mem::size_of::<Node4>() == 128);
+const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
-impl Node4 {
-    const EMPTY: Node4 = Node4 {
+impl WideNode {
+    const EMPTY: WideNode = WideNode {
         bounds: [
             [f32::INFINITY; WIDTH],
             [f32::INFINITY; WIDTH],
@@ -113,22 +116,22 @@ impl Node4 {
     }
 }
 
-/// A four-wide BVH: the root reference, its box, and the nodes.
+/// An eight-wide BVH: the root reference, its box, and the nodes.
 #[derive(Clone, Debug)]
-pub(crate) struct Bvh4 {
+pub(crate) struct WideBvh {
     /// Root reference ([`Item::NONE`] for an empty tree).
     pub root: Item,
     /// Box of everything.
     pub bounds: Aabb,
     /// Interior nodes.
-    pub nodes: Vec<Node4>,
+    pub nodes: Vec<WideNode>,
 }
 
-impl Bvh4 {
+impl WideBvh {
     /// Collapses a binary BVH; `leaf_mask(first, count)` gives a leaf's mask.
-    pub fn from_binary(bin: &BinaryBvh, leaf_mask: &dyn Fn(u32, u32) -> u32) -> Bvh4 {
+    pub fn from_binary(bin: &BinaryBvh, leaf_mask: &dyn Fn(u32, u32) -> u32) -> WideBvh {
         let Some(root) = bin.nodes.first() else {
-            return Bvh4 {
+            return WideBvh {
                 root: Item::NONE,
                 bounds: Aabb::EMPTY,
                 nodes: Vec::new(),
@@ -139,11 +142,11 @@ impl Bvh4 {
             Item::leaf(root.first, root.count)
         } else {
             let mut mask = 0;
-            nodes.push(Node4::EMPTY);
+            nodes.push(WideNode::EMPTY);
             collapse(bin, 0, &mut nodes, 0, leaf_mask, &mut mask);
             Item(0)
         };
-        Bvh4 {
+        WideBvh {
             root: root_item,
             bounds: root.bounds,
             nodes,
@@ -152,7 +155,7 @@ impl Bvh4 {
 
     /// Bytes used by the nodes.
     pub fn memory_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<Node4>()
+        self.nodes.len() * std::mem::size_of::<WideNode>()
     }
 }
 
@@ -161,7 +164,7 @@ impl Bvh4 {
 fn collapse(
     bin: &BinaryBvh,
     b: usize,
-    out: &mut Vec<Node4>,
+    out: &mut Vec<WideNode>,
     reserved: usize,
     leaf_mask: &dyn Fn(u32, u32) -> u32,
     mask: &mut u32,
@@ -169,7 +172,7 @@ fn collapse(
     let node: &BinaryNode = &bin.nodes[b];
     debug_assert_eq!(node.count, 0);
     let mut kids: Vec<usize> = vec![node.first as usize, node.first as usize + 1];
-    // Open the interior child of largest area until four children or only leaves remain.
+    // Open the interior child of largest area until eight children or only leaves remain.
     while kids.len() < WIDTH {
         let interior = kids
             .iter()
@@ -193,9 +196,9 @@ fn collapse(
     out.extend(
         kids.iter()
             .filter(|&&k| bin.nodes[k].count == 0)
-            .map(|_| Node4::EMPTY),
+            .map(|_| WideNode::EMPTY),
     );
-    let mut wide = Node4::EMPTY;
+    let mut wide = WideNode::EMPTY;
     for (i, &k) in kids.iter().enumerate() {
         let kid = &bin.nodes[k];
         let (item, m) = if kid.count > 0 {
@@ -233,9 +236,9 @@ pub(crate) struct PreparedRay {
     pub inv_dir: [f32; 3],
     /// `origin · inv_dir`, so a plane distance is one multiply-subtract.
     pub origin_inv: [f32; 3],
-    /// Row of [`Node4::bounds`] holding the entry plane per axis.
+    /// Row of [`WideNode::bounds`] holding the entry plane per axis.
     pub near: [usize; 3],
-    /// Row of [`Node4::bounds`] holding the exit plane per axis.
+    /// Row of [`WideNode::bounds`] holding the exit plane per axis.
     pub far: [usize; 3],
     /// Smallest accepted distance.
     pub t_min: f32,
@@ -288,34 +291,6 @@ impl PreparedRay {
             ..*self
         }
     }
-
-    /// Entry distances of the four child boxes of `node` and a bit mask of the children
-    /// hit within `(t_min, t_max)` (and, when `MASKED`, whose mask meets `mask`).
-    #[inline(always)]
-    fn hit_boxes<const MASKED: bool>(&self, node: &Node4, t_max: f32, mask: u32) -> (Vec4, u32) {
-        let b = &node.bounds;
-        let [nx, ny, nz] = self.near;
-        let [fx, fy, fz] = self.far;
-        let [ix, iy, iz] = self.inv_dir.map(Vec4::splat);
-        let [ox, oy, oz] = self.origin_inv.map(Vec4::splat);
-        let plane = |row: usize, inv: Vec4, o: Vec4| Vec4::from_array(b[row]) * inv - o;
-        let t_near = plane(nx, ix, ox)
-            .max(plane(ny, iy, oy))
-            .max(plane(nz, iz, oz).max(Vec4::splat(self.t_min)));
-        let t_far = plane(fx, ix, ox)
-            .min(plane(fy, iy, oy))
-            .min(plane(fz, iz, oz).min(Vec4::splat(t_max)))
-            * EXIT_SCALE;
-        let mut bits = t_near.cmple(t_far).bitmask();
-        if MASKED {
-            for (i, m) in node.masks.iter().enumerate() {
-                if m & mask == 0 {
-                    bits &= !(1 << i);
-                }
-            }
-        }
-        (t_near, bits)
-    }
 }
 
 /// Entries of a traversal stack: (child reference, entry distance).
@@ -324,7 +299,13 @@ pub(crate) type StackEntry = (u32, f32);
 thread_local! {
     /// Each thread's traversal stack, kept between queries (clearing a fresh one per ray
     /// would cost more than a small scene's whole query).
-    static STACK: RefCell<Vec<StackEntry>> = RefCell::new(vec![(0, 0.0); 2 * STACK_SIZE]);
+    static STACK: RefCell<Vec<StackEntry>> = RefCell::new(new_stack());
+}
+
+/// A traversal stack big enough for one tree walk plus, below it, one more (the
+/// instance level walks a mesh BVH from its leaves).
+pub(crate) fn new_stack() -> Vec<StackEntry> {
+    vec![(0, 0.0); 2 * STACK_SIZE]
 }
 
 /// Runs `f` with a stack big enough for one tree walk plus, below it, one more (the
@@ -334,17 +315,19 @@ pub(crate) fn with_stack<R>(f: impl FnOnce(&mut [StackEntry]) -> R) -> R {
     STACK.with(|stack| match stack.try_borrow_mut() {
         Ok(mut stack) => f(&mut stack),
         // Only reached if a query runs inside another on the same thread.
-        Err(_) => f(&mut vec![(0, 0.0); 2 * STACK_SIZE]),
+        Err(_) => f(&mut new_stack()),
     })
 }
 
-/// Walks `bvh` nearest child first, using `stack` (at least `STACK_SIZE` entries).
+/// Walks `bvh` nearest child first with the box tests of `kernel`, using `stack` (at
+/// least `STACK_SIZE` entries).
 /// `leaf(range, t_max, free_stack)` tests a leaf's primitives, lowers `t_max` on a
 /// closer hit, and returns true to stop the walk (any-hit queries); `free_stack` is the
 /// unused rest of `stack`, for a nested walk. Returns the final `t_max`.
 #[inline(always)]
-pub(crate) fn traverse<const MASKED: bool>(
-    bvh: &Bvh4,
+pub(crate) fn traverse<K: BoxKernel, const MASKED: bool>(
+    kernel: K,
+    bvh: &WideBvh,
     ray: &PreparedRay,
     mut t_max: f32,
     mask: u32,
@@ -363,7 +346,7 @@ pub(crate) fn traverse<const MASKED: bool>(
             }
         } else {
             let node = &bvh.nodes[current.node()];
-            let (dist, mut bits) = ray.hit_boxes::<MASKED>(node, t_max, mask);
+            let (dist, mut bits) = kernel.hit_boxes::<MASKED>(ray, node, t_max, mask);
             if bits == 0 {
                 // Nothing hit: fall through to pop.
             } else if bits & (bits - 1) == 0 {
@@ -371,32 +354,24 @@ pub(crate) fn traverse<const MASKED: bool>(
                 current = Item(node.children[bits.trailing_zeros() as usize]);
                 continue;
             } else {
-                // Gather the hit children, then sort them nearest first (at most four).
-                let dist = dist.to_array();
-                let mut hits = [(0u32, 0f32); WIDTH];
-                let mut n = 0;
+                // Insert the hit children into the stack sorted farthest first (an
+                // insertion sort in place: ties keep slot order), then visit the nearest.
+                let base = sp;
                 while bits != 0 {
                     let i = bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    hits[n] = (node.children[i], dist[i]);
-                    n += 1;
-                }
-                if n > 0 {
-                    for i in 1..n {
-                        let mut j = i;
-                        while j > 0 && hits[j - 1].1 < hits[j].1 {
-                            hits.swap(j - 1, j);
-                            j -= 1;
-                        }
+                    let entry = (node.children[i], dist[i]);
+                    let mut j = sp;
+                    while j > base && stack[j - 1].1 < entry.1 {
+                        stack[j] = stack[j - 1];
+                        j -= 1;
                     }
-                    // Farthest first onto the stack; the nearest is visited now.
-                    for &h in &hits[..n - 1] {
-                        stack[sp] = h;
-                        sp += 1;
-                    }
-                    current = Item(hits[n - 1].0);
-                    continue;
+                    stack[j] = entry;
+                    sp += 1;
                 }
+                sp -= 1;
+                current = Item(stack[sp].0);
+                continue;
             }
         }
         // Pop the next child still nearer than the closest hit.

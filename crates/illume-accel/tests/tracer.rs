@@ -1,10 +1,12 @@
 //! The two-level BVH against the brute-force oracle: closest hits, occlusion and masks on
 //! built-in scenes, random triangle soups and (when the loaders can read them) the shared
 //! scenes, before and after instances move; plus `validate()` and "update never rebuilds
-//! a mesh BVH".
+//! a mesh BVH". Every query check runs in every traversal kernel this CPU has (the
+//! portable one and, where present, AVX2), and one test asserts that all kernels give
+//! bit-identical hits.
 
 use illume_accel::brute_force::BruteForce;
-use illume_accel::{Hit, Tracer};
+use illume_accel::{Hit, Tracer, TraversalKernel};
 use illume_core::sampling::Pcg32;
 use illume_core::{Aabb, Affine3A, Quat, Ray, Vec2, Vec3};
 use illume_scene::builtin::SceneBuilder;
@@ -172,6 +174,21 @@ fn size(scene: &Scene) -> f32 {
     b.min.abs().max(b.max.abs()).max_element()
 }
 
+/// `tracer` switched to each kernel this CPU can run, with the kernel's name.
+fn in_every_kernel(tracer: &Tracer) -> Vec<(String, Tracer)> {
+    let kernels = TraversalKernel::available();
+    assert!(kernels.contains(&TraversalKernel::Portable));
+    kernels
+        .into_iter()
+        .map(|k| {
+            let mut t = tracer.clone();
+            t.set_kernel(k).unwrap();
+            assert_eq!(t.kernel(), k);
+            (k.name().to_string(), t)
+        })
+        .collect()
+}
+
 fn check(scene_name: &str, scene: &Scene, n: usize, seed: u64) {
     let tracer = Tracer::new(scene);
     tracer
@@ -179,15 +196,11 @@ fn check(scene_name: &str, scene: &Scene, n: usize, seed: u64) {
         .unwrap_or_else(|e| panic!("{scene_name}: {e}"));
     let oracle = BruteForce::new(scene);
     let rays = random_rays(scene.bounds(), n, seed);
-    compare_closest(
-        scene_name,
-        &tracer,
-        &oracle,
-        &rays,
-        MASK_DEFAULT,
-        size(scene),
-    );
-    compare_occluded(scene_name, &tracer, &oracle, &rays[..n / 4], MASK_DEFAULT);
+    for (kernel, tracer) in in_every_kernel(&tracer) {
+        let name = format!("{scene_name} ({kernel})");
+        compare_closest(&name, &tracer, &oracle, &rays, MASK_DEFAULT, size(scene));
+        compare_occluded(&name, &tracer, &oracle, &rays[..n / 4], MASK_DEFAULT);
+    }
 }
 
 fn builtin(name: &str) -> Scene {
@@ -318,6 +331,23 @@ fn soup_scene(seed: u64) -> Scene {
 
 #[test]
 fn triangle_soups_validate_and_agree_with_brute_force() {
+    let cut = cut_soup(13);
+    cut.validate().unwrap();
+    check("soup with a cut-out grid", &cut, 30_000, 14);
+    let rays = random_rays(cut.bounds(), 10_000, 15);
+    let (with_holes, without) = (
+        Tracer::new(&cut).intersect_batch(&rays, MASK_DEFAULT),
+        Tracer::new(&soup_scene(13)).intersect_batch(&rays, MASK_DEFAULT),
+    );
+    let through = with_holes
+        .iter()
+        .zip(&without)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        through > 100,
+        "only {through} rays pass through the grid's holes"
+    );
     let scene = soup_scene(11);
     scene.validate().unwrap();
     check("soup", &scene, 30_000, 12);
@@ -375,8 +405,11 @@ fn moved_instances_agree_after_update_without_mesh_rebuilds() {
                 .unwrap_or_else(|e| panic!("{name} step {step}: {e}"));
             let oracle = BruteForce::new(&scene);
             let rays = random_rays(scene.bounds(), n / 2, 100 + step as u64);
-            compare_closest(name, &tracer, &oracle, &rays, MASK_DEFAULT, size(&scene));
-            compare_occluded(name, &tracer, &oracle, &rays[..n / 8], MASK_DEFAULT);
+            for (kernel, tracer) in in_every_kernel(&tracer) {
+                let name = format!("{name} ({kernel})");
+                compare_closest(&name, &tracer, &oracle, &rays, MASK_DEFAULT, size(&scene));
+                compare_occluded(&name, &tracer, &oracle, &rays[..n / 8], MASK_DEFAULT);
+            }
         }
         let after = tracer.stats();
         assert_eq!(
@@ -403,14 +436,16 @@ fn animation_time_steps_agree() {
         tracer.update(&scene);
         tracer.validate().unwrap();
         let rays = random_rays(scene.bounds(), 10_000, 200 + k as u64);
-        compare_closest(
-            "cornell-spot animated",
-            &tracer,
-            &BruteForce::new(&scene),
-            &rays,
-            MASK_DEFAULT,
-            size(&scene),
-        );
+        for (kernel, tracer) in in_every_kernel(&tracer) {
+            compare_closest(
+                &format!("cornell-spot animated ({kernel})"),
+                &tracer,
+                &BruteForce::new(&scene),
+                &rays,
+                MASK_DEFAULT,
+                size(&scene),
+            );
+        }
     }
     assert_eq!(tracer.stats().mesh_builds, scene.meshes.len() as u64);
 }
@@ -424,26 +459,19 @@ fn masks_hide_instances() {
         .position(|i| i.name == "sphere")
         .unwrap();
     scene.instances[sphere].mask = 2;
-    let tracer = Tracer::new(&scene);
+    for (kernel, tracer) in in_every_kernel(&Tracer::new(&scene)) {
+        masks_hide_instances_in(&scene, sphere, &tracer, &kernel);
+    }
+}
+
+fn masks_hide_instances_in(scene: &Scene, sphere: usize, tracer: &Tracer, kernel: &str) {
+    let name = format!("cornell-spot masked ({kernel})");
     tracer.validate().unwrap();
-    let oracle = BruteForce::new(&scene);
+    let oracle = BruteForce::new(scene);
     let rays = random_rays(scene.bounds(), 40_000, 9);
     for mask in [1u32, 2, 3] {
-        compare_closest(
-            "cornell-spot masked",
-            &tracer,
-            &oracle,
-            &rays,
-            mask,
-            size(&scene),
-        );
-        compare_occluded(
-            "cornell-spot masked",
-            &tracer,
-            &oracle,
-            &rays[..10_000],
-            mask,
-        );
+        compare_closest(&name, tracer, &oracle, &rays, mask, size(scene));
+        compare_occluded(&name, tracer, &oracle, &rays[..10_000], mask);
     }
     let hits1 = tracer.intersect_batch(&rays, 1);
     let hits2 = tracer.intersect_batch(&rays, 2);
@@ -500,7 +528,12 @@ fn cut_outs_let_rays_through_their_holes_only() {
     );
     illume_scene::builtin::cut_half_of_occluder(&mut scene);
     check("cut-out occluder", &scene, 50_000, 11);
-    let tracer = Tracer::new(&scene);
+    for (kernel, tracer) in in_every_kernel(&Tracer::new(&scene)) {
+        cut_outs_in(&tracer, &kernel);
+    }
+}
+
+fn cut_outs_in(tracer: &Tracer, kernel: &str) {
     // Straight down through the occluder's square (x, z ∈ [−0.2, 0.2] at y = 0.5): its
     // half z ≥ 0 remains (bilinear alpha crosses ½ at z = 0).
     let mut seen = [0; 2];
@@ -512,11 +545,134 @@ fn cut_outs_let_rays_through_their_holes_only() {
                 .intersect(&ray, MASK_DEFAULT)
                 .expect("the plane is below");
             let expect = if z > 0.0 { 1 } else { 0 };
-            assert_eq!(hit.instance, InstanceId(expect), "ray down at ({x}, {z})");
+            assert_eq!(
+                hit.instance,
+                InstanceId(expect),
+                "{kernel}: ray down at ({x}, {z})"
+            );
             seen[expect as usize] += 1;
             let to_occluder = Ray { t_max: 0.6, ..ray };
             assert_eq!(tracer.occluded(&to_occluder, MASK_DEFAULT), z > 0.0);
         }
     }
     assert_eq!(seen, [800, 800]);
+}
+
+/// `soup_scene(seed)` with its grid cut out in a checker pattern: alpha-mask holes in a
+/// mesh whose leaves hold several triangle packets.
+fn cut_soup(seed: u64) -> Scene {
+    use illume_scene::{MaterialId, Texture, TextureId, WrapMode};
+    let mut scene = soup_scene(seed);
+    scene.textures.push(std::sync::Arc::new(Texture {
+        name: "checker".into(),
+        width: 4,
+        height: 4,
+        texels: vec![illume_core::Rgb::ONE; 16],
+        wrap_u: WrapMode::Repeat,
+        wrap_v: WrapMode::Repeat,
+        alpha: (0..16)
+            .map(|i| if (i + i / 4) % 2 == 0 { 0 } else { 255 })
+            .collect(),
+    }));
+    let texture = TextureId(scene.textures.len() as u32 - 1);
+    let grid = scene.meshes.iter().position(|m| m.name == "grid").unwrap();
+    let mut material = scene.materials[scene.meshes[grid].triangle_materials[0].index()].clone();
+    material.name = "checker cut-out".into();
+    material.alpha_texture = Some(texture);
+    material.alpha_cutoff = Some(0.5);
+    scene.materials.push(material);
+    let id = MaterialId(scene.materials.len() as u32 - 1);
+    let mut mesh = (*scene.meshes[grid]).clone();
+    mesh.uvs = mesh
+        .positions
+        .iter()
+        .map(|p| Vec2::new(p.x, p.z) * 1.7)
+        .collect();
+    mesh.triangle_materials.fill(id);
+    scene.meshes[grid] = std::sync::Arc::new(mesh);
+    scene
+}
+
+/// The bits of a hit, so that equality is bit-for-bit (and -0.0 differs from 0.0).
+fn hit_bits(h: &Option<Hit>) -> Option<(u32, u32, u32, u32, u32)> {
+    h.map(|h| {
+        (
+            h.t.to_bits(),
+            h.instance.0,
+            h.triangle,
+            h.barycentrics.x.to_bits(),
+            h.barycentrics.y.to_bits(),
+        )
+    })
+}
+
+/// The same random rays through every kernel this CPU has: identical closest hits (bit
+/// for bit, including the hit geometry), occlusion and masked queries, on scenes with
+/// instances (rotated, scaled, masked), triangle soups, alpha cut-outs and Sponza.
+#[test]
+fn every_kernel_gives_identical_hits() {
+    let mut masked = builtin("cornell-spot");
+    masked.instances[1].mask = 2;
+    let mut moved = soup_scene(21);
+    move_everything(&mut moved, 1);
+    let mut cut = illume_scene::builtin::lit_plane(
+        illume_scene::LightKind::Point {
+            intensity: illume_core::Rgb::ONE,
+        },
+        Trs::from_translation(Vec3::Y),
+        0.5,
+        true,
+    );
+    illume_scene::builtin::cut_half_of_occluder(&mut cut);
+    let kernels = TraversalKernel::available();
+    println!("kernels on this CPU: {kernels:?}");
+    for (name, scene, n) in [
+        ("cornell-spot masked", masked, 50_000),
+        ("soup moved", moved, 50_000),
+        ("cut-out", cut, 20_000),
+        ("soup with a cut-out grid", cut_soup(23), 50_000),
+        ("sponza", shared_scene("dabrovic_sponza/sponza.obj"), 20_000),
+    ] {
+        let tracers = in_every_kernel(&Tracer::new(&scene));
+        let (reference_kernel, reference) = &tracers[0];
+        let rays = random_rays(scene.bounds(), n, 31);
+        for mask in [MASK_DEFAULT, 1, 2] {
+            let want = reference.intersect_batch(&rays, mask);
+            let want_occluded = reference.occluded_batch(&rays, mask);
+            let hits = want.iter().flatten().count();
+            assert!(
+                mask != MASK_DEFAULT || hits > n / 10,
+                "{name}: only {hits} hits"
+            );
+            for (kernel, tracer) in &tracers[1..] {
+                let got = tracer.intersect_batch(&rays, mask);
+                let got_occluded = tracer.occluded_batch(&rays, mask);
+                for (i, ray) in rays.iter().enumerate() {
+                    assert_eq!(
+                        hit_bits(&got[i]),
+                        hit_bits(&want[i]),
+                        "{name} mask {mask} ray {i} {ray:?}: {kernel} {:?}, {reference_kernel} {:?}",
+                        got[i],
+                        want[i]
+                    );
+                    assert_eq!(
+                        got_occluded[i], want_occluded[i],
+                        "{name} mask {mask} ray {i} {ray:?}: occlusion, {kernel} vs {reference_kernel}"
+                    );
+                }
+                for ray in rays.iter().step_by(7) {
+                    let (a, b) = (
+                        tracer.intersect_geometry(ray, mask),
+                        reference.intersect_geometry(ray, mask),
+                    );
+                    assert_eq!(hit_bits(&a.map(|g| g.0)), hit_bits(&b.map(|g| g.0)));
+                    assert_eq!(
+                        a.map(|g| g.1),
+                        b.map(|g| g.1),
+                        "{name}: geometry of {ray:?}"
+                    );
+                }
+            }
+        }
+    }
 }
