@@ -298,8 +298,7 @@ pub fn auto_exposure_ev(img: &RgbImage) -> Option<f32> {
 /// (PNG, the viewer's display) goes through here instead of three `powf` per pixel.
 #[inline]
 pub fn srgb8(x: f32) -> u8 {
-    // Written so that NaN takes the first branch.
-    if !(x > 0.0) {
+    if x.is_nan() || x <= 0.0 {
         return 0;
     }
     if x >= 1.0 {
