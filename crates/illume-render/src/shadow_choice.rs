@@ -1,0 +1,326 @@
+//! `shadows = "auto"`: each analytic light, each frame, gets its shadows from shadow maps
+//! or from shadow rays, whichever a measured cost model expects to be cheaper.
+//!
+//! Per light, with `lit` the pixels the light reaches (in range, inside its cone, facing
+//! it; counted on [`SAMPLED_PIXELS`] pixels spread over the G-buffer):
+//!
+//! * **maps** cost `lit × lookup_ns` when the light's maps are current (its view and the
+//!   geometry unchanged since they were rendered); when they are not, plus the cost of
+//!   rendering them, spread over the frames they are expected to serve: 1 for a light
+//!   (or scene) that moved since the last frame, `k + 1` for one that has been still for
+//!   `k` frames, [`NEW_LIGHT_STILL_FRAMES`] for a light seen for the first time;
+//! * **rays** cost `lit × ray_ns`.
+//!
+//! Every cost is measured on the scene at hand, per light, and carried from frame to
+//! frame as a running average: `ray_ns` and `lookup_ns` by timing [`PROBE_RAYS`] shadow
+//! rays (whenever the maps are not current) or map lookups (whenever they are used) from
+//! lit pixels, in runs of [`PROBE_BATCH`] neighbouring pixels spread over the image, each
+//! timed on its second pass (with warm caches, as the shading pass finds the data of a
+//! pixel's neighbours), the fastest run counting (preemption by other processes only
+//! adds time); the rendering by timing the light's last one. Before a measurement
+//! exists, priors stand in: a lookup costs [`LOOKUP_PER_RAY_PRIOR`] of a ray, a ray
+//! [`RAY_NS_PRIOR`], a rendering `faces × (triangles × RASTER_TRIANGLE_NS + face texels
+//! × RASTER_TEXEL_NS)` scaled by how far measured renderings of other lights were off
+//! this prediction (the rasterizer's cost per triangle depends on how many texels each
+//! covers: 50–600 ns). Costs are nanoseconds of
+//! one core (renderings: wall-clock time × threads); the passes are parallel alike, so
+//! the thread count cancels out. On a machine shared with other processes the
+//! renderings' wall-clock times grow with the load while the probes' do not, which tips
+//! moving lights towards rays.
+//!
+//! The outcome: a light that moves every frame with a cube map over a large scene gets
+//! rays (six rasterizations of every triangle cost more than one ray per lit pixel); a
+//! still light keeps its map (lookups only, cheaper than rays); a light that stops
+//! moving goes back to maps once the one rendering pays off over as many frames as it
+//! has been still.
+
+use illume_core::Vec2;
+use illume_transport::{
+    GBuffer, GBufferPixel, LightMapPlan, LightSample, ShadowMapError, ShadowMapSettings,
+    ShadowMaps, SurfaceHit, World,
+};
+use std::time::Instant;
+
+/// Cost of one shadow-map lookup before one is measured, as a fraction of the light's
+/// shadow ray (the probes measure 0.4–0.65 on the Cornell dragon, cornell-spot and
+/// Sponza; `BENCHMARKS.md`).
+pub const LOOKUP_PER_RAY_PRIOR: f64 = 0.5;
+
+/// Cost of one shadow ray before one is measured \[ns of one core\].
+pub const RAY_NS_PRIOR: f64 = 100.0;
+
+/// Rasterizing one triangle into one depth map, before any rendering is measured \[ns of
+/// one core\]: vertex transform, setup, binning and its share of fill.
+pub const RASTER_TRIANGLE_NS: f64 = 50.0;
+
+/// Clearing, filling and converting one depth-map texel, before any rendering is
+/// measured \[ns of one core\].
+pub const RASTER_TEXEL_NS: f64 = 5.0;
+
+/// Frames a light seen for the first time is expected to stay still (10 s at 30 fps):
+/// its first frame's rendering is charged 1/this of its cost (most lights never move).
+pub const NEW_LIGHT_STILL_FRAMES: u32 = 300;
+
+/// Shadow rays (or lookups) the probe times per light and frame.
+pub const PROBE_RAYS: usize = 256;
+
+/// Rays (or lookups) per timed batch of the probe.
+pub const PROBE_BATCH: usize = 32;
+
+/// G-buffer pixels sampled per light and frame to count the lit ones.
+pub const SAMPLED_PIXELS: usize = 2048;
+
+/// What one frame's shadows used (analytic lights; area lights always use rays).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ShadowStats {
+    /// Analytic lights whose shadows came from maps.
+    pub lights_with_maps: u32,
+    /// Analytic lights whose shadows came from rays.
+    pub lights_with_rays: u32,
+    /// Depth maps rendered this frame (a cube map counts six; kept maps count nothing).
+    pub maps_rendered: u32,
+}
+
+/// One light's estimate in one frame \[ns of one core\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightShadowChoice {
+    /// What the shadow maps found for the light.
+    pub plan: LightMapPlan,
+    /// Estimated pixels the light reaches.
+    pub lit_pixels: f64,
+    /// Cost of one shadow ray used for the estimate.
+    pub ray_ns: f64,
+    /// Cost of one lookup used for the estimate.
+    pub lookup_ns: f64,
+    /// Cost of rendering all the light's maps used for the estimate.
+    pub render_ns: f64,
+    /// Estimated cost of its maps this frame (rendering share + lookups).
+    pub maps_ns: f64,
+    /// Estimated cost of its rays this frame.
+    pub rays_ns: f64,
+    /// The choice.
+    pub maps: bool,
+}
+
+/// What was measured for one analytic light \[ns of one core\].
+#[derive(Clone, Copy, Debug, Default)]
+struct Measured {
+    ray_ns: Option<f64>,
+    lookup_ns: Option<f64>,
+}
+
+/// The state behind `shadows = "auto"`: the costs measured per light, carried from frame
+/// to frame.
+#[derive(Clone, Debug)]
+pub struct ShadowChooser {
+    /// Per analytic light.
+    measured: Vec<Measured>,
+    /// Measured ÷ predicted rendering time (running average).
+    raster_scale: f64,
+    /// The last frame's choices.
+    choices: Vec<LightShadowChoice>,
+}
+
+impl Default for ShadowChooser {
+    fn default() -> Self {
+        Self {
+            measured: Vec::new(),
+            raster_scale: 1.0,
+            choices: Vec::new(),
+        }
+    }
+}
+
+/// Rendering cost of a light's maps predicted from the priors \[ns of one core\].
+fn predicted_render_ns(plan: &LightMapPlan, triangles: f64) -> f64 {
+    f64::from(plan.faces) * triangles * RASTER_TRIANGLE_NS + plan.texels as f64 * RASTER_TEXEL_NS
+}
+
+/// A running average of `old` and the new measurement `new`.
+fn average(old: Option<f64>, new: Option<f64>) -> Option<f64> {
+    match (old, new) {
+        (Some(a), Some(b)) => Some(0.5 * (a + b)),
+        (a, b) => b.or(a),
+    }
+}
+
+impl ShadowChooser {
+    /// Chooses maps or rays for every analytic light of `world` this frame, renders the
+    /// maps of the lights that get them ([`ShadowMaps::plan`], then
+    /// [`ShadowMaps::render_planned`]) and reports the counts. Call once per frame; then
+    /// shade with `Shadows::Maps(maps)`: lights without maps cast rays.
+    pub fn choose(
+        &mut self,
+        world: &World,
+        gbuffer: &GBuffer,
+        maps: &mut ShadowMaps,
+        settings: &ShadowMapSettings,
+    ) -> Result<ShadowStats, ShadowMapError> {
+        let plans = maps.plan(world, settings)?.to_vec();
+        if self.measured.len() != plans.len() {
+            self.measured = vec![Measured::default(); plans.len()];
+        }
+        let threads = rayon::current_num_threads() as f64;
+        let triangles = world.scene.instanced_triangle_count() as f64;
+        self.choices.clear();
+        let mut samples = Vec::with_capacity(plans.len());
+        for (light, plan) in plans.iter().enumerate() {
+            let lit = lit_samples(world, gbuffer, light);
+            let m = &mut self.measured[light];
+            if plan.faces > 0 && (!plan.current || m.ray_ns.is_none()) {
+                m.ray_ns = average(
+                    m.ray_ns,
+                    time_batches(&lit.batches, |(hit, s)| world.unoccluded(hit, s)),
+                );
+            }
+            let render_ns = match maps.render_ms(light) {
+                Some(ms) => ms * 1e6 * threads,
+                None => self.raster_scale * predicted_render_ns(plan, triangles),
+            };
+            let ray_ns = m.ray_ns.unwrap_or(RAY_NS_PRIOR);
+            let mut choice = LightShadowChoice {
+                plan: *plan,
+                lit_pixels: lit.pixels,
+                ray_ns,
+                lookup_ns: m.lookup_ns.unwrap_or(LOOKUP_PER_RAY_PRIOR * ray_ns),
+                render_ns,
+                maps_ns: 0.0,
+                rays_ns: 0.0,
+                maps: false,
+            };
+            let frames = plan.still_frames.map_or(NEW_LIGHT_STILL_FRAMES, |k| k + 1);
+            let render_share = if plan.current {
+                0.0
+            } else {
+                render_ns / f64::from(frames.max(1))
+            };
+            choice.maps_ns = render_share + choice.lit_pixels * choice.lookup_ns;
+            choice.rays_ns = choice.lit_pixels * choice.ray_ns;
+            // No map can be made (faces = 0): rays. Equal costs (nothing lit, a current
+            // map): keep the map.
+            choice.maps = plan.faces > 0
+                && (choice.maps_ns < choice.rays_ns
+                    || (plan.current && choice.lookup_ns <= choice.ray_ns));
+            self.choices.push(choice);
+            samples.push(lit.batches);
+        }
+        let use_maps: Vec<bool> = self.choices.iter().map(|c| c.maps).collect();
+        maps.render_planned(world, &use_maps);
+        let maps_ref = &*maps;
+        for (light, (choice, lit)) in self.choices.iter().zip(&samples).enumerate() {
+            if !choice.maps {
+                continue;
+            }
+            let m = &mut self.measured[light];
+            m.lookup_ns = average(
+                m.lookup_ns,
+                time_batches(lit, |(hit, s)| maps_ref.visibility(light, hit, s)),
+            );
+            // A rendering this frame calibrates the priors for lights not yet rendered.
+            if !choice.plan.current
+                && let Some(ms) = maps.render_ms(light)
+            {
+                let predicted = predicted_render_ns(&choice.plan, triangles);
+                let ratio = (ms * 1e6 * threads / predicted).clamp(0.05, 50.0);
+                self.raster_scale = 0.5 * (self.raster_scale + ratio);
+            }
+        }
+        let with_maps = use_maps.iter().filter(|&&m| m).count() as u32;
+        Ok(ShadowStats {
+            lights_with_maps: with_maps,
+            lights_with_rays: plans.len() as u32 - with_maps,
+            maps_rendered: maps.rendered_last_build() as u32,
+        })
+    }
+
+    /// The last frame's per-light estimates and choices, in analytic-light order.
+    pub fn choices(&self) -> &[LightShadowChoice] {
+        &self.choices
+    }
+
+    /// Measured ÷ predicted rendering time of the lights rendered so far: the
+    /// calibration of [`RASTER_TRIANGLE_NS`] and [`RASTER_TEXEL_NS`] on this scene (1
+    /// before any rendering was timed).
+    pub fn raster_scale(&self) -> f64 {
+        self.raster_scale
+    }
+}
+
+/// The lit pixels of a G-buffer sample, for one light.
+struct LitSample<'g> {
+    /// Estimated lit pixels in the whole image.
+    pixels: f64,
+    /// Up to [`PROBE_RAYS`] / [`PROBE_BATCH`] runs of up to [`PROBE_BATCH`] consecutive
+    /// lit pixels, spread over the image, with their light samples: neighbours, as the
+    /// shading pass meets them (shadow rays and map lookups of neighbouring pixels share
+    /// caches; scattered ones would cost several times more).
+    batches: Vec<Vec<(&'g SurfaceHit, LightSample)>>,
+}
+
+/// The light sample of `light` at `px` if the light reaches it (in range and cone,
+/// the surface facing it).
+fn lit_by(world: &World, px: &Option<GBufferPixel>, light: usize) -> Option<LightSample> {
+    let hit = &px.as_ref()?.hit;
+    if hit.is_black() {
+        return None;
+    }
+    let (s, _) = world
+        .lights
+        .incident_from(light, hit.position, Vec2::ZERO)?;
+    let (normal, geometric) = (hit.facing_normal(), hit.facing_geometric_normal());
+    (normal.dot(s.wi) > 0.0 && geometric.dot(s.wi) > 0.0).then_some(s)
+}
+
+/// Counts the pixels of `gbuffer` that analytic light `light` reaches among
+/// [`SAMPLED_PIXELS`] pixels spread over the image, and collects the probe's runs.
+fn lit_samples<'g>(world: &World, gbuffer: &'g GBuffer, light: usize) -> LitSample<'g> {
+    let pixels = &gbuffer.pixels;
+    let n = pixels.len();
+    let stride = n.div_ceil(SAMPLED_PIXELS).max(1);
+    let (mut lit, mut sampled) = (0usize, 0usize);
+    for px in pixels.iter().skip(stride / 2).step_by(stride) {
+        sampled += 1;
+        lit += usize::from(lit_by(world, px, light).is_some());
+    }
+    let runs = PROBE_RAYS / PROBE_BATCH;
+    let mut batches = Vec::with_capacity(runs);
+    if lit > 0 {
+        for run in 0..runs {
+            // From the middle of each n/runs-pixel band, the next lit pixels (scanning
+            // at most 32 runs' worth).
+            let start = (2 * run + 1) * n / (2 * runs);
+            let batch: Vec<_> = pixels[start.min(n)..]
+                .iter()
+                .take(32 * PROBE_BATCH)
+                .filter_map(|px| Some((&px.as_ref()?.hit, lit_by(world, px, light)?)))
+                .take(PROBE_BATCH)
+                .collect();
+            if !batch.is_empty() {
+                batches.push(batch);
+            }
+        }
+    }
+    LitSample {
+        pixels: lit as f64 * n as f64 / sampled.max(1) as f64,
+        batches,
+    }
+}
+
+/// Cost of `f` per sample \[ns\]: that of the fastest batch, each timed whole on its
+/// second pass (the first brings its data into the caches, as the shading pass's
+/// neighbouring pixels find it); `None` without samples.
+fn time_batches<T, R>(batches: &[Vec<T>], f: impl Fn(&T) -> R) -> Option<f64> {
+    let mut fastest: Option<f64> = None;
+    for batch in batches.iter().filter(|b| !b.is_empty()) {
+        for sample in batch {
+            std::hint::black_box(f(sample));
+        }
+        let t = Instant::now();
+        for sample in batch {
+            std::hint::black_box(f(sample));
+        }
+        let ns = t.elapsed().as_secs_f64() * 1e9 / batch.len() as f64;
+        fastest = Some(fastest.map_or(ns, |f: f64| f.min(ns)));
+    }
+    fastest
+}
