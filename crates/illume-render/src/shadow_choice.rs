@@ -5,28 +5,27 @@
 //! it; counted on [`SAMPLED_PIXELS`] pixels spread over the G-buffer):
 //!
 //! * **maps** cost `lit × lookup_ns` when the light's maps are current (its view and the
-//!   geometry unchanged since they were rendered); when they are not, plus the cost of
-//!   rendering them, spread over the frames they are expected to serve: 1 for a light
+//!   geometry unchanged since they were rendered) — then they are always kept, as
+//!   lookups cost 0.1–0.4× the time of rays in every scene measured; when they are not,
+//!   plus the cost of rendering them, spread over the frames they are expected to serve: 1 for a light
 //!   (or scene) that moved since the last frame, `k + 1` for one that has been still for
 //!   `k` frames, [`NEW_LIGHT_STILL_FRAMES`] for a light seen for the first time;
-//! * **rays** cost `lit × ray_ns`.
+//! * **rays** cost `lit × ray_ns`, the probe's measurement × [`RAY_PROBE_SCALE`].
 //!
 //! Every cost is measured on the scene at hand, per light, and carried from frame to
 //! frame as a running average: `ray_ns` and `lookup_ns` by timing [`PROBE_RAYS`] shadow
 //! rays (whenever the maps are not current) or map lookups (whenever they are used) from
-//! lit pixels, in runs of [`PROBE_BATCH`] neighbouring pixels spread over the image, each
-//! timed on its second pass (with warm caches, as the shading pass finds the data of a
-//! pixel's neighbours), the fastest run counting (preemption by other processes only
-//! adds time); the rendering by timing the light's last one. Before a measurement
+//! lit pixels, in runs of neighbouring pixels spread over the image, [`PROBE_BATCH`] of
+//! them timed after as many neighbours warmed the caches (as in the shading pass), the
+//! fastest run counting (preemption by other processes only adds time); the rendering by the CPU time its last one took on the renderer's
+//! threads. Before a measurement
 //! exists, priors stand in: a lookup costs [`LOOKUP_PER_RAY_PRIOR`] of a ray, a ray
 //! [`RAY_NS_PRIOR`], a rendering `faces × (triangles × RASTER_TRIANGLE_NS + face texels
 //! × RASTER_TEXEL_NS)` scaled by how far measured renderings of other lights were off
 //! this prediction (the rasterizer's cost per triangle depends on how many texels each
-//! covers: 50–600 ns). Costs are nanoseconds of
-//! one core (renderings: wall-clock time × threads); the passes are parallel alike, so
-//! the thread count cancels out. On a machine shared with other processes the
-//! renderings' wall-clock times grow with the load while the probes' do not, which tips
-//! moving lights towards rays.
+//! covers: 50–600 ns). Costs are nanoseconds of CPU time; the passes are parallel
+//! alike, so the thread count cancels out, and CPU time does not grow with the load of
+//! other processes on the machine.
 //!
 //! The outcome: a light that moves every frame with a cube map over a large scene gets
 //! rays (six rasterizations of every triangle cost more than one ray per lit pixel); a
@@ -48,6 +47,11 @@ pub const LOOKUP_PER_RAY_PRIOR: f64 = 0.5;
 
 /// Cost of one shadow ray before one is measured \[ns of one core\].
 pub const RAY_NS_PRIOR: f64 = 100.0;
+
+/// The shading pass's shadow rays cost this many times the probe's (measured on
+/// cornell-spot, Sponza and the Cornell dragon in `benches/direct.rs`: 1.3–2.0; the
+/// pass's rays miss caches that the probe's warm-up filled).
+pub const RAY_PROBE_SCALE: f64 = 1.5;
 
 /// Rasterizing one triangle into one depth map, before any rendering is measured \[ns of
 /// one core\]: vertex transform, setup, binning and its share of fill.
@@ -160,7 +164,6 @@ impl ShadowChooser {
         if self.measured.len() != plans.len() {
             self.measured = vec![Measured::default(); plans.len()];
         }
-        let threads = rayon::current_num_threads() as f64;
         let triangles = world.scene.instanced_triangle_count() as f64;
         self.choices.clear();
         let mut samples = Vec::with_capacity(plans.len());
@@ -168,13 +171,11 @@ impl ShadowChooser {
             let lit = lit_samples(world, gbuffer, light);
             let m = &mut self.measured[light];
             if plan.faces > 0 && (!plan.current || m.ray_ns.is_none()) {
-                m.ray_ns = average(
-                    m.ray_ns,
-                    time_batches(&lit.batches, |(hit, s)| world.unoccluded(hit, s)),
-                );
+                let probed = time_batches(&lit.batches, |(hit, s)| world.unoccluded(hit, s));
+                m.ray_ns = average(m.ray_ns, probed.map(|ns| ns * RAY_PROBE_SCALE));
             }
-            let render_ns = match maps.render_ms(light) {
-                Some(ms) => ms * 1e6 * threads,
+            let render_ns = match maps.render_cost(light) {
+                Some(ns) => ns,
                 None => self.raster_scale * predicted_render_ns(plan, triangles),
             };
             let ray_ns = m.ray_ns.unwrap_or(RAY_NS_PRIOR);
@@ -196,16 +197,15 @@ impl ShadowChooser {
             };
             choice.maps_ns = render_share + choice.lit_pixels * choice.lookup_ns;
             choice.rays_ns = choice.lit_pixels * choice.ray_ns;
-            // No map can be made (faces = 0): rays. Equal costs (nothing lit, a current
-            // map): keep the map.
-            choice.maps = plan.faces > 0
-                && (choice.maps_ns < choice.rays_ns
-                    || (plan.current && choice.lookup_ns <= choice.ray_ns));
+            // No map can be made (faces = 0): rays. A current map is always kept: its
+            // lookups cost 0.1–0.4× the time of rays in every scene measured
+            // (`BENCHMARKS.md`), and the probes cannot tell them apart that finely.
+            choice.maps = plan.faces > 0 && (plan.current || choice.maps_ns < choice.rays_ns);
             self.choices.push(choice);
             samples.push(lit.batches);
         }
         let use_maps: Vec<bool> = self.choices.iter().map(|c| c.maps).collect();
-        maps.render_planned(world, &use_maps);
+        maps.render_planned_timed(world, &use_maps, &pool_cpu_ns);
         let maps_ref = &*maps;
         for (light, (choice, lit)) in self.choices.iter().zip(&samples).enumerate() {
             if !choice.maps {
@@ -218,10 +218,10 @@ impl ShadowChooser {
             );
             // A rendering this frame calibrates the priors for lights not yet rendered.
             if !choice.plan.current
-                && let Some(ms) = maps.render_ms(light)
+                && let Some(ns) = maps.render_cost(light)
             {
                 let predicted = predicted_render_ns(&choice.plan, triangles);
-                let ratio = (ms * 1e6 * threads / predicted).clamp(0.05, 50.0);
+                let ratio = (ns / predicted).clamp(0.05, 50.0);
                 self.raster_scale = 0.5 * (self.raster_scale + ratio);
             }
         }
@@ -286,16 +286,17 @@ fn lit_samples<'g>(world: &World, gbuffer: &'g GBuffer, light: usize) -> LitSamp
     let mut batches = Vec::with_capacity(runs);
     if lit > 0 {
         for run in 0..runs {
-            // From the middle of each n/runs-pixel band, the next lit pixels (scanning
-            // at most 32 runs' worth).
+            // From the middle of each n/runs-pixel band, the next 2 × PROBE_BATCH lit
+            // pixels (scanning at most 64 batches' worth): the first half warms the
+            // caches, the second is timed.
             let start = (2 * run + 1) * n / (2 * runs);
             let batch: Vec<_> = pixels[start.min(n)..]
                 .iter()
-                .take(32 * PROBE_BATCH)
+                .take(64 * PROBE_BATCH)
                 .filter_map(|px| Some((&px.as_ref()?.hit, lit_by(world, px, light)?)))
-                .take(PROBE_BATCH)
+                .take(2 * PROBE_BATCH)
                 .collect();
-            if !batch.is_empty() {
+            if batch.len() > 1 {
                 batches.push(batch);
             }
         }
@@ -306,21 +307,57 @@ fn lit_samples<'g>(world: &World, gbuffer: &'g GBuffer, light: usize) -> LitSamp
     }
 }
 
-/// Cost of `f` per sample \[ns\]: that of the fastest batch, each timed whole on its
-/// second pass (the first brings its data into the caches, as the shading pass's
-/// neighbouring pixels find it); `None` without samples.
+/// Cost of `f` per sample \[ns\]: that of the fastest run, timed on the second half of
+/// its samples once the first half (their neighbours) has brought the data they share
+/// into the caches; `None` without samples.
 fn time_batches<T, R>(batches: &[Vec<T>], f: impl Fn(&T) -> R) -> Option<f64> {
     let mut fastest: Option<f64> = None;
-    for batch in batches.iter().filter(|b| !b.is_empty()) {
-        for sample in batch {
+    for batch in batches.iter().filter(|b| b.len() > 1) {
+        let (warm, timed) = batch.split_at(batch.len() / 2);
+        for sample in warm {
             std::hint::black_box(f(sample));
         }
         let t = Instant::now();
-        for sample in batch {
+        for sample in timed {
             std::hint::black_box(f(sample));
         }
-        let ns = t.elapsed().as_secs_f64() * 1e9 / batch.len() as f64;
+        let ns = t.elapsed().as_secs_f64() * 1e9 / timed.len() as f64;
         fastest = Some(fastest.map_or(ns, |f: f64| f.min(ns)));
     }
     fastest
+}
+
+/// CPU time consumed so far by the threads of the current rayon pool \[ns\]: what the
+/// map renderings cost, whatever share of the cores other processes take meanwhile
+/// (wall-clock time would grow with their load; the probes, too short to be preempted,
+/// do not).
+fn pool_cpu_ns() -> f64 {
+    rayon::broadcast(|_| thread_cpu_ns()).iter().sum()
+}
+
+/// CPU time of the calling thread \[ns\].
+#[cfg(unix)]
+fn thread_cpu_ns() -> f64 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    #[expect(
+        unsafe_code,
+        reason = "clock_gettime through libc, no safe std equivalent"
+    )]
+    // SAFETY: `t` is a valid, writable timespec; CLOCK_THREAD_CPUTIME_ID exists on every
+    // unix this builds for; the call has no other precondition.
+    let status = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
+    if status != 0 {
+        return 0.0;
+    }
+    t.tv_sec as f64 * 1e9 + t.tv_nsec as f64
+}
+
+/// Elsewhere: wall-clock time since the first call, as if each thread were busy.
+#[cfg(not(unix))]
+fn thread_cpu_ns() -> f64 {
+    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+    START.get_or_init(Instant::now).elapsed().as_secs_f64() * 1e9
 }

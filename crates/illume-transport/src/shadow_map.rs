@@ -414,8 +414,8 @@ pub struct ShadowMaps {
     generation: u64,
     /// Maps rendered by the last build (the others were kept or unused).
     rendered: usize,
-    /// Per analytic light, the wall-clock time of its maps' last rendering \[ms\].
-    render_ms: Vec<Option<f64>>,
+    /// Per analytic light, the cost of its maps' last rendering (see `render_cost`).
+    render_cost: Vec<Option<f64>>,
 }
 
 /// One map slot of a plan.
@@ -607,7 +607,7 @@ impl ShadowMaps {
         }
         if light_count != self.plans.len() {
             // Other lights: their rendering times say nothing about these.
-            self.render_ms.clear();
+            self.render_cost.clear();
         }
         self.plan = plan;
         self.plans = plans;
@@ -625,11 +625,24 @@ impl ShadowMaps {
     /// current, in parallel. Those lights' shadows then come from their maps; the others'
     /// from rays ([`ShadowMaps::visibility`] answers `None` for them).
     pub fn render_planned(&mut self, world: &World, use_maps: &[bool]) {
+        let start = std::time::Instant::now();
+        self.render_planned_timed(world, use_maps, &|| start.elapsed().as_secs_f64() * 1e3);
+    }
+
+    /// [`ShadowMaps::render_planned`], each light's rendering timed by `clock` (any
+    /// monotonic reading: [`ShadowMaps::render_cost`] is its difference across the
+    /// light's rendering, e.g. the CPU time of the threads that render).
+    pub fn render_planned_timed(
+        &mut self,
+        world: &World,
+        use_maps: &[bool],
+        clock: &dyn Fn() -> f64,
+    ) {
         let wanted = |light: usize| use_maps.get(light).copied().unwrap_or(false);
         for (light, active) in self.active.iter_mut().enumerate() {
             *active = wanted(light) && self.plans[light].faces > 0;
         }
-        self.render_ms.resize(self.lights.len(), None);
+        self.render_cost.resize(self.lights.len(), None);
         let scene = &world.scene;
         let generation = self.generation;
         self.rendered = 0;
@@ -639,7 +652,7 @@ impl ShadowMaps {
             if !self.active[light] || self.plans[light].current {
                 continue;
             }
-            let t = std::time::Instant::now();
+            let before = clock();
             let rendered: usize = self
                 .maps
                 .par_iter_mut()
@@ -662,16 +675,18 @@ impl ShadowMaps {
                 })
                 .sum();
             if rendered > 0 {
-                self.render_ms[light] = Some(t.elapsed().as_secs_f64() * 1e3);
+                self.render_cost[light] = Some(clock() - before);
             }
             self.rendered += rendered;
         }
     }
 
-    /// Wall-clock time of the last rendering of analytic light `light`'s maps, all its
-    /// faces \[ms\]; `None` before its maps were first rendered.
-    pub fn render_ms(&self, light: usize) -> Option<f64> {
-        self.render_ms.get(light).copied().flatten()
+    /// Cost of the last rendering of analytic light `light`'s maps, all its faces: its
+    /// wall-clock time \[ms\] after [`ShadowMaps::render_planned`], the clock's difference
+    /// after [`ShadowMaps::render_planned_timed`]; `None` before its maps were first
+    /// rendered.
+    pub fn render_cost(&self, light: usize) -> Option<f64> {
+        self.render_cost.get(light).copied().flatten()
     }
 
     /// Whether analytic light `light`'s shadows come from its maps this frame (the last
@@ -938,12 +953,12 @@ mod tests {
         // Rays this frame: nothing rendered, no map used.
         maps.render_planned(&world, &[false]);
         assert_eq!((maps.rendered_last_build(), maps.uses_maps(0)), (0, false));
-        assert_eq!(maps.render_ms(0), None);
+        assert_eq!(maps.render_cost(0), None);
         let second = maps.plan(&world, &settings).expect("valid")[0];
         assert_eq!((second.current, second.still_frames), (false, Some(1)));
         maps.render_planned(&world, &[true]);
         assert_eq!((maps.rendered_last_build(), maps.uses_maps(0)), (1, true));
-        assert!(maps.render_ms(0).is_some());
+        assert!(maps.render_cost(0).is_some());
         assert!(maps.plan(&world, &settings).expect("valid")[0].current);
         maps.render_planned(&world, &[true]);
         assert_eq!(maps.rendered_last_build(), 0, "a current map is kept");
