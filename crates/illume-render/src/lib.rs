@@ -65,23 +65,26 @@ pub struct RenderSettings {
     /// footprint wide along shadow edges, creases and contacts (see `shadow_maps`).
     ///
     /// `auto` (default): `rays` for techniques that are not interactive (the reference);
-    /// for interactive ones ([`Technique::interactive`]: `photon_stream`, `precomputed`)
-    /// each light chooses, every frame, whichever is expected to cost less
-    /// ([`shadow_choice`] has the model; [`Frame::shadows`] counts the outcome). Maps
-    /// pay per triangle and texel when they must be re-rendered — ≈ 40 ns of one core per
-    /// triangle and map face, a cube map six times over — and ≈ 12 ns per lit pixel to
-    /// look up; rays pay per lit pixel, ≈ 50–300 ns each depending on the scene,
-    /// measured every frame on a few hundred rays. So a still light keeps its map (a
-    /// kept map costs lookups only, 0.3–0.6× the time of rays: `BENCHMARKS.md`), a light
-    /// that moves every frame over a large scene uses rays (the 100 k-triangle Cornell
-    /// dragon with a moving point light at 320×240: rays cost a few ms, its cube map
-    /// ≈ 20 ms a frame), and a light that stops moving returns to maps once one
-    /// rendering pays off over as many frames as it has been still. Force `maps` or
-    /// `rays` to rule the choice out (the choice depends on measured times, so two runs
-    /// may shade a shadow edge differently within the maps' tolerance).
+    /// for interactive ones ([`Technique::interactive`]: `photon_stream`, `selective`,
+    /// `precomputed`) each light chooses, every frame, whichever is expected to cost less
+    /// ([`shadow_choice`] has the model; [`Frame::shadows`] counts the outcome). Units:
+    /// CPU time. Maps pay for re-rendering whenever the light or any object moved —
+    /// measured per light, ≈ 40 ns per triangle and face for the dragon's cube map
+    /// (16–25 ms), up to ≈ 250 ns per triangle where triangles cover many texels
+    /// (Sponza's 1024² maps: 15–19 ms) — then ≈ 25 ns per lit pixel to look up; rays pay
+    /// per lit pixel, ≈ 70–190 ns each depending on the scene (probed every frame on a few
+    /// hundred rays). Trade-off: a rendering that serves many frames is cheap per frame,
+    /// so a still light keeps its map (a kept map costs lookups only, 0.1–0.4× the time
+    /// of rays, `BENCHMARKS.md`); a light that moves every frame over a large scene uses
+    /// rays (the 100 k-triangle Cornell dragon with a moving point light at 320×240:
+    /// ≈ 3.6 ms of rays against ≈ 18 ms for its cube map, per frame); a light that stops
+    /// moving returns to maps once one rendering pays off over as many frames as it has
+    /// been still; a new light is expected to stay still for 300 frames. Force `maps` or
+    /// `rays` to rule the choice out: it depends on measured times, so two runs may shade
+    /// a light's shadow edges differently, within the maps' tolerance of rays.
     pub shadows: ShadowMode,
     /// Resolution, bias and filtering of the shadow maps (`[render.shadow_maps]`), used
-    /// when `shadows = "maps"`. Out-of-range values are rejected by
+    /// wherever maps are (`shadows = "maps"`, or chosen by `auto`). Out-of-range values are rejected by
     /// [`RenderSettings::validate`]; a renderer given them anyway falls back to rays.
     pub shadow_maps: ShadowMapSettings,
 }

@@ -165,12 +165,21 @@ impl ShadowChooser {
             self.measured = vec![Measured::default(); plans.len()];
         }
         let triangles = world.scene.instanced_triangle_count() as f64;
-        self.choices.clear();
+        let previous = std::mem::take(&mut self.choices);
         let mut samples = Vec::with_capacity(plans.len());
         for (light, plan) in plans.iter().enumerate() {
-            let lit = lit_samples(world, gbuffer, light);
+            // A current map is kept whatever the costs (below): no sampling, no probe,
+            // the last estimate of its lit pixels stands.
+            let lit = if plan.current {
+                LitSample {
+                    pixels: previous.get(light).map_or(0.0, |c| c.lit_pixels),
+                    batches: Vec::new(),
+                }
+            } else {
+                lit_samples(world, gbuffer, light)
+            };
             let m = &mut self.measured[light];
-            if plan.faces > 0 && (!plan.current || m.ray_ns.is_none()) {
+            if plan.faces > 0 && !plan.current {
                 let probed = time_batches(&lit.batches, |(hit, s)| world.unoccluded(hit, s));
                 m.ray_ns = average(m.ray_ns, probed.map(|ns| ns * RAY_PROBE_SCALE));
             }

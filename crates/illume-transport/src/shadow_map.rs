@@ -31,7 +31,9 @@
 //!
 //! Only near shadow edges: a texel-sized band is blurred by the filter, and contacts
 //! (an object resting on a floor) leak light within about one footprint of the contact
-//! because of the bias. Everywhere else the bias keeps lit surfaces lit (no "acne")
+//! because of the bias — as do surfaces lit at grazing angles (within ≈ 20° of their
+//! plane), whose slope-scaled bias reaches several footprints (a fold of the Cornell
+//! dragon a few cm from the surface it shades). Everywhere else the bias keeps lit surfaces lit (no "acne")
 //! and occluders further than the bias from the receiver shadow exactly.
 
 use crate::lights::{Emitter, LightSample};
@@ -56,8 +58,8 @@ pub const MAX_PCF_TEXELS: u32 = 8;
 /// does the work.
 const MAX_SLOPE: f32 = 10.0;
 
-/// Shadow-map quality and bias, a tuning guide. Used when the renderer's `shadows` is
-/// `maps`; exact shadow rays ignore it.
+/// Shadow-map quality and bias, a tuning guide. Used wherever the renderer's `shadows`
+/// gives a light maps (`maps`, or `auto`'s choice); exact shadow rays ignore it.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ShadowMapSettings {
