@@ -17,13 +17,17 @@
 //! (`cornell_dragon/cornell_dragon.obj`, 100 k triangles) at 320×240 with a point light
 //! below its ceiling (a cube map). After the timings, a `calibration` table prints what
 //! the cost model's constants are fitted to (lit pixels, triangles, texels).
+//!
+//! `cargo bench -p illume-render --bench direct -- paired` instead measures the
+//! before/after pairs (maps against auto, still and moving light) back to back, frame
+//! by frame (see [`paired`]).
 
 #![expect(
     missing_docs,
     reason = "criterion_group! generates an undocumented public function"
 )]
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{Criterion, criterion_group};
 use illume_core::{Affine3A, Quat, Rgb, Vec3};
 use illume_render::{ShadowChooser, Shadows, direct_light, direct_light_with};
 use illume_scene::{Edit, Light, LightId, LightKind, Node, Scene, Trs};
@@ -247,5 +251,110 @@ fn lit_pixels(world: &World, gbuffer: &GBuffer) -> usize {
         .count()
 }
 
+/// `-- paired`: the before/after rows measured back to back. Per scene, 41 rounds of
+/// one frame each of `maps static light` then `auto static light`, and of `maps moving
+/// light` then `auto moving light` (each pair in alternating order, after 5 warm-up
+/// rounds), so that the load of other processes, which drifts over seconds on a shared
+/// machine, weighs on both alike. Prints medians and the median of the per-round ratios.
+fn paired() {
+    let settings = ShadowMapSettings::default();
+    println!("\n### paired: maps (before) against auto (after), one frame each, back to back\n");
+    println!("| scene | light | maps [ms] | auto [ms] | median auto ÷ maps | auto's choice |");
+    println!("|---|---|---:|---:|---:|---|");
+    for (name, mut world, (w, h)) in scenes() {
+        if name.contains("glossy") {
+            continue;
+        }
+        let gbuffer = GBuffer::rasterize(&world, w, h);
+        let home = world.scene.lights[0].world_from_light;
+        for moving in [false, true] {
+            let mut maps = ShadowMaps::build(&world, &settings).expect("valid settings");
+            let (mut auto_maps, mut chooser) = (ShadowMaps::default(), ShadowChooser::default());
+            let (mut before, mut after, mut ratios) = (Vec::new(), Vec::new(), Vec::new());
+            for round in 0..46u32 {
+                if moving {
+                    let angle = 1.7e-4 * (round as f32 * 0.7).sin();
+                    world
+                        .apply_edit(&Edit::SetLightTransform {
+                            light: LightId(0),
+                            world_from_light: home
+                                * Affine3A::from_rotation_translation(
+                                    Quat::from_rotation_x(angle),
+                                    Vec3::splat(angle),
+                                ),
+                        })
+                        .expect("edit");
+                }
+                let time_maps = |maps: &mut ShadowMaps| {
+                    let t = std::time::Instant::now();
+                    maps.rebuild(&world, &settings).expect("valid settings");
+                    std::hint::black_box(direct_light_with(
+                        &world,
+                        &gbuffer,
+                        Shadows::Maps(maps),
+                        1,
+                        0,
+                    ));
+                    t.elapsed().as_secs_f64() * 1e3
+                };
+                let time_auto = |maps: &mut ShadowMaps, chooser: &mut ShadowChooser| {
+                    let t = std::time::Instant::now();
+                    chooser
+                        .choose(&world, &gbuffer, maps, &settings)
+                        .expect("valid settings");
+                    std::hint::black_box(direct_light_with(
+                        &world,
+                        &gbuffer,
+                        Shadows::Maps(maps),
+                        1,
+                        0,
+                    ));
+                    t.elapsed().as_secs_f64() * 1e3
+                };
+                let (m, a) = if round % 2 == 0 {
+                    let m = time_maps(&mut maps);
+                    (m, time_auto(&mut auto_maps, &mut chooser))
+                } else {
+                    let a = time_auto(&mut auto_maps, &mut chooser);
+                    (time_maps(&mut maps), a)
+                };
+                if round >= 5 {
+                    before.push(m);
+                    after.push(a);
+                    ratios.push(a / m);
+                }
+            }
+            let c = chooser.choices()[0];
+            println!(
+                "| {name} {w}×{h} | {} | {:.2} | {:.2} | {:.2} | {} |",
+                if moving { "moving" } else { "still" },
+                median(&mut before),
+                median(&mut after),
+                median(&mut ratios),
+                if c.maps { "maps" } else { "rays" }
+            );
+            world
+                .apply_edit(&Edit::SetLightTransform {
+                    light: LightId(0),
+                    world_from_light: home,
+                })
+                .expect("edit");
+        }
+    }
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
 criterion_group!(benches, direct);
-criterion_main!(benches);
+
+fn main() {
+    if std::env::args().any(|a| a == "paired") {
+        paired();
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}
