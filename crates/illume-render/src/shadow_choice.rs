@@ -4,34 +4,34 @@
 //! Per light, with `lit` the pixels the light reaches (in range, inside its cone, facing
 //! it; counted on [`SAMPLED_PIXELS`] pixels spread over the G-buffer):
 //!
-//! * **maps** cost `lit × lookup_ns` when the light's maps are current (its view and the
-//!   geometry unchanged since they were rendered) — then they are always kept, as
-//!   lookups cost 0.1–0.4× the time of rays in every scene measured; when they are not,
-//!   plus the cost of rendering them, spread over the frames they are expected to serve: 1 for a light
-//!   (or scene) that moved since the last frame, `k + 1` for one that has been still for
-//!   `k` frames, [`NEW_LIGHT_STILL_FRAMES`] for a light seen for the first time;
-//! * **rays** cost `lit × ray_ns`, the probe's measurement × [`RAY_PROBE_SCALE`].
+//! * **maps** whose view and geometry did not change since they were rendered are always
+//!   kept: they cost `lit × lookup_ns`, and lookups cost 0.1–0.4× the time of rays in
+//!   every scene measured (`BENCHMARKS.md`). Stale maps cost their rendering, spread over
+//!   the frames they are expected to serve — 1 for a light (or scene) that moved since
+//!   the last frame, `k + 1` for one that has been still for `k` frames,
+//!   [`NEW_LIGHT_STILL_FRAMES`] for a light seen for the first time — plus the lookups;
+//! * **rays** cost `lit × ray_ns`.
 //!
 //! Every cost is measured on the scene at hand, per light, and carried from frame to
-//! frame as a running average: `ray_ns` and `lookup_ns` by timing [`PROBE_RAYS`] shadow
-//! rays (whenever the maps are not current) or map lookups (whenever they are used) from
-//! lit pixels, in runs of neighbouring pixels spread over the image, [`PROBE_BATCH`] of
-//! them timed after as many neighbours warmed the caches (as in the shading pass), the
-//! fastest run counting (preemption by other processes only adds time); the rendering by the CPU time its last one took on the renderer's
-//! threads. Before a measurement
+//! frame as a running average. `ray_ns` (whenever the light's maps are stale) and
+//! `lookup_ns` (whenever they were just rendered) by timing [`PROBE_RAYS`] shadow rays or
+//! lookups from lit pixels: runs of neighbouring pixels spread over the image, each
+//! timing [`PROBE_BATCH`] pixels after as many neighbours warmed the caches (as in the
+//! shading pass), the fastest run counting (preemption by other processes only adds
+//! time); the pass's rays cost [`RAY_PROBE_SCALE`] times the probe's. The rendering by
+//! the CPU time its last one took on the renderer's threads. Before a measurement
 //! exists, priors stand in: a lookup costs [`LOOKUP_PER_RAY_PRIOR`] of a ray, a ray
-//! [`RAY_NS_PRIOR`], a rendering `faces × (triangles × RASTER_TRIANGLE_NS + face texels
-//! × RASTER_TEXEL_NS)` scaled by how far measured renderings of other lights were off
-//! this prediction (the rasterizer's cost per triangle depends on how many texels each
-//! covers: 50–600 ns). Costs are nanoseconds of CPU time; the passes are parallel
-//! alike, so the thread count cancels out, and CPU time does not grow with the load of
-//! other processes on the machine.
+//! [`RAY_NS_PRIOR`], a rendering `faces × (triangles × RASTER_TRIANGLE_NS + face texels ×
+//! RASTER_TEXEL_NS)` scaled by how far measured renderings of other lights were off this
+//! prediction (the rasterizer's cost per triangle depends on how many texels each
+//! covers: 40–600 ns). Costs are nanoseconds of CPU time: the passes are parallel alike,
+//! so the thread count cancels out, and CPU time does not grow with the load of other
+//! processes on the machine.
 //!
 //! The outcome: a light that moves every frame with a cube map over a large scene gets
 //! rays (six rasterizations of every triangle cost more than one ray per lit pixel); a
-//! still light keeps its map (lookups only, cheaper than rays); a light that stops
-//! moving goes back to maps once the one rendering pays off over as many frames as it
-//! has been still.
+//! still light keeps its map (lookups only); a light that stops moving goes back to maps
+//! once the one rendering pays off over as many frames as it has been still.
 
 use illume_core::Vec2;
 use illume_transport::{
@@ -41,16 +41,16 @@ use illume_transport::{
 use std::time::Instant;
 
 /// Cost of one shadow-map lookup before one is measured, as a fraction of the light's
-/// shadow ray (the probes measure 0.4–0.65 on the Cornell dragon, cornell-spot and
+/// shadow ray (the probes measure 0.2–0.7 on the Cornell dragon, cornell-spot and
 /// Sponza; `BENCHMARKS.md`).
 pub const LOOKUP_PER_RAY_PRIOR: f64 = 0.5;
 
 /// Cost of one shadow ray before one is measured \[ns of one core\].
 pub const RAY_NS_PRIOR: f64 = 100.0;
 
-/// The shading pass's shadow rays cost this many times the probe's (measured on
-/// cornell-spot, Sponza and the Cornell dragon in `benches/direct.rs`: 1.3–2.0; the
-/// pass's rays miss caches that the probe's warm-up filled).
+/// The shading pass's shadow rays cost this many times the probe's: the pass's rays
+/// miss caches that the probe's warm-up filled (cornell-spot and Sponza in
+/// `benches/direct.rs`, per lit pixel against the probes: 1.35–2.2; `BENCHMARKS.md`).
 pub const RAY_PROBE_SCALE: f64 = 1.5;
 
 /// Rasterizing one triangle into one depth map, before any rendering is measured \[ns of
