@@ -28,6 +28,13 @@ fn config(kind: TechniqueKind) -> Config {
     };
     c.render.width = 64;
     c.render.height = 48;
+    // Pinned: for interactive techniques `auto` chooses maps or rays per light from
+    // measured times (issue 15), so their frames are not bit-reproducible; `maps` is what
+    // `auto` gave photon_stream when the checksums were recorded (the reference keeps
+    // `auto`: rays).
+    if matches!(kind, TechniqueKind::PhotonStream) {
+        c.render.shadows = illume_render::ShadowMode::Maps;
+    }
     c.photon_stream = illume_photon_stream::PhotonStreamSettings {
         vsl_count: 40,
         photons_per_frame: 5000,

@@ -3,8 +3,8 @@
 //!
 //! Direct light is the renderer's job for every technique, as in all four papers: each
 //! analytic light (point, spot, directional) is evaluated exactly, its visibility decided
-//! by one shadow ray or, with [`RenderSettings::shadows`] = `maps`, by a shadow map
-//! rebuilt each frame ([`illume_transport::shadow_map`]); emissive triangles (area lights)
+//! by one shadow ray or by a shadow map ([`illume_transport::shadow_map`]), chosen per
+//! light and frame by cost ([`RenderSettings::shadows`], [`shadow_choice`]); emissive triangles (area lights)
 //! are sampled [`RenderSettings::area_light_samples`] times per pixel, chosen by power,
 //! each sample with a shadow ray. The G-buffer samples each pixel once at its centre,
 //! by rasterization or by rays ([`RenderSettings::primary_visibility`]).
@@ -29,6 +29,10 @@ use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+pub mod shadow_choice;
+
+pub use shadow_choice::{LightShadowChoice, ShadowChooser, ShadowStats};
+
 /// Renderer settings.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -52,22 +56,35 @@ pub struct RenderSettings {
     /// debugging, or for scenes whose geometry comes within 0.1 mm of the camera plane
     /// (the rasterizer's near plane). Both sample pixel centres only.
     pub primary_visibility: PrimaryVisibility,
-    /// How analytic lights (point, spot, directional) find their shadows. `auto`
-    /// (default): `maps` for interactive techniques ([`Technique::interactive`]:
-    /// `photon_stream`, as its paper), `rays` for the others (the reference). `rays`: one
-    /// BVH shadow ray per pixel and light — exact, the reference path tracer's tests
-    /// compare against it. `maps`: a depth map per light (six for a point light)
-    /// rasterized from all the scene's triangles whenever the light or any object moved
-    /// (kept otherwise), then a filtered
-    /// lookup per pixel — equal to rays except in a band about one texel footprint wide
-    /// along shadow edges, creases and contacts (see `shadow_maps`). Maps pay per
-    /// triangle and texel, rays per lit pixel: maps win when many pixels are lit and the
-    /// scene is small (cornell-spot at 800×600: ≈ 0.6× the time of rays, `BENCHMARKS.md`)
-    /// and lose when the lights reach few pixels of a large scene (Sponza: 2–8× slower).
-    /// Area lights always use rays.
+    /// How analytic lights (point, spot, directional) find their shadows; area lights
+    /// always use rays. `rays`: one BVH shadow ray per pixel and light — exact, the
+    /// reference path tracer's tests compare against it. `maps`: a depth map per light
+    /// (six for a point light or a spot wider than 60°) rasterized from all the scene's
+    /// triangles whenever the light or any object moved (kept otherwise), then a
+    /// filtered lookup per pixel — equal to rays except in a band about one texel
+    /// footprint wide along shadow edges, creases and contacts (see `shadow_maps`).
+    ///
+    /// `auto` (default): `rays` for techniques that are not interactive (the reference);
+    /// for interactive ones ([`Technique::interactive`]: `photon_stream`, `selective`,
+    /// `precomputed`) each light chooses, every frame, whichever is expected to cost less
+    /// ([`shadow_choice`] has the model; [`Frame::shadows`] counts the outcome). Units:
+    /// CPU time. Maps pay for re-rendering whenever the light or any object moved —
+    /// measured per light, ≈ 40 ns per triangle and face for the dragon's cube map
+    /// (16–25 ms), up to ≈ 250 ns per triangle where triangles cover many texels
+    /// (Sponza's 1024² maps: 15–19 ms) — then ≈ 25 ns per lit pixel to look up; rays pay
+    /// per lit pixel, ≈ 70–190 ns each depending on the scene (probed every frame on a few
+    /// hundred rays). Trade-off: a rendering that serves many frames is cheap per frame,
+    /// so a still light keeps its map (a kept map costs lookups only, 0.1–0.4× the time
+    /// of rays, `BENCHMARKS.md`); a light that moves every frame over a large scene uses
+    /// rays (the 100 k-triangle Cornell dragon with a moving point light at 320×240:
+    /// ≈ 3.6 ms of rays against ≈ 18 ms for its cube map, per frame); a light that stops
+    /// moving returns to maps once one rendering pays off over as many frames as it has
+    /// been still; a new light is expected to stay still for 300 frames. Force `maps` or
+    /// `rays` to rule the choice out: it depends on measured times, so two runs may shade
+    /// a light's shadow edges differently, within the maps' tolerance of rays.
     pub shadows: ShadowMode,
     /// Resolution, bias and filtering of the shadow maps (`[render.shadow_maps]`), used
-    /// when `shadows = "maps"`. Out-of-range values are rejected by
+    /// wherever maps are (`shadows = "maps"`, or chosen by `auto`). Out-of-range values are rejected by
     /// [`RenderSettings::validate`]; a renderer given them anyway falls back to rays.
     pub shadow_maps: ShadowMapSettings,
 }
@@ -76,7 +93,8 @@ pub struct RenderSettings {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ShadowMode {
-    /// `Maps` for interactive techniques, `Rays` otherwise.
+    /// Per light and frame by cost for interactive techniques ([`ShadowChooser`]),
+    /// `Rays` otherwise.
     #[default]
     Auto,
     /// One shadow ray per pixel and light (exact).
@@ -90,7 +108,8 @@ pub enum ShadowMode {
 pub enum Shadows<'a> {
     /// Shadow rays through the world's tracer.
     Rays,
-    /// Lookups in maps built for the same world ([`ShadowMaps::rebuild`]).
+    /// Lookups in maps built for the same world ([`ShadowMaps::rebuild`]); lights the
+    /// last [`ShadowMaps::render_planned`] left without maps cast rays.
     Maps(&'a ShadowMaps),
     /// No shadows from analytic lights (area lights still cast rays): wrong wherever
     /// something occludes, for measuring what shadows cost and for debugging.
@@ -240,6 +259,8 @@ pub struct Frame {
     pub gbuffer: Arc<GBuffer>,
     /// Stage timings.
     pub timings: FrameTimings,
+    /// How many analytic lights took their shadows from maps and how many from rays.
+    pub shadows: ShadowStats,
 }
 
 /// The CPU renderer.
@@ -250,8 +271,9 @@ pub struct Renderer {
     /// The last frame's G-buffer, reused when no frame holds it any more (a G-buffer is
     /// ~100 bytes per pixel: reallocating 48 MB at 800×600 costs page faults every frame).
     previous: Mutex<Option<Arc<GBuffer>>>,
-    /// The shadow maps, re-rendered each frame into the same allocations.
-    shadow_maps: Mutex<ShadowMaps>,
+    /// The shadow maps, re-rendered each frame into the same allocations, and the
+    /// per-light choice of `shadows = "auto"`.
+    shadow_maps: Mutex<(ShadowMaps, ShadowChooser)>,
 }
 
 impl Renderer {
@@ -260,8 +282,15 @@ impl Renderer {
         Self {
             settings,
             previous: Mutex::new(None),
-            shadow_maps: Mutex::new(ShadowMaps::default()),
+            shadow_maps: Mutex::new((ShadowMaps::default(), ShadowChooser::default())),
         }
+    }
+
+    /// The last frame's per-light estimates and choices of `shadows = "auto"` (empty
+    /// unless the last frame chose by cost).
+    pub fn shadow_choices(&self) -> Vec<LightShadowChoice> {
+        let state = self.shadow_maps.lock().unwrap_or_else(|e| e.into_inner());
+        state.1.choices().to_vec()
     }
 
     /// The previous G-buffer's allocation if the caller has dropped its frame.
@@ -291,15 +320,37 @@ impl Renderer {
         });
         *self.previous.lock().unwrap_or_else(|e| e.into_inner()) = Some(Arc::clone(&gbuffer));
         let t1 = Instant::now();
-        let mut maps = self.shadow_maps.lock().unwrap_or_else(|e| e.into_inner());
-        // Settings that `RenderSettings::validate` rejects fall back to exact rays.
-        let use_maps = match s.shadows {
-            ShadowMode::Auto => technique.interactive(),
-            ShadowMode::Maps => true,
-            ShadowMode::Rays => false,
+        let mut state = self.shadow_maps.lock().unwrap_or_else(|e| e.into_inner());
+        let (maps, chooser) = &mut *state;
+        let analytic = world.lights.analytic_range().len() as u32;
+        let all_rays = ShadowStats {
+            lights_with_rays: analytic,
+            ..ShadowStats::default()
         };
-        let shadows = if use_maps && maps.rebuild(world, &s.shadow_maps).is_ok() {
-            Shadows::Maps(&maps)
+        // Settings that `RenderSettings::validate` rejects fall back to exact rays.
+        let stats = match s.shadows {
+            ShadowMode::Auto if technique.interactive() => chooser
+                .choose(world, &gbuffer, maps, &s.shadow_maps)
+                .unwrap_or(all_rays),
+            ShadowMode::Maps => match maps.rebuild(world, &s.shadow_maps) {
+                Ok(()) => {
+                    let with_maps = world
+                        .lights
+                        .analytic_range()
+                        .filter(|&i| maps.uses_maps(i))
+                        .count() as u32;
+                    ShadowStats {
+                        lights_with_maps: with_maps,
+                        lights_with_rays: analytic - with_maps,
+                        maps_rendered: maps.rendered_last_build() as u32,
+                    }
+                }
+                Err(_) => all_rays,
+            },
+            ShadowMode::Auto | ShadowMode::Rays => all_rays,
+        };
+        let shadows = if stats.lights_with_maps > 0 {
+            Shadows::Maps(&*maps)
         } else {
             Shadows::Rays
         };
@@ -312,7 +363,7 @@ impl Renderer {
             mix64(s.seed ^ frame_index.wrapping_mul(0x9e37)),
             !technique.supplies_sky_light(),
         );
-        drop(maps);
+        drop(state);
         let t2 = Instant::now();
         let indirect = technique.indirect(world, &gbuffer);
         let t3 = Instant::now();
@@ -331,6 +382,7 @@ impl Renderer {
             full,
             gbuffer,
             timings,
+            shadows: stats,
         }
     }
 }

@@ -45,7 +45,7 @@ pub use camera::CameraRays;
 pub use gbuffer::{GBuffer, GBufferPixel};
 pub use lights::{EmissionSample, LightSample, LightSet};
 pub use raster::VisibilityBuffer;
-pub use shadow_map::{ShadowMapError, ShadowMapSettings, ShadowMaps};
+pub use shadow_map::{LightMapPlan, ShadowMapError, ShadowMapSettings, ShadowMaps};
 pub use surface::SurfaceHit;
 pub use technique::{Budget, ChangeResponse, Pacing, Technique, TechniqueError, TechniqueSettings};
 pub use world::{SharedWorld, World};

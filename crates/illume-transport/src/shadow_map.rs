@@ -31,7 +31,9 @@
 //!
 //! Only near shadow edges: a texel-sized band is blurred by the filter, and contacts
 //! (an object resting on a floor) leak light within about one footprint of the contact
-//! because of the bias. Everywhere else the bias keeps lit surfaces lit (no "acne")
+//! because of the bias — as do surfaces lit at grazing angles (within ≈ 20° of their
+//! plane), whose slope-scaled bias reaches several footprints (a fold of the Cornell
+//! dragon a few cm from the surface it shades). Everywhere else the bias keeps lit surfaces lit (no "acne")
 //! and occluders further than the bias from the receiver shadow exactly.
 
 use crate::lights::{Emitter, LightSample};
@@ -56,8 +58,8 @@ pub const MAX_PCF_TEXELS: u32 = 8;
 /// does the work.
 const MAX_SLOPE: f32 = 10.0;
 
-/// Shadow-map quality and bias, a tuning guide. Used when the renderer's `shadows` is
-/// `maps`; exact shadow rays ignore it.
+/// Shadow-map quality and bias, a tuning guide. Used wherever the renderer's `shadows`
+/// gives a light maps (`maps`, or `auto`'s choice); exact shadow rays ignore it.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ShadowMapSettings {
@@ -302,6 +304,8 @@ struct DepthMap {
     size: u32,
     /// Row-major depths \[m\], row 0 at the top; `∞` where nothing is seen.
     depth: Vec<f32>,
+    /// The geometry generation the depths were rendered at (`None`: never rendered).
+    generation: Option<u64>,
 }
 
 impl DepthMap {
@@ -386,19 +390,60 @@ const CUBE_AXES: [Vec3; 6] = [
 ];
 
 /// The shadow maps of every analytic light of a world, rebuilt each frame into the same
-/// allocations — except the maps whose view and geometry did not change since the last
-/// build (a static light in a static scene costs nothing after its first frame).
+/// allocations — except the maps whose view and geometry did not change since they were
+/// rendered (a static light in a static scene costs nothing after its first frame).
+///
+/// A frame either calls [`ShadowMaps::rebuild`] (every light gets its maps), or
+/// [`ShadowMaps::plan`] then [`ShadowMaps::render_planned`] with the lights that should
+/// use maps this frame: the others keep their (possibly stale) depths unused, and
+/// [`ShadowMaps::visibility`] answers `None` for them, so the caller casts rays.
 #[derive(Clone, Debug, Default)]
 pub struct ShadowMaps {
     settings: ShadowMapSettings,
     /// Per analytic light, in [`LightSet::analytic_range`](crate::LightSet::analytic_range) order.
     lights: Vec<LightMaps>,
+    /// Per analytic light: its maps are current and were chosen for this frame.
+    active: Vec<bool>,
     maps: Vec<DepthMap>,
-    /// Every instance's transform and mask at the last build (what the depths depend on
+    /// The last plan: each map slot's view and size, and the light it belongs to.
+    plan: Vec<PlannedMap>,
+    /// The last plan's summary per light.
+    plans: Vec<LightMapPlan>,
+    /// Every instance's transform and mask at the last plan (what the depths depend on
     /// besides each map's projection; meshes never change).
     geometry: Vec<(Affine3A, u32)>,
-    /// Maps rendered by the last build (the others were kept).
+    /// Counts the changes of `geometry` (a map rendered at an older one is stale).
+    generation: u64,
+    /// Maps rendered by the last build (the others were kept or unused).
     rendered: usize,
+    /// Per analytic light, the cost of its maps' last rendering (see `render_cost`).
+    render_cost: Vec<Option<f64>>,
+}
+
+/// One map slot of a plan.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PlannedMap {
+    projection: Projection,
+    size: u32,
+    light: usize,
+}
+
+/// What [`ShadowMaps::plan`] found for one analytic light: the inputs of a cost model
+/// choosing between its maps and shadow rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightMapPlan {
+    /// Depth maps the light needs: 6 for a cube map (point lights, wide spots), 1 for a
+    /// spot or directional light, 0 where no map can be made (an empty scene: rays).
+    pub faces: u32,
+    /// Texels in all of them.
+    pub texels: u64,
+    /// Its maps are up to date for the light's view and the geometry: using them costs
+    /// lookups only, no rendering.
+    pub current: bool,
+    /// Consecutive earlier plans with the same view of the light and the same geometry
+    /// (0: the light or an object moved since the last plan); `None` for a light seen
+    /// for the first time.
+    pub still_frames: Option<u32>,
 }
 
 impl ShadowMaps {
@@ -410,34 +455,51 @@ impl ShadowMaps {
     }
 
     /// Re-renders the maps for `world` as it is now (lights and objects may have moved),
-    /// reusing this set's depth allocations. Maps of different lights and faces are
-    /// rendered in parallel.
+    /// reusing this set's depth allocations, for every analytic light ([`ShadowMaps::plan`]
+    /// then [`ShadowMaps::render_planned`] with all lights). Maps of different lights and
+    /// faces are rendered in parallel.
     pub fn rebuild(
         &mut self,
         world: &World,
         settings: &ShadowMapSettings,
     ) -> Result<(), ShadowMapError> {
+        let n = self.plan(world, settings)?.len();
+        self.render_planned(world, &vec![true; n]);
+        Ok(())
+    }
+
+    /// Plans this frame's maps for `world` as it is now, without rendering any: per
+    /// analytic light, how many maps and texels it needs, whether its maps are current,
+    /// and for how many plans its view and the geometry have stayed put. Call once per
+    /// frame (the still count advances with each call), then
+    /// [`ShadowMaps::render_planned`].
+    pub fn plan(
+        &mut self,
+        world: &World,
+        settings: &ShadowMapSettings,
+    ) -> Result<&[LightMapPlan], ShadowMapError> {
         settings.validate()?;
         self.settings = settings.clone();
         self.lights.clear();
-        let mut plan: Vec<(Projection, u32)> = Vec::new();
+        let mut plan: Vec<PlannedMap> = Vec::new();
         let border = settings.border_texels();
         // Widen a view whose useful region spans `tan` so `border` texels lie outside it.
         let widened =
             |tan: f32, size: u32| tan * size as f32 / (size as f32 - 2.0 * border).max(1.0);
         let emitters = world.lights.emitters();
         for i in world.lights.analytic_range() {
-            let cube = |position: Vec3, plan: &mut Vec<(Projection, u32)>| {
+            let cube = |position: Vec3, plan: &mut Vec<PlannedMap>| {
                 let first = plan.len();
                 let size = settings.cube_face_resolution;
                 for axis in CUBE_AXES {
-                    plan.push((
-                        Projection::Perspective {
+                    plan.push(PlannedMap {
+                        projection: Projection::Perspective {
                             view_from_world: look_to(position, axis),
                             tan_half: widened(1.0, size),
                         },
                         size,
-                    ));
+                        light: i,
+                    });
                 }
                 LightMaps::Cube { first, position }
             };
@@ -454,20 +516,25 @@ impl ShadowMaps {
                         cube(*position, &mut plan)
                     } else {
                         let size = settings.resolution;
-                        plan.push((
-                            Projection::Perspective {
+                        plan.push(PlannedMap {
+                            projection: Projection::Perspective {
                                 view_from_world: look_to(*position, *axis),
                                 tan_half: widened(half_angle.tan(), size),
                             },
                             size,
-                        ));
+                            light: i,
+                        });
                         LightMaps::Single(plan.len() - 1)
                     }
                 }
                 Emitter::Directional { direction, .. } => {
                     match fit_orthographic(world, *direction, settings.resolution, border) {
                         Some(projection) => {
-                            plan.push((projection, settings.resolution));
+                            plan.push(PlannedMap {
+                                projection,
+                                size: settings.resolution,
+                                light: i,
+                            });
                             LightMaps::Single(plan.len() - 1)
                         }
                         None => LightMaps::None,
@@ -477,46 +544,161 @@ impl ShadowMaps {
             };
             self.lights.push(entry);
         }
-        // Keep the depth allocations of the previous frame's maps.
-        self.maps.truncate(plan.len());
-        while self.maps.len() < plan.len() {
-            self.maps.push(DepthMap {
-                projection: plan[self.maps.len()].0,
-                size: 0,
-                depth: Vec::new(),
-            });
-        }
-        let scene = &world.scene;
-        let geometry: Vec<(Affine3A, u32)> = scene
+        let geometry: Vec<(Affine3A, u32)> = world
+            .scene
             .instances
             .iter()
             .map(|i| (i.world_from_object, i.mask))
             .collect();
-        let same_geometry = geometry == self.geometry;
-        self.geometry = geometry;
-        self.rendered = self
-            .maps
-            .par_iter_mut()
-            .zip(plan)
-            .map(|(map, (projection, size))| {
-                if same_geometry
-                    && map.size == size
-                    && map.projection == projection
-                    && !map.depth.is_empty()
-                {
-                    return 0;
+        let geometry_moved = geometry != self.geometry;
+        if geometry_moved {
+            self.generation += 1;
+            self.geometry = geometry;
+        }
+        // Keep the depth allocations of the previous frame's maps.
+        self.maps.truncate(plan.len());
+        while self.maps.len() < plan.len() {
+            self.maps.push(DepthMap {
+                projection: plan[self.maps.len()].projection,
+                size: 0,
+                depth: Vec::new(),
+                generation: None,
+            });
+        }
+        let light_count = self.lights.len();
+        let mut plans = vec![
+            LightMapPlan {
+                faces: 0,
+                texels: 0,
+                current: true,
+                still_frames: None,
+            };
+            light_count
+        ];
+        for (planned, map) in plan.iter().zip(&self.maps) {
+            let p = &mut plans[planned.light];
+            p.faces += 1;
+            p.texels += u64::from(planned.size) * u64::from(planned.size);
+            p.current &= map.size == planned.size
+                && map.projection == planned.projection
+                && map.generation == Some(self.generation)
+                && !map.depth.is_empty();
+        }
+        for (light, p) in plans.iter_mut().enumerate() {
+            if p.faces == 0 {
+                p.current = false;
+            }
+            // The same light (same maps, same views) in the last plan?
+            let views = |plan: &[PlannedMap]| -> Vec<(Projection, u32)> {
+                plan.iter()
+                    .filter(|m| m.light == light)
+                    .map(|m| (m.projection, m.size))
+                    .collect()
+            };
+            p.still_frames = match self.plans.get(light) {
+                Some(previous) if light_count == self.plans.len() => {
+                    let same = !geometry_moved && views(&plan) == views(&self.plan);
+                    Some(if same {
+                        previous.still_frames.map_or(1, |k| k.saturating_add(1))
+                    } else {
+                        0
+                    })
                 }
-                map.projection = projection;
-                map.size = size;
-                let (viewport, stored) = projection.viewport(size);
-                rasterize_depth(scene, &viewport, &mut map.depth, stored);
-                1
-            })
-            .sum();
-        Ok(())
+                _ => None,
+            };
+        }
+        if light_count != self.plans.len() {
+            // Other lights: their rendering times say nothing about these.
+            self.render_cost.clear();
+        }
+        self.plan = plan;
+        self.plans = plans;
+        self.active = vec![false; light_count];
+        Ok(&self.plans)
     }
 
-    /// Maps the last [`ShadowMaps::rebuild`] rendered; the others were unchanged and kept.
+    /// The last [`ShadowMaps::plan`], per analytic light.
+    pub fn planned(&self) -> &[LightMapPlan] {
+        &self.plans
+    }
+
+    /// Renders the planned maps of the analytic lights `use_maps[i]` marks (one flag per
+    /// light of the last [`ShadowMaps::plan`]; missing flags are `false`) that are not
+    /// current, in parallel. Those lights' shadows then come from their maps; the others'
+    /// from rays ([`ShadowMaps::visibility`] answers `None` for them).
+    pub fn render_planned(&mut self, world: &World, use_maps: &[bool]) {
+        let start = std::time::Instant::now();
+        self.render_planned_timed(world, use_maps, &|| start.elapsed().as_secs_f64() * 1e3);
+    }
+
+    /// [`ShadowMaps::render_planned`], each light's rendering timed by `clock` (any
+    /// monotonic reading: [`ShadowMaps::render_cost`] is its difference across the
+    /// light's rendering, e.g. the CPU time of the threads that render).
+    pub fn render_planned_timed(
+        &mut self,
+        world: &World,
+        use_maps: &[bool],
+        clock: &dyn Fn() -> f64,
+    ) {
+        let wanted = |light: usize| use_maps.get(light).copied().unwrap_or(false);
+        for (light, active) in self.active.iter_mut().enumerate() {
+            *active = wanted(light) && self.plans[light].faces > 0;
+        }
+        self.render_cost.resize(self.lights.len(), None);
+        let scene = &world.scene;
+        let generation = self.generation;
+        self.rendered = 0;
+        // Light by light (each light's faces and strips in parallel), so that each
+        // light's rendering is timed.
+        for light in 0..self.lights.len() {
+            if !self.active[light] || self.plans[light].current {
+                continue;
+            }
+            let before = clock();
+            let rendered: usize = self
+                .maps
+                .par_iter_mut()
+                .zip(&self.plan)
+                .filter(|(_, planned)| planned.light == light)
+                .map(|(map, planned)| {
+                    if map.generation == Some(generation)
+                        && map.size == planned.size
+                        && map.projection == planned.projection
+                        && !map.depth.is_empty()
+                    {
+                        return 0;
+                    }
+                    map.projection = planned.projection;
+                    map.size = planned.size;
+                    map.generation = Some(generation);
+                    let (viewport, stored) = planned.projection.viewport(planned.size);
+                    rasterize_depth(scene, &viewport, &mut map.depth, stored);
+                    1
+                })
+                .sum();
+            if rendered > 0 {
+                self.render_cost[light] = Some(clock() - before);
+            }
+            self.rendered += rendered;
+        }
+    }
+
+    /// Cost of the last rendering of analytic light `light`'s maps, all its faces: its
+    /// wall-clock time \[ms\] after [`ShadowMaps::render_planned`], the clock's difference
+    /// after [`ShadowMaps::render_planned_timed`]; `None` before its maps were first
+    /// rendered.
+    pub fn render_cost(&self, light: usize) -> Option<f64> {
+        self.render_cost.get(light).copied().flatten()
+    }
+
+    /// Whether analytic light `light`'s shadows come from its maps this frame (the last
+    /// [`ShadowMaps::render_planned`] chose it and it has maps).
+    pub fn uses_maps(&self, light: usize) -> bool {
+        self.active.get(light).copied().unwrap_or(false)
+    }
+
+    /// Maps the last [`ShadowMaps::rebuild`] or [`ShadowMaps::render_planned`] rendered;
+    /// the others were unchanged and kept, or not used.
     pub fn rendered_last_build(&self) -> usize {
         self.rendered
     }
@@ -542,6 +724,9 @@ impl ShadowMaps {
     /// standing in for [`World::unoccluded`]. `None` when the light has no map (the caller
     /// casts a ray).
     pub fn visibility(&self, light: usize, hit: &SurfaceHit, sample: &LightSample) -> Option<f32> {
+        if !self.uses_maps(light) {
+            return None;
+        }
         let map = match *self.lights.get(light)? {
             LightMaps::None => return None,
             LightMaps::Single(m) => &self.maps[m],
@@ -628,6 +813,7 @@ mod tests {
             },
             size: size as u32,
             depth,
+            generation: None,
         }
     }
 
@@ -746,6 +932,56 @@ mod tests {
         };
         maps.rebuild(&world, &biased).expect("valid");
         assert_eq!(maps.rendered_last_build(), 0);
+    }
+
+    #[test]
+    fn planned_maps_render_only_for_chosen_lights_and_go_stale_while_unused() {
+        let mut world = World::new(illume_scene::builtin::load("cornell-spot").expect("builtin"));
+        let settings = ShadowMapSettings {
+            resolution: 64,
+            ..Default::default()
+        };
+        let mut maps = ShadowMaps::default();
+        let first = maps.plan(&world, &settings).expect("valid")[0];
+        assert_eq!(
+            first,
+            LightMapPlan {
+                faces: 1,
+                texels: 64 * 64,
+                current: false,
+                still_frames: None,
+            }
+        );
+        // Rays this frame: nothing rendered, no map used.
+        maps.render_planned(&world, &[false]);
+        assert_eq!((maps.rendered_last_build(), maps.uses_maps(0)), (0, false));
+        assert_eq!(maps.render_cost(0), None);
+        let second = maps.plan(&world, &settings).expect("valid")[0];
+        assert_eq!((second.current, second.still_frames), (false, Some(1)));
+        maps.render_planned(&world, &[true]);
+        assert_eq!((maps.rendered_last_build(), maps.uses_maps(0)), (1, true));
+        assert!(maps.render_cost(0).is_some());
+        assert!(maps.plan(&world, &settings).expect("valid")[0].current);
+        maps.render_planned(&world, &[true]);
+        assert_eq!(maps.rendered_last_build(), 0, "a current map is kept");
+        // An object moves while the light uses rays; when maps are chosen again, the
+        // map (same view, older geometry) is re-rendered.
+        world
+            .apply_edit(&illume_scene::Edit::SetInstanceTransform {
+                instance: illume_scene::InstanceId(2),
+                world_from_object: Affine3A::from_translation(Vec3::new(0.1, 0.0, 0.05))
+                    * world.scene.instances[2].world_from_object,
+            })
+            .expect("edit");
+        let moved = maps.plan(&world, &settings).expect("valid")[0];
+        assert_eq!((moved.current, moved.still_frames), (false, Some(0)));
+        maps.render_planned(&world, &[false]);
+        let later = maps.plan(&world, &settings).expect("valid")[0];
+        assert_eq!((later.current, later.still_frames), (false, Some(1)));
+        maps.render_planned(&world, &[true]);
+        assert_eq!(maps.rendered_last_build(), 1);
+        let fresh = ShadowMaps::build(&world, &settings).expect("valid");
+        assert_eq!(maps.maps[0].depth, fresh.maps[0].depth);
     }
 
     #[test]
