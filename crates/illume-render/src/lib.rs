@@ -68,20 +68,19 @@ pub struct RenderSettings {
     /// for interactive ones ([`Technique::interactive`]: `photon_stream`, `selective`,
     /// `precomputed`) each light chooses, every frame, whichever is expected to cost less
     /// ([`shadow_choice`] has the model; [`Frame::shadows`] counts the outcome). Units:
-    /// CPU time. Maps pay for re-rendering whenever the light or any object moved —
-    /// measured per light, ≈ 40 ns per triangle and face for the dragon's cube map
-    /// (16–25 ms), up to ≈ 250 ns per triangle where triangles cover many texels
-    /// (Sponza's 1024² maps: 15–19 ms) — then ≈ 25 ns per lit pixel to look up; rays pay
-    /// per lit pixel, ≈ 70–190 ns each depending on the scene (probed every frame on a few
-    /// hundred rays). Trade-off: a rendering that serves many frames is cheap per frame,
-    /// so a still light keeps its map (a kept map costs lookups only, 0.1–0.4× the time
-    /// of rays, `BENCHMARKS.md`); a light that moves every frame over a large scene uses
-    /// rays (the 100 k-triangle Cornell dragon with a moving point light at 320×240:
-    /// ≈ 3.6 ms of rays against ≈ 18 ms for its cube map, per frame); a light that stops
+    /// CPU time, measured on the scene at hand. Maps pay for re-rendering whenever the
+    /// light or any object moved (per triangle and face, more where triangles cover many
+    /// texels), then one lookup per lit pixel; rays pay one ray per lit pixel (probed
+    /// every frame on a few hundred rays). Trade-off: a rendering that serves many frames
+    /// is cheap per frame, so a still light keeps its map (a kept map costs lookups only,
+    /// a fraction of the time of rays); a light that moves every frame over a large scene
+    /// uses rays (the Cornell dragon with a moving point light); a light that stops
     /// moving returns to maps once one rendering pays off over as many frames as it has
-    /// been still; a new light is expected to stay still for 300 frames. Force `maps` or
-    /// `rays` to rule the choice out: it depends on measured times, so two runs may shade
-    /// a light's shadow edges differently, within the maps' tolerance of rays.
+    /// been still; a new light is expected to stay still for 300 frames. The measured
+    /// costs are in `BENCHMARKS.md` ("Direct light — shadow maps against shadow rays").
+    /// Force `maps` or `rays` to rule the choice out: it depends on measured times, so
+    /// two runs may shade a light's shadow edges differently, within the maps' tolerance
+    /// of rays.
     pub shadows: ShadowMode,
     /// Resolution, bias and filtering of the shadow maps (`[render.shadow_maps]`), used
     /// wherever maps are (`shadows = "maps"`, or chosen by `auto`). Out-of-range values are rejected by
