@@ -41,7 +41,10 @@ pub struct StepOutput {
     /// The scene changes this step applied.
     pub changes: Vec<SceneChange>,
     /// The technique's counters after the frame, filed under its name
-    /// (`photon_stream.photons_per_s`).
+    /// (`photon_stream.photons_per_s`), then the renderer's choice of shadows for the
+    /// frame's analytic lights (`RenderSettings::shadows`): `render.shadow_lights_maps`
+    /// and `render.shadow_lights_rays` (lights shadowed each way) and
+    /// `render.shadow_maps_rendered` (depth maps rendered, a cube map counting six).
     pub stats: Counters,
     /// Time spent updating the world and the technique \[ms\].
     pub update_ms: f64,
@@ -261,7 +264,20 @@ impl Engine {
             .render(&world, self.technique.as_mut(), self.frame_index);
         drop(world);
         self.frame_index += 1;
-        let stats = self.technique.stats().prefixed(self.kind.name());
+        let mut stats = self.technique.stats().prefixed(self.kind.name());
+        let shadows = frame.shadows;
+        stats.set(
+            "render.shadow_lights_maps",
+            f64::from(shadows.lights_with_maps),
+        );
+        stats.set(
+            "render.shadow_lights_rays",
+            f64::from(shadows.lights_with_rays),
+        );
+        stats.set(
+            "render.shadow_maps_rendered",
+            f64::from(shadows.maps_rendered),
+        );
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         Ok(StepOutput {
             frame,

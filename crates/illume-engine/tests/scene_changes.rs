@@ -134,3 +134,31 @@ fn every_technique_follows_an_object_added_then_removed() {
         assert_ne!(added, InstanceId(0));
     }
 }
+
+/// Every step reports how its analytic lights were shadowed: the reference (not
+/// interactive) shades cornell-spot's one spot light with rays; photon_stream with
+/// `shadows = "maps"` with a map, rendered on the first frame and kept while nothing
+/// moves.
+#[test]
+fn each_step_reports_the_shadows_of_its_lights() {
+    let get = |out: &illume_engine::StepOutput, k: &str| {
+        out.stats.get(k).unwrap_or_else(|| panic!("no counter {k}"))
+    };
+    let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+    let mut engine = Engine::new(scene.clone(), &config(TechniqueKind::Reference)).unwrap();
+    let out = engine.step(0.0).unwrap();
+    assert_eq!(get(&out, "render.shadow_lights_rays"), 1.0);
+    assert_eq!(get(&out, "render.shadow_lights_maps"), 0.0);
+    assert_eq!(get(&out, "render.shadow_maps_rendered"), 0.0);
+
+    let mut c = config(TechniqueKind::PhotonStream);
+    c.render.shadows = illume_render::ShadowMode::Maps;
+    let mut engine = Engine::new(scene, &c).unwrap();
+    let first = engine.step(0.0).unwrap();
+    assert_eq!(get(&first, "render.shadow_lights_maps"), 1.0);
+    assert_eq!(get(&first, "render.shadow_lights_rays"), 0.0);
+    assert!(get(&first, "render.shadow_maps_rendered") >= 1.0);
+    let second = engine.step(0.0).unwrap();
+    assert_eq!(get(&second, "render.shadow_lights_maps"), 1.0);
+    assert_eq!(get(&second, "render.shadow_maps_rendered"), 0.0);
+}
