@@ -379,6 +379,12 @@ fn the_window_handles_input_while_a_frame_takes_seconds() {
         frame_ms >= 1000.0,
         "a frame should take ≥ 1 s here: {first}"
     );
+    // The viewer logs a frame when it takes it, then draws it: the first draw of an image
+    // (the frame texture's creation, lavapipe's first run of the display pipeline) is a
+    // one-time cost — a first key waited 61–118 ms behind it in two CI runs — and not
+    // the steady state measured here; let it pass (frames take ≥ 1 s, so the next one
+    // is still rendering).
+    std::thread::sleep(Duration::from_millis(800));
     focus(&id);
     // Latency: from the key's sending to the viewer's log line. xdotool sends the key
     // at the end of its run, after starting up and connecting to the X server; that cost
