@@ -47,7 +47,8 @@ struct RunArgs {
     /// Last clock hour [hours] (default 24).
     #[arg(long)]
     to: Option<f64>,
-    /// screen (default); cube and atlas are not implemented yet.
+    /// screen (default: the fixed camera), cube (the camera may turn in place) or atlas
+    /// (lightmap and probes: any camera; `--set precomputed.atlas_density=…`).
     #[arg(long)]
     domain: Option<String>,
     /// adaptive (default) or uniform.
@@ -259,6 +260,18 @@ fn run_info(i: InfoArgs) -> Result<()> {
         h.scene_source, h.scene_fingerprint
     );
     println!("domain      {} {}×{}", h.domain, h.width, h.height);
+    if let Some(a) = &h.atlas {
+        println!(
+            "atlas       {}×{} lightmap at {} texels/m, {}×{}×{} probes {} m apart",
+            a.lightmap[0],
+            a.lightmap[1],
+            a.density,
+            a.probe_dims[0],
+            a.probe_dims[1],
+            a.probe_dims[2],
+            a.probe_spacing
+        );
+    }
     println!("exposure    {}", h.exposure);
     let dark = h.keys.iter().filter(|k| k.dark).count();
     println!(

@@ -168,6 +168,24 @@ pub struct KeyInfo {
     pub dark: bool,
 }
 
+/// The `atlas` domain's layout, as listed in the header: the run time rebuilds the
+/// layout from the scene and checks it against `layout_checksum`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AtlasInfo {
+    /// Lightmap width and height \[texels\] (the key image holds the probes' values in
+    /// the rows after them).
+    pub lightmap: [u32; 2],
+    /// Texels per metre.
+    pub density: f32,
+    /// Probe spacing \[m\].
+    pub probe_spacing: f32,
+    /// Probes along x, y, z.
+    pub probe_dims: [u32; 3],
+    /// [`crate::atlas::Atlas::checksum`], 16 hex digits.
+    pub layout_checksum: String,
+}
+
 /// The TOML header.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -197,6 +215,9 @@ pub struct Header {
     pub exposure: f32,
     /// Shard `[K, N]` of a partial file (`[0, 1]`: unsharded).
     pub shard: [u32; 2],
+    /// The `atlas` layout (absent for other domains).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atlas: Option<AtlasInfo>,
     /// The keys, sorted by time.
     pub keys: Vec<KeyInfo>,
     /// PCA: kept components k.

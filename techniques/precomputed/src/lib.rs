@@ -13,13 +13,17 @@
 //! - [`pca`]: the PCA of the key images (§3.2, Fig. 5);
 //! - [`schedule`]: uniform (Eq. 1, 3) and adaptive (§3.2, Fig. 6) key times, and the
 //!   binary search + α of non-uniform keys;
-//! - [`file`]: the versioned `.illumepc` file (magic, TOML header, checksummed sections).
+//! - [`file`]: the versioned `.illumepc` file (magic, TOML header, checksummed sections);
+//! - [`domain`]: where keys live (`screen`, `cube`, `atlas`) and how each renders them;
+//! - [`atlas`]: the `atlas` domain's lightmap coordinates and probe grid.
 //!
 //! # Limits (as in the paper)
 //! One day and one place per file; static geometry; Lambertian materials only (§3.1: no
 //! reflective objects); dynamic objects leave the indirect light unchanged (they neither
 //! block it nor bleed colour).
 
+pub mod atlas;
+pub mod domain;
 pub mod error;
 pub mod file;
 pub mod pca;

@@ -13,13 +13,13 @@
 //! - key t's samples are seeded from (seed, time): any machine renders the same key.
 
 use crate::PrecomputedError;
-use crate::file::{Header, KeyInfo, PcFile, Section, SectionFormat, scene_fingerprint};
+use crate::domain::Layout;
+use crate::file::{AtlasInfo, Header, KeyInfo, PcFile, Section, SectionFormat, scene_fingerprint};
 use crate::pca::{self, Components, Precision};
 use crate::schedule::KeyTime;
 use crate::settings::{Colour, PrecomputedSettings};
 use illume_core::image::RgbImage;
 use illume_core::sampling::mix64;
-use illume_reference::{ReferenceRenderer, ReferenceSettings};
 use illume_scene::sun::SunSettings;
 use illume_scene::{LightKind, Scene};
 use illume_transport::World;
@@ -45,7 +45,7 @@ pub fn sun_of(scene: &Scene) -> Result<SunSettings, PrecomputedError> {
 }
 
 /// The precompute's private scene: dynamic instances masked out.
-fn static_scene(scene: &Scene) -> Scene {
+pub fn static_scene(scene: &Scene) -> Scene {
     let mut s = scene.clone();
     for inst in s.instances.iter_mut().filter(|i| i.dynamic) {
         inst.mask = 0;
@@ -58,30 +58,28 @@ pub fn key_seed(seed: u64, hours: f64) -> u64 {
     mix64(seed ^ mix64(hours.to_bits()))
 }
 
-fn indirect(world: &World, scene: Scene, spp: u32, seed: u64, size: (u32, u32)) -> RgbImage {
-    let w = world.with_scene(scene);
-    let mut r = ReferenceRenderer::new(
-        ReferenceSettings {
-            spp,
-            seed,
-            ..Default::default()
-        },
-        size.0,
-        size.1,
-    );
-    r.add_samples(&w, spp);
-    r.images().indirect
-}
-
-/// Renders the key at clock time `time.hours` (sun only, sky off, dynamic masked).
+/// Renders the key at clock time `time.hours` (sun only, sky off, dynamic masked) in
+/// the domain `settings` ask for, for images of `size` pixels ([`Layout::new`]).
 pub fn render_key(
     world: &World,
     settings: &PrecomputedSettings,
     time: KeyTime,
     size: (u32, u32),
 ) -> Result<Key, PrecomputedError> {
+    let layout = Layout::new(world, settings, size)?;
+    render_key_in(world, settings, time, &layout)
+}
+
+/// As [`render_key`], in a layout made once for many keys.
+pub fn render_key_in(
+    world: &World,
+    settings: &PrecomputedSettings,
+    time: KeyTime,
+    layout: &Layout,
+) -> Result<Key, PrecomputedError> {
     let sun = sun_of(&world.scene)?;
     let state = illume_scene::sun::evaluate(&sun, sun.scene_time(time.hours))?;
+    let size = layout.image_size();
     if state.position.elevation_deg <= 0.0 {
         return Ok(Key {
             time,
@@ -95,12 +93,11 @@ pub fn render_key(
     }
     scene.sky = None;
     scene.set_time(sun.scene_time(time.hours));
-    let image = indirect(
-        world,
-        scene,
+    let image = layout.render(
+        &world.with_scene(scene),
         settings.spp,
         key_seed(settings.seed, time.hours),
-        size,
+        true,
     );
     Ok(Key {
         time,
@@ -118,6 +115,16 @@ pub fn render_sky(
     settings: &PrecomputedSettings,
     size: (u32, u32),
 ) -> Result<RgbImage, PrecomputedError> {
+    render_sky_in(world, settings, &Layout::new(world, settings, size)?)
+}
+
+/// As [`render_sky`], in a layout made once.
+pub fn render_sky_in(
+    world: &World,
+    settings: &PrecomputedSettings,
+    layout: &Layout,
+) -> Result<RgbImage, PrecomputedError> {
+    let size = layout.image_size();
     let mut scene = static_scene(&world.scene);
     let path = scene
         .sun
@@ -136,19 +143,12 @@ pub fn render_sky(
     if scene.sky.is_none() {
         return Ok(RgbImage::filled(size.0, size.1, illume_core::Rgb::ZERO));
     }
-    let w = world.with_scene(scene);
-    let spp = settings.spp;
-    let mut r = ReferenceRenderer::new(
-        ReferenceSettings {
-            spp,
-            seed: mix64(settings.seed ^ 0x0073_6b79),
-            ..Default::default()
-        },
-        size.0,
-        size.1,
-    );
-    r.add_samples(&w, spp);
-    Ok(r.images().full)
+    Ok(layout.render(
+        &world.with_scene(scene),
+        settings.spp,
+        mix64(settings.seed ^ 0x0073_6b79),
+        false,
+    ))
 }
 
 /// The 8-bit sRGB encoding (clamped, no tone curve) of an image at `exposure` (for the Yee metric).
@@ -169,6 +169,16 @@ pub fn base_header(
     settings: &PrecomputedSettings,
     size: (u32, u32),
 ) -> Result<Header, PrecomputedError> {
+    base_header_in(world, settings, &Layout::new(world, settings, size)?)
+}
+
+/// As [`base_header`], for a layout made once.
+pub fn base_header_in(
+    world: &World,
+    settings: &PrecomputedSettings,
+    layout: &Layout,
+) -> Result<Header, PrecomputedError> {
+    let size = layout.image_size();
     let sun = sun_of(&world.scene)?;
     let (_, fingerprint) = scene_fingerprint(&world.scene);
     let camera = &world.scene.camera;
@@ -184,7 +194,17 @@ pub fn base_header(
         scene_fingerprint: fingerprint,
         settings: settings_table,
         sun: table(&sun),
-        domain: "screen".into(),
+        domain: layout.name().into(),
+        atlas: match layout {
+            Layout::Atlas(a) => Some(AtlasInfo {
+                lightmap: [a.width, a.height],
+                density: a.density,
+                probe_spacing: a.probes.spacing,
+                probe_dims: a.probes.dims,
+                layout_checksum: format!("{:016x}", a.checksum()),
+            }),
+            _ => None,
+        },
         width: size.0,
         height: size.1,
         channels: 3,
@@ -365,14 +385,15 @@ pub fn precompute(
 ) -> Result<PcFile, PrecomputedError> {
     settings.validate()?;
     sun_of(&world.scene)?;
-    let sky = render_sky(world, settings, size)?;
+    let layout = Layout::new(world, settings, size)?;
+    let sky = render_sky_in(world, settings, &layout)?;
     let keys = match settings.schedule {
         crate::settings::ScheduleKind::Uniform => {
             let times = crate::schedule::uniform(settings.from_h, settings.to_h, settings.step_min);
             progress.begin("precomputed keys", times.len() as u64);
             let mut keys = Vec::with_capacity(times.len());
             for (i, t) in times.into_iter().enumerate() {
-                keys.push(render_key(world, settings, t, size)?);
+                keys.push(render_key_in(world, settings, t, &layout)?);
                 progress.set(i as u64 + 1);
             }
             progress.end();
@@ -397,7 +418,8 @@ pub fn precompute(
                     progress.set(done);
                     let mut out = Vec::with_capacity(times.len());
                     for &hours in times {
-                        let key = render_key(world, settings, KeyTime { hours, level: 0 }, size)?;
+                        let key =
+                            render_key_in(world, settings, KeyTime { hours, level: 0 }, &layout)?;
                         out.push(key.image);
                         done += 1;
                         progress.set(done);
@@ -419,5 +441,10 @@ pub fn precompute(
                 .collect()
         }
     };
-    compress(base_header(world, settings, size)?, settings, &keys, &sky)
+    compress(
+        base_header_in(world, settings, &layout)?,
+        settings,
+        &keys,
+        &sky,
+    )
 }

@@ -9,9 +9,10 @@ use serde::{Deserialize, Serialize};
 pub enum Domain {
     /// One image from the fixed camera (the paper's implementation). Default.
     Screen,
-    /// Six faces around a camera that rotates in place. Not implemented yet.
+    /// Six faces around a camera that turns in place (its position is fixed).
     Cube,
-    /// A world-space lightmap of static geometry (free camera). Not implemented yet.
+    /// A world-space lightmap of static geometry and a probe grid for dynamic objects
+    /// (any camera; the paper's choice for the general case).
     Atlas,
 }
 
@@ -53,8 +54,24 @@ pub struct PrecomputedSettings {
     /// The `.illumepc` file to load at construction (`--data FILE`). Empty: precompute
     /// in memory at the first frame (slow; for tests and tiny scenes).
     pub data: String,
-    /// Where key images live. Default `screen` (§3.1, the paper's implementation).
+    /// Where key images live. Default `screen` (§3.1, the paper's implementation):
+    /// `screen` is exact per pixel but fixes the camera; `cube` lets it turn in place
+    /// (six faces to render and store); `atlas` frees it, at the lightmap's resolution
+    /// (`atlas_density`), with probes for dynamic objects.
     pub domain: Domain,
+    /// `cube`: pixels along a face's side. 0 (default): the side that matches the image's
+    /// pixel density at its centre (height / tan(yfov/2): 857 for 600 pixels at 70°).
+    /// Six faces of that side cost 6·side²/(width·height) times a screen key (9× at
+    /// 800×600).
+    pub cube_face: u32,
+    /// `atlas`: lightmap texels per metre of surface. Higher: sharper indirect light and
+    /// sky shadows, more texels to render and store (∝ density²). Default 16 (6 cm
+    /// texels: indirect light varies slowly; the sun's own shadows are the renderer's).
+    pub atlas_density: f32,
+    /// `atlas`: distance between the probes that light dynamic objects \[m\]. Lower:
+    /// finer variation on moving objects, more probes (∝ 1/spacing³, 6 values each).
+    /// Default 0.5.
+    pub probe_spacing: f32,
     /// Key times. Default `adaptive` (§3.2).
     pub schedule: ScheduleKind,
     /// Key interval of `uniform` and the smallest interval of `adaptive` \[minutes\].
@@ -93,6 +110,9 @@ impl Default for PrecomputedSettings {
         Self {
             data: String::new(),
             domain: Domain::Screen,
+            cube_face: 0,
+            atlas_density: 16.0,
+            probe_spacing: 0.5,
             schedule: ScheduleKind::Adaptive,
             step_min: 5.0,
             from_h: 0.0,
@@ -138,11 +158,14 @@ impl PrecomputedSettings {
         if !(self.exposure.is_finite() && self.exposure > 0.0) {
             return bad("exposure", "must be > 0");
         }
-        if self.domain != Domain::Screen {
-            return bad(
-                "domain",
-                "only `screen` is implemented so far (cube, atlas: planned)",
-            );
+        if !(self.atlas_density.is_finite() && self.atlas_density > 0.0) {
+            return bad("atlas_density", "must be > 0 texels per metre");
+        }
+        if !(self.probe_spacing.is_finite() && self.probe_spacing > 0.0) {
+            return bad("probe_spacing", "must be > 0 metres");
+        }
+        if self.cube_face > 16384 {
+            return bad("cube_face", "must be at most 16384 pixels");
         }
         Ok(())
     }

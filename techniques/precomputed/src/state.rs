@@ -2,8 +2,16 @@
 //! paper pre-loads); each frame interpolates the k temporal coefficients and the mean
 //! between the two keys around the clock time, reconstructs every pixel in O(k), clamps at
 //! 0 and adds the sky image (its direct and indirect light) scaled by s(t).
+//!
+//! Per domain ([`crate::domain`]): `screen` pixels are the file's pixels; `cube` pixels
+//! look up the face texel along the direction from the camera to their surface; `atlas`
+//! pixels of static surfaces read their lightmap texel (bilinear, within their chart),
+//! pixels of dynamic objects the probe grid, both times the pixel's albedo. `cube` and
+//! `atlas` reconstruct their whole domain image when the clock time changes and keep it
+//! while it stays.
 
 use crate::PrecomputedError;
+use crate::atlas::Atlas;
 use crate::file::{FileError, PcFile};
 use crate::schedule::bracket;
 use crate::settings::{Interpolation, PrecomputedSettings};
@@ -28,6 +36,19 @@ struct Group {
     rows: usize,
 }
 
+/// How the file's texels reach the pixels.
+enum Lookup {
+    /// One texel per pixel.
+    Screen,
+    /// Six faces of `face` pixels around `position`.
+    Cube {
+        face: u32,
+        position: illume_core::Vec3,
+    },
+    /// The lightmap and probes; probe validity flags.
+    Atlas { atlas: Box<Atlas>, valid: Vec<f32> },
+}
+
 /// The loaded `precomputed` technique.
 pub struct Precomputed {
     settings: PrecomputedSettings,
@@ -38,8 +59,13 @@ pub struct Precomputed {
     groups: Vec<Group>,
     joint: bool,
     sky: Vec<Rgb>,
+    /// The key image's size (screen: the image's; cube: face × 6·face; atlas: lightmap
+    /// and probe rows).
     width: u32,
     height: u32,
+    lookup: Lookup,
+    /// Reconstructed texels of `cube` and `atlas` and the (hours, sky scale) they are for.
+    cache: Option<((f64, f32), Vec<Rgb>)>,
     load_s: f64,
     last_ms: f64,
     stale: u64,
@@ -73,6 +99,8 @@ impl Precomputed {
             sky: Vec::new(),
             width,
             height,
+            lookup: Lookup::Screen,
+            cache: None,
             load_s: 0.0,
             last_ms: 0.0,
             stale: 0,
@@ -80,8 +108,10 @@ impl Precomputed {
         })
     }
 
-    /// Loads `path` for `world`: checks the file, the static scene, and (screen domain)
-    /// the camera and the image size `width × height`.
+    /// Loads `path` for `world`: checks the file, the static scene, and per domain:
+    /// `screen` the camera and the image size `width × height`; `cube` the camera's
+    /// position (it may turn, and any image size samples the faces); `atlas` that the
+    /// scene gives the file's lightmap layout (any camera and size).
     pub fn load(
         world: &World,
         settings: PrecomputedSettings,
@@ -118,23 +148,81 @@ impl Precomputed {
             return Err(mismatch("file kind", "pca".into(), h.kind.clone()));
         }
         file.check_scene(path, &world.scene)?;
-        if (h.width, h.height) != (width, height) {
-            return Err(mismatch(
-                "image size",
-                format!("{width}×{height}"),
-                format!("{}×{}", h.width, h.height),
-            ));
-        }
         let camera = &world.scene.camera;
         let mut cam: Vec<f32> = camera.world_from_camera.to_cols_array().to_vec();
         cam.push(camera.yfov_rad);
-        if h.domain == "screen" && cam != h.camera {
-            return Err(mismatch(
-                "camera (a screen file needs its fixed camera)",
-                format!("{cam:?}"),
-                format!("{:?}", h.camera),
-            ));
-        }
+        let lookup = match h.domain.as_str() {
+            "screen" => {
+                if (h.width, h.height) != (width, height) {
+                    return Err(mismatch(
+                        "image size (a screen file holds one image of its size)",
+                        format!("{width}×{height}"),
+                        format!("{}×{}", h.width, h.height),
+                    ));
+                }
+                if cam != h.camera {
+                    return Err(mismatch(
+                        "camera (a screen file needs its fixed camera)",
+                        format!("{cam:?}"),
+                        format!("{:?}", h.camera),
+                    ));
+                }
+                Lookup::Screen
+            }
+            "cube" => {
+                let position = camera.world_from_camera.translation;
+                let stored = h.camera.get(9..12).unwrap_or(&[]);
+                let tolerance = 1e-4 * (1.0 + position.abs().max_element());
+                let same = stored.len() == 3
+                    && (0..3).all(|i| (stored[i] - position[i]).abs() <= tolerance);
+                if !same || h.height != 6 * h.width {
+                    return Err(mismatch(
+                        "camera position (a cube file lets the camera turn, not move)",
+                        format!("{:?}", position.to_array()),
+                        format!("{stored:?}"),
+                    ));
+                }
+                Lookup::Cube {
+                    face: h.width,
+                    position: position.into(),
+                }
+            }
+            "atlas" => {
+                let info = h
+                    .atlas
+                    .as_ref()
+                    .ok_or_else(|| mismatch("[atlas] table", "present".into(), "missing".into()))?;
+                let atlas = Atlas::build(&world.scene, info.density, info.probe_spacing)?;
+                let checksum = format!("{:016x}", atlas.checksum());
+                if checksum != info.layout_checksum
+                    || [atlas.width, atlas.height] != info.lightmap
+                    || atlas.image_size() != (h.width, h.height)
+                {
+                    return Err(mismatch(
+                        "atlas layout (the scene's lightmap coordinates; made by another version?)",
+                        format!("{}×{} {checksum}", atlas.width, atlas.height),
+                        format!(
+                            "{}×{} {}",
+                            info.lightmap[0], info.lightmap[1], info.layout_checksum
+                        ),
+                    ));
+                }
+                let static_world = world.with_scene(crate::precompute::static_scene(&world.scene));
+                let valid = crate::domain::probe_flags(&static_world, &atlas);
+                Lookup::Atlas {
+                    atlas: Box::new(atlas),
+                    valid,
+                }
+            }
+            other => {
+                return Err(mismatch(
+                    "domain",
+                    "screen, cube or atlas".into(),
+                    other.into(),
+                ));
+            }
+        };
+        let (width, height) = (h.width, h.height);
         let sun: SunSettings = h.sun.clone().try_into().map_err(|e: toml::de::Error| {
             mismatch("[sun] table", "a valid [sun]".into(), e.to_string())
         })?;
@@ -197,6 +285,8 @@ impl Precomputed {
             sky,
             width,
             height,
+            lookup,
+            cache: None,
             load_s: start.elapsed().as_secs_f64(),
             last_ms: 0.0,
             stale: 0,
@@ -232,7 +322,8 @@ impl Precomputed {
     }
 
     /// The sun's indirect light at clock time `hours` plus the sky's whole light (direct
-    /// and indirect) at scale `sky_scale`, one value per pixel of the file's image.
+    /// and indirect) at scale `sky_scale`, one value per texel of the file's key image
+    /// (screen: its pixels).
     pub fn reconstruct(&self, hours: f64, sky_scale: f32) -> Vec<Rgb> {
         let weights = self.weights(hours);
         let keys = self.times.len();
@@ -288,6 +379,43 @@ impl Precomputed {
                     planes[1][p].max(0.0),
                     planes[2][p].max(0.0),
                 ) + self.sky[p] * sky_scale
+            })
+            .collect()
+    }
+}
+
+impl Precomputed {
+    /// `cube` and `atlas`: each pixel's value from the domain's reconstructed texels.
+    fn shade(&self, values: &[Rgb], gbuffer: &GBuffer) -> Vec<Rgb> {
+        gbuffer
+            .pixels
+            .par_iter()
+            .with_min_len(256)
+            .map(|px| {
+                let Some(px) = px else {
+                    return Rgb::ZERO;
+                };
+                let hit = &px.hit;
+                match &self.lookup {
+                    Lookup::Screen => Rgb::ZERO,
+                    Lookup::Cube { face, position } => {
+                        crate::domain::cube_lookup(values, *face, hit.position - *position)
+                    }
+                    Lookup::Atlas { atlas, valid } => {
+                        let back = !hit.front_face;
+                        let albedo = hit.albedo;
+                        match atlas.slot(hit.instance, hit.triangle, back) {
+                            Some(slot) => atlas.lookup(values, slot, hit.barycentrics) * albedo,
+                            // The unlit back of a one-sided static surface.
+                            None if atlas.maps(hit.instance) => Rgb::ZERO,
+                            None => {
+                                let probes = &values[atlas.lightmap_texels()..];
+                                atlas.probe_lookup(probes, valid, hit.position, hit.facing_normal())
+                                    * albedo
+                            }
+                        }
+                    }
+                }
             })
             .collect()
     }
@@ -359,17 +487,31 @@ impl Technique for Precomputed {
         let elevation = illume_scene::sun::solar_position(&self.sun, hours)
             .map(|p| p.elevation_deg)
             .unwrap_or(-90.0);
-        let values = self.reconstruct(hours, illume_scene::sun::sky_scale(elevation));
-        // Pixels that see nothing get nothing. A G-buffer of another size than the file's
-        // was refused at load; keep black rather than a wrong image if it happens anyway.
-        let out = if (gbuffer.width, gbuffer.height) == (self.width, self.height) {
-            values
-                .into_iter()
-                .zip(&gbuffer.pixels)
-                .map(|(v, px)| if px.is_some() { v } else { Rgb::ZERO })
-                .collect()
-        } else {
-            vec![Rgb::ZERO; gbuffer.width as usize * gbuffer.height as usize]
+        let sky_scale = illume_scene::sun::sky_scale(elevation);
+        let n = gbuffer.width as usize * gbuffer.height as usize;
+        let out = match &self.lookup {
+            Lookup::Screen => {
+                // Pixels that see nothing get nothing. A G-buffer of another size than
+                // the file's was refused at load; keep black rather than a wrong image
+                // if it happens anyway.
+                if (gbuffer.width, gbuffer.height) == (self.width, self.height) {
+                    self.reconstruct(hours, sky_scale)
+                        .into_iter()
+                        .zip(&gbuffer.pixels)
+                        .map(|(v, px)| if px.is_some() { v } else { Rgb::ZERO })
+                        .collect()
+                } else {
+                    vec![Rgb::ZERO; n]
+                }
+            }
+            Lookup::Cube { .. } | Lookup::Atlas { .. } => {
+                let key = (hours, sky_scale);
+                if self.cache.as_ref().is_none_or(|(k, _)| *k != key) {
+                    self.cache = Some((key, self.reconstruct(hours, sky_scale)));
+                }
+                let values = &self.cache.as_ref().expect("just filled").1;
+                self.shade(values, gbuffer)
+            }
         };
         self.last_ms = start.elapsed().as_secs_f64() * 1e3;
         RgbImage::from_vec(gbuffer.width, gbuffer.height, out).expect("one value per pixel")

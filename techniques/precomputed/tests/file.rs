@@ -24,6 +24,7 @@ fn sample(scene: &illume_scene::Scene) -> PcFile {
             ],
             exposure: 1.0,
             shard: [0, 1],
+            atlas: None,
             keys: vec![
                 KeyInfo {
                     hours: 0.0,

@@ -1,0 +1,466 @@
+//! Where key images live (Bahnsen et al. §3.1, Fig. 4) and how each domain renders a key
+//! and the sky image:
+//!
+//! - `screen`: the fixed camera's image, `width × height` pixels (the paper's
+//!   implementation). Rendered by the reference path tracer.
+//! - `cube`: six square faces of `face` pixels around the camera's position, stacked
+//!   top to bottom in the order +X, −X, +Y, −Y, +Z, −Z (each face a 90° pinhole camera
+//!   looking along its axis). The camera may turn in place; its position is fixed.
+//!   Rendered by the reference path tracer, one face at a time.
+//! - `atlas`: the world-space lightmap and probe grid of [`crate::atlas`]; each texel is
+//!   a path-traced gather from its surface point with albedo 1. Any camera.
+//!
+//! All three store one RGB value per texel in a key image, so the PCA, the file, the
+//! shards and the adaptive schedule treat them alike.
+
+use crate::PrecomputedError;
+use crate::atlas::{Atlas, PROBE_AXES};
+use crate::settings::{Domain, PrecomputedSettings};
+use illume_core::image::RgbImage;
+use illume_core::sampling::{Pcg32, SampleStream, mix64};
+use illume_core::{Affine3A, Mat3, Ray, Rgb, Vec2, Vec3};
+use illume_reference::{ReferenceRenderer, ReferenceSettings};
+use illume_transport::path::{PathRadiance, PathSettings, continue_path};
+use illume_transport::{SurfaceHit, World};
+use rayon::prelude::*;
+
+/// A domain with its sizes.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Layout {
+    /// The camera's image.
+    Screen {
+        /// Pixels across.
+        width: u32,
+        /// Pixels down.
+        height: u32,
+    },
+    /// Six faces around the camera's position.
+    Cube {
+        /// Pixels along a face's side.
+        face: u32,
+    },
+    /// The lightmap and probes.
+    Atlas(Box<Atlas>),
+}
+
+/// The cube faces' axes: (forward, up) of each face's camera.
+pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
+    (Vec3::X, Vec3::Y),
+    (Vec3::NEG_X, Vec3::Y),
+    (Vec3::Y, Vec3::NEG_Z),
+    (Vec3::NEG_Y, Vec3::Z),
+    (Vec3::Z, Vec3::Y),
+    (Vec3::NEG_Z, Vec3::Y),
+];
+
+/// The rotation of cube face `f`'s camera (camera space: −Z forward, +Y up, +X right).
+fn face_rotation(f: usize) -> Mat3 {
+    let (forward, up) = CUBE_FACES[f];
+    Mat3::from_cols(forward.cross(up), up, -forward)
+}
+
+impl Layout {
+    /// The layout `settings` ask for, in `world` (its static scene and camera), for an
+    /// image of `size` pixels (screen; cube: the face side when `cube_face` is 0).
+    pub fn new(
+        world: &World,
+        settings: &PrecomputedSettings,
+        size: (u32, u32),
+    ) -> Result<Self, PrecomputedError> {
+        Ok(match settings.domain {
+            Domain::Screen => Self::Screen {
+                width: size.0,
+                height: size.1,
+            },
+            Domain::Cube => Self::Cube {
+                face: cube_face(settings.cube_face, size.1, world.scene.camera.yfov_rad),
+            },
+            Domain::Atlas => Self::Atlas(Box::new(Atlas::build(
+                &world.scene,
+                settings.atlas_density,
+                settings.probe_spacing,
+            )?)),
+        })
+    }
+
+    /// The domain's name in files and settings.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Screen { .. } => "screen",
+            Self::Cube { .. } => "cube",
+            Self::Atlas(_) => "atlas",
+        }
+    }
+
+    /// Width and height of a key image.
+    pub fn image_size(&self) -> (u32, u32) {
+        match self {
+            Self::Screen { width, height } => (*width, *height),
+            Self::Cube { face } => (*face, 6 * face),
+            Self::Atlas(a) => a.image_size(),
+        }
+    }
+
+    /// Renders light of `world` into a key image: light reflected ≥ 2 times (`indirect`)
+    /// or all reflected light (`!indirect`, for the sky image), `spp` samples per texel.
+    pub fn render(&self, world: &World, spp: u32, seed: u64, indirect: bool) -> RgbImage {
+        match self {
+            Self::Screen { width, height } => {
+                render_camera(world, (*width, *height), spp, seed, indirect)
+            }
+            Self::Cube { face } => {
+                let mut pixels = Vec::with_capacity(6 * (*face as usize).pow(2));
+                for f in 0..6 {
+                    let mut camera = world.scene.camera.clone();
+                    camera.world_from_camera = Affine3A::from_mat3_translation(
+                        face_rotation(f),
+                        camera.world_from_camera.translation.into(),
+                    );
+                    camera.yfov_rad = std::f32::consts::FRAC_PI_2;
+                    let seed = mix64(seed ^ (0xc0be_0000 + f as u64));
+                    let mut scene = world.scene.clone();
+                    scene.camera = camera;
+                    let w = world.with_scene(scene);
+                    let image = render_camera(&w, (*face, *face), spp, seed, indirect);
+                    pixels.extend_from_slice(image.pixels());
+                }
+                RgbImage::from_vec(*face, 6 * face, pixels).expect("six faces")
+            }
+            Self::Atlas(atlas) => render_atlas(world, atlas, spp, seed, indirect),
+        }
+    }
+}
+
+/// A cube face's side: `asked`, or (0) the side whose texels match the density of a
+/// `height`-pixel image with vertical field of view `yfov` at its centre.
+pub fn cube_face(asked: u32, height: u32, yfov: f32) -> u32 {
+    if asked > 0 {
+        return asked;
+    }
+    ((height as f32 / (0.5 * yfov).tan()).round() as u32).max(1)
+}
+
+/// The reference path tracer's image of `world`'s camera: light reflected ≥ 2 times, or
+/// (`!indirect`) everything.
+fn render_camera(world: &World, size: (u32, u32), spp: u32, seed: u64, indirect: bool) -> RgbImage {
+    let mut r = ReferenceRenderer::new(
+        ReferenceSettings {
+            spp,
+            seed,
+            ..Default::default()
+        },
+        size.0,
+        size.1,
+    );
+    r.add_samples(world, spp);
+    let images = r.images();
+    if indirect {
+        images.indirect
+    } else {
+        images.full
+    }
+}
+
+/// A white Lambertian version of `hit` (albedo 1, no emission): what a lightmap texel
+/// or a probe direction gathers with.
+fn white(mut hit: SurfaceHit) -> SurfaceHit {
+    hit.albedo = Rgb::ONE;
+    hit.metallic = 0.0;
+    hit.roughness = 1.0;
+    hit.emission = Rgb::ZERO;
+    hit.reflects = true;
+    hit
+}
+
+/// The surface at lightmap texel point `p`, seen from its side's normal.
+fn texel_hit(world: &World, p: &crate::atlas::TexelPoint) -> SurfaceHit {
+    let scene = &world.scene;
+    let inst = &scene.instances[p.instance.index()];
+    let mesh = &scene.meshes[inst.mesh.index()];
+    let corners = mesh
+        .triangle(p.triangle as usize)
+        .map(|c| inst.world_from_object.transform_point3(c));
+    let b = p.barycentrics;
+    let position = corners[0] * (1.0 - b.x - b.y) + corners[1] * b.x + corners[2] * b.y;
+    let mut n = (corners[1] - corners[0])
+        .cross(corners[2] - corners[0])
+        .normalize_or(Vec3::Y);
+    if inst.world_from_object.matrix3.determinant() < 0.0 {
+        n = -n;
+    }
+    if p.side == 1 {
+        n = -n;
+    }
+    // A ray arriving against the side's normal: the hit is on that side.
+    let ray = Ray::new(position + n * 1e-3, -n);
+    let hit = illume_accel::Hit {
+        t: 1e-3,
+        instance: p.instance,
+        triangle: p.triangle,
+        barycentrics: b,
+    };
+    white(world.surface(&ray, &hit))
+}
+
+/// Mean of `spp` gathers from `hit` (seeded per sample and texel `index`).
+fn gather(world: &World, hit: SurfaceHit, spp: u32, seed: u64, index: u64, indirect: bool) -> Rgb {
+    let path = PathSettings::default();
+    let wo = hit.facing_normal();
+    let mut sum = [0f64; 3];
+    for s in 0..spp {
+        let mut rng = Pcg32::new(mix64(seed.wrapping_add(s as u64)), index);
+        let mut out = PathRadiance::default();
+        continue_path(world, hit, wo, &mut rng, &path, &mut out);
+        let v = if indirect {
+            out.indirect
+        } else {
+            out.direct + out.indirect
+        };
+        for c in 0..3 {
+            sum[c] += v[c] as f64;
+        }
+    }
+    let n = spp.max(1) as f64;
+    Rgb::new(
+        (sum[0] / n) as f32,
+        (sum[1] / n) as f32,
+        (sum[2] / n) as f32,
+    )
+}
+
+/// Whether most of a few rays from `origin` about `normal` hit back faces within
+/// `reach`: the point is inside other geometry (a floor under a wall, a probe in a
+/// column).
+fn buried(world: &World, origin: Vec3, normal: Option<Vec3>, reach: f32, index: u64) -> bool {
+    const RAYS: u32 = 16;
+    let mut rng = Pcg32::new(0x6275_7269_6564, index);
+    let mut back = 0;
+    for _ in 0..RAYS {
+        let d = match normal {
+            Some(n) => illume_core::Frame::from_normal(n)
+                .to_world(illume_core::sampling::cosine_hemisphere(rng.next_2d())),
+            None => illume_core::sampling::uniform_sphere(rng.next_2d()),
+        };
+        let ray = Ray::segment(origin, d, reach);
+        if let Some(h) = world.tracer.intersect(&ray, illume_scene::MASK_DEFAULT) {
+            let s = world.surface(&ray, &h);
+            if !s.front_face && !world.scene.materials[s.material.index()].double_sided {
+                back += 1;
+            }
+        }
+    }
+    back * 2 > RAYS
+}
+
+/// Renders the atlas: lightmap texels (valid ones gathered, buried ones copied from the
+/// nearest valid texel of their chart), then the probes.
+fn render_atlas(world: &World, atlas: &Atlas, spp: u32, seed: u64, indirect: bool) -> RgbImage {
+    let (w, h) = atlas.image_size();
+    let texels = atlas.lightmap_texels();
+    let reach = 2.0 / atlas.density;
+    let mut values: Vec<Option<Rgb>> = (0..texels)
+        .into_par_iter()
+        .with_min_len(64)
+        .map(|i| {
+            let p = atlas.point(i)?;
+            let hit = texel_hit(world, &p);
+            let origin = hit.spawn_origin(hit.facing_geometric_normal());
+            if buried(world, origin, Some(hit.facing_normal()), reach, i as u64) {
+                return None;
+            }
+            Some(gather(world, hit, spp, seed, i as u64, indirect))
+        })
+        .collect();
+    dilate(atlas, &mut values);
+    let mut pixels: Vec<Rgb> = values.into_iter().map(|v| v.unwrap_or(Rgb::ZERO)).collect();
+    // Probes: six white gathers each; buried probes black (their flag says so).
+    let template = (0..texels)
+        .find_map(|i| atlas.point(i))
+        .map(|p| texel_hit(world, &p));
+    let probe_values: Vec<Rgb> = (0..6 * atlas.probes.count())
+        .into_par_iter()
+        .with_min_len(6)
+        .map(|j| {
+            let Some(template) = template else {
+                return Rgb::ZERO;
+            };
+            let (probe, axis) = (j / 6, j % 6);
+            let position = atlas.probes.position(probe);
+            if probe_buried(world, atlas, probe) {
+                return Rgb::ZERO;
+            }
+            let n = PROBE_AXES[axis];
+            let hit = SurfaceHit {
+                position,
+                geometric_normal: n,
+                shading_normal: n,
+                front_face: true,
+                ..template
+            };
+            gather(world, hit, spp, seed, (texels + j) as u64, indirect)
+        })
+        .collect();
+    pixels.extend(probe_values);
+    pixels.resize(w as usize * h as usize, Rgb::ZERO);
+    RgbImage::from_vec(w, h, pixels).expect("atlas image size")
+}
+
+/// Whether probe `i` is inside geometry (left out of lookups).
+pub fn probe_buried(world: &World, atlas: &Atlas, i: usize) -> bool {
+    buried(
+        world,
+        atlas.probes.position(i),
+        None,
+        atlas.probes.spacing,
+        0x7072_6f62_0000 + i as u64,
+    )
+}
+
+/// The probes' flags (1 valid, 0 buried), as stored in an atlas file.
+pub fn probe_flags(world: &World, atlas: &Atlas) -> Vec<f32> {
+    (0..atlas.probes.count())
+        .into_par_iter()
+        .map(|i| {
+            if probe_buried(world, atlas, i) {
+                0.0
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+/// Gives every `None` texel the value of a `Some` neighbour, growing outwards a ring at a
+/// time (4-neighbours, never across rows of another chart: texels of one chart only take
+/// values through texels of that chart, as charts are rectangles and lookups clamp to
+/// them, values leaking across a chart's border would never be read anyway).
+fn dilate(atlas: &Atlas, values: &mut [Option<Rgb>]) {
+    let (w, h) = (atlas.width as usize, atlas.height as usize);
+    loop {
+        let mut changed = false;
+        let snapshot = values.to_vec();
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                if snapshot[i].is_some() || atlas.point(i).is_none() {
+                    continue;
+                }
+                let mut sum = Rgb::ZERO;
+                let mut n = 0;
+                let neighbours = [
+                    (x > 0).then(|| i - 1),
+                    (x + 1 < w).then(|| i + 1),
+                    (y > 0).then(|| i - w),
+                    (y + 1 < h).then(|| i + w),
+                ];
+                for j in neighbours.into_iter().flatten() {
+                    if same_chart(atlas, i, j)
+                        && let Some(v) = snapshot[j]
+                    {
+                        sum += v;
+                        n += 1;
+                    }
+                }
+                if n > 0 {
+                    values[i] = Some(sum * (1.0 / n as f32));
+                    changed = true;
+                }
+            }
+        }
+        if !changed {
+            return;
+        }
+    }
+}
+
+/// Whether texels `i` and `j` sample the same chart (same instance and side, and the
+/// same slot rectangle).
+fn same_chart(atlas: &Atlas, i: usize, j: usize) -> bool {
+    match (atlas.point(i), atlas.point(j)) {
+        (Some(a), Some(b)) => {
+            let ra = atlas
+                .slot(a.instance, a.triangle, a.side == 1)
+                .map(|s| s.rect);
+            let rb = atlas
+                .slot(b.instance, b.triangle, b.side == 1)
+                .map(|s| s.rect);
+            ra.is_some() && ra == rb
+        }
+        _ => false,
+    }
+}
+
+/// Bilinear lookup in the cube image `values` (faces stacked) along direction `d`.
+pub fn cube_lookup(values: &[Rgb], face: u32, d: Vec3) -> Rgb {
+    let a = d.abs();
+    let f = if a.x >= a.y && a.x >= a.z {
+        if d.x > 0.0 { 0 } else { 1 }
+    } else if a.y >= a.z {
+        if d.y > 0.0 { 2 } else { 3 }
+    } else if d.z > 0.0 {
+        4
+    } else {
+        5
+    };
+    let (forward, up) = CUBE_FACES[f];
+    let right = forward.cross(up);
+    let depth = d.dot(forward);
+    if depth <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let ndc = Vec2::new(d.dot(right), d.dot(up)) / depth;
+    let n = face as f32;
+    // Pixel (x, y)'s centre is at ndc ((x + 0.5)/n·2 − 1, 1 − (y + 0.5)/n·2).
+    let x = ((ndc.x + 1.0) * 0.5 * n - 0.5).clamp(0.0, n - 1.0);
+    let y = ((1.0 - ndc.y) * 0.5 * n - 0.5).clamp(0.0, n - 1.0);
+    let (ix, iy) = (x.floor() as usize, y.floor() as usize);
+    let (tx, ty) = (x - ix as f32, y - iy as f32);
+    let last = face as usize - 1;
+    let (jx, jy) = ((ix + 1).min(last), (iy + 1).min(last));
+    let base = f * (face as usize).pow(2);
+    let at = |x: usize, y: usize| values[base + y * face as usize + x];
+    (at(ix, iy) * (1.0 - tx) + at(jx, iy) * tx) * (1.0 - ty)
+        + (at(ix, jy) * (1.0 - tx) + at(jx, jy) * tx) * ty
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cube_faces_are_right_handed_cameras() {
+        for (f, (forward, _)) in CUBE_FACES.iter().enumerate() {
+            let m = face_rotation(f);
+            assert!((m.determinant() - 1.0).abs() < 1e-6);
+            // The camera looks along −Z: its forward is the face's axis.
+            assert!((m * Vec3::NEG_Z - *forward).length() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn cube_lookup_finds_the_texel_a_face_camera_renders() {
+        // Each texel holds its own index; the direction through a face pixel's centre
+        // reads that pixel back.
+        let face = 8u32;
+        let values: Vec<Rgb> = (0..6 * 64).map(|i| Rgb::splat(i as f32)).collect();
+        for f in 0..6 {
+            let mut camera = illume_scene::Camera {
+                name: String::new(),
+                yfov_rad: std::f32::consts::FRAC_PI_2,
+                node: illume_scene::NodeId(0),
+                world_from_camera: Affine3A::IDENTITY,
+            };
+            camera.world_from_camera = Affine3A::from_mat3(face_rotation(f));
+            let rays = illume_transport::CameraRays::new(&camera, face, face);
+            for (x, y) in [(0, 0), (3, 5), (7, 7), (6, 1)] {
+                let d = rays.ray(x, y, Vec2::splat(0.5)).dir;
+                let got = cube_lookup(&values, face, d).x;
+                let expect = (f as u32 * 64 + y * face + x) as f32;
+                assert!(
+                    (got - expect).abs() < 1e-3,
+                    "face {f} ({x},{y}): {got} vs {expect}"
+                );
+            }
+        }
+    }
+}
