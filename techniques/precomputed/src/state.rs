@@ -426,8 +426,10 @@ impl Technique for Precomputed {
         crate::NAME
     }
 
-    /// The sun's motion is on the file's timeline; a moved static instance or a changed
-    /// material makes the file stale (a warning and `stale` counted, never a rebuild).
+    /// The sun's motion is on the file's timeline; a moved static instance, a changed
+    /// material, or a camera that leaves what the domain allows (`screen`: any move;
+    /// `cube`: a new position) makes the file stale (a warning and `stale` counted,
+    /// never a rebuild).
     fn scene_changed(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
         for c in changes {
             let stale = match c {
@@ -437,13 +439,24 @@ impl Technique for Precomputed {
                     .get(instance.index())
                     .is_some_and(|i| !i.dynamic),
                 SceneChange::MaterialChanged { .. } => true,
+                // A screen file holds its camera's view, a cube file its position's.
+                SceneChange::CameraMoved { from, to } => match self.lookup {
+                    Lookup::Screen => !self.pending,
+                    Lookup::Cube { .. } => from.translation != to.translation,
+                    Lookup::Atlas { .. } => false,
+                },
                 _ => false,
             };
             if stale {
                 self.stale += 1;
                 log::warn!(
-                    "precomputed: {} no longer matches the scene (a static instance moved or a material changed): indirect light is stale",
-                    self.file.display()
+                    "precomputed: {} no longer matches the scene (a static instance moved, a material changed, or the camera left what a {} file allows): indirect light is stale",
+                    self.file.display(),
+                    match self.lookup {
+                        Lookup::Screen => "screen",
+                        Lookup::Cube { .. } => "cube",
+                        Lookup::Atlas { .. } => "atlas",
+                    }
                 );
             }
         }

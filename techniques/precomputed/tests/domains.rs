@@ -255,6 +255,24 @@ fn cube_lets_the_camera_turn_but_not_move() {
         "means {m_ours} vs {m_ref}"
     );
     assert!(rms < 0.15, "block RMS {rms}");
+    // At run time a turn keeps the file valid, a move makes it stale (counted).
+    let stale = |t: &mut Precomputed, to: &Scene| {
+        let change = illume_scene::SceneChange::CameraMoved {
+            from: world.scene.camera.world_from_camera,
+            to: to.camera.world_from_camera,
+        };
+        t.scene_changed(&world, &[change]);
+        t.stats().get("stale").unwrap_or(-1.0)
+    };
+    let turned_again = posed(&world.scene, -20.0, illume_core::Vec3::ZERO, true);
+    assert_eq!(stale(&mut technique, &turned_again), 0.0);
+    let moved = posed(
+        &world.scene,
+        0.0,
+        illume_core::Vec3::new(0.2, 0.0, 0.0),
+        true,
+    );
+    assert_eq!(stale(&mut technique, &moved), 1.0);
     // A moved camera is refused, naming the file and the camera position.
     let moved = posed(
         &world.scene,
