@@ -5,17 +5,19 @@
 //! linear and cubic, and the run-time cost at 800×600 (reconstruction alone and a whole
 //! engine frame).
 //!
-//! `cargo bench -p illume-precomputed --bench day` (env: `DAY_W`, `DAY_H`, `DAY_SPP`).
+//! `cargo bench -p illume-precomputed --bench day` (env: `DAY_W`, `DAY_H`, `DAY_SPP`;
+//! `DAY_ONLY_RUNTIME=1` for the 800×600 run time alone, `DAY_DOMAINS=screen,cube,atlas`).
 
 use illume_core::image::RgbImage;
 use illume_engine::{Config, Engine, TechniqueKind};
 use illume_precomputed::Precomputed;
+use illume_precomputed::domain::Layout;
 use illume_precomputed::file::PcFile;
 use illume_precomputed::precompute::{
     Key, base_header, compress, precompute, render_key, render_sky,
 };
 use illume_precomputed::schedule::KeyTime;
-use illume_precomputed::settings::{Interpolation, PrecomputedSettings, ScheduleKind};
+use illume_precomputed::settings::{Domain, Interpolation, PrecomputedSettings, ScheduleKind};
 use illume_reference::{ReferenceRenderer, ReferenceSettings};
 use illume_transport::World;
 use std::time::Instant;
@@ -280,85 +282,143 @@ fn measure_pca_and_error(
 /// Run time at 800×600.
 fn runtime(world: &World, sun: &illume_scene::sun::SunSettings, dir: &std::path::Path) {
     let world = world.clone_world();
-    // Run time at 800×600: a synthetic file of the right size (run time does not depend
-    // on the content), reconstruction alone and whole engine frames.
+    // Run time at 800×600 per domain: a synthetic file of the right size (run time does
+    // not depend on the content), then whole engine frames with the sun moving, the
+    // camera still (and for `atlas` turning too). Medians of the renderer's timings.
     let (fw, fh) = (800u32, 600u32);
-    let s = PrecomputedSettings {
-        schedule: ScheduleKind::Uniform,
-        components: 10,
-        ..Default::default()
-    };
-    let synthetic: Vec<Key> = (0..12)
-        .map(|i| Key {
-            time: KeyTime {
-                hours: 8.0 + i as f64,
-                level: 0,
+    let only = std::env::var("DAY_DOMAINS").unwrap_or_else(|_| "screen,cube,atlas".into());
+    for domain in [Domain::Screen, Domain::Cube, Domain::Atlas] {
+        let name = format!("{domain:?}").to_lowercase();
+        if !only.split(',').any(|d| d == name) {
+            continue;
+        }
+        let s = PrecomputedSettings {
+            schedule: ScheduleKind::Uniform,
+            components: 10,
+            domain,
+            ..Default::default()
+        };
+        let start = Instant::now();
+        let layout = Layout::new(&world, &s, (fw, fh)).unwrap();
+        let layout_s = start.elapsed().as_secs_f64();
+        let (iw, ih) = layout.image_size();
+        let synthetic: Vec<Key> = (0..12)
+            .map(|i| Key {
+                time: KeyTime {
+                    hours: 8.0 + i as f64,
+                    level: 0,
+                },
+                dark: false,
+                image: RgbImage::from_vec(
+                    iw,
+                    ih,
+                    (0..iw * ih)
+                        .map(|p| {
+                            illume_core::Rgb::splat(
+                                ((p * 7 + i * 13) % 101) as f32 * 1e-3 + i as f32 * 1e-3,
+                            )
+                        })
+                        .collect(),
+                )
+                .unwrap(),
+            })
+            .collect();
+        let sky = RgbImage::filled(iw, ih, illume_core::Rgb::splat(0.01));
+        let start = Instant::now();
+        let big = compress(
+            base_header(&world, &s, (fw, fh)).unwrap(),
+            &s,
+            &synthetic,
+            &sky,
+        )
+        .unwrap();
+        let pca_s = start.elapsed().as_secs_f64();
+        let path = dir.join(format!("{name}.illumepc"));
+        big.write(&path).unwrap();
+        let tech = Precomputed::load(&world, s.clone(), &path, fw, fh).unwrap();
+        println!(
+            "{name}: key image {iw}×{ih} ({} texels{}), layout {layout_s:.3} s, PCA of 12 keys {pca_s:.2} s, file {:.1} MB, load {:.3} s",
+            iw as u64 * ih as u64,
+            match &layout {
+                Layout::Atlas(a) => format!(
+                    "; lightmap {}×{}, {} probes",
+                    a.width,
+                    a.height,
+                    a.probes.count()
+                ),
+                _ => String::new(),
             },
-            dark: false,
-            image: RgbImage::from_vec(
-                fw,
-                fh,
-                (0..fw * fh)
-                    .map(|p| {
-                        illume_core::Rgb::splat(
-                            ((p * 7 + i * 13) % 101) as f32 * 1e-3 + i as f32 * 1e-3,
-                        )
-                    })
-                    .collect(),
-            )
-            .unwrap(),
-        })
-        .collect();
-    let sky = RgbImage::filled(fw, fh, illume_core::Rgb::splat(0.01));
-    let start = Instant::now();
-    let big = compress(
-        base_header(&world, &s, (fw, fh)).unwrap(),
-        &s,
-        &synthetic,
-        &sky,
-    )
-    .unwrap();
-    println!(
-        "800×600 × 12 keys PCA (k = 10): {:.3} s",
-        start.elapsed().as_secs_f64()
-    );
-    let path = dir.join("big.illumepc");
-    big.write(&path).unwrap();
-    let tech = Precomputed::load(&world, s.clone(), &path, fw, fh).unwrap();
-    println!(
-        "800×600 file {:.1} MB, load {:.3} s",
-        std::fs::metadata(&path).unwrap().len() as f64 / 1e6,
-        tech.load_seconds()
-    );
-    let start = Instant::now();
-    let reps = 20;
-    for r in 0..reps {
-        std::hint::black_box(tech.reconstruct(10.0 + r as f64 * 0.1, 0.5));
+            std::fs::metadata(&path).unwrap().len() as f64 / 1e6,
+            tech.load_seconds()
+        );
+        drop(tech);
+        let mut config = Config {
+            technique: TechniqueKind::Precomputed,
+            ..Default::default()
+        };
+        config.render.width = fw;
+        config.render.height = fh;
+        if let Ok(mode) = std::env::var("DAY_SHADOWS") {
+            config.render.shadows = match mode.as_str() {
+                "maps" => illume_render::ShadowMode::Maps,
+                "rays" => illume_render::ShadowMode::Rays,
+                _ => illume_render::ShadowMode::Auto,
+            };
+        }
+        config.precomputed = PrecomputedSettings {
+            data: path.display().to_string(),
+            ..s
+        };
+        let cameras: &[bool] = if domain == Domain::Atlas {
+            &[false, true]
+        } else {
+            &[false]
+        };
+        for &turning in cameras {
+            let mut engine = Engine::new(world.scene.clone(), &config).unwrap();
+            let _ = engine.step(sun.scene_time(10.0)).unwrap();
+            let camera = world.scene.camera.world_from_camera;
+            let frames = 15;
+            let mut t: [Vec<f64>; 5] = Default::default();
+            for f in 0..frames {
+                if turning {
+                    let turn =
+                        illume_core::Affine3A::from_rotation_y((f as f32 * 2.0).to_radians());
+                    engine
+                        .apply_edit(&illume_scene::Edit::SetCameraTransform {
+                            world_from_camera: camera * turn,
+                        })
+                        .unwrap();
+                }
+                let start = Instant::now();
+                let out = engine.step(sun.scene_time(10.0 + f as f64 * 0.05)).unwrap();
+                let ft = out.frame.timings;
+                if f == 0 {
+                    println!(
+                        "  shadows: {} light(s) with maps, {} with rays",
+                        out.frame.shadows.lights_with_maps, out.frame.shadows.lights_with_rays
+                    );
+                }
+                t[0].push(start.elapsed().as_secs_f64() * 1e3);
+                t[1].push(ft.gbuffer_ms);
+                t[2].push(ft.shadow_maps_ms);
+                t[3].push(ft.direct_ms);
+                t[4].push(ft.indirect_ms);
+            }
+            let med = |v: &mut Vec<f64>| {
+                v.sort_by(f64::total_cmp);
+                v[v.len() / 2]
+            };
+            let [a, b, c, d, e] = &mut t;
+            let (frame, g, sm, direct, indirect) = (med(a), med(b), med(c), med(d), med(e));
+            println!(
+                "  800×600 frames, camera {}: {frame:.1} ms ({:.1} fps): G-buffer {g:.1}, direct {direct:.1} (shadow maps {sm:.1}), indirect {indirect:.1} ms ({:.0} % of the frame)",
+                if turning { "turning" } else { "still" },
+                1e3 / frame,
+                100.0 * indirect / frame
+            );
+        }
     }
-    let rec_ms = start.elapsed().as_secs_f64() * 1e3 / reps as f64;
-    let mut config = Config {
-        technique: TechniqueKind::Precomputed,
-        ..Default::default()
-    };
-    config.render.width = fw;
-    config.render.height = fh;
-    config.precomputed = PrecomputedSettings {
-        data: path.display().to_string(),
-        ..s
-    };
-    let mut engine = Engine::new(world.scene.clone(), &config).unwrap();
-    let _ = engine.step(sun.scene_time(10.0)).unwrap();
-    let frames = 10;
-    let start = Instant::now();
-    for f in 0..frames {
-        let _ = engine.step(sun.scene_time(10.0 + f as f64 * 0.05)).unwrap();
-    }
-    let frame_ms = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
-    println!(
-        "800×600 run time: reconstruction {rec_ms:.1} ms, whole frame {frame_ms:.1} ms ({:.1} fps), indirect share {:.0} %",
-        1e3 / frame_ms,
-        100.0 * rec_ms / frame_ms
-    );
 }
 
 /// A second world on the same meshes (the bench's helpers take `&World`).

@@ -392,6 +392,15 @@ fn same_chart(atlas: &Atlas, i: usize, j: usize) -> bool {
 
 /// Bilinear lookup in the cube image `values` (faces stacked) along direction `d`.
 pub fn cube_lookup(values: &[Rgb], face: u32, d: Vec3) -> Rgb {
+    cube_texels(face, d)
+        .iter()
+        .map(|&(t, w)| values[t] * w)
+        .fold(Rgb::ZERO, |a, b| a + b)
+}
+
+/// The four texels (index in the stacked faces, bilinear weight) along direction `d`
+/// (weights 0 for a zero direction).
+pub fn cube_texels(face: u32, d: Vec3) -> [(usize, f32); 4] {
     let a = d.abs();
     let f = if a.x >= a.y && a.x >= a.z {
         if d.x > 0.0 { 0 } else { 1 }
@@ -406,7 +415,7 @@ pub fn cube_lookup(values: &[Rgb], face: u32, d: Vec3) -> Rgb {
     let right = forward.cross(up);
     let depth = d.dot(forward);
     if depth <= 0.0 {
-        return Rgb::ZERO;
+        return [(0, 0.0); 4];
     }
     let ndc = Vec2::new(d.dot(right), d.dot(up)) / depth;
     let n = face as f32;
@@ -418,9 +427,13 @@ pub fn cube_lookup(values: &[Rgb], face: u32, d: Vec3) -> Rgb {
     let last = face as usize - 1;
     let (jx, jy) = ((ix + 1).min(last), (iy + 1).min(last));
     let base = f * (face as usize).pow(2);
-    let at = |x: usize, y: usize| values[base + y * face as usize + x];
-    (at(ix, iy) * (1.0 - tx) + at(jx, iy) * tx) * (1.0 - ty)
-        + (at(ix, jy) * (1.0 - tx) + at(jx, jy) * tx) * ty
+    let at = |x: usize, y: usize| base + y * face as usize + x;
+    [
+        (at(ix, iy), (1.0 - tx) * (1.0 - ty)),
+        (at(jx, iy), tx * (1.0 - ty)),
+        (at(ix, jy), (1.0 - tx) * ty),
+        (at(jx, jy), tx * ty),
+    ]
 }
 
 #[cfg(test)]

@@ -6,9 +6,10 @@
 //! Per domain ([`crate::domain`]): `screen` pixels are the file's pixels; `cube` pixels
 //! look up the face texel along the direction from the camera to their surface; `atlas`
 //! pixels of static surfaces read their lightmap texel (bilinear, within their chart),
-//! pixels of dynamic objects the probe grid, both times the pixel's albedo. `cube` and
-//! `atlas` reconstruct their whole domain image when the clock time changes and keep it
-//! while it stays.
+//! pixels of dynamic objects the probe grid, both times the pixel's albedo. `atlas`
+//! reconstructs its whole (small) domain image when the clock time changes and keeps it
+//! while it stays; `cube` (about 9× the image's pixels) reconstructs only the four texels
+//! each pixel reads.
 
 use crate::PrecomputedError;
 use crate::atlas::Atlas;
@@ -35,6 +36,9 @@ struct Group {
     /// Values per image.
     rows: usize,
 }
+
+/// `cube`: texels are reconstructed in runs of this many (those some pixel reads).
+const RUN: usize = 64;
 
 /// How the file's texels reach the pixels.
 enum Lookup {
@@ -64,8 +68,10 @@ pub struct Precomputed {
     width: u32,
     height: u32,
     lookup: Lookup,
-    /// Reconstructed texels of `cube` and `atlas` and the (hours, sky scale) they are for.
+    /// Reconstructed texels of `atlas` and the (hours, sky scale) they are for.
     cache: Option<((f64, f32), Vec<Rgb>)>,
+    /// `cube`: the texels reconstructed this frame (runs the pixels read).
+    runs: Vec<Rgb>,
     load_s: f64,
     last_ms: f64,
     stale: u64,
@@ -101,6 +107,7 @@ impl Precomputed {
             height,
             lookup: Lookup::Screen,
             cache: None,
+            runs: Vec::new(),
             load_s: 0.0,
             last_ms: 0.0,
             stale: 0,
@@ -287,6 +294,7 @@ impl Precomputed {
             height,
             lookup,
             cache: None,
+            runs: Vec::new(),
             load_s: start.elapsed().as_secs_f64(),
             last_ms: 0.0,
             stale: 0,
@@ -321,17 +329,15 @@ impl Precomputed {
         }
     }
 
-    /// The sun's indirect light at clock time `hours` plus the sky's whole light (direct
-    /// and indirect) at scale `sky_scale`, one value per texel of the file's key image
-    /// (screen: its pixels).
-    pub fn reconstruct(&self, hours: f64, sky_scale: f32) -> Vec<Rgb> {
+    /// Each PCA group's mean and k coefficients at clock time `hours`, interpolated
+    /// between the keys around it.
+    fn blend(&self, hours: f64) -> Vec<(f32, Vec<f32>)> {
         let weights = self.weights(hours);
         let keys = self.times.len();
         let blend = |values: &[f32], offset: usize| -> f32 {
             weights.iter().map(|&(i, w)| w * values[offset + i]).sum()
         };
-        let per_group: Vec<(f32, Vec<f32>)> = self
-            .groups
+        self.groups
             .iter()
             .map(|g| {
                 (
@@ -339,7 +345,55 @@ impl Precomputed {
                     (0..self.k).map(|c| blend(&g.temporal, c * keys)).collect(),
                 )
             })
-            .collect();
+            .collect()
+    }
+
+    /// [`Precomputed::reconstruct`] of the runs of [`RUN`] texels marked in `needed`,
+    /// written into `out` (other texels left as they are).
+    fn reconstruct_runs(&self, hours: f64, sky_scale: f32, needed: &[bool], out: &mut [Rgb]) {
+        let blended = self.blend(hours);
+        out.par_chunks_mut(RUN)
+            .zip(needed)
+            .enumerate()
+            .filter(|(_, (_, n))| **n)
+            .for_each(|(run, (out, _))| {
+                let first = run * RUN;
+                let mut planes = [[0f32; RUN]; 3];
+                for (c, plane) in planes.iter_mut().enumerate() {
+                    let g = if self.joint { 0 } else { c };
+                    let group = &self.groups[g];
+                    let (mean, coefficients) = &blended[g];
+                    let plane = &mut plane[..out.len()];
+                    plane.fill(*mean);
+                    for (i, coefficient) in coefficients.iter().enumerate() {
+                        let image = &group.images[i * group.rows..(i + 1) * group.rows];
+                        if self.joint {
+                            for (j, o) in plane.iter_mut().enumerate() {
+                                *o += image[3 * (first + j) + c] * coefficient;
+                            }
+                        } else {
+                            let src = &image[first..first + plane.len()];
+                            for (o, x) in plane.iter_mut().zip(src) {
+                                *o += x * coefficient;
+                            }
+                        }
+                    }
+                }
+                for (j, o) in out.iter_mut().enumerate() {
+                    *o = Rgb::new(
+                        planes[0][j].max(0.0),
+                        planes[1][j].max(0.0),
+                        planes[2][j].max(0.0),
+                    ) + self.sky[first + j] * sky_scale;
+                }
+            });
+    }
+
+    /// The sun's indirect light at clock time `hours` plus the sky's whole light (direct
+    /// and indirect) at scale `sky_scale`, one value per texel of the file's key image
+    /// (screen: its pixels).
+    pub fn reconstruct(&self, hours: f64, sky_scale: f32) -> Vec<Rgb> {
+        let per_group = self.blend(hours);
         let pixels = self.width as usize * self.height as usize;
         // Channel planes, filled in cache-sized chunks: per chunk, mean then one
         // multiply-add pass per component (vectorised), then clamp at 0.
@@ -385,7 +439,7 @@ impl Precomputed {
 }
 
 impl Precomputed {
-    /// `cube` and `atlas`: each pixel's value from the domain's reconstructed texels.
+    /// `atlas`: each pixel's value from the reconstructed lightmap and probes.
     fn shade(&self, values: &[Rgb], gbuffer: &GBuffer) -> Vec<Rgb> {
         gbuffer
             .pixels
@@ -397,10 +451,7 @@ impl Precomputed {
                 };
                 let hit = &px.hit;
                 match &self.lookup {
-                    Lookup::Screen => Rgb::ZERO,
-                    Lookup::Cube { face, position } => {
-                        crate::domain::cube_lookup(values, *face, hit.position - *position)
-                    }
+                    Lookup::Screen | Lookup::Cube { .. } => Rgb::ZERO,
                     Lookup::Atlas { atlas, valid } => {
                         let back = !hit.front_face;
                         let albedo = hit.albedo;
@@ -517,7 +568,44 @@ impl Technique for Precomputed {
                     vec![Rgb::ZERO; n]
                 }
             }
-            Lookup::Cube { .. } | Lookup::Atlas { .. } => {
+            Lookup::Cube { face, position } => {
+                // Only the runs of texels the pixels read: a cube holds ~9× the image's
+                // pixels, a camera sees a fraction of it.
+                let (face, position) = (*face, *position);
+                let taps: Vec<[(usize, f32); 4]> = gbuffer
+                    .pixels
+                    .par_iter()
+                    .with_min_len(1024)
+                    .map(|px| match px {
+                        Some(px) => crate::domain::cube_texels(face, px.hit.position - position),
+                        None => [(0, 0.0); 4],
+                    })
+                    .collect();
+                let texels = self.width as usize * self.height as usize;
+                let mut needed = vec![false; texels.div_ceil(RUN)];
+                for tap in &taps {
+                    for &(t, w) in tap {
+                        if w > 0.0 {
+                            needed[t / RUN] = true;
+                        }
+                    }
+                }
+                let mut buffer = std::mem::take(&mut self.runs);
+                buffer.resize(texels, Rgb::ZERO);
+                self.reconstruct_runs(hours, sky_scale, &needed, &mut buffer);
+                let out = taps
+                    .par_iter()
+                    .with_min_len(1024)
+                    .map(|tap| {
+                        tap.iter()
+                            .map(|&(t, w)| buffer[t] * w)
+                            .fold(Rgb::ZERO, |a, b| a + b)
+                    })
+                    .collect();
+                self.runs = buffer;
+                out
+            }
+            Lookup::Atlas { .. } => {
                 let key = (hours, sky_scale);
                 if self.cache.as_ref().is_none_or(|(k, _)| *k != key) {
                     self.cache = Some((key, self.reconstruct(hours, sky_scale)));
