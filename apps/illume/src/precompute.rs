@@ -76,6 +76,17 @@ struct RunArgs {
     /// `illume precompute merge`).
     #[arg(long)]
     shard: Option<Shard>,
+    /// Camera position X,Y,Z [m] (with --look-at), as in render: a `screen` or `cube`
+    /// file holds this camera's view.
+    #[arg(long, value_parser = crate::setup::parse_point, requires = "look_at", allow_hyphen_values = true)]
+    look_from: Option<illume_core::Vec3>,
+    /// Point the camera looks at, X,Y,Z [m] (with --look-from).
+    #[arg(long, value_parser = crate::setup::parse_point, requires = "look_from", allow_hyphen_values = true)]
+    look_at: Option<illume_core::Vec3>,
+    /// A uniform sky of radiance R,G,B [W/(m²·sr)] at sky scale 1, replacing the
+    /// scene's (render with the same --sky: the file's scene fingerprint holds it).
+    #[arg(long, value_parser = crate::setup::parse_radiance, value_name = "R,G,B", allow_hyphen_values = true)]
+    sky: Option<illume_core::Vec3>,
     /// Extra settings, as in render: `--set precomputed.KEY=VALUE`.
     #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
     sets: Vec<String>,
@@ -190,6 +201,13 @@ fn run_precompute(a: RunArgs) -> Result<()> {
     }
     if let Some(path) = scene.sun.take() {
         scene.sky = path.sky_base;
+    }
+    if let (Some(eye), Some(target)) = (a.look_from, a.look_at) {
+        illume_scene::builtin::look_from(&mut scene, eye, target)
+            .map_err(|m| anyhow::anyhow!("--look-from/--look-at: {m}"))?;
+    }
+    if let Some(radiance) = a.sky {
+        scene.sky = Some(illume_scene::Sky::Uniform { radiance });
     }
     scene.attach_sun(sun)?;
     let world = illume_transport::World::new(scene);

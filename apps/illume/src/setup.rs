@@ -112,7 +112,7 @@ pub struct SetupArgs {
 }
 
 /// `R,G,B` as a radiance: three finite numbers ≥ 0.
-fn parse_radiance(s: &str) -> Result<Vec3, String> {
+pub(crate) fn parse_radiance(s: &str) -> Result<Vec3, String> {
     let v =
         parse_point(s).map_err(|_| format!("'{s}': expected three finite numbers R,G,B ≥ 0"))?;
     if v.min_element() < 0.0 {
@@ -195,7 +195,7 @@ pub fn finite_f64(s: &str) -> Result<f64, String> {
 }
 
 /// `X,Y,Z` as a point.
-fn parse_point(s: &str) -> Result<Vec3, String> {
+pub(crate) fn parse_point(s: &str) -> Result<Vec3, String> {
     let v: Vec<f32> = s
         .split(',')
         .map(|c| c.trim().parse::<f32>())

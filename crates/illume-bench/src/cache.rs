@@ -60,6 +60,17 @@ impl CacheKey {
                 light.name, light.kind, light.world_from_light
             );
         }
+        // The sky: its kind and integral (an environment map's pixels are in the
+        // scene's identity, its file).
+        match &scene.sky {
+            Some(illume_scene::Sky::Uniform { radiance }) => {
+                let _ = writeln!(text, "sky uniform {radiance:?}");
+            }
+            Some(sky) => {
+                let _ = writeln!(text, "sky map {:?}", sky.integral());
+            }
+            None => {}
+        }
         let _ = writeln!(
             text,
             "camera yfov_rad {:?} {:?}",

@@ -98,6 +98,14 @@ pub struct Scenario {
     /// error (empty cells, not zeros). Latency is judged on the measured frames. Default:
     /// every frame.
     pub reference_frames: Option<Vec<usize>>,
+    /// A uniform sky of this radiance \[W/(m²·sr)\] (linear RGB), replacing the scene's
+    /// (as `--sky` of `render`). Default: the scene's own.
+    pub sky: Option<[f32; 3]>,
+    /// A `[sun]` table (`illume_scene::sun::SunSettings`): a directional light posed by the
+    /// solar position at each frame's time, its irradiance from the sun's elevation, and
+    /// the sky scaled by it (for `precomputed` and any technique on a day of sun).
+    /// Default: none (a scene's own `[sun]`, e.g. `builtin:sun-room`'s, stays).
+    pub sun: Option<illume_scene::sun::SunSettings>,
     /// Also measure each technique against its own converged image of each measured
     /// frame's state, to separate a technique's latency (how long until it reaches its
     /// own steady state after a change) from its bias (how far that steady state is from
@@ -145,6 +153,8 @@ impl Default for Scenario {
             latency_threshold: 0.1,
             own_latency_threshold: None,
             reference_frames: None,
+            sky: None,
+            sun: None,
             own_converged_frames: 0,
             render: None,
             reference: ReferenceSpec::default(),
@@ -684,8 +694,8 @@ impl Scenario {
         })
     }
 
-    /// Loads the scene, selects the animation (none: animations are switched off) and
-    /// sets the scene to the first frame's time.
+    /// Loads the scene, applies `sky` and `[sun]`, selects the animation (none:
+    /// animations are switched off) and sets the scene to the first frame's time.
     pub fn load_scene(&self) -> Result<Scene, BenchError> {
         let path = self.scene_path()?;
         let scene_error = |message: String| BenchError::Scene {
@@ -693,6 +703,27 @@ impl Scenario {
             message,
         };
         let mut scene = illume_scene::load_scene(&path).map_err(|e| scene_error(e.to_string()))?;
+        if let Some(rgb) = self.sky {
+            if !rgb.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                return Err(scene_error(format!(
+                    "sky = {rgb:?}: each value must be ≥ 0"
+                )));
+            }
+            let radiance = illume_core::Rgb::from(rgb);
+            match scene.sun.as_mut() {
+                // A sun scales its sky: replace the sky it scales.
+                Some(path) => path.sky_base = Some(illume_scene::Sky::Uniform { radiance }),
+                None => scene.sky = Some(illume_scene::Sky::Uniform { radiance }),
+            }
+        }
+        if let Some(sun) = &self.sun {
+            if let Some(path) = scene.sun.take() {
+                scene.sky = path.sky_base;
+            }
+            scene
+                .attach_sun(sun.clone())
+                .map_err(|e| scene_error(format!("[sun]: {e}")))?;
+        }
         match &self.animation {
             Some(name) => scene.select_animation(name).map_err(scene_error)?,
             None => scene.active_animation = None,
@@ -785,5 +816,35 @@ mod tests {
             ..Scenario::default()
         };
         assert_eq!(s.frame_times(), vec![0.5, 0.75, 1.0, 1.25]);
+    }
+
+    #[test]
+    fn a_sun_and_a_sky_are_attached_to_the_scene() {
+        let s = Scenario {
+            scene: "builtin:cornell-spot".into(),
+            sky: Some([0.1, 0.2, 0.3]),
+            sun: Some(illume_scene::sun::SunSettings::default()),
+            times_s: Some(vec![12.0 * 3600.0]),
+            ..Scenario::default()
+        };
+        let scene = s.load_scene().unwrap();
+        let path = scene.sun.as_ref().expect("a sun path");
+        assert_eq!(
+            path.sky_base,
+            Some(illume_scene::Sky::Uniform {
+                radiance: illume_core::Rgb::new(0.1, 0.2, 0.3)
+            })
+        );
+        match scene.lights[path.light.index()].kind {
+            illume_scene::LightKind::Directional { irradiance } => {
+                assert!(irradiance.max_element() > 0.0, "noon: {irradiance:?}")
+            }
+            ref other => panic!("{other:?}"),
+        }
+        let bad = Scenario {
+            sky: Some([-1.0, 0.0, 0.0]),
+            ..s
+        };
+        assert!(bad.load_scene().unwrap_err().to_string().contains("sky"));
     }
 }

@@ -111,6 +111,8 @@ impl Engine {
         config: &Config,
         timeline: Timeline,
     ) -> Result<Self, EngineError> {
+        let mut scene = scene;
+        config.technique.prepare_scene(&mut scene, config)?;
         scene
             .validate()
             .map_err(|e| EngineError::InvalidScene(format!("{}: {e}", scene.source)))?;

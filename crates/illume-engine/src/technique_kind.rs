@@ -150,6 +150,27 @@ impl TechniqueKind {
     }
 }
 
+impl TechniqueKind {
+    /// What the technique needs of the scene before its world is built: `precomputed`
+    /// with a file gives a scene without a `[sun]` the file's sun (the direct light must
+    /// follow the sun the keys were rendered with).
+    pub fn prepare_scene(
+        self,
+        scene: &mut illume_scene::Scene,
+        config: &Config,
+    ) -> Result<(), EngineError> {
+        if self == TechniqueKind::Precomputed {
+            illume_precomputed::state::attach_file_sun(scene, &config.precomputed).map_err(
+                |e| EngineError::Technique {
+                    technique: self.name(),
+                    source: e.into(),
+                },
+            )?;
+        }
+        Ok(())
+    }
+}
+
 impl std::str::FromStr for TechniqueKind {
     type Err = String;
 

@@ -369,8 +369,31 @@ impl PcFile {
         Self::from_bytes(path, &bytes)
     }
 
-    /// Parses and checks a file's bytes; `path` is only named in errors.
-    pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
+    /// Reads and checks only the header of the file at `path` (its magic, version and
+    /// header checksum), not its sections: what a caller needs to know about a file
+    /// before loading it (its `[sun]`, domain, sizes).
+    pub fn read_header(path: &Path) -> Result<Header, FileError> {
+        use std::io::Read;
+        let io = |source| FileError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut file = std::fs::File::open(path).map_err(io)?;
+        let mut prefix = Vec::new();
+        (&mut file).take(16).read_to_end(&mut prefix).map_err(io)?;
+        if prefix.len() == 16 && &prefix[..8] == MAGIC {
+            let len = u32::from_le_bytes([prefix[12], prefix[13], prefix[14], prefix[15]]);
+            // A header longer than the whole-file limit is a corrupt length: read what
+            // is there and let the parser report the truncation.
+            let want = (len as u64 + 8).min(MAX_FILE_BYTES);
+            file.take(want).read_to_end(&mut prefix).map_err(io)?;
+        }
+        Self::parse_header(path, &prefix).map(|(header, _)| header)
+    }
+
+    /// Parses and checks the magic, version and header at the start of `bytes`; returns
+    /// the header and the offset of the first section. `path` is only named in errors.
+    fn parse_header(path: &Path, bytes: &[u8]) -> Result<(Header, usize), FileError> {
         let p = || path.to_path_buf();
         let got = bytes.len() as u64;
         let truncated = |what: &str, needed: u64| FileError::Truncated {
@@ -427,6 +450,21 @@ impl PcFile {
             path: p(),
             message: e.to_string(),
         })?;
+        Ok((header, header_end + 8))
+    }
+
+    /// Parses and checks a file's bytes; `path` is only named in errors.
+    pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
+        let p = || path.to_path_buf();
+        let got = bytes.len() as u64;
+        let truncated = |what: &str, needed: u64| FileError::Truncated {
+            path: p(),
+            what: what.to_string(),
+            needed,
+            got,
+        };
+        let (header, header_end) = Self::parse_header(path, bytes)?;
+        let header_end = header_end - 8;
         let mut offset = header_end as u64 + 8;
         let mut sections = Vec::with_capacity(header.sections.len());
         for info in &header.sections {

@@ -37,6 +37,34 @@ struct Group {
     rows: usize,
 }
 
+/// Gives `scene` the `[sun]` of the file `settings.data` when it has none of its own (a
+/// scene file such as Sponza's carries no sun: the precompute attached one, and the run
+/// time needs the same sun for the direct light). Returns whether it attached one.
+pub fn attach_file_sun(
+    scene: &mut illume_scene::Scene,
+    settings: &PrecomputedSettings,
+) -> Result<bool, PrecomputedError> {
+    if scene.sun.is_some() || settings.data.is_empty() {
+        return Ok(false);
+    }
+    let path = PathBuf::from(&settings.data);
+    let header = PcFile::read_header(&path)?;
+    let sun: SunSettings = header
+        .sun
+        .clone()
+        .try_into()
+        .map_err(|e: toml::de::Error| {
+            PrecomputedError::File(FileError::Mismatch {
+                path: path.clone(),
+                what: "[sun] table".into(),
+                expected: "a valid [sun]".into(),
+                found: e.to_string(),
+            })
+        })?;
+    scene.attach_sun(sun)?;
+    Ok(true)
+}
+
 /// `cube`: texels are reconstructed in runs of this many (those some pixel reads).
 const RUN: usize = 64;
 
