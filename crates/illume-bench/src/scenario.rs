@@ -106,6 +106,11 @@ pub struct Scenario {
     /// the sky scaled by it (for `precomputed` and any technique on a day of sun).
     /// Default: none (a scene's own `[sun]`, e.g. `builtin:sun-room`'s, stays).
     pub sun: Option<illume_scene::sun::SunSettings>,
+    /// Camera position \[m\] (with `look_at`), replacing the scene's camera placement
+    /// (as `--look-from` of `render`). Default: the scene's camera.
+    pub look_from: Option<[f32; 3]>,
+    /// Point the camera looks at \[m\] (with `look_from`).
+    pub look_at: Option<[f32; 3]>,
     /// Also measure each technique against its own converged image of each measured
     /// frame's state, to separate a technique's latency (how long until it reaches its
     /// own steady state after a change) from its bias (how far that steady state is from
@@ -155,6 +160,8 @@ impl Default for Scenario {
             reference_frames: None,
             sky: None,
             sun: None,
+            look_from: None,
+            look_at: None,
             own_converged_frames: 0,
             render: None,
             reference: ReferenceSpec::default(),
@@ -694,7 +701,7 @@ impl Scenario {
         })
     }
 
-    /// Loads the scene, applies `sky` and `[sun]`, selects the animation (none:
+    /// Loads the scene, applies `look_from`/`look_at`, `sky` and `[sun]`, selects the animation (none:
     /// animations are switched off) and sets the scene to the first frame's time.
     pub fn load_scene(&self) -> Result<Scene, BenchError> {
         let path = self.scene_path()?;
@@ -703,6 +710,18 @@ impl Scenario {
             message,
         };
         let mut scene = illume_scene::load_scene(&path).map_err(|e| scene_error(e.to_string()))?;
+        match (self.look_from, self.look_at) {
+            (Some(eye), Some(target)) => {
+                illume_scene::builtin::look_from(&mut scene, eye.into(), target.into())
+                    .map_err(|m| scene_error(format!("look_from/look_at: {m}")))?
+            }
+            (None, None) => {}
+            _ => {
+                return Err(scene_error(
+                    "look_from and look_at go together: give both or neither".into(),
+                ));
+            }
+        }
         if let Some(rgb) = self.sky {
             if !rgb.iter().all(|v| v.is_finite() && *v >= 0.0) {
                 return Err(scene_error(format!(
@@ -843,8 +862,30 @@ mod tests {
         }
         let bad = Scenario {
             sky: Some([-1.0, 0.0, 0.0]),
-            ..s
+            ..s.clone()
         };
         assert!(bad.load_scene().unwrap_err().to_string().contains("sky"));
+        // A camera placed by look_from/look_at; one without the other is an error.
+        let placed = Scenario {
+            look_from: Some([0.0, 1.0, 3.0]),
+            look_at: Some([0.0, 1.0, 0.0]),
+            ..s.clone()
+        };
+        let scene = placed.load_scene().unwrap();
+        let eye = scene.camera.world_from_camera.translation;
+        assert!(
+            (eye - illume_core::Vec3A::new(0.0, 1.0, 3.0)).length() < 1e-5,
+            "{eye:?}"
+        );
+        let half = Scenario {
+            look_from: Some([0.0, 1.0, 3.0]),
+            ..s
+        };
+        assert!(
+            half.load_scene()
+                .unwrap_err()
+                .to_string()
+                .contains("look_at")
+        );
     }
 }

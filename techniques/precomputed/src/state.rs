@@ -261,6 +261,16 @@ impl Precomputed {
         let sun: SunSettings = h.sun.clone().try_into().map_err(|e: toml::de::Error| {
             mismatch("[sun] table", "a valid [sun]".into(), e.to_string())
         })?;
+        // The renderer's direct light follows the scene's sun: it must be the keys'.
+        if let Some(path) = &world.scene.sun
+            && path.settings != sun
+        {
+            return Err(mismatch(
+                "[sun] (the scene's sun must be the one the keys were rendered with)",
+                format!("{:?}", path.settings),
+                format!("{sun:?}"),
+            ));
+        }
         let joint = h.colour == "joint";
         let names: &[&str] = if joint { &["rgb"] } else { &["r", "g", "b"] };
         let pixels = width as usize * height as usize;

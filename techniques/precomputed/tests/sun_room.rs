@@ -236,6 +236,10 @@ fn another_camera_size_or_scene_is_refused() {
         e.contains("room.illumepc") && e.contains("another scene"),
         "{e}"
     );
+    let mut scene = world.scene.clone();
+    scene.sun.as_mut().unwrap().settings.latitude_deg += 1.0;
+    let e = load(&world.with_scene(scene), small).expect("another sun is refused");
+    assert!(e.contains("room.illumepc") && e.contains("[sun]"), "{e}");
     // The dynamic box may move: the file still fits.
     let mut scene = world.scene.clone();
     let i = scene.instances.iter().position(|i| i.dynamic).unwrap();
