@@ -100,6 +100,9 @@ pub struct Precomputed {
     cache: Option<((f64, f32), Vec<Rgb>)>,
     /// `cube`: the texels reconstructed this frame (runs the pixels read).
     runs: Vec<Rgb>,
+    /// Linear interpolation: the key pair (N, N+1) around the last frame's time and their
+    /// reconstructed images (sun only, clamped at 0).
+    pair: Option<(usize, usize, Vec<Rgb>, Vec<Rgb>)>,
     load_s: f64,
     last_ms: f64,
     stale: u64,
@@ -136,6 +139,7 @@ impl Precomputed {
             lookup: Lookup::Screen,
             cache: None,
             runs: Vec::new(),
+            pair: None,
             load_s: 0.0,
             last_ms: 0.0,
             stale: 0,
@@ -333,6 +337,7 @@ impl Precomputed {
             lookup,
             cache: None,
             runs: Vec::new(),
+            pair: None,
             load_s: start.elapsed().as_secs_f64(),
             last_ms: 0.0,
             stale: 0,
@@ -477,6 +482,30 @@ impl Precomputed {
 }
 
 impl Precomputed {
+    /// Every texel's value at `hours` (what [`Precomputed::reconstruct`] gives, to
+    /// rounding): with linear interpolation, Eq. 2 literally, `(1 − α)·L_N + α·L_{N+1} +
+    /// s·L_sky` from the two key images reconstructed once per key interval (each
+    /// clamped at 0), so a frame costs a blend instead of k multiply-adds per texel;
+    /// with cubic interpolation a whole reconstruction.
+    fn values(&mut self, hours: f64, sky_scale: f32) -> Vec<Rgb> {
+        if self.settings.interpolation != Interpolation::Linear {
+            return self.reconstruct(hours, sky_scale);
+        }
+        let (n, m, alpha) = bracket(&self.times, hours);
+        if self.pair.as_ref().is_none_or(|p| (p.0, p.1) != (n, m)) {
+            let a = self.reconstruct(self.times[n], 0.0);
+            let b = self.reconstruct(self.times[m], 0.0);
+            self.pair = Some((n, m, a, b));
+        }
+        let (_, _, a, b) = self.pair.as_ref().expect("just filled");
+        a.par_iter()
+            .zip(b)
+            .zip(&self.sky)
+            .with_min_len(4096)
+            .map(|((a, b), sky)| *a * (1.0 - alpha) + *b * alpha + *sky * sky_scale)
+            .collect()
+    }
+
     /// `atlas`: each pixel's value from the reconstructed lightmap and probes.
     fn shade(&self, values: &[Rgb], gbuffer: &GBuffer) -> Vec<Rgb> {
         gbuffer
@@ -597,8 +626,8 @@ impl Technique for Precomputed {
                 // the file's was refused at load; keep black rather than a wrong image
                 // if it happens anyway.
                 if (gbuffer.width, gbuffer.height) == (self.width, self.height) {
-                    self.reconstruct(hours, sky_scale)
-                        .into_iter()
+                    self.values(hours, sky_scale)
+                        .into_par_iter()
                         .zip(&gbuffer.pixels)
                         .map(|(v, px)| if px.is_some() { v } else { Rgb::ZERO })
                         .collect()
@@ -646,7 +675,8 @@ impl Technique for Precomputed {
             Lookup::Atlas { .. } => {
                 let key = (hours, sky_scale);
                 if self.cache.as_ref().is_none_or(|(k, _)| *k != key) {
-                    self.cache = Some((key, self.reconstruct(hours, sky_scale)));
+                    let values = self.values(hours, sky_scale);
+                    self.cache = Some((key, values));
                 }
                 let values = &self.cache.as_ref().expect("just filled").1;
                 self.shade(values, gbuffer)

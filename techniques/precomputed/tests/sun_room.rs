@@ -60,7 +60,7 @@ fn indirect_between_keys_matches_the_reference() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("day.illumepc");
     file.write(&path).unwrap();
-    let technique = Precomputed::load(&world, s.clone(), &path, SIZE.0, SIZE.1).unwrap();
+    let mut technique = Precomputed::load(&world, s.clone(), &path, SIZE.0, SIZE.1).unwrap();
 
     // 11:45, between the keys of 11:30 and 12:00. The reference: the whole scene at that
     // time (sun and scaled sky), dynamic box masked like the precompute's.
@@ -104,6 +104,29 @@ fn indirect_between_keys_matches_the_reference() {
     rs.add_samples(&world.with_scene(sky_only), 256);
     let reference = r.images().indirect.add(&rs.images().direct);
     let ours = technique.reconstruct(hours, illume_scene::sun::sky_scale(elevation));
+    // A frame blends the two key images around the time (Eq. 2): the same image as the
+    // reconstruction from blended coefficients, up to rounding and the clamp at 0.
+    {
+        use illume_transport::Technique;
+        let g = illume_transport::GBuffer::render(
+            &reference_world,
+            SIZE.0,
+            SIZE.1,
+            illume_core::Vec2::splat(0.5),
+        );
+        let frame = technique.indirect(&reference_world, &g);
+        let mut close = 0;
+        for (i, (a, b)) in frame.pixels().iter().zip(&ours).enumerate() {
+            if g.pixels[i].is_none() {
+                continue;
+            }
+            if (*a - *b).abs().max_element() <= 1e-4 * b.max_element().max(1e-3) {
+                close += 1;
+            }
+        }
+        let seen = g.pixels.iter().filter(|p| p.is_some()).count();
+        assert!(close * 100 >= seen * 99, "{close} of {seen} pixels agree");
+    }
 
     let mean = |v: &[Rgb]| v.iter().map(|p| (p.x + p.y + p.z) / 3.0).sum::<f32>() / v.len() as f32;
     let (m_ref, m_ours) = (mean(reference.pixels()), mean(&ours));
