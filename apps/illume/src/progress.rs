@@ -1,4 +1,6 @@
-//! Progress bars for work longer than a second (hidden when stderr is not a terminal).
+//! Progress bars for work longer than a second. When stderr is not a terminal (a batch
+//! job's log, a pipe) the bars are hidden and [`Bars`] writes a plain line per phase
+//! instead: at its start, every 10 s with the count, rate and ETA, and at its end.
 
 use indicatif::{ProgressBar, ProgressStyle};
 use std::time::Duration;
@@ -35,6 +37,23 @@ pub fn spinner(what: &str) -> ProgressBar {
 pub struct Bars {
     bar: Option<ProgressBar>,
     idle: Option<String>,
+    /// Plain log lines (stderr is not a terminal): the phase, its total, its start and
+    /// the last line's time.
+    log: Option<LogPhase>,
+}
+
+/// A phase reported by plain lines.
+struct LogPhase {
+    what: String,
+    total: u64,
+    start: std::time::Instant,
+    last: std::time::Instant,
+}
+
+/// Whether progress goes to plain lines rather than bars.
+fn plain() -> bool {
+    use std::io::IsTerminal;
+    !std::io::stderr().is_terminal()
 }
 
 impl Bars {
@@ -43,6 +62,7 @@ impl Bars {
         Self {
             bar: Some(spinner(what)),
             idle: Some(what.to_owned()),
+            log: None,
         }
     }
 
@@ -61,17 +81,56 @@ impl illume_core::Progress for Bars {
             b.finish_and_clear();
         }
         self.bar = Some(bar(total, what));
+        if plain() {
+            // A phase that grows (the adaptive schedule re-begins with a larger total)
+            // keeps its start time.
+            let now = std::time::Instant::now();
+            match &mut self.log {
+                Some(p) if p.what == what => p.total = total,
+                _ => {
+                    eprintln!("{what}: started, {total} to do");
+                    self.log = Some(LogPhase {
+                        what: what.to_owned(),
+                        total,
+                        start: now,
+                        last: now,
+                    });
+                }
+            }
+        }
     }
 
     fn set(&mut self, done: u64) {
         if let Some(b) = &self.bar {
             b.set_position(done);
         }
+        if let Some(p) = &mut self.log
+            && p.last.elapsed().as_secs_f64() >= 10.0
+        {
+            p.last = std::time::Instant::now();
+            let elapsed = p.start.elapsed().as_secs_f64();
+            let eta = if done > 0 {
+                format!(
+                    ", eta {:.0} s",
+                    elapsed / done as f64 * p.total.saturating_sub(done) as f64
+                )
+            } else {
+                String::new()
+            };
+            eprintln!("{}: {done}/{} after {elapsed:.0} s{eta}", p.what, p.total);
+        }
     }
 
     fn end(&mut self) {
         if let Some(b) = self.bar.take() {
             b.finish_and_clear();
+        }
+        if let Some(p) = self.log.take() {
+            eprintln!(
+                "{}: done in {:.1} s",
+                p.what,
+                p.start.elapsed().as_secs_f64()
+            );
         }
         self.bar = self.idle.as_deref().map(spinner);
     }

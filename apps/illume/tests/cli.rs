@@ -931,7 +931,15 @@ fn data_flag_reads_a_precomputed_file_like_the_set_key() {
     ]);
     args.extend(size);
     args.extend(["--output", path(&day)]);
-    ok(&illume(&args));
+    let out = illume(&args);
+    ok(&out);
+    // stderr is a pipe here: progress comes as plain lines (a batch job's log).
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("precomputed keys: started, 6 to do")
+            && err.contains("precomputed keys: done in"),
+        "{err}"
+    );
     let set = format!("precomputed.data={}", path(&day));
     let render = |extra: &[&str], out: &Path| {
         let mut a = vec!["render", "builtin:sun-room", "--time", "30000"];
