@@ -146,7 +146,7 @@ log "ok: levels 0–$levels in shards equal the unsharded adaptive file bit for 
 margs="--animation move --technique reference --duration 0.5 --fps 10 --work-per-frame 2 --width 24 --height 16"
 log "animate: 3-task array and the collect"
 read -r array collect < <(ILLUME=$illume scripts/slurm/submit_animate.sh 3 "$work/frames" builtin:cornell-spot $margs)
-wait_ok "$array,$collect" 4 "$work/frames"
+wait_ok "$array,$collect" 4 "$work/frames.logs"
 # shellcheck disable=SC2086
 "$illume" animate builtin:cornell-spot $margs --output "$work/frames-whole" 2>/dev/null
 for f in "$work"/frames-whole/frame_*.png; do
