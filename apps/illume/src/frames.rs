@@ -16,8 +16,8 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 
 /// True for the names `animate` writes into its output folder: `frame_NNNNN.png` /
-/// `.exr`, `frames.csv`, `preview.gif` / `.mp4`, and the temporary files they are
-/// written through (`.NAME.PID.tmp`, `.preview.gif.partial`).
+/// `.exr`, `frames.csv`, a shard's `frames_K_of_N.csv`, `preview.gif` / `.mp4`, and the
+/// temporary files they are written through (`.NAME.PID.tmp`, `.preview.gif.partial`).
 pub fn is_animate_output(name: &str) -> bool {
     let frame = name
         .strip_prefix("frame_")

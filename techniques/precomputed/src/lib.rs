@@ -13,7 +13,9 @@
 //! - [`pca`]: the PCA of the key images (§3.2, Fig. 5);
 //! - [`schedule`]: uniform (Eq. 1, 3) and adaptive (§3.2, Fig. 6) key times, and the
 //!   binary search + α of non-uniform keys;
-//! - [`file`]: the versioned `.illumepc` file (magic, TOML header, checksummed sections).
+//! - [`file`](mod@file): the versioned `.illumepc` file (magic, TOML header, checksummed sections);
+//! - [`shard`]: `--shard K/N` over machines, the adaptive schedule level by level
+//!   (`--level L`), and the merge; bit for bit the unsharded file.
 //!
 //! # Limits (as in the paper)
 //! One day and one place per file; static geometry; Lambertian materials only (§3.1: no
