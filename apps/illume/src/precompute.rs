@@ -35,7 +35,9 @@ pub struct PrecomputeArgs {
 
 #[derive(Subcommand)]
 enum Action {
-    /// Check that shard files agree, gather their keys and run the PCA.
+    /// Check that shard files agree, gather their keys and run the PCA (an adaptive
+    /// level: write the merged levels so far, or the PCA file once no interval is left
+    /// to split).
     Merge(MergeArgs),
     /// Describe a .illumepc file: keys, keys per hour, variance curve; --dump writes EXRs.
     Info(InfoArgs),
