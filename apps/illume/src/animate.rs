@@ -6,10 +6,11 @@ use crate::progress;
 use crate::setup::ExposureMode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use illume_core::Shard;
 use illume_core::image::{ToneMap, auto_exposure_ev, to_srgb8};
-use illume_engine::{Engine, TechniqueKind};
-use illume_scene::Timeline;
+use illume_engine::{Config, Engine, FrameHistory, TechniqueKind};
 use illume_scene::timeline::ping_pong_time;
+use illume_scene::{Scene, Timeline};
 use illume_transport::Pacing;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -61,6 +62,18 @@ pub struct AnimateArgs {
     /// light (log-average luminance to middle grey); `fixed`: 0 + `--exposure`.
     #[arg(long, value_enum, default_value_t)]
     pub exposure_mode: crate::setup::ExposureMode,
+    /// Render only the frames with index mod N = K, as linear frame_NNNNN.exr and
+    /// frames_K_of_N.csv in the output folder (which the N shards share), for
+    /// `--collect N`. Only for techniques whose frames do not build on the frames before:
+    /// `reference`, when every frame moves something (it restarts its average at each
+    /// change); others are refused.
+    #[arg(long, value_name = "K/N", conflicts_with_all = ["realtime", "collect"])]
+    pub shard: Option<Shard>,
+    /// Gather the frames of N shards (`--shard K/N`, run with the same flags) in the
+    /// output folder: tone-map them with one exposure as the unsharded run does, write
+    /// the PNG frames, frames.csv and the preview; the EXR frames stay with --exr.
+    #[arg(long, value_name = "N", conflicts_with = "realtime")]
+    pub collect: Option<u32>,
 }
 
 /// Arguments of `illume demo`.
@@ -106,12 +119,6 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     if !(duration >= 0.0 && duration.is_finite()) {
         bail!("--duration must be a non-negative number of seconds");
     }
-    crate::frames::prepare_output(&a.output)?;
-    // Fixed: known now. Auto: from the first frame with light, then kept for the sequence.
-    let mut exposure_ev = match a.exposure_mode {
-        ExposureMode::Fixed => Some(a.exposure),
-        ExposureMode::Auto => None,
-    };
     if (duration * a.fps).round() >= 1e6 {
         bail!(
             "--duration {duration} s at --fps {} gives more than 1000000 frames",
@@ -124,6 +131,18 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     let times: Vec<f64> = (0..planned)
         .map(|i| ping_pong_time(i as f64 / a.fps, animation_s, a.ping_pong))
         .collect();
+    if let Some(n) = a.collect {
+        return collect(&a, n, planned, w, h);
+    }
+    if let Some(shard) = a.shard {
+        return run_shard(&a, &config, scene, times, shard);
+    }
+    crate::frames::prepare_output(&a.output)?;
+    // Fixed: known now. Auto: from the first frame with light, then kept for the sequence.
+    let mut exposure_ev = match a.exposure_mode {
+        ExposureMode::Fixed => Some(a.exposure),
+        ExposureMode::Auto => None,
+    };
     let timeline = Timeline::new(scene.clone(), times, w, h)?;
     let mut engine = Engine::with_timeline(scene, &config, timeline)?;
     let mut bars = progress::Bars::default();
@@ -154,7 +173,6 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         let t_frame = Instant::now();
         let out = engine.step(ping_pong_time(t, animation_s, a.ping_pong))?;
         render_s += t_frame.elapsed().as_secs_f64() - out.precompute_ms / 1e3;
-        let ft = out.frame.timings;
         let names: Vec<String> = out.stats.names().map(str::to_owned).collect();
         if csv_header.is_none() {
             csv_header = Some(names.clone());
@@ -162,20 +180,13 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         // Precompute is its own column: frame 0 carries the phase before the first
         // frame, any frame a rebuild's.
         let frame_precompute_ms = out.precompute_ms + if index == 0 { precompute_ms } else { 0.0 };
-        let mut row = format!(
-            "{index},{t:.6},{:.6},{frame_precompute_ms:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
+        csv_rows.push(csv_row(
+            index,
+            t,
             start.elapsed().as_secs_f64(),
-            out.update_ms,
-            out.advance_ms,
-            ft.gbuffer_ms,
-            ft.direct_ms,
-            ft.indirect_ms,
-            ft.total_ms
-        );
-        for (_, v) in out.stats.iter() {
-            row += &format!(",{v}");
-        }
-        csv_rows.push(row);
+            frame_precompute_ms,
+            &out,
+        ));
         // Written on the writer thread while the next frames render (memory stays
         // bounded; before, real-time runs kept every frame until the end).
         writer.push(Frame {
@@ -208,12 +219,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     let csv_path = a.output.join("frames.csv");
     use std::fmt::Write as _;
     let mut csv = String::new();
-    let header = csv_header.unwrap_or_default();
-    writeln!(
-        csv,
-        "frame,time_s,wall_s,precompute_ms,update_ms,advance_ms,gbuffer_ms,direct_ms,indirect_ms,render_ms{}",
-        header.iter().map(|n| format!(",{n}")).collect::<String>()
-    )?;
+    writeln!(csv, "{}", csv_header_line(&csv_header.unwrap_or_default()))?;
     for r in &csv_rows {
         writeln!(csv, "{r}")?;
     }
@@ -283,5 +289,272 @@ pub fn demo(d: DemoArgs) -> Result<()> {
         exr: false,
         exposure: 0.0,
         exposure_mode: ExposureMode::Auto,
+        shard: None,
+        collect: None,
     })
+}
+
+/// The first line of frames.csv: the fixed columns, then the counters' `names`.
+fn csv_header_line(names: &[String]) -> String {
+    format!(
+        "frame,time_s,wall_s,precompute_ms,update_ms,advance_ms,gbuffer_ms,direct_ms,indirect_ms,render_ms{}",
+        names.iter().map(|n| format!(",{n}")).collect::<String>()
+    )
+}
+
+/// One frames.csv row: frame `index` at scene time `t` [s], `wall_s` after the start,
+/// with the precompute time charged to it.
+fn csv_row(
+    index: u64,
+    t: f64,
+    wall_s: f64,
+    precompute_ms: f64,
+    out: &illume_engine::StepOutput,
+) -> String {
+    let ft = out.frame.timings;
+    let mut row = format!(
+        "{index},{t:.6},{wall_s:.6},{precompute_ms:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
+        out.update_ms, out.advance_ms, ft.gbuffer_ms, ft.direct_ms, ft.indirect_ms, ft.total_ms
+    );
+    for (_, v) in out.stats.iter() {
+        row += &format!(",{v}");
+    }
+    row
+}
+
+/// Refuses `--shard` where a shard's frames would differ from the unsharded run's: a
+/// technique that carries state from frame to frame, or `reference` on a frame that
+/// shows no change from the one before (it would average the frames before it).
+fn check_shardable(
+    technique: TechniqueKind,
+    scene: &Scene,
+    times: &[f64],
+    shard: Shard,
+) -> Result<()> {
+    match technique.frame_history() {
+        FrameHistory::Carried(why) => bail!(
+            "--shard {shard}: {technique} carries state from frame to frame ({why}): a shard, \
+             which renders every {}th frame alone, would not give the unsharded frames; render \
+             the sequence unsharded",
+            shard.count
+        ),
+        FrameHistory::RestartsOnChange => {
+            let mut state = scene.clone();
+            state.set_time(times[0]);
+            for (i, &t) in times.iter().enumerate().skip(1) {
+                if state.set_time(t).is_empty() {
+                    bail!(
+                        "--shard {shard}: {technique} averages its samples over the frames \
+                         while the scene is still, and frame {i} (t = {t:.3} s) shows no \
+                         change from frame {}: unsharded it builds on the frames before, a \
+                         shard renders it alone. Shard only sequences in which every frame \
+                         moves something, or render this one unsharded",
+                        i - 1
+                    );
+                }
+            }
+            Ok(())
+        }
+    }
+}
+
+/// `animate --shard K/N`: the frames with index mod N = K, each from a technique reset
+/// to its state after a scene change (what the unsharded run has at that frame, as
+/// [`check_shardable`] ensures) and with the renderer's frame index set to the frame's
+/// (its direct-light samples): linear `frame_NNNNN.exr` and `frames_K_of_N.csv`.
+fn run_shard(
+    a: &AnimateArgs,
+    config: &Config,
+    scene: Scene,
+    times: Vec<f64>,
+    shard: Shard,
+) -> Result<()> {
+    check_shardable(config.technique, &scene, &times, shard)?;
+    crate::frames::prepare_shard_output(&a.output, shard)?;
+    let (w, h) = (config.render.width, config.render.height);
+    let planned = times.len();
+    let timeline = Timeline::new(scene.clone(), times.clone(), w, h)?;
+    let mut engine = Engine::with_timeline(scene, config, timeline)?;
+    let mut bars = progress::Bars::default();
+    let precompute_ms = engine.precompute(&mut bars)?;
+    bars.finish();
+    let mine: Vec<usize> = (0..planned).filter(|&i| shard.owns(i)).collect();
+    let pb = progress::bar(mine.len() as u64, "frames");
+    let start = Instant::now();
+    let mut header = None;
+    let mut rows = Vec::with_capacity(mine.len());
+    for (done, &i) in mine.iter().enumerate() {
+        engine.technique_mut().reset();
+        engine.set_frame_index(i as u64);
+        let out = engine.step(times[i])?;
+        header.get_or_insert_with(|| out.stats.names().map(str::to_owned).collect::<Vec<_>>());
+        let charged = out.precompute_ms + if done == 0 { precompute_ms } else { 0.0 };
+        rows.push(csv_row(
+            i as u64,
+            times[i],
+            start.elapsed().as_secs_f64(),
+            charged,
+            &out,
+        ));
+        let path = a.output.join(format!("frame_{i:05}.exr"));
+        illume_core::image::write_exr(&out.frame.full, &path)?;
+        pb.set_position(done as u64 + 1);
+    }
+    pb.finish_and_clear();
+    let csv_path = a.output.join(crate::frames::shard_csv_name(shard));
+    let mut csv = csv_header_line(&header.unwrap_or_default());
+    for r in &rows {
+        csv.push('\n');
+        csv.push_str(r);
+    }
+    csv.push('\n');
+    illume_core::atomic::write_file(&csv_path, csv)
+        .with_context(|| format!("{}: cannot write", csv_path.display()))?;
+    eprintln!(
+        "shard {shard}: {} of {planned} frames of {w}×{h} with {} in {:.2} s into {} (gather them with --collect {})",
+        mine.len(),
+        config.technique,
+        start.elapsed().as_secs_f64(),
+        a.output.display(),
+        shard.count
+    );
+    Ok(())
+}
+
+/// `animate --collect N`: the N shards' frames in the output folder become the unsharded
+/// run's outputs: PNG frames tone-mapped with the exposure the unsharded run picks (the
+/// first frame with light, in frame order), frames.csv (the shards' rows in frame order;
+/// `wall_s` is each shard's own clock), the preview. The shards' CSVs are removed, and
+/// their EXR frames unless `--exr`.
+fn collect(a: &AnimateArgs, n: u32, planned: u64, w: u32, h: u32) -> Result<()> {
+    if n == 0 {
+        bail!("--collect 0: give the number of shards N (≥ 1)");
+    }
+    let dir = &a.output;
+    // Every frame first: a missing one names its shard before anything is written.
+    let exr = |i: u64| dir.join(format!("frame_{i:05}.exr"));
+    for i in 0..planned {
+        if !exr(i).is_file() {
+            bail!(
+                "{}: missing: frame {i} is shard {}/{n}'s (its job failed, or ran with other flags)",
+                exr(i).display(),
+                i % u64::from(n)
+            );
+        }
+    }
+    let mut header: Option<(String, std::path::PathBuf)> = None;
+    let mut rows: Vec<(u64, String)> = Vec::new();
+    let mut shard_csvs = Vec::new();
+    for k in 0..n {
+        let path = dir.join(crate::frames::shard_csv_name(Shard { index: k, count: n }));
+        let text = std::fs::read_to_string(&path).with_context(|| {
+            format!(
+                "{}: cannot read shard {k}/{n}'s frame table",
+                path.display()
+            )
+        })?;
+        let mut lines = text.lines();
+        let first = lines.next().unwrap_or_default().to_owned();
+        match &header {
+            Some((h0, p0)) if *h0 != first => bail!(
+                "{}: its columns differ from {}'s: shards of different runs?",
+                path.display(),
+                p0.display()
+            ),
+            Some(_) => {}
+            None => header = Some((first, path.clone())),
+        }
+        for line in lines.filter(|l| !l.is_empty()) {
+            let index: u64 = line
+                .split(',')
+                .next()
+                .and_then(|f| f.parse().ok())
+                .with_context(|| format!("{}: bad row {line:?}", path.display()))?;
+            rows.push((index, line.to_owned()));
+        }
+        shard_csvs.push(path);
+    }
+    rows.sort_by_key(|r| r.0);
+    let indices: Vec<u64> = rows.iter().map(|r| r.0).collect();
+    if indices != (0..planned).collect::<Vec<_>>() {
+        bail!(
+            "{}: the shards' frame tables list {} rows, not frames 0–{}: shards of different runs?",
+            dir.display(),
+            rows.len(),
+            planned.saturating_sub(1)
+        );
+    }
+    // Stale frames of a longer earlier run.
+    for entry in
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?
+    {
+        let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if crate::frames::frame_number(&name).is_some_and(|i| i >= planned) {
+            std::fs::remove_file(entry.path())
+                .with_context(|| format!("{}: cannot remove", entry.path().display()))?;
+        }
+    }
+    let mut exposure_ev = match a.exposure_mode {
+        ExposureMode::Fixed => Some(a.exposure),
+        ExposureMode::Auto => None,
+    };
+    let mut writer = FrameWriter::start(dir, w, h)?;
+    let pb = progress::bar(planned, "frames");
+    for i in 0..planned {
+        let frame = illume_core::image::RgbImage::read(&exr(i))?;
+        if (frame.width(), frame.height()) != (w, h) {
+            bail!(
+                "{}: {}×{}, not {w}×{h}: shards of another run?",
+                exr(i).display(),
+                frame.width(),
+                frame.height()
+            );
+        }
+        if exposure_ev.is_none() {
+            exposure_ev = auto_exposure_ev(&frame).map(|ev| ev + a.exposure);
+        }
+        let tone = ToneMap {
+            exposure_ev: exposure_ev.unwrap_or(a.exposure),
+            ..Default::default()
+        };
+        writer.push(Frame {
+            index: i,
+            shown_s: i as f64 / a.fps,
+            srgb8: to_srgb8(&frame, &tone),
+            hdr: None,
+        })?;
+        pb.set_position(i + 1);
+    }
+    pb.finish_and_clear();
+    let preview = writer.finish(a.fps)?;
+    let csv_path = dir.join("frames.csv");
+    let mut csv = header.map(|h| h.0).unwrap_or_default();
+    for (_, r) in &rows {
+        csv.push('\n');
+        csv.push_str(r);
+    }
+    csv.push('\n');
+    illume_core::atomic::write_file(&csv_path, csv)
+        .with_context(|| format!("{}: cannot write", csv_path.display()))?;
+    for path in shard_csvs {
+        std::fs::remove_file(&path)
+            .with_context(|| format!("{}: cannot remove", path.display()))?;
+    }
+    if !a.exr {
+        for i in 0..planned {
+            std::fs::remove_file(exr(i))
+                .with_context(|| format!("{}: cannot remove", exr(i).display()))?;
+        }
+    }
+    eprintln!(
+        "collected {planned} frames of {n} shards: exposure {:+.2} EV ({:?}); wrote {}/frame_NNNNN.png{}, {}, {}",
+        exposure_ev.unwrap_or(a.exposure),
+        a.exposure_mode,
+        dir.display(),
+        if a.exr { " (+ .exr)" } else { "" },
+        csv_path.display(),
+        preview.display()
+    );
+    Ok(())
 }

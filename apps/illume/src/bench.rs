@@ -3,7 +3,8 @@
 use crate::progress;
 use anyhow::{Context, Result};
 use clap::Args;
-use illume_bench::{RunOptions, Scenario, run, write_report};
+use illume_bench::{RunOptions, Scenario, references_shard, run, write_report};
+use illume_core::Shard;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -21,6 +22,12 @@ pub struct BenchArgs {
     /// Also write every frame of every series as PNG under OUTPUT/frames/.
     #[arg(long)]
     pub save_frames: bool,
+    /// Only render shard K of N's share of the converged references into --cache (the
+    /// distinct references in frame order, those with number mod N = K) and stop: no
+    /// technique runs, no report. After the N shards, the plain `illume bench` finds
+    /// them all in the cache (scripts/slurm/bench_refs.sbatch).
+    #[arg(long, value_name = "K/N", conflicts_with = "save_frames")]
+    pub shard: Option<Shard>,
 }
 
 /// Runs `illume bench`.
@@ -33,6 +40,22 @@ pub fn run_bench(a: BenchArgs) -> Result<()> {
     }
     options.cache_dir = a.cache;
     options.save_frames = a.save_frames;
+    if let Some(shard) = a.shard {
+        let mut bars = progress::Bars::default();
+        let done = references_shard(&scenario, &options, shard, &mut bars)
+            .with_context(|| format!("{} (shard {shard})", a.scenario.display()))?;
+        bars.finish();
+        eprintln!(
+            "shard {shard}: {} of {} distinct converged references ({} rendered, {} already cached) in {} ({:.1} s)",
+            done.mine,
+            done.distinct,
+            done.cache_renders,
+            done.cache_hits,
+            options.cache_dir.display(),
+            t0.elapsed().as_secs_f64()
+        );
+        return Ok(());
+    }
     let command: Vec<String> = std::env::args().collect();
     options
         .notes

@@ -16,8 +16,8 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 
 /// True for the names `animate` writes into its output folder: `frame_NNNNN.png` /
-/// `.exr`, `frames.csv`, `preview.gif` / `.mp4`, and the temporary files they are
-/// written through (`.NAME.PID.tmp`, `.preview.gif.partial`).
+/// `.exr`, `frames.csv`, a shard's `frames_K_of_N.csv`, `preview.gif` / `.mp4`, and the
+/// temporary files they are written through (`.NAME.PID.tmp`, `.preview.gif.partial`).
 pub fn is_animate_output(name: &str) -> bool {
     let frame = name
         .strip_prefix("frame_")
@@ -35,8 +35,71 @@ pub fn is_animate_output(name: &str) -> bool {
         );
     frame
         || temporary
+        || is_shard_csv(name)
         || matches!(name, "frames.csv" | "preview.gif" | "preview.mp4")
         || name == ".preview.gif.partial"
+}
+
+/// The per-frame CSV of `animate --shard K/N`: `frames_K_of_N.csv`.
+pub fn shard_csv_name(shard: illume_core::Shard) -> String {
+    format!("frames_{}_of_{}.csv", shard.index, shard.count)
+}
+
+/// True for [`shard_csv_name`]'s names.
+fn is_shard_csv(name: &str) -> bool {
+    name.strip_prefix("frames_")
+        .and_then(|r| r.strip_suffix(".csv"))
+        .and_then(|r| r.split_once("_of_"))
+        .is_some_and(|(k, n)| {
+            [k, n]
+                .iter()
+                .all(|x| !x.is_empty() && x.bytes().all(|b| b.is_ascii_digit()))
+        })
+}
+
+/// The frame number of a `frame_NNNNN.png` / `.exr` name.
+pub fn frame_number(name: &str) -> Option<u64> {
+    name.strip_prefix("frame_")
+        .and_then(|r| r.strip_suffix(".png").or_else(|| r.strip_suffix(".exr")))
+        .filter(|n| n.len() >= 5)
+        .and_then(|n| n.parse().ok())
+}
+
+/// Makes `dir` ready for one shard's frames (`animate --shard K/N`), which other shards
+/// may be writing into at the same time: created if missing; a folder holding anything
+/// but `animate`'s files is refused (as [`prepare_output`]); of those, only this shard's
+/// earlier frames and CSV are removed.
+pub fn prepare_shard_output(dir: &Path, shard: illume_core::Shard) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("{}: cannot create folder", dir.display()))?;
+    let mut foreign = Vec::new();
+    let mut mine = Vec::new();
+    for entry in
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?
+    {
+        let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if !(entry.file_type().is_ok_and(|t| t.is_file()) && is_animate_output(&name)) {
+            foreign.push(name);
+        } else if frame_number(&name).is_some_and(|i| shard.owns(i as usize))
+            || name == shard_csv_name(shard)
+        {
+            mine.push(entry.path());
+        }
+    }
+    if !foreign.is_empty() {
+        foreign.sort();
+        anyhow::bail!(
+            "{}: the output folder holds files illume did not write ({}); choose an empty or new folder with --output",
+            dir.display(),
+            foreign.join(", ")
+        );
+    }
+    for path in mine {
+        std::fs::remove_file(&path)
+            .with_context(|| format!("{}: cannot remove an earlier run's file", path.display()))?;
+    }
+    Ok(())
 }
 
 /// Makes `dir` ready for a sequence: created if missing; a folder holding only what an
@@ -416,6 +479,8 @@ mod tests {
             "frame_12345.exr",
             "frame_1234567.png",
             "frames.csv",
+            "frames_2_of_3.csv",
+            ".frames_0_of_12.csv.77.tmp",
             "preview.gif",
             "preview.mp4",
             ".preview.gif.partial",
@@ -431,6 +496,8 @@ mod tests {
             "frame_00000.jpg",
             "notes.txt",
             "frames.csv.bak",
+            "frames_x_of_3.csv",
+            "frames_1_of_.csv",
             ".notes.txt.1.tmp",
             "preview.webm",
         ] {

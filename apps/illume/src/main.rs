@@ -7,7 +7,12 @@
 //! * `illume demo` — photon streaming on `builtin:cornell-spot` in real time.
 //! * `illume bench SCENARIO.toml` — run a benchmark scenario and write its report.
 //! * `illume precompute SCENE --output FILE` — a day of precomputed indirect light
-//!   (`--shard K/N` for one shard; `precompute merge`, `precompute info`).
+//!   (`--shard K/N` for one shard, `--level L` for one adaptive level; `precompute
+//!   merge`, `precompute info`).
+//!
+//! Offline work splits over machines with `--shard K/N` (item i goes to shard i mod N):
+//! precompute keys, `animate` frames (gathered by `animate --collect N`), `bench`'s
+//! converged references; `scripts/slurm/` submits them as job arrays.
 //! * `illume view SCENE` — an interactive window (default feature `view`).
 //!
 //! SCENE is a file (`.gltf`, `.glb`, `.obj`, `.ply`) or `builtin:NAME`

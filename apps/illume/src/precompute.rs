@@ -1,17 +1,31 @@
 //! `illume precompute`: the offline part of `precomputed` (Bahnsen et al. 2012) — render
-//! a day's indirect-light keys (or one shard of them), merge shards, describe a file.
+//! a day's indirect-light keys (or one shard of them, or of one adaptive level), merge
+//! shards, describe a file.
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use illume_precomputed::file::PcFile;
 use illume_precomputed::settings::{Colour, PrecomputedSettings, ScheduleKind};
-use illume_precomputed::shard::{Shard, merge, precompute_shard};
+use illume_precomputed::shard::{Shard, merge_level, precompute_level, precompute_shard};
 use std::path::PathBuf;
 use std::time::Instant;
 
 /// `illume precompute SCENE … --output FILE`, or `merge` / `info`.
 #[derive(Args)]
-#[command(args_conflicts_with_subcommands = true)]
+#[command(
+    args_conflicts_with_subcommands = true,
+    after_help = "Sharding over machines (docs/techniques/precomputed.md, scripts/slurm/):
+  uniform:  illume precompute SCENE --schedule uniform --shard K/N -o partK.illumepc   (K = 0…N−1)
+            illume precompute merge part*.illumepc -o day.illumepc
+  adaptive, level by level (level L's keys depend on the images of the levels before):
+            illume precompute SCENE --level 0 --shard K/N -o l0_K.illumepc
+            illume precompute merge l0_*.illumepc -o levels0.illumepc
+            illume precompute SCENE --level 1 --previous levels0.illumepc --shard K/N -o l1_K.illumepc
+            illume precompute merge l1_*.illumepc --previous levels0.illumepc -o levels1.illumepc
+            … until a merge reports the schedule complete: it then writes the PCA file
+            (`illume precompute info FILE` says `kind pca`). The result equals the
+            unsharded run bit for bit."
+)]
 pub struct PrecomputeArgs {
     #[command(subcommand)]
     action: Option<Action>,
@@ -21,7 +35,9 @@ pub struct PrecomputeArgs {
 
 #[derive(Subcommand)]
 enum Action {
-    /// Check that shard files agree, gather their keys and run the PCA.
+    /// Check that shard files agree, gather their keys and run the PCA (an adaptive
+    /// level: write the merged levels so far, or the PCA file once no interval is left
+    /// to split).
     Merge(MergeArgs),
     /// Describe a .illumepc file: keys, keys per hour, variance curve; --dump writes EXRs.
     Info(InfoArgs),
@@ -73,7 +89,8 @@ struct RunArgs {
     #[arg(long)]
     height: Option<u32>,
     /// Render only the keys with index mod N = K into a partial file (merge them with
-    /// `illume precompute merge`).
+    /// `illume precompute merge`). The adaptive schedule shards one level at a time:
+    /// give --level too.
     #[arg(long)]
     shard: Option<Shard>,
     /// Camera position X,Y,Z [m] (with --look-at), as in render: a `screen` or `cube`
@@ -87,6 +104,15 @@ struct RunArgs {
     /// scene's (render with the same --sky: the file's scene fingerprint holds it).
     #[arg(long, value_parser = crate::setup::parse_radiance, value_name = "R,G,B", allow_hyphen_values = true)]
     sky: Option<illume_core::Vec3>,
+    /// Adaptive schedule: render only level L's keys (0: the three first keys; L ≥ 1:
+    /// the middles of the intervals the levels before split, found from --previous),
+    /// into a partial file (all of them, or shard K/N's with --shard).
+    #[arg(long, value_name = "L")]
+    level: Option<u32>,
+    /// With --level L ≥ 1: the merged file of levels 0…L−1 (what `precompute merge`
+    /// wrote for level L−1). Must come from the same scene and settings.
+    #[arg(long, value_name = "FILE", requires = "level")]
+    previous: Option<PathBuf>,
     /// Extra settings, as in render: `--set precomputed.KEY=VALUE`.
     #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
     sets: Vec<String>,
@@ -97,9 +123,14 @@ struct RunArgs {
 
 #[derive(Args)]
 struct MergeArgs {
-    /// The shard files.
+    /// The shard files (all N of one step: the uniform schedule, or one adaptive level).
     #[arg(required = true)]
     parts: Vec<PathBuf>,
+    /// Adaptive level L ≥ 1: the merged file of levels 0…L−1 the shards were given.
+    /// The merge writes the levels 0…L file, or the final PCA file when no interval is
+    /// left to split.
+    #[arg(long, value_name = "FILE")]
+    previous: Option<PathBuf>,
     /// Output file (.illumepc).
     #[arg(long, short)]
     output: PathBuf,
@@ -211,11 +242,33 @@ fn run_precompute(a: RunArgs) -> Result<()> {
     }
     scene.attach_sun(sun)?;
     let world = illume_transport::World::new(scene);
+    let previous = match &a.previous {
+        Some(p) => Some((p.clone(), PcFile::read(p)?)),
+        None => None,
+    };
     let start = Instant::now();
     let mut bars = crate::progress::Bars::with_spinner("precomputed PCA");
-    let file = match a.shard {
-        Some(shard) => precompute_shard(&world, &s, (width, height), shard, &mut bars)?,
-        None => illume_precomputed::precompute::precompute(&world, &s, (width, height), &mut bars)?,
+    let size = (width, height);
+    let file = match (s.schedule, a.level, a.shard) {
+        (ScheduleKind::Uniform, Some(_), _) => anyhow::bail!(
+            "--level is for the adaptive schedule; uniform keys shard with --shard K/N alone"
+        ),
+        (ScheduleKind::Adaptive, None, Some(_)) => anyhow::bail!(
+            "--shard with the adaptive schedule needs --level L: level L's keys depend on the \
+             images of the levels before, so it shards one level at a time (--level 0, merge, \
+             --level 1 --previous MERGED, … see `illume precompute --help`)"
+        ),
+        (_, Some(level), shard) => precompute_level(
+            &world,
+            &s,
+            size,
+            level,
+            previous.as_ref().map(|(p, f)| (p.as_path(), f)),
+            shard.unwrap_or_default(),
+            &mut bars,
+        )?,
+        (_, None, Some(shard)) => precompute_shard(&world, &s, size, shard, &mut bars)?,
+        (_, None, None) => illume_precomputed::precompute::precompute(&world, &s, size, &mut bars)?,
     };
     bars.finish();
     file.write(&output)?;
@@ -227,9 +280,10 @@ fn run_precompute(a: RunArgs) -> Result<()> {
         file.header.keys.iter().filter(|k| k.dark).count(),
         start.elapsed().as_secs_f64(),
         bytes as f64 / 1e6,
-        match a.shard {
-            Some(sh) => format!(", shard {}/{}", sh.index, sh.count),
-            None => String::new(),
+        match (a.level, a.shard) {
+            (Some(l), sh) => format!(", level {l}, shard {}", sh.unwrap_or_default()),
+            (None, Some(sh)) => format!(", shard {sh}"),
+            (None, None) => String::new(),
         }
     );
     Ok(())
@@ -241,20 +295,35 @@ fn run_merge(m: MergeArgs) -> Result<()> {
         .iter()
         .map(|p| Ok((p.clone(), PcFile::read(p)?)))
         .collect::<Result<Vec<_>>>()?;
+    let previous = match &m.previous {
+        Some(p) => Some((p.clone(), PcFile::read(p)?)),
+        None => None,
+    };
     let start = Instant::now();
-    let mut spinner = crate::progress::spinner("precomputed PCA");
-    let file = merge(&parts)?;
+    let spinner = crate::progress::spinner("precomputed PCA");
+    let file = merge_level(&parts, previous.as_ref().map(|(p, f)| (p.as_path(), f)))?;
     spinner.finish_and_clear();
-    let _ = &mut spinner;
     file.write(&m.output)?;
-    eprintln!(
-        "{}: merged {} shards, {} keys, k = {}, PCA {:.2} s",
-        m.output.display(),
-        parts.len(),
-        file.header.keys.len(),
-        file.header.components,
-        start.elapsed().as_secs_f64()
-    );
+    if file.header.kind == "levels" {
+        let level = file.header.keys.iter().map(|k| k.level).max().unwrap_or(0);
+        eprintln!(
+            "{}: merged {} shards: levels 0–{level}, {} keys; next: --level {} --previous {}",
+            m.output.display(),
+            parts.len(),
+            file.header.keys.len(),
+            level + 1,
+            m.output.display()
+        );
+    } else {
+        eprintln!(
+            "{}: merged {} shards, {} keys, k = {}, PCA {:.2} s",
+            m.output.display(),
+            parts.len(),
+            file.header.keys.len(),
+            file.header.components,
+            start.elapsed().as_secs_f64()
+        );
+    }
     Ok(())
 }
 
@@ -269,10 +338,17 @@ fn run_info(i: InfoArgs) -> Result<()> {
         i.file.display(),
         bytes as f64 / 1e6
     );
-    println!(
-        "kind        {} (shard {}/{})",
-        h.kind, h.shard[0], h.shard[1]
-    );
+    let top_level = h.keys.iter().map(|k| k.level).max().unwrap_or(0);
+    match h.kind.as_str() {
+        "levels" => println!(
+            "kind        levels (adaptive levels 0–{top_level} merged; next: --level {})",
+            top_level + 1
+        ),
+        _ => println!(
+            "kind        {} (shard {}/{})",
+            h.kind, h.shard[0], h.shard[1]
+        ),
+    }
     println!(
         "scene       {} (fingerprint {})",
         h.scene_source, h.scene_fingerprint

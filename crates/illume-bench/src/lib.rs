@@ -18,6 +18,10 @@
 //! 4. [`write_report`] writes `report.md`, `results.csv` and SVG plots (error vs time,
 //!    fps per frame, latency after each event).
 //!
+//! The converged references are the heavy part; [`references_shard`] renders one
+//! shard's share of them into the cache (`illume bench --shard K/N`, a Slurm job array:
+//! `scripts/slurm/bench_refs.sbatch`), so that the plain run after the N shards only reads them.
+//!
 //! ```no_run
 //! use illume_bench::{RunOptions, Scenario, Silent, run, write_report};
 //! let scenario = Scenario::load("scenarios/moving_sphere.toml".as_ref()).unwrap();
@@ -41,5 +45,8 @@ pub use error::BenchError;
 pub use illume_core::{Progress, Silent};
 pub use replay::{EditTarget, Replay};
 pub use report::{ReportFiles, write_report};
-pub use run::{BenchOutcome, Event, FrameRecord, RunOptions, SeriesSummary, run};
+pub use run::{
+    BenchOutcome, Event, FrameRecord, RunOptions, SeriesSummary, ShardOutcome, references_shard,
+    run,
+};
 pub use scenario::{EditSpec, ReferenceSpec, Scenario, TechniqueSpec};

@@ -5,8 +5,8 @@ use crate::cache::{CacheKey, ReferenceCache};
 use crate::error::BenchError;
 use crate::replay::Replay;
 use crate::scenario::Scenario;
-use illume_core::Progress;
 use illume_core::image::{RgbImage, ToneMap};
+use illume_core::{Progress, Shard};
 use illume_engine::{Config, Engine};
 use illume_metrics::{Counters, Metric, compare_images, flicker, latency_after_event};
 use illume_reference::{ReferenceRenderer, ReferenceSettings};
@@ -196,7 +196,15 @@ pub fn run(
     let measured = scenario.measured_frames(times.len());
     let mut cache = ReferenceCache::new(&options.cache_dir);
     let references = converged_references(
-        scenario, &scene, &times, &keys, &measured, &settings, &mut cache, progress,
+        scenario,
+        &scene,
+        &times,
+        &keys,
+        &measured,
+        &settings,
+        Shard::default(),
+        &mut cache,
+        progress,
     )?;
     progress.message(&format!(
         "converged references: {} distinct, {} from the cache, {} rendered ({})",
@@ -293,21 +301,67 @@ fn reference_keys(
     Ok(keys)
 }
 
+/// What [`references_shard`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShardOutcome {
+    /// Distinct converged references of the whole scenario (all shards).
+    pub distinct: usize,
+    /// Those that belong to this shard.
+    pub mine: usize,
+    /// Of this shard's, how many the cache already held.
+    pub cache_hits: usize,
+    /// Of this shard's, how many were rendered (and stored).
+    pub cache_renders: usize,
+}
+
+/// Renders shard `shard`'s share of `scenario`'s converged references into the cache
+/// (`options.cache_dir`), and nothing else: no technique runs, no report is written.
+///
+/// The share: the scenario's distinct reference states (frames of a still scene share
+/// one), numbered in frame order, those with number j mod N = K. Each image is what the
+/// unsharded run renders (same state, settings and seed: the same cache key and pixels),
+/// so after the N shards a plain [`run`] with the same cache finds every reference there.
+pub fn references_shard(
+    scenario: &Scenario,
+    options: &RunOptions,
+    shard: Shard,
+    progress: &mut dyn Progress,
+) -> Result<ShardOutcome, BenchError> {
+    let times = scenario.frame_times();
+    let scene = scenario.load_scene()?;
+    let identity = scenario.scene_identity()?;
+    let settings = reference_settings(scenario);
+    let keys = reference_keys(scenario, &scene, &identity, &settings, &times)?;
+    let measured = scenario.measured_frames(times.len());
+    let mut cache = ReferenceCache::new(&options.cache_dir);
+    let references = converged_references(
+        scenario, &scene, &times, &keys, &measured, &settings, shard, &mut cache, progress,
+    )?;
+    Ok(ShardOutcome {
+        distinct: references.unique,
+        mine: references.images.iter().filter(|i| i.is_some()).count(),
+        cache_hits: cache.hits,
+        cache_renders: cache.renders,
+    })
+}
+
 /// The converged references: distinct images and which one each frame uses.
-/// Frames outside `reference_frames` have none.
+/// Frames outside `reference_frames` have none; with a shard, only its images are there.
 struct References {
-    images: Vec<RgbImage>,
+    images: Vec<Option<RgbImage>>,
     frame_image: Vec<Option<usize>>,
     unique: usize,
 }
 
 impl References {
     fn frame(&self, i: usize) -> Option<&RgbImage> {
-        self.frame_image[i].map(|k| &self.images[k])
+        self.frame_image[i].and_then(|k| self.images[k].as_ref())
     }
 
     fn per_frame(&self) -> impl Iterator<Item = Option<&RgbImage>> {
-        self.frame_image.iter().map(|k| k.map(|k| &self.images[k]))
+        self.frame_image
+            .iter()
+            .map(|k| k.and_then(|k| self.images[k].as_ref()))
     }
 }
 
@@ -322,6 +376,7 @@ fn converged_references(
     keys: &[CacheKey],
     measured: &[bool],
     settings: &ReferenceSettings,
+    shard: Shard,
     cache: &mut ReferenceCache,
     progress: &mut dyn Progress,
 ) -> Result<References, BenchError> {
@@ -329,8 +384,9 @@ fn converged_references(
     let mut to_render = 0u64;
     for (k, _) in keys.iter().zip(measured).filter(|(_, m)| **m) {
         if !unique.contains_key(&k.hash) {
-            unique.insert(k.hash, unique.len());
-            if !cache.contains(k) {
+            let slot = unique.len();
+            unique.insert(k.hash, slot);
+            if shard.owns(slot) && !cache.contains(k) {
                 to_render += 1;
             }
         }
@@ -347,7 +403,8 @@ fn converged_references(
         replay.apply_due(&mut world, t)?;
         world.set_time(t);
         let slot = unique[&key.hash];
-        if images[slot].is_some() {
+        // The world above still steps through every measured frame, as unsharded.
+        if images[slot].is_some() || !shard.owns(slot) {
             continue;
         }
         let image = cache.get_or_render(key, || {
@@ -372,10 +429,7 @@ fn converged_references(
         .map(|(k, &m)| m.then(|| unique[&k.hash]))
         .collect();
     Ok(References {
-        images: images
-            .into_iter()
-            .map(|i| i.expect("every slot filled"))
-            .collect(),
+        images,
         frame_image,
         unique: unique.len(),
     })

@@ -1,8 +1,9 @@
 //! illume's foundation, shared by every other crate: math types and conventions
 //! ([`math`]), index-addressable random and quasi-random sample sources with their
 //! warps ([`sampling`]), HDR images with tone mapping and EXR/PNG I/O ([`image`]), named
-//! counters ([`Counters`]), progress reports of long work ([`progress`]) and guarded
-//! reads of input files ([`files`]).
+//! counters ([`Counters`]), progress reports of long work ([`progress`]), guarded
+//! reads of input files ([`files`]) and the `--shard K/N` split of offline work
+//! ([`shard`]).
 //!
 //! Conventions (see `shared/DESIGN.md`): metres and seconds, right-handed with +Y up,
 //! cameras look down −Z, colour is linear Rec.709 RGB radiometry, time is `f64` seconds.
@@ -21,7 +22,9 @@ pub mod image;
 pub mod math;
 pub mod progress;
 pub mod sampling;
+pub mod shard;
 
 pub use counters::Counters;
 pub use math::*;
 pub use progress::{Progress, Silent};
+pub use shard::Shard;

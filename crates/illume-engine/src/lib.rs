@@ -26,7 +26,7 @@ pub mod technique_kind;
 
 pub use config::{AnySettings, Config, ConfigError, ConfigLayers};
 pub use still::{Still, render_still};
-pub use technique_kind::TechniqueKind;
+pub use technique_kind::{FrameHistory, TechniqueKind};
 
 use illume_core::{Counters, Progress, Silent};
 use illume_render::{Frame, Renderer};

@@ -11,6 +11,17 @@ use illume_scene::Timeline;
 use illume_selective::SelectiveSettings;
 use illume_transport::{SharedWorld, Technique, TechniqueError, TechniqueSettings};
 
+/// How a technique's frame depends on the frames before it in one run
+/// ([`TechniqueKind::frame_history`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameHistory {
+    /// Samples accumulate while nothing changes and start afresh at any scene change: a
+    /// frame that follows a change (and the first) depends on no earlier frame.
+    RestartsOnChange,
+    /// State carried from frame to frame (why): a frame depends on all before it.
+    Carried(&'static str),
+}
+
 /// Every technique illume implements; the name is the same everywhere (module, TOML
 /// table, CLI value, counter prefix, docs page).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -89,6 +100,28 @@ impl TechniqueKind {
             TechniqueKind::Selective => SelectiveSettings::WORK_UNIT,
             TechniqueKind::RadianceCache => RadianceCacheSettings::WORK_UNIT,
             TechniqueKind::Precomputed => PrecomputedSettings::WORK_UNIT,
+        }
+    }
+
+    /// How a frame depends on the frames rendered before it in one run: whether
+    /// `illume animate --shard K/N` (frames apart, on other machines) gives the frames of
+    /// the unsharded run.
+    pub fn frame_history(self) -> FrameHistory {
+        match self {
+            TechniqueKind::Reference => FrameHistory::RestartsOnChange,
+            TechniqueKind::PhotonStream => FrameHistory::Carried(
+                "its photon pool and virtual surface lights build up over the frames",
+            ),
+            TechniqueKind::Selective => {
+                FrameHistory::Carried("its photons and corrective groups build up over the frames")
+            }
+            TechniqueKind::RadianceCache => {
+                FrameHistory::Carried("its cache records are reused from frame to frame")
+            }
+            TechniqueKind::Precomputed => FrameHistory::Carried(
+                "it is interactive: the renderer picks shadow maps or rays per frame from \
+                 costs measured on the frames before",
+            ),
         }
     }
 

@@ -13,7 +13,10 @@
 //! - [`pca`]: the PCA of the key images (§3.2, Fig. 5);
 //! - [`schedule`]: uniform (Eq. 1, 3) and adaptive (§3.2, Fig. 6) key times, and the
 //!   binary search + α of non-uniform keys;
-//! - [`file`]: the versioned `.illumepc` file (magic, TOML header, checksummed sections);
+//! - [`file`](mod@file): the versioned `.illumepc` file (magic, TOML header, checksummed
+//!   sections);
+//! - [`shard`]: `--shard K/N` over machines, the adaptive schedule level by level
+//!   (`--level L`), and the merge; bit for bit the unsharded file;
 //! - [`domain`]: where keys live (`screen`, `cube`, `atlas`) and how each renders them;
 //! - [`atlas`]: the `atlas` domain's lightmap coordinates and probe grid.
 //!

@@ -365,7 +365,8 @@ pub fn differs_visibly(a: &RgbImage, b: &RgbImage, exposure: f32) -> bool {
     .is_ok_and(|r| r.visible)
 }
 
-fn lerp(a: &RgbImage, b: &RgbImage, alpha: f32) -> RgbImage {
+/// `(1 − α)·a + α·b`, pixel by pixel (same sizes): the adaptive schedule's interpolation.
+pub fn lerp(a: &RgbImage, b: &RgbImage, alpha: f32) -> RgbImage {
     let px = a
         .pixels()
         .iter()

@@ -69,14 +69,74 @@ pub fn open_intervals(keys: &[KeyTime], level: u32, min_step_min: f64) -> Vec<(u
         .collect()
 }
 
+/// A middle that adaptive level `level` tests: the midpoint of the interval between
+/// keys `ends.0` and `ends.1` (indices into the keys of the levels before).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Middle {
+    /// Its time \[hours\].
+    pub hours: f64,
+    /// The interval's keys.
+    pub ends: (usize, usize),
+}
+
+/// The middles adaptive level `level` (≥ 1) renders, from the keys of the levels before
+/// (sorted by time, with their images): the middles of the intervals made at level
+/// `level − 1` that are at least `2 · min_step_min` long ([`open_intervals`]). With
+/// [`Criterion::Ends`] only those whose ends' interpolation at the middle `differs` from
+/// either end; with [`Criterion::VerifyMidpoint`] all of them (the rendered middle then
+/// decides, [`keeps_middle`]). Empty: the schedule is complete.
+pub fn level_middles<T>(
+    keys: &[(KeyTime, T)],
+    level: u32,
+    min_step_min: f64,
+    criterion: Criterion,
+    mut differs: impl FnMut(&T, &T) -> bool,
+    mut interpolate: impl FnMut(&T, &T, f32) -> T,
+) -> Vec<Middle> {
+    let times: Vec<KeyTime> = keys.iter().map(|k| k.0).collect();
+    let Some(previous) = level.checked_sub(1) else {
+        return Vec::new();
+    };
+    open_intervals(&times, previous, min_step_min)
+        .into_iter()
+        .filter(|&(a, b)| match criterion {
+            Criterion::Ends => {
+                let mid = interpolate(&keys[a].1, &keys[b].1, 0.5);
+                differs(&mid, &keys[a].1) || differs(&mid, &keys[b].1)
+            }
+            Criterion::VerifyMidpoint => true,
+        })
+        .map(|(a, b)| Middle {
+            hours: 0.5 * (times[a].hours + times[b].hours),
+            ends: (a, b),
+        })
+        .collect()
+}
+
+/// Whether a rendered middle becomes a key: always with [`Criterion::Ends`] (its interval
+/// was split before rendering it); with [`Criterion::VerifyMidpoint`] when the ends'
+/// interpolation `differs` from the rendered `image`.
+pub fn keeps_middle<T>(
+    criterion: Criterion,
+    ends: (&T, &T),
+    image: &T,
+    mut differs: impl FnMut(&T, &T) -> bool,
+    mut interpolate: impl FnMut(&T, &T, f32) -> T,
+) -> bool {
+    match criterion {
+        Criterion::Ends => true,
+        Criterion::VerifyMidpoint => differs(&interpolate(ends.0, ends.1, 0.5), image),
+    }
+}
+
 /// The whole adaptive schedule in one process: `render` makes the images of a batch of
 /// times (it may run them in parallel), `differs(a, b)` says whether two images differ
 /// noticeably, `interpolate(a, b, α)` blends two images. Returns the keys (sorted) with
 /// their images.
 ///
-/// With [`Criterion::Ends`] (the paper's), a middle is rendered only when its interval
-/// splits; with [`Criterion::VerifyMidpoint`] every tested middle is rendered and kept only
-/// if `differs(interpolation, middle)`.
+/// Level 0 is [`adaptive_start`]; level L ≥ 1 renders [`level_middles`] and keeps those
+/// [`keeps_middle`] accepts, until a level keeps none. The sharded precompute
+/// ([`crate::shard`]) runs the same two steps level by level, across machines.
 pub fn adaptive<T, E>(
     from_h: f64,
     to_h: f64,
@@ -89,56 +149,38 @@ pub fn adaptive<T, E>(
     let start = adaptive_start(from_h, to_h);
     let hours: Vec<f64> = start.iter().map(|k| k.hours).collect();
     let mut keys: Vec<(KeyTime, T)> = start.into_iter().zip(render(&hours)?).collect();
-    let mut level = 0;
-    loop {
-        let times: Vec<KeyTime> = keys.iter().map(|k| k.0).collect();
-        let open = open_intervals(&times, level, min_step_min);
-        let mut middles = Vec::new();
-        match criterion {
-            Criterion::Ends => {
-                for &(a, b) in &open {
-                    let mid = interpolate(&keys[a].1, &keys[b].1, 0.5);
-                    if differs(&mid, &keys[a].1) || differs(&mid, &keys[b].1) {
-                        middles.push(0.5 * (times[a].hours + times[b].hours));
-                    }
-                }
-                let images = render(&middles)?;
-                keys.extend(middles.iter().zip(images).map(|(&hours, image)| {
-                    (
-                        KeyTime {
-                            hours,
-                            level: level + 1,
-                        },
-                        image,
-                    )
-                }));
-            }
-            Criterion::VerifyMidpoint => {
-                let candidates: Vec<f64> = open
-                    .iter()
-                    .map(|&(a, b)| 0.5 * (times[a].hours + times[b].hours))
-                    .collect();
-                let images = render(&candidates)?;
-                for ((&(a, b), &hours), image) in open.iter().zip(&candidates).zip(images) {
-                    let mid = interpolate(&keys[a].1, &keys[b].1, 0.5);
-                    if differs(&mid, &image) {
-                        middles.push(hours);
-                        keys.push((
-                            KeyTime {
-                                hours,
-                                level: level + 1,
-                            },
-                            image,
-                        ));
-                    }
-                }
-            }
-        }
+    for level in 1.. {
+        let middles = level_middles(
+            &keys,
+            level,
+            min_step_min,
+            criterion,
+            &mut differs,
+            &mut interpolate,
+        );
         if middles.is_empty() {
             break;
         }
+        let hours: Vec<f64> = middles.iter().map(|m| m.hours).collect();
+        let images = render(&hours)?;
+        let mut kept = Vec::new();
+        for (m, image) in middles.iter().zip(images) {
+            let ends = (&keys[m.ends.0].1, &keys[m.ends.1].1);
+            if keeps_middle(criterion, ends, &image, &mut differs, &mut interpolate) {
+                kept.push((
+                    KeyTime {
+                        hours: m.hours,
+                        level,
+                    },
+                    image,
+                ));
+            }
+        }
+        if kept.is_empty() {
+            break;
+        }
+        keys.extend(kept);
         keys.sort_by(|a, b| a.0.hours.total_cmp(&b.0.hours));
-        level += 1;
     }
     Ok(keys)
 }
