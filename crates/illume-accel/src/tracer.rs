@@ -241,7 +241,8 @@ impl Tracer {
         self.kernel.kind()
     }
 
-    /// Makes queries run in `kernel` (every kernel gives the same hits bit for bit);
+    /// Makes queries run in `kernel` (every kernel gives the same hits bit for bit, but
+    /// for ties between triangles at equal distance, see [`TraversalKernel`]);
     /// an error, leaving the kernel unchanged, when this CPU cannot run it.
     pub fn set_kernel(&mut self, kernel: TraversalKernel) -> Result<(), KernelUnavailable> {
         self.kernel = Kernel::new(kernel).ok_or(KernelUnavailable(kernel))?;
