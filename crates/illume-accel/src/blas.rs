@@ -311,14 +311,13 @@ impl Blas {
         ray: &PreparedRay,
         t_max: f32,
     ) -> bool {
-        (0..packet.halves()).any(|half| {
+        for half in 0..packet.halves() {
             let (_, b1, b2, bits) = packet.intersect_half(half, ray, t_max);
-            if CUT && bits != 0 {
-                self.keep_lanes(packet, half, bits, b1, b2) != 0
-            } else {
-                bits != 0
+            if bits != 0 && (!CUT || self.keep_lanes(packet, half, bits, b1, b2) != 0) {
+                return true;
             }
-        })
+        }
+        false
     }
 
     /// The lanes of `bits` (hits of half `half` of `packet` at barycentrics `b1`, `b2`)
@@ -384,20 +383,20 @@ impl Blas {
             stack,
             #[inline(always)]
             |range, t_max, _| {
-                let packets = &self.packets[range];
-                hit = packets.iter().any(|packet| {
-                    if K::WIDE_PACKETS {
+                // Loops, not `Iterator::any`: see `Tracer::occluded_in`.
+                for packet in &self.packets[range] {
+                    let occludes = if K::WIDE_PACKETS {
                         let (_, b1, b2, bits) = k.intersect_packet(packet, ray, *t_max);
-                        if CUT && bits != 0 {
-                            self.keep_packet_lanes(packet, bits, &b1, &b2) != 0
-                        } else {
-                            bits != 0
-                        }
+                        bits != 0 && (!CUT || self.keep_packet_lanes(packet, bits, &b1, &b2) != 0)
                     } else {
                         self.packet_occludes::<CUT>(packet, ray, *t_max)
+                    };
+                    if occludes {
+                        hit = true;
+                        return true;
                     }
-                });
-                hit
+                }
+                false
             },
         );
         hit

@@ -15,6 +15,11 @@
 //! visited in rests on the entry distances). The random-ray test of every kernel
 //! (`every_kernel_gives_identical_hits`) finds no such ray.
 //!
+//! Everything an AVX2 entry point calls must inline into it to run as AVX2 code: a
+//! closure handed to a library function (`Iterator::any`, `array::map`, …) may stay out of
+//! line, is then compiled without AVX2, and every intrinsic in it becomes a function call.
+//! The query paths therefore use plain loops, and the intrinsics are called directly.
+//!
 //! `unsafe` is confined to this module: the AVX2 intrinsics of the box and triangle tests
 //! and the calls of the AVX2 entry points, each with the argument that makes it sound. All
 //! rest on one invariant: an [`Avx2`] value exists only on a CPU with AVX2, because its one
@@ -271,7 +276,11 @@ impl BoxKernel for Avx2 {
             let c = |k: usize| _mm256_loadu_ps(packet.coords[k].as_ptr());
             let (e1x, e1y, e1z) = (c(3), c(4), c(5));
             let (e2x, e2y, e2z) = (c(6), c(7), c(8));
-            let [dx, dy, dz] = ray.dir.to_array().map(|v| _mm256_set1_ps(v));
+            let (dx, dy, dz) = (
+                _mm256_set1_ps(ray.dir.x),
+                _mm256_set1_ps(ray.dir.y),
+                _mm256_set1_ps(ray.dir.z),
+            );
             let mul = |x, y| _mm256_mul_ps(x, y);
             let sub = |x, y| _mm256_sub_ps(x, y);
             let add = |x, y| _mm256_add_ps(x, y);
@@ -280,7 +289,11 @@ impl BoxKernel for Avx2 {
             let pz = sub(mul(dx, e2y), mul(dy, e2x));
             let det = add(add(mul(e1x, px), mul(e1y, py)), mul(e1z, pz));
             let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
-            let [ox, oy, oz] = ray.origin.to_array().map(|v| _mm256_set1_ps(v));
+            let (ox, oy, oz) = (
+                _mm256_set1_ps(ray.origin.x),
+                _mm256_set1_ps(ray.origin.y),
+                _mm256_set1_ps(ray.origin.z),
+            );
             let (tx, ty, tz) = (sub(ox, c(0)), sub(oy, c(1)), sub(oz, c(2)));
             let b1 = mul(add(add(mul(tx, px), mul(ty, py)), mul(tz, pz)), inv_det);
             let abs_det = _mm256_and_ps(det, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
