@@ -4,9 +4,21 @@
 //! mesh level, triangle packets) is compiled for AVX2 inside it; the portable kernel runs
 //! everywhere and is the reference the others are tested against.
 //!
-//! Every kernel computes each box's entry and exit distance with the same IEEE operations
-//! in the same order (multiply, then subtract; no fused multiply-add), so they visit the
-//! same nodes in the same order and return bit-identical hits.
+//! Every kernel tests triangles with the same IEEE operations in the same order (no fused
+//! multiply-add), so a triangle's hit is the same bit for bit in every kernel. Box tests
+//! differ in one rounding: the portable kernel computes a plane's distance as a multiply,
+//! then a subtract; the AVX2 kernel fuses them (`vfmsub`, one rounding), so an entry
+//! distance can differ by an ulp. Both tests are conservative (exit distances widened by
+//! 2γ₃), so both kernels find the same closest hit; the one possible difference is which
+//! of two triangles wins when their hit distances are equal, or within that ulp of a box
+//! face's entry distance (ties go to the first triangle found, and the order children are
+//! visited in rests on the entry distances). The random-ray test of every kernel
+//! (`every_kernel_gives_identical_hits`) finds no such ray.
+//!
+//! Everything an AVX2 entry point calls must inline into it to run as AVX2 code: a
+//! closure handed to a library function (`Iterator::any`, `array::map`, …) may stay out of
+//! line, is then compiled without AVX2, and every intrinsic in it becomes a function call.
+//! The query paths therefore use plain loops, and the intrinsics are called directly.
 //!
 //! `unsafe` is confined to this module: the AVX2 intrinsics of the box and triangle tests
 //! and the calls of the AVX2 entry points, each with the argument that makes it sound. All
@@ -25,13 +37,14 @@ use illume_core::{Ray, Vec4};
 use std::sync::OnceLock;
 
 /// A traversal kernel: the instruction set a [`Tracer`]'s queries run in. Every kernel
-/// returns bit-identical hits; they differ in speed only.
+/// returns the same hits bit for bit, except possibly which of two triangles at equal
+/// distance wins (see the module documentation); they differ in speed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TraversalKernel {
     /// Two 4-lane box tests per node through `glam` (SSE2 on x86-64): runs on every CPU.
     Portable,
-    /// One 8-lane AVX2 box test per node, the whole query compiled for AVX2: x86-64 CPUs
-    /// with AVX2, detected at run time.
+    /// One 8-lane AVX2 box test per node (with fused multiply-subtract), the whole query
+    /// compiled for AVX2 and FMA: x86-64 CPUs with both, detected at run time.
     Avx2,
 }
 
@@ -226,16 +239,16 @@ impl BoxKernel for Portable {
     }
 }
 
-/// The AVX2 kernel. A value exists only when the CPU has AVX2 ([`Avx2::detect`]).
+/// The AVX2 kernel. A value exists only when the CPU has AVX2 and FMA ([`Avx2::detect`]).
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Avx2(());
 
 #[cfg(target_arch = "x86_64")]
 impl Avx2 {
-    /// The kernel, when this CPU has AVX2.
+    /// The kernel, when this CPU has AVX2 and FMA.
     fn detect() -> Option<Avx2> {
-        is_x86_feature_detected!("avx2").then_some(Avx2(()))
+        (is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")).then_some(Avx2(()))
     }
 }
 
@@ -263,7 +276,11 @@ impl BoxKernel for Avx2 {
             let c = |k: usize| _mm256_loadu_ps(packet.coords[k].as_ptr());
             let (e1x, e1y, e1z) = (c(3), c(4), c(5));
             let (e2x, e2y, e2z) = (c(6), c(7), c(8));
-            let [dx, dy, dz] = ray.dir.to_array().map(|v| _mm256_set1_ps(v));
+            let (dx, dy, dz) = (
+                _mm256_set1_ps(ray.dir.x),
+                _mm256_set1_ps(ray.dir.y),
+                _mm256_set1_ps(ray.dir.z),
+            );
             let mul = |x, y| _mm256_mul_ps(x, y);
             let sub = |x, y| _mm256_sub_ps(x, y);
             let add = |x, y| _mm256_add_ps(x, y);
@@ -272,7 +289,11 @@ impl BoxKernel for Avx2 {
             let pz = sub(mul(dx, e2y), mul(dy, e2x));
             let det = add(add(mul(e1x, px), mul(e1y, py)), mul(e1z, pz));
             let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
-            let [ox, oy, oz] = ray.origin.to_array().map(|v| _mm256_set1_ps(v));
+            let (ox, oy, oz) = (
+                _mm256_set1_ps(ray.origin.x),
+                _mm256_set1_ps(ray.origin.y),
+                _mm256_set1_ps(ray.origin.z),
+            );
             let (tx, ty, tz) = (sub(ox, c(0)), sub(oy, c(1)), sub(oz, c(2)));
             let b1 = mul(add(add(mul(tx, px), mul(ty, py)), mul(tz, pz)), inv_det);
             let abs_det = _mm256_and_ps(det, _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)));
@@ -310,9 +331,10 @@ impl BoxKernel for Avx2 {
         out
     }
 
-    /// [`Portable::hit_boxes`] in one 8-lane pass, with the same operations in the same
-    /// order, so the same results bit for bit: `_mm256_max_ps(a, b)`/`_mm256_min_ps`
-    /// return `b` when either is NaN, as `Vec4::max`/`min` (`_mm_max_ps`) do, and the
+    /// [`Portable::hit_boxes`] in one 8-lane pass, with each plane's multiply and
+    /// subtract fused (`_mm256_fmsub_ps`, one rounding instead of two) and otherwise the
+    /// same operations in the same order: `_mm256_max_ps(a, b)`/`_mm256_min_ps` return
+    /// `b` when either is NaN, as `Vec4::max`/`min` (`_mm_max_ps`) do, and the
     /// comparison is the same ordered `≤`.
     ///
     /// Not a `#[target_feature]` function itself (those cannot be forced inline): it is
@@ -332,17 +354,15 @@ impl BoxKernel for Avx2 {
         let [nx, ny, nz] = ray.near;
         let [fx, fy, fz] = ray.far;
         let mut dist = [0.0f32; WIDTH];
-        // SAFETY: `self` exists only if `Avx2::detect` found AVX2 on this CPU, so every
-        // AVX/AVX2 intrinsic below may run. Each load reads `b[row]`, a `[f32; 8]` (32
+        // SAFETY: `self` exists only if `Avx2::detect` found AVX2 and FMA on this CPU, so
+        // every AVX/AVX2/FMA intrinsic below may run. Each load reads `b[row]`, a `[f32; 8]` (32
         // readable bytes), and the store writes `dist`, a `[f32; 8]` (32 writable bytes);
         // `loadu`/`storeu` have no alignment requirement.
         let bits = unsafe {
             let plane = |row: usize, axis: usize| {
-                _mm256_sub_ps(
-                    _mm256_mul_ps(
-                        _mm256_loadu_ps(b[row].as_ptr()),
-                        _mm256_set1_ps(ray.inv_dir[axis]),
-                    ),
+                _mm256_fmsub_ps(
+                    _mm256_loadu_ps(b[row].as_ptr()),
+                    _mm256_set1_ps(ray.inv_dir[axis]),
                     _mm256_set1_ps(ray.origin_inv[axis]),
                 )
             };
@@ -382,8 +402,8 @@ pub(crate) fn closest(
     match tracer.kernel {
         Kernel::Portable(k) => tracer.closest_in(k, ray, mask, stack),
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: a `Kernel::Avx2` holds an `Avx2`, which exists only on CPUs with AVX2,
-        // the one requirement of `closest_avx2`.
+        // SAFETY: a `Kernel::Avx2` holds an `Avx2`, which exists only on CPUs with AVX2 and
+        // FMA, the one requirement of `closest_avx2`.
         Kernel::Avx2(k) => unsafe { closest_avx2(tracer, k, ray, mask, stack) },
     }
 }
@@ -394,14 +414,16 @@ pub(crate) fn occluded(tracer: &Tracer, ray: &Ray, mask: u32, stack: &mut [Stack
     match tracer.kernel {
         Kernel::Portable(k) => tracer.occluded_in(k, ray, mask, stack),
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: as in `closest`: the `Avx2` value proves the CPU has AVX2.
+        // SAFETY: as in `closest`: the `Avx2` value proves the CPU has AVX2 and FMA.
         Kernel::Avx2(k) => unsafe { occluded_avx2(tracer, k, ray, mask, stack) },
     }
 }
 
-/// [`Tracer::closest_in`] compiled for AVX2 (everything it calls is inlined into it).
+/// [`Tracer::closest_in`] compiled for AVX2 and FMA (everything it calls is inlined into
+/// it; Rust never contracts a separate multiply and add into an FMA, so only the box
+/// test's explicit `_mm256_fmsub_ps` fuses).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 fn closest_avx2(
     tracer: &Tracer,
     k: Avx2,
@@ -412,9 +434,9 @@ fn closest_avx2(
     tracer.closest_in(k, ray, mask, stack)
 }
 
-/// [`Tracer::occluded_in`] compiled for AVX2.
+/// [`Tracer::occluded_in`] compiled for AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 fn occluded_avx2(tracer: &Tracer, k: Avx2, ray: &Ray, mask: u32, stack: &mut [StackEntry]) -> bool {
     tracer.occluded_in(k, ray, mask, stack)
 }
@@ -430,7 +452,7 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         assert_eq!(
             available.contains(&TraversalKernel::Avx2),
-            is_x86_feature_detected!("avx2")
+            is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")
         );
         assert!(available.contains(&TraversalKernel::default_for_this_cpu()));
         for k in TraversalKernel::ALL {

@@ -23,13 +23,15 @@
 //!   of a leaf counted in groups of four triangles, builds a binary tree that is
 //!   collapsed into eight-wide nodes of 256 bytes (child boxes as structure of arrays, so
 //!   one ray meets eight boxes in one 8-lane test). Triangles are copied in leaf order,
-//!   eight to a 320-byte packet (corner and two edges per lane, structure of arrays), so a
+//!   eight to a 320-byte packet (five cache lines; corner and two edges per lane, structure of arrays), so a
 //!   leaf of up to eight triangles is one packet.
-//! * Kernels ([`TraversalKernel`]): on CPUs with AVX2, detected at run time, the whole
-//!   query is compiled for AVX2, and the box test of a node and the triangle test of a
-//!   packet are one 8-lane pass each; elsewhere boxes and packets are tested in portable
-//!   4-lane halves. Both use the same operations in the same order and return
-//!   bit-identical hits; [`KERNEL_ENV`] or [`Tracer::set_kernel`] forces one.
+//! * Kernels ([`TraversalKernel`]): on CPUs with AVX2 and FMA, detected at run time, the
+//!   whole query is compiled for them, and the box test of a node (with fused
+//!   multiply-subtract) and the triangle test of a packet are one 8-lane pass each;
+//!   elsewhere boxes and packets are tested in portable 4-lane halves. Triangle tests use
+//!   the same operations in the same order, so both kernels return the same hits bit for
+//!   bit, but for which of two triangles at equal distance wins (see [`TraversalKernel`]);
+//!   [`KERNEL_ENV`] or [`Tracer::set_kernel`] forces one.
 //! * Instance level: the same builder over the instances' world boxes (the mesh BVH's
 //!   box under `world_from_object`), rebuilt by [`Tracer::update`] (cost linear in the
 //!   instance count, independent of triangle counts); each node keeps the union of the masks below each child, so

@@ -241,7 +241,8 @@ impl Tracer {
         self.kernel.kind()
     }
 
-    /// Makes queries run in `kernel` (every kernel gives the same hits bit for bit);
+    /// Makes queries run in `kernel` (every kernel gives the same hits bit for bit, but
+    /// for ties between triangles at equal distance, see [`TraversalKernel`]);
     /// an error, leaving the kernel unchanged, when this CPU cannot run it.
     pub fn set_kernel(&mut self, kernel: TraversalKernel) -> Result<(), KernelUnavailable> {
         self.kernel = Kernel::new(kernel).ok_or(KernelUnavailable(kernel))?;
@@ -478,16 +479,23 @@ impl Tracer {
             stack,
             #[inline(always)]
             |range, t_max, free| {
-                hit = self.instances[range].iter().any(|inst| {
-                    inst.mask & mask != 0
+                // A loop, not `Iterator::any`: a closure handed to a library function may
+                // stay out of line, and then it is not compiled for the kernel's
+                // instruction set (see `crate::kernel`).
+                for inst in &self.instances[range] {
+                    if inst.mask & mask != 0
                         && self.blases[inst.mesh as usize].occluded(
                             k,
                             &object_ray(inst, &world_ray),
                             *t_max,
                             free,
                         )
-                });
-                hit
+                    {
+                        hit = true;
+                        return true;
+                    }
+                }
+                false
             },
         );
         hit

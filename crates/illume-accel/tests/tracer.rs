@@ -3,7 +3,7 @@
 //! scenes, before and after instances move; plus `validate()` and "update never rebuilds
 //! a mesh BVH". Every query check runs in every traversal kernel this CPU has (the
 //! portable one and, where present, AVX2), and one test asserts that all kernels give
-//! bit-identical hits.
+//! bit-identical hits on random rays.
 
 use illume_accel::brute_force::BruteForce;
 use illume_accel::{Hit, Tracer, TraversalKernel};
