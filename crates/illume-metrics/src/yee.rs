@@ -166,8 +166,10 @@ pub fn yee_diff(
                 sum_c += dc;
                 sum_weighted += dc * f_freq * f_mask;
             }
+            // Threshold elevation by frequency and masking, bounded to [1, 10] as pdiff
+            // bounds it: masking never hides a difference of more than ten thresholds.
             let elevation = if sum_c > 1e-4 {
-                sum_weighted / sum_c
+                (sum_weighted / sum_c).clamp(1.0, 10.0)
             } else {
                 1.0
             };
@@ -373,6 +375,34 @@ mod tests {
         assert!(strong.visible);
         let faint = yee_diff(64, 64, &base, &with_square(121), &s).unwrap();
         assert_eq!(faint.failed_pixels, 0);
+    }
+
+    /// A black image against a bright, finely textured one: every pixel differs by far
+    /// more than any masking can hide (the threshold elevation is bounded).
+    #[test]
+    fn black_against_a_bright_texture_is_visible() {
+        let (w, h) = (96, 72);
+        let texture: Vec<u8> = (0..w * h)
+            .flat_map(|p| {
+                let v = if (p % w + p / w) % 2 == 0 { 255 } else { 140 };
+                [v, v, v]
+            })
+            .collect();
+        let black = grey(w, h, 0);
+        let r = yee_diff(
+            w as u32,
+            h as u32,
+            &black,
+            &texture,
+            &YeeSettings::default(),
+        )
+        .unwrap();
+        assert!(
+            r.failed_pixels * 10 >= w * h * 9,
+            "{} of {}",
+            r.failed_pixels,
+            w * h
+        );
     }
 
     #[test]
