@@ -40,6 +40,9 @@ impl illume_core::Progress for Count {
 }
 
 fn main() {
+    if let Ok(file) = std::env::var("DAY_FILE") {
+        return file_runtime(&file);
+    }
     let (w, h, spp) = (env("DAY_W", 160), env("DAY_H", 120), env("DAY_SPP", 32));
     let size = (w, h);
     let world = World::new(illume_scene::builtin::load("sun-room").unwrap());
@@ -369,56 +372,117 @@ fn runtime(world: &World, sun: &illume_scene::sun::SunSettings, dir: &std::path:
             data: path.display().to_string(),
             ..s
         };
-        let cameras: &[bool] = if domain == Domain::Atlas {
+        let turning: &[bool] = if domain == Domain::Atlas {
             &[false, true]
         } else {
             &[false]
         };
-        for &turning in cameras {
-            let mut engine = Engine::new(world.scene.clone(), &config).unwrap();
-            let _ = engine.step(sun.scene_time(10.0)).unwrap();
-            let camera = world.scene.camera.world_from_camera;
-            let frames = 15;
-            let mut t: [Vec<f64>; 5] = Default::default();
-            for f in 0..frames {
-                if turning {
-                    let turn =
-                        illume_core::Affine3A::from_rotation_y((f as f32 * 2.0).to_radians());
-                    engine
-                        .apply_edit(&illume_scene::Edit::SetCameraTransform {
-                            world_from_camera: camera * turn,
-                        })
-                        .unwrap();
-                }
-                let start = Instant::now();
-                let out = engine.step(sun.scene_time(10.0 + f as f64 * 0.05)).unwrap();
-                let ft = out.frame.timings;
-                if f == 0 {
-                    println!(
-                        "  shadows: {} light(s) with maps, {} with rays",
-                        out.frame.shadows.lights_with_maps, out.frame.shadows.lights_with_rays
-                    );
-                }
-                t[0].push(start.elapsed().as_secs_f64() * 1e3);
-                t[1].push(ft.gbuffer_ms);
-                t[2].push(ft.shadow_maps_ms);
-                t[3].push(ft.direct_ms);
-                t[4].push(ft.indirect_ms);
-            }
-            let med = |v: &mut Vec<f64>| {
-                v.sort_by(f64::total_cmp);
-                v[v.len() / 2]
-            };
-            let [a, b, c, d, e] = &mut t;
-            let (frame, g, sm, direct, indirect) = (med(a), med(b), med(c), med(d), med(e));
-            println!(
-                "  800×600 frames, camera {}: {frame:.1} ms ({:.1} fps): G-buffer {g:.1}, direct {direct:.1} (shadow maps {sm:.1}), indirect {indirect:.1} ms ({:.0} % of the frame)",
-                if turning { "turning" } else { "still" },
-                1e3 / frame,
-                100.0 * indirect / frame
-            );
-        }
+        frames(&world.scene, &config, sun, turning);
     }
+}
+
+/// Engine frames at 800×600 (`config`), the sun moving from 10:00, the camera still or
+/// turning 2° a frame: median frame time and the renderer's breakdown.
+fn frames(
+    scene: &illume_scene::Scene,
+    config: &Config,
+    sun: &illume_scene::sun::SunSettings,
+    cameras: &[bool],
+) {
+    for &turning in cameras {
+        let mut engine = Engine::new(scene.clone(), config).unwrap();
+        let _ = engine.step(sun.scene_time(10.0)).unwrap();
+        let camera = scene.camera.world_from_camera;
+        let frames = 15;
+        let mut t: [Vec<f64>; 5] = Default::default();
+        for f in 0..frames {
+            if turning {
+                let turn = illume_core::Affine3A::from_rotation_y((f as f32 * 2.0).to_radians());
+                engine
+                    .apply_edit(&illume_scene::Edit::SetCameraTransform {
+                        world_from_camera: camera * turn,
+                    })
+                    .unwrap();
+            }
+            let start = Instant::now();
+            let out = engine.step(sun.scene_time(10.0 + f as f64 * 0.05)).unwrap();
+            let ft = out.frame.timings;
+            if f == 0 {
+                println!(
+                    "  shadows: {} light(s) with maps, {} with rays",
+                    out.frame.shadows.lights_with_maps, out.frame.shadows.lights_with_rays
+                );
+            }
+            t[0].push(start.elapsed().as_secs_f64() * 1e3);
+            t[1].push(ft.gbuffer_ms);
+            t[2].push(ft.shadow_maps_ms);
+            t[3].push(ft.direct_ms);
+            t[4].push(ft.indirect_ms);
+        }
+        let med = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let [a, b, c, d, e] = &mut t;
+        let (frame, g, sm, direct, indirect) = (med(a), med(b), med(c), med(d), med(e));
+        println!(
+            "  800×600 frames, camera {}: {frame:.1} ms ({:.1} fps): G-buffer {g:.1}, direct {direct:.1} (shadow maps {sm:.1}), indirect {indirect:.1} ms ({:.0} % of the frame)",
+            if turning { "turning" } else { "still" },
+            1e3 / frame,
+            100.0 * indirect / frame
+        );
+    }
+}
+
+/// A file made by `illume precompute` on a scene file, at 800×600: `DAY_FILE` (the
+/// file), `DAY_SCENE` (the scene it was made for), `DAY_SKY=R,G,B` (the `--sky` it was
+/// made with), `DAY_LOOK=EX,EY,EZ,TX,TY,TZ` (a camera; atlas files take any).
+fn file_runtime(file: &str) {
+    let scene_path = std::env::var("DAY_SCENE").expect("DAY_SCENE: the scene of DAY_FILE");
+    let numbers = |name: &str| -> Option<Vec<f32>> {
+        std::env::var(name).ok().map(|v| {
+            v.split(',')
+                .map(|x| x.trim().parse().expect(name))
+                .collect()
+        })
+    };
+    let mut scene = illume_scene::load_scene(std::path::Path::new(&scene_path)).unwrap();
+    if let Some(l) = numbers("DAY_LOOK") {
+        illume_scene::builtin::look_from(
+            &mut scene,
+            illume_core::Vec3::new(l[0], l[1], l[2]),
+            illume_core::Vec3::new(l[3], l[4], l[5]),
+        )
+        .unwrap();
+    }
+    if let Some(c) = numbers("DAY_SKY") {
+        scene.sky = Some(illume_scene::Sky::Uniform {
+            radiance: illume_core::Rgb::new(c[0], c[1], c[2]),
+        });
+    }
+    let header = PcFile::read_header(std::path::Path::new(file)).unwrap();
+    let sun: illume_scene::sun::SunSettings = header.sun.clone().try_into().unwrap();
+    println!(
+        "# precomputed: {file} ({} domain, {}×{} key image, {} keys) on {scene_path}",
+        header.domain,
+        header.width,
+        header.height,
+        header.keys.len()
+    );
+    let mut config = Config {
+        technique: TechniqueKind::Precomputed,
+        ..Default::default()
+    };
+    config.render.width = 800;
+    config.render.height = 600;
+    config.precomputed.data = file.to_owned();
+    let start = Instant::now();
+    drop(Engine::new(scene.clone(), &config).unwrap());
+    println!(
+        "  engine with the file loaded in {:.2} s",
+        start.elapsed().as_secs_f64()
+    );
+    frames(&scene, &config, &sun, &[false, true]);
 }
 
 /// A second world on the same meshes (the bench's helpers take `&World`).
