@@ -250,6 +250,16 @@ pub struct PcFile {
     pub sections: Vec<Section>,
 }
 
+/// The error of `bytes` (read from `path`) ending before `needed` bytes, in `what`.
+fn truncated(path: &Path, bytes: &[u8], what: &str, needed: u64) -> FileError {
+    FileError::Truncated {
+        path: path.to_path_buf(),
+        what: what.to_string(),
+        needed,
+        got: bytes.len() as u64,
+    }
+}
+
 /// FNV-1a 64 (as `illume-bench`'s cache keys).
 pub fn fnv1a64(bytes: &[u8]) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -395,13 +405,7 @@ impl PcFile {
     /// the header and the offset of the first section. `path` is only named in errors.
     fn parse_header(path: &Path, bytes: &[u8]) -> Result<(Header, usize), FileError> {
         let p = || path.to_path_buf();
-        let got = bytes.len() as u64;
-        let truncated = |what: &str, needed: u64| FileError::Truncated {
-            path: p(),
-            what: what.to_string(),
-            needed,
-            got,
-        };
+        let truncated = |what: &str, needed: u64| truncated(path, bytes, what, needed);
         if bytes.len() < 8 {
             // Too short even for the magic: call it what it starts like.
             if MAGIC.starts_with(bytes) && !bytes.is_empty() {
@@ -457,12 +461,7 @@ impl PcFile {
     pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, FileError> {
         let p = || path.to_path_buf();
         let got = bytes.len() as u64;
-        let truncated = |what: &str, needed: u64| FileError::Truncated {
-            path: p(),
-            what: what.to_string(),
-            needed,
-            got,
-        };
+        let truncated = |what: &str, needed: u64| truncated(path, bytes, what, needed);
         let (header, header_end) = Self::parse_header(path, bytes)?;
         let header_end = header_end - 8;
         let mut offset = header_end as u64 + 8;
