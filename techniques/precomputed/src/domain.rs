@@ -277,6 +277,7 @@ fn render_atlas(world: &World, atlas: &Atlas, spp: u32, seed: u64, indirect: boo
     let template = (0..texels)
         .find_map(|i| atlas.point(i))
         .map(|p| texel_hit(world, &p));
+    let flags = probe_flags(world, atlas);
     let probe_values: Vec<Rgb> = (0..6 * atlas.probes.count())
         .into_par_iter()
         .with_min_len(6)
@@ -286,7 +287,7 @@ fn render_atlas(world: &World, atlas: &Atlas, spp: u32, seed: u64, indirect: boo
             };
             let (probe, axis) = (j / 6, j % 6);
             let position = atlas.probes.position(probe);
-            if probe_buried(world, atlas, probe) {
+            if flags[probe] < 0.5 {
                 return Rgb::ZERO;
             }
             let n = PROBE_AXES[axis];

@@ -391,6 +391,28 @@ impl Precomputed {
             .collect()
     }
 
+    /// Channel `c` of texels `first..first + out.len()` before the clamp: the blended
+    /// mean, then one multiply-add pass per component (vectorised for per-channel
+    /// groups).
+    fn accumulate(&self, c: usize, blended: &(f32, Vec<f32>), first: usize, out: &mut [f32]) {
+        let group = &self.groups[if self.joint { 0 } else { c }];
+        let (mean, coefficients) = blended;
+        out.fill(*mean);
+        for (i, coefficient) in coefficients.iter().enumerate() {
+            let image = &group.images[i * group.rows..(i + 1) * group.rows];
+            if self.joint {
+                for (j, o) in out.iter_mut().enumerate() {
+                    *o += image[3 * (first + j) + c] * coefficient;
+                }
+            } else {
+                let src = &image[first..first + out.len()];
+                for (o, x) in out.iter_mut().zip(src) {
+                    *o += x * coefficient;
+                }
+            }
+        }
+    }
+
     /// [`Precomputed::reconstruct`] of the runs of [`RUN`] texels marked in `needed`,
     /// written into `out` (other texels left as they are).
     fn reconstruct_runs(&self, hours: f64, sky_scale: f32, needed: &[bool], out: &mut [Rgb]) {
@@ -404,23 +426,7 @@ impl Precomputed {
                 let mut planes = [[0f32; RUN]; 3];
                 for (c, plane) in planes.iter_mut().enumerate() {
                     let g = if self.joint { 0 } else { c };
-                    let group = &self.groups[g];
-                    let (mean, coefficients) = &blended[g];
-                    let plane = &mut plane[..out.len()];
-                    plane.fill(*mean);
-                    for (i, coefficient) in coefficients.iter().enumerate() {
-                        let image = &group.images[i * group.rows..(i + 1) * group.rows];
-                        if self.joint {
-                            for (j, o) in plane.iter_mut().enumerate() {
-                                *o += image[3 * (first + j) + c] * coefficient;
-                            }
-                        } else {
-                            let src = &image[first..first + plane.len()];
-                            for (o, x) in plane.iter_mut().zip(src) {
-                                *o += x * coefficient;
-                            }
-                        }
-                    }
+                    self.accumulate(c, &blended[g], first, &mut plane[..out.len()]);
                 }
                 for (j, o) in out.iter_mut().enumerate() {
                     *o = Rgb::new(
@@ -444,28 +450,10 @@ impl Precomputed {
         let mut planes = vec![vec![0f32; pixels]; 3];
         for (c, plane) in planes.iter_mut().enumerate() {
             let g = if self.joint { 0 } else { c };
-            let group = &self.groups[g];
-            let (mean, coefficients) = &per_group[g];
             plane
                 .par_chunks_mut(CHUNK)
                 .enumerate()
-                .for_each(|(chunk, out)| {
-                    let first = chunk * CHUNK;
-                    out.fill(*mean);
-                    for (i, coefficient) in coefficients.iter().enumerate() {
-                        let image = &group.images[i * group.rows..(i + 1) * group.rows];
-                        if self.joint {
-                            for (j, o) in out.iter_mut().enumerate() {
-                                *o += image[3 * (first + j) + c] * coefficient;
-                            }
-                        } else {
-                            let src = &image[first..first + out.len()];
-                            for (o, x) in out.iter_mut().zip(src) {
-                                *o += x * coefficient;
-                            }
-                        }
-                    }
-                });
+                .for_each(|(chunk, out)| self.accumulate(c, &per_group[g], chunk * CHUNK, out));
         }
         (0..pixels)
             .into_par_iter()
