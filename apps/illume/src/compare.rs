@@ -56,9 +56,10 @@ pub fn run(a: CompareArgs) -> Result<()> {
             for (m, v) in compare_files(&a.reference, &a.test, &metrics, &settings)? {
                 println!("{:<9} {}", m.name(), fmt_value(m, v));
             }
+            let r = RgbImage::read(&a.reference)?;
+            let t = RgbImage::read(&a.test)?;
+            print!("{}", channel_means(&r, &t));
             if let Some(path) = &a.error_map {
-                let r = RgbImage::read(&a.reference)?;
-                let t = RgbImage::read(&a.test)?;
                 let is_hdr = a
                     .reference
                     .extension()
@@ -75,6 +76,31 @@ pub fn run(a: CompareArgs) -> Result<()> {
         _ => bail!("compare two images or two folders, not one of each"),
     }
     Ok(())
+}
+
+/// Per-channel means of both images and the test's relative difference: a bias in
+/// energy or colour that per-pixel metrics do not name.
+fn channel_means(reference: &RgbImage, test: &RgbImage) -> String {
+    let (mr, mt) = (reference.mean(), test.mean());
+    let rel = |t: f32, r: f32| {
+        if r > 0.0 {
+            format!("{:+.2} %", 100.0 * (t as f64 / r as f64 - 1.0))
+        } else {
+            "-".to_string()
+        }
+    };
+    format!(
+        "mean ref  {:.6} {:.6} {:.6}\nmean test {:.6} {:.6} {:.6}\nmean diff {} {} {}\n",
+        mr.x,
+        mr.y,
+        mr.z,
+        mt.x,
+        mt.y,
+        mt.z,
+        rel(mt.x, mr.x),
+        rel(mt.y, mr.y),
+        rel(mt.z, mr.z)
+    )
 }
 
 fn fmt_value(m: Metric, v: f64) -> String {

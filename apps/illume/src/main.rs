@@ -64,7 +64,8 @@ enum Command {
     /// The main demo: photon streaming on builtin:cornell-spot with the sphere and the
     /// spot light moving, in real time; writes out/demo/ and prints frames per second.
     Demo(animate::DemoArgs),
-    /// Compare two images (EXR/PNG) or two folders of frames with image metrics.
+    /// Compare two images (EXR/PNG) or two folders of frames with image metrics (and, for
+    /// two images, their per-channel means).
     Compare(compare::CompareArgs),
     /// Run a benchmark scenario: techniques vs the converged reference, report and plots.
     Bench(bench::BenchArgs),

@@ -98,9 +98,15 @@ fn on_cornell_spot() -> impl Iterator<Item = TechniqueKind> {
 }
 
 fn config(kind: TechniqueKind, sets: &[&str]) -> Config {
+    config_preset(kind, None, sets)
+}
+
+/// [`config`] on top of the named preset.
+fn config_preset(kind: TechniqueKind, preset: Option<&str>, sets: &[&str]) -> Config {
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
     let mut c = Config::layered(&ConfigLayers {
         technique: Some(kind),
+        preset,
         sets: &sets,
         ..Default::default()
     })
@@ -135,8 +141,13 @@ fn indirect(kind: TechniqueKind, sets: &[&str], frames: u32) -> RgbImage {
 
 /// [`indirect`] under `lighting`.
 fn indirect_in(lighting: Lighting, kind: TechniqueKind, sets: &[&str], frames: u32) -> RgbImage {
+    indirect_with(lighting, &config(kind, sets), frames)
+}
+
+/// The indirect image of `config` under `lighting` after `frames` frames at t = 0.
+fn indirect_with(lighting: Lighting, config: &Config, frames: u32) -> RgbImage {
     let scene = scene(lighting);
-    let mut engine = Engine::new(scene, &config(kind, sets)).unwrap_or_else(|e| panic!("{e}"));
+    let mut engine = Engine::new(scene, config).unwrap_or_else(|e| panic!("{e}"));
     engine
         .precompute(&mut Silent)
         .unwrap_or_else(|e| panic!("{e}"));
@@ -269,6 +280,40 @@ fn every_technique_agrees_with_the_reference_under_a_sky() {
         let img = indirect_in(Lighting::SpotAndSky, kind, a.sets, a.frames);
         let name = format!("{}_sky", kind.name());
         match check(&name, &img, reference, &a, &output_dir()) {
+            Ok(summary) => eprintln!("{summary}"),
+            Err(failure) => failures.push(failure),
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// photon_stream's `still` preset (`illume render`'s default: the whole indirect light
+/// gathered over 3200 VSL cells, issue 15) under the tightened tolerance, with and
+/// without the sky. What is left is the cells' averaging (each gather hit reads its
+/// cell's mean exitance), the gather noise of 576 rays per shaded pixel spread by
+/// stride-3 interpolation, and the reference's own noise (block ≈ 0.02). Bounds:
+/// energy ±3 % (the issue's target for stills), block L1 < 0.06 (measured +1.3 % and
+/// 0.035, sky 0.026).
+#[test]
+fn photon_stream_still_preset_agrees_within_the_tightened_tolerance() {
+    let a = Agreement {
+        sets: &[],
+        frames: 1,
+        max_energy_error: 0.03,
+        max_block_error: 0.06,
+    };
+    let config = config_preset(TechniqueKind::PhotonStream, Some("still"), a.sets);
+    let mut failures = Vec::new();
+    for (lighting, reference, name) in [
+        (Lighting::Spot, reference(), "photon_stream_still"),
+        (
+            Lighting::SpotAndSky,
+            sky_reference(),
+            "photon_stream_still_sky",
+        ),
+    ] {
+        let img = indirect_with(lighting, &config, a.frames);
+        match check(name, &img, reference, &a, &output_dir()) {
             Ok(summary) => eprintln!("{summary}"),
             Err(failure) => failures.push(failure),
         }

@@ -205,6 +205,28 @@ impl World {
         ))
     }
 
+    /// The first surface `ray` meets (instances visible to `mask`) as cheaply as a hit can
+    /// be recorded: the tracer's hit (distance, instance, triangle), the object-space
+    /// point, and whether the ray arrived on the front face — the same side
+    /// [`PhotonHit::front_face`] gives, so lookups keyed like photon deposits (surface
+    /// point and side) agree with them. No material, normal or texture is read.
+    #[inline]
+    pub fn trace_side(
+        &self,
+        tracer: &mut ScopedTracer<'_>,
+        ray: &Ray,
+        mask: u32,
+    ) -> Option<(Hit, illume_core::Vec3, bool)> {
+        let (hit, geometry) = tracer.intersect_geometry(ray, mask)?;
+        let inst = &self.scene.instances[hit.instance.index()];
+        let frame = self.hit_tables.frame(hit.instance, &inst.world_from_object);
+        let front_face = ray
+            .dir
+            .dot(frame.normal(geometry.normal_object) * frame.det_sign)
+            < 0.0;
+        Some((hit, geometry.position_object, front_face))
+    }
+
     /// True when nothing visible to the default mask lies between `hit` and the light
     /// point of `sample` (the shadow ray leaves from just off the surface and stops just
     /// short of the light; directional samples reach to infinity).

@@ -125,6 +125,28 @@ pub struct PhotonStreamSettings {
     /// Shadow rays per pixel in [`VisibilityMode::Stochastic`]. Higher: less noise, at a
     /// cost linear in the count. Default 8.
     pub visibility_rays: u32,
+    /// Gather rays per shaded pixel for the near field (beyond the paper; 0 = off, the
+    /// paper's estimator). A VSL stands for its whole Voronoi cell at one point, which is
+    /// wrong close to the cell: a wall point next to the floor sees the floor's cells at
+    /// grazing angles and receives almost nothing from their centres, so every edge and
+    /// corner of a room comes out dark (the Cornell box's indirect mean −12…−16 %,
+    /// `BENCHMARKS.md`). With rays > 0, a VSL at distance r lights a point with weight
+    /// w(r) (0 inside `near_field_scale`/2 cell sizes, 1 beyond `near_field_scale`,
+    /// smooth between) and the rest, 1 − w, is gathered: cosine-distributed rays (a
+    /// rank-1 lattice, shifted per pixel) find the surfaces around the point and read
+    /// their exitance Φ_s/A_s from the hit's nearest VSL on the side facing the point.
+    /// Higher: less gather noise, at one closest-hit ray each per shaded pixel (pixels
+    /// between shaded ones are interpolated, `shading_stride`, so 576 rays at stride 3
+    /// cost 64 a pixel). Default 0; the `quality` and `still` presets use 576.
+    pub near_field_rays: u32,
+    /// Radius of the near field in cell sizes √A_s of the VSL involved (the VSL whose
+    /// weight is taken, or the gather hit's nearest VSL), at least 0.5. Larger: the
+    /// gathered share grows (less VSL discretisation error, no shadow rays for the VSLs
+    /// inside it, more gather noise). `inf`: everything is gathered — a final gather
+    /// over the VSL cells' exitance, in which the VSLs light nothing directly, need no
+    /// visibility, and their count only sets the cells' size (the `quality` and `still`
+    /// presets: 3200 cells). Default 3.
+    pub near_field_scale: f32,
     /// Longest photon path in bounces, a safety net behind Russian roulette (§0.7.1).
     /// Default 32.
     pub max_bounces: u32,
@@ -165,6 +187,8 @@ impl Default for PhotonStreamSettings {
             shading_stride: 2,
             visibility: VisibilityMode::Off,
             visibility_rays: 8,
+            near_field_rays: 0,
+            near_field_scale: 3.0,
             max_bounces: 32,
             filtered_textures: true,
             warm_up: true,
@@ -200,25 +224,27 @@ impl PhotonStreamSettings {
         }
     }
 
-    /// Preset for stills: 200 VSLs, a large pool, stochastic VSL visibility, every
-    /// pixel shaded.
+    /// Preset for stills and slow previews (streaming): the whole indirect light
+    /// gathered over 3200 VSL cells fed by a 10⁶-impact pool
+    /// ([`near_field_scale`](PhotonStreamSettings::near_field_scale) = ∞), 576 rays
+    /// per shaded pixel one pixel in nine (stride 3). No visibility noise, no dark
+    /// edges; about a second per 320×240 frame on 2 cores (`BENCHMARKS.md`).
     pub fn quality() -> Self {
         Self {
-            vsl_count: 200,
+            vsl_count: 3200,
             pool_size: 1_000_000,
-            visibility: VisibilityMode::Stochastic,
-            shading_stride: 1,
+            near_field_rays: 576,
+            near_field_scale: f32::INFINITY,
+            shading_stride: 3,
             ..Self::default()
         }
     }
 
     /// Preset for stills (`illume render`'s default for this technique): the quality
-    /// preset, shot deterministically, with a shadow ray to every VSL — no visibility
-    /// noise, the same image on every run.
+    /// preset shot deterministically — the same image on every run.
     pub fn still() -> Self {
         Self {
             mode: StreamMode::Deterministic,
-            visibility: VisibilityMode::All,
             ..Self::quality()
         }
     }
@@ -288,6 +314,21 @@ impl PhotonStreamSettings {
                 format!("{} is not in 1..=8", self.shading_stride),
             );
         }
+        if self.near_field_rays > 4096 {
+            return bad(
+                "near_field_rays",
+                format!("{} is more than 4096", self.near_field_rays),
+            );
+        }
+        if self.near_field_scale.is_nan() || self.near_field_scale < 0.5 {
+            return bad(
+                "near_field_scale",
+                format!(
+                    "{} is not a number of cell sizes ≥ 0.5 (or inf)",
+                    self.near_field_scale
+                ),
+            );
+        }
         if self.visibility == VisibilityMode::Stochastic && self.visibility_rays == 0 {
             return bad(
                 "visibility_rays",
@@ -318,12 +359,9 @@ impl TechniqueSettings for PhotonStreamSettings {
             ),
             (
                 "quality",
-                "200 VSLs, a 10⁶-impact pool, stochastic VSL shadows, every pixel shaded",
+                "all indirect light gathered over 3200 VSL cells (10⁶-impact pool), streaming",
             ),
-            (
-                "still",
-                "quality, deterministic, a shadow ray to every VSL: `render`'s default",
-            ),
+            ("still", "quality, deterministic: `render`'s default"),
         ]
     }
 

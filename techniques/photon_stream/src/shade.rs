@@ -22,11 +22,39 @@
 //!
 //! **Visibility (beyond the paper).** Optionally a shadow ray tests each VSL (or a
 //! subset chosen ∝ contribution) from each pixel, removing Figure 7's over-illumination.
+//!
+//! **Near field (beyond the paper,
+//! [`near_field_rays`](PhotonStreamSettings::near_field_rays) > 0).** A VSL stands for
+//! its Voronoi cell at one point and one normal. Far away that is a good approximation;
+//! close to the cell it is not: a point on a wall a few centimetres above the floor sees
+//! the floor at grazing angles, its nearest floor VSLs lie tens of centimetres away, and
+//! their cosθ' ≈ h/r is near zero — while the true floor, a uniformly bright half-plane,
+//! would give it half of the floor's exitance whatever h. Every edge and corner comes
+//! out dark. The estimator therefore splits the integral over the surfaces around x by
+//! distance with a window w(r) = smoothstep over r² from (s·ℓ/2)² to (s·ℓ)², ℓ = √A of
+//! the VSL involved, s = `near_field_scale`:
+//!
+//! ```text
+//! L(x) = ρ(x)/π · [ Σ_s w(r_s) Φ_s V_s cosθ_i cosθ'/(π r_s² + A_s)
+//!                 + (π/N) Σ_k (1 − w(r_k)) Φ_{s(y_k)} / (π A_{s(y_k)}) ]
+//! ```
+//!
+//! with N cosine-distributed rays from x hitting y_k at distance r_k, s(y_k) the VSL the
+//! photons landing at y_k are assigned to, on the side facing x (its cell's mean
+//! exitance). The gathered part needs no visibility test (the rays find the first
+//! surface) and has no singularity (a ray's weight is bounded). **Remaining bias:** the
+//! gathered exitance is the cell's mean, not its value at y (light gradients inside a
+//! cell near x are averaged); w is evaluated at the VSL's centre on one side and at the
+//! hit on the other, so the two parts overlap or leave a gap of order ℓ in the window's
+//! transition band; far VSLs keep one normal and one point per cell. Noise: the rays of
+//! a pixel follow a rank-1 lattice shifted per pixel and frame, so the near field has
+//! some per-pixel noise, small where the surroundings' exitance is smooth.
 
+use crate::placement::VslSet;
 use crate::settings::{PhotonStreamSettings, VisibilityMode};
 use illume_core::image::RgbImage;
-use illume_core::sampling::{Pcg32, SampleStream, mix64};
-use illume_core::{Aabb, INV_PI, PI, Ray, Rgb, Vec3, channel_mean};
+use illume_core::sampling::{Pcg32, SampleStream, cosine_hemisphere, mix64};
+use illume_core::{Aabb, Frame, INV_PI, PI, Ray, Rgb, Vec2, Vec3, channel_mean};
 use illume_transport::{GBuffer, World};
 use rayon::prelude::*;
 
@@ -68,6 +96,25 @@ impl VslField {
     }
 }
 
+/// The far-field weight w of the near-field split (module doc): 0 for squared distances
+/// up to `scale2`·A/4, 1 from `scale2`·A on, a smoothstep in r² between; 0 everywhere
+/// for an infinite scale (everything gathered).
+#[inline(always)]
+pub fn far_weight(d2: f32, area_m2: f32, scale2: f32) -> f32 {
+    let hi = (scale2 * area_m2).max(1e-30);
+    let t = ((d2 / hi - 0.25) * (4.0 / 3.0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// What the near-field gather reads besides the field: the VSLs (to find a hit's cell),
+/// the rays per pixel and the window's squared scale.
+#[derive(Clone, Copy)]
+struct NearField<'a> {
+    vsls: &'a VslSet,
+    rays: u32,
+    scale2: f32,
+}
+
 /// Counters of one shading pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ShadeStats {
@@ -79,6 +126,8 @@ pub struct ShadeStats {
     pub evaluations: u64,
     /// Shadow rays traced (visibility mode).
     pub shadow_rays: u64,
+    /// Near-field gather rays traced.
+    pub near_rays: u64,
     /// Pixels whose value was interpolated from shaded neighbours
     /// ([`PhotonStreamSettings::shading_stride`] > 1).
     pub interpolated: u64,
@@ -103,6 +152,7 @@ impl ShadeStats {
             vsls_kept: self.vsls_kept + o.vsls_kept,
             evaluations: self.evaluations + o.evaluations,
             shadow_rays: self.shadow_rays + o.shadow_rays,
+            near_rays: self.near_rays + o.near_rays,
             interpolated: self.interpolated + o.interpolated,
             fallbacks: self.fallbacks + o.fallbacks,
         }
@@ -131,6 +181,8 @@ struct VslTerm {
     front: Rgb,
     back: Rgb,
     area: f32,
+    /// The near-field window's squared scale; 0 when there is no near field (w = 1).
+    scale2: f32,
 }
 
 /// A tile's pixel positions and normals, structure of arrays (equal lengths).
@@ -175,9 +227,25 @@ fn accumulate_avx2(v: &VslTerm, t: &TileSoa, r: &mut [f32], g: &mut [f32], b: &m
 }
 
 /// Branch-free over the tile's pixels (vectorised by the compiler); one-sided VSLs
-/// (no back-side power, the common case) skip the side selection.
+/// (no back-side power, the common case) skip the side selection, and without a near
+/// field the window is left out.
 #[inline(always)]
 fn accumulate_portable(v: &VslTerm, t: &TileSoa, r: &mut [f32], g: &mut [f32], b: &mut [f32]) {
+    if v.scale2 > 0.0 {
+        accumulate_loop::<true>(v, t, r, g, b);
+    } else {
+        accumulate_loop::<false>(v, t, r, g, b);
+    }
+}
+
+#[inline(always)]
+fn accumulate_loop<const WINDOW: bool>(
+    v: &VslTerm,
+    t: &TileSoa,
+    r: &mut [f32],
+    g: &mut [f32],
+    b: &mut [f32],
+) {
     let m = r.len();
     let (px, py, pz, nx, ny, nz) = (
         &t.px[..m],
@@ -188,7 +256,14 @@ fn accumulate_portable(v: &VslTerm, t: &TileSoa, r: &mut [f32], g: &mut [f32], b
         &t.nz[..m],
     );
     let (g, b) = (&mut g[..m], &mut b[..m]);
-    let (p, n, f, bk, area) = (v.p, v.n, v.front, v.back, v.area);
+    let (p, n, f, bk, area, scale2) = (v.p, v.n, v.front, v.back, v.area, v.scale2);
+    let window = |dd: f32| {
+        if WINDOW {
+            far_weight(dd, area, scale2)
+        } else {
+            1.0
+        }
+    };
     if bk == Rgb::ZERO {
         for i in 0..m {
             let dx = p.x - px[i];
@@ -197,7 +272,7 @@ fn accumulate_portable(v: &VslTerm, t: &TileSoa, r: &mut [f32], g: &mut [f32], b
             let dd = (dx * dx + dy * dy + dz * dz).max(1e-20);
             let ci = (nx[i] * dx + ny[i] * dy + nz[i] * dz).max(0.0);
             let cs = (-(n.x * dx + n.y * dy + n.z * dz)).max(0.0);
-            let wgt = ci * cs / (dd * (PI * dd + area));
+            let wgt = ci * cs / (dd * (PI * dd + area)) * window(dd);
             r[i] += wgt * f.x;
             g[i] += wgt * f.y;
             b[i] += wgt * f.z;
@@ -210,7 +285,7 @@ fn accumulate_portable(v: &VslTerm, t: &TileSoa, r: &mut [f32], g: &mut [f32], b
             let dd = (dx * dx + dy * dy + dz * dz).max(1e-20);
             let ci = (nx[i] * dx + ny[i] * dy + nz[i] * dz).max(0.0);
             let cs = -(n.x * dx + n.y * dy + n.z * dz);
-            let wgt = ci * cs.abs() / (dd * (PI * dd + area));
+            let wgt = ci * cs.abs() / (dd * (PI * dd + area)) * window(dd);
             let front = cs > 0.0;
             r[i] += wgt * if front { f.x } else { bk.x };
             g[i] += wgt * if front { f.y } else { bk.y };
@@ -219,12 +294,16 @@ fn accumulate_portable(v: &VslTerm, t: &TileSoa, r: &mut [f32], g: &mut [f32], b
     }
 }
 
-/// VSLs of `field` that may light any point of `bounds` (see the module doc).
+/// VSLs of `field` that may light any point of `bounds` (see the module doc). With a
+/// near field (`near_scale2` > 0, the window's squared scale) a VSL whose far-field
+/// weight is 0 over the whole box (every corner inside its inner radius) is left out
+/// too: its light there is all gathered.
 pub fn cull(
     field: &VslField,
     bounds: &Aabb,
     max_reflectance: f32,
     epsilon: f32,
+    near_scale2: f32,
     out: &mut Vec<u32>,
 ) {
     out.clear();
@@ -245,6 +324,15 @@ pub fn cull(
                 continue;
             }
         }
+        if near_scale2 > 0.0 {
+            let farthest = corners
+                .iter()
+                .map(|c| c.distance_squared(p))
+                .fold(0.0f32, f32::max);
+            if far_weight(farthest, field.area_m2[s], near_scale2) <= 0.0 {
+                continue;
+            }
+        }
         let n = field.normals[s];
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
         for c in &corners {
@@ -262,13 +350,21 @@ pub fn cull(
 
 /// Indirect radiance of every G-buffer pixel from `field` (see the module doc).
 /// `frame_seed` decorrelates stochastic visibility between frames.
+/// `vsls` are the VSLs `field` was made from (the near-field gather finds a hit's cell
+/// with them).
 pub fn shade(
     world: &World,
     gbuffer: &GBuffer,
     field: &VslField,
+    vsls: &VslSet,
     settings: &PhotonStreamSettings,
     frame_seed: u64,
 ) -> (RgbImage, ShadeStats) {
+    let near = (settings.near_field_rays > 0).then_some(NearField {
+        vsls,
+        rays: settings.near_field_rays,
+        scale2: settings.near_field_scale * settings.near_field_scale,
+    });
     let (w, h) = (gbuffer.width, gbuffer.height);
     let n = (w * h) as usize;
     let stride = settings.shading_stride.max(1);
@@ -280,6 +376,7 @@ pub fn shade(
         world,
         gbuffer,
         field,
+        near,
         settings,
         frame_seed,
         &grid,
@@ -301,6 +398,7 @@ pub fn shade(
             world,
             gbuffer,
             field,
+            near,
             settings,
             frame_seed,
             &Include::Mask(&mask),
@@ -356,10 +454,15 @@ impl Include<'_> {
 }
 
 /// Shades the pixels `include` selects, tile by tile, into `gathered` (Σ Φ·G).
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the pass's inputs, passed through to every tile"
+)]
 fn gather(
     world: &World,
     gbuffer: &GBuffer,
     field: &VslField,
+    near: Option<NearField>,
     settings: &PhotonStreamSettings,
     frame_seed: u64,
     include: &Include,
@@ -378,6 +481,7 @@ fn gather(
                     world,
                     gbuffer,
                     field,
+                    near,
                     settings,
                     frame_seed,
                     (x0, y0, (x0 + t).min(w), (y0 + t).min(h)),
@@ -513,6 +617,7 @@ fn shade_tile(
     world: &World,
     gbuffer: &GBuffer,
     field: &VslField,
+    near: Option<NearField>,
     settings: &PhotonStreamSettings,
     frame_seed: u64,
     (x0, y0, x1, y1): (u32, u32, u32, u32),
@@ -566,11 +671,18 @@ fn shade_tile(
     if m == 0 {
         return (Vec::new(), stats);
     }
-    cull(field, &bounds, max_albedo * INV_PI, settings.epsilon, kept);
+    cull(
+        field,
+        &bounds,
+        max_albedo * INV_PI,
+        settings.epsilon,
+        near.map_or(0.0, |nf| nf.scale2),
+        kept,
+    );
     stats.tiles = 1;
     stats.vsls_kept = kept.len() as u64;
     stats.evaluations = (kept.len() * m) as u64;
-    let out: Vec<(u32, Rgb)> = match settings.visibility {
+    let mut out: Vec<(u32, Rgb)> = match settings.visibility {
         VisibilityMode::Off => {
             for v in [&mut tp.r, &mut tp.g, &mut tp.b] {
                 v.clear();
@@ -595,6 +707,7 @@ fn shade_tile(
                     front: field.front_w[s],
                     back: field.back_w[s],
                     area: field.area_m2[s],
+                    scale2: near.map_or(0.0, |nf| nf.scale2),
                 };
                 accumulate(&vsl, &pixels, r, g, b);
             }
@@ -615,7 +728,11 @@ fn shade_tile(
                     let n = px.hit.facing_normal();
                     contrib.clear();
                     for &s in kept.iter() {
-                        let (wgt, front) = field.geometry(s as usize, x, n);
+                        let (mut wgt, front) = field.geometry(s as usize, x, n);
+                        if let Some(nf) = near {
+                            let d2 = field.positions[s as usize].distance_squared(x);
+                            wgt *= far_weight(d2, field.area_m2[s as usize], nf.scale2);
+                        }
                         let phi = if front {
                             field.front_w[s as usize]
                         } else {
@@ -674,5 +791,75 @@ fn shade_tile(
                 .collect()
         }
     };
+    if let Some(nf) = near {
+        let seed = mix64(frame_seed ^ settings.seed ^ 0x6e65_6172);
+        world.tracer.scoped(|tracer| {
+            for (idx, sum) in out.iter_mut() {
+                let px = gbuffer.pixels[*idx as usize]
+                    .as_ref()
+                    .expect("gathered pixels exist");
+                *sum += near_gather(world, tracer, field, nf, &px.hit, seed, *idx);
+            }
+        });
+        stats.near_rays = (out.len() as u64) * nf.rays as u64;
+    }
     (out, stats)
+}
+
+/// The near-field share at `hit` (module doc), in the units of the VSL sum (Σ Φ·G,
+/// before ρ/π): (π/N) Σ_k (1 − w(r_k)) Φ_k/(π A_k) over N cosine-distributed rays.
+fn near_gather(
+    world: &World,
+    tracer: &mut illume_accel::ScopedTracer<'_>,
+    field: &VslField,
+    nf: NearField,
+    hit: &illume_transport::SurfaceHit,
+    seed: u64,
+    pixel: u32,
+) -> Rgb {
+    /// The rank-1 lattice's generator: the golden ratio's fractional part (a Fibonacci
+    /// lattice, the best-spread rank-1 set in 2D for any N).
+    const ALPHA: f32 = 0.618_034;
+    let n = hit.facing_normal();
+    let ng = hit.facing_geometric_normal();
+    let frame = Frame::from_normal(n);
+    let mut rng = Pcg32::new(seed, pixel as u64);
+    let shift = rng.next_2d();
+    let inv_n = 1.0 / nf.rays as f32;
+    let mut sum = Rgb::ZERO;
+    for k in 0..nf.rays {
+        let u = Vec2::new(
+            ((k as f32 + 0.5) * inv_n + shift.x).fract(),
+            (k as f32 * ALPHA + shift.y).fract(),
+        );
+        let dir = frame.to_world(cosine_hemisphere(u));
+        if dir.dot(ng) <= 0.0 {
+            continue; // below the geometric surface: no light from there
+        }
+        let ray = Ray::new(hit.spawn_origin(dir), dir);
+        // A side that does not reflect (the back of a one-sided surface) or a black one
+        // received no photon: its VSL side has no power, nothing to test here.
+        let Some((y, position_object, front_face)) =
+            world.trace_side(tracer, &ray, illume_scene::MASK_DEFAULT)
+        else {
+            continue;
+        };
+        let Some(s) = nf.vsls.nearest_on(y.instance, y.triangle, position_object) else {
+            continue;
+        };
+        let s = s as usize;
+        let area = field.area_m2[s];
+        // The ray is unit, so the hit is y.t from the (offset) origin.
+        let w = far_weight(y.t * y.t, area, nf.scale2);
+        if w >= 1.0 {
+            continue;
+        }
+        let phi = if front_face {
+            field.front_w[s]
+        } else {
+            field.back_w[s]
+        };
+        sum += phi * ((1.0 - w) / area.max(1e-12));
+    }
+    sum * inv_n
 }

@@ -252,7 +252,14 @@ impl Technique for PhotonStream {
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
         let t0 = Instant::now();
         let field = self.field(world);
-        let (img, stats) = shade(world, gbuffer, &field, &self.settings, self.frames);
+        let (img, stats) = shade(
+            world,
+            gbuffer,
+            &field,
+            &self.vsls,
+            &self.settings,
+            self.frames,
+        );
         self.frames += 1;
         self.last_shade = stats;
         self.shading_ms = t0.elapsed().as_secs_f64() * 1e3;

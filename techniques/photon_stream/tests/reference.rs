@@ -183,4 +183,35 @@ fn in_the_empty_box_vsl_shading_converges_to_the_reference_as_the_vsl_count_grow
         "400 VSLs: energy ratio {} not within ±6 %",
         ratios[2]
     );
+
+    // The near field (issue 15) gathers what the VSL centres cannot give close to their
+    // cells. Measured: 100 VSLs split at 3 cell sizes 1.042 (against 0.841 without),
+    // 3200 cells all gathered (the `quality`/`still` estimator) 1.019. What remains is
+    // positive and shrinks with the cell size: the box's walls are one object, so cells
+    // at its edges straddle two faces and a gather hit reads their mixed mean exitance.
+    for (n, scale, bound) in [(100u32, 3.0f32, 0.06), (3200, f32::INFINITY, 0.03)] {
+        let settings = PhotonStreamSettings {
+            vsl_count: n,
+            pool_size: 1_000_000,
+            warm_up: false,
+            near_field_rays: 64,
+            near_field_scale: scale,
+            shading_stride: 1,
+            ..PhotonStreamSettings::deterministic()
+        };
+        let mut ps = PhotonStream::new(&world, settings).unwrap();
+        ps.advance(
+            &w,
+            &Budget {
+                work: Some(400_000),
+                ..Default::default()
+            },
+        );
+        let ratio = mean_ratio(&ps.indirect(&w, &g), &ref_img);
+        eprintln!("{n} VSLs, near field at {scale} cell sizes: energy ratio {ratio:.3}");
+        assert!(
+            (ratio - 1.0).abs() < bound,
+            "{n} VSLs, near field at {scale}: energy ratio {ratio} not within ±{bound}"
+        );
+    }
 }

@@ -29,8 +29,8 @@ fn stride_two_matches_every_pixel_shading() {
         shading_stride: 2,
         ..full.clone()
     };
-    let (a, sa) = shade(&w, &g, &field, &full, 0);
-    let (b, sb) = shade(&w, &g, &field, &half, 0);
+    let (a, sa) = shade(&w, &g, &field, ps.vsls(), &full, 0);
+    let (b, sb) = shade(&w, &g, &field, ps.vsls(), &half, 0);
     assert_eq!(sa.interpolated, 0);
     let lit = g.pixels.iter().flatten().filter(|p| p.hit.reflects).count() as u64;
     assert!(
