@@ -203,6 +203,44 @@ impl KdTree {
         Some((self.ids[best.0], best.1))
     }
 
+    /// The id of the point nearest to `q` (of equally near points, the lowest id), its
+    /// squared distance, and the squared distance of the second nearest (∞ when there
+    /// is one point).
+    pub fn two_nearest(&self, q: Vec3) -> Option<(u32, f32, f32)> {
+        if self.points.is_empty() {
+            return None;
+        }
+        let mut best = [(0usize, f32::INFINITY), (0usize, f32::INFINITY)];
+        self.search_two(0, self.points.len(), q, &mut best);
+        Some((self.ids[best[0].0], best[0].1, best[1].1))
+    }
+
+    fn search_two(&self, lo: usize, hi: usize, q: Vec3, best: &mut [(usize, f32); 2]) {
+        if lo >= hi {
+            return;
+        }
+        let mid = lo + (hi - lo) / 2;
+        let p = self.points[mid];
+        let d = p.distance_squared(q);
+        if d < best[0].1 || (d == best[0].1 && self.ids[mid] < self.ids[best[0].0]) {
+            best[1] = best[0];
+            best[0] = (mid, d);
+        } else if d < best[1].1 {
+            best[1] = (mid, d);
+        }
+        let axis = self.axes[mid] as usize;
+        let diff = q[axis] - p[axis];
+        let (near, far) = if diff < 0.0 {
+            ((lo, mid), (mid + 1, hi))
+        } else {
+            ((mid + 1, hi), (lo, mid))
+        };
+        self.search_two(near.0, near.1, q, best);
+        if diff * diff <= best[1].1 {
+            self.search_two(far.0, far.1, q, best);
+        }
+    }
+
     fn search(&self, lo: usize, hi: usize, q: Vec3, best: &mut (usize, f32)) {
         if lo >= hi {
             return;
@@ -253,6 +291,29 @@ fn build(items: &mut [(Vec3, u32)], axes: &mut [u8]) {
 mod tests {
     use super::*;
     use illume_core::sampling::{Pcg32, SampleStream};
+
+    #[test]
+    fn two_nearest_matches_linear_scan() {
+        let mut rng = Pcg32::new(5, 6);
+        let pts: Vec<(Vec3, u32)> = (0..200)
+            .map(|i| (Vec3::new(rng.next_1d(), rng.next_1d(), rng.next_1d()), i))
+            .collect();
+        let tree = KdTree::new(pts.clone());
+        for _ in 0..500 {
+            let q = Vec3::new(rng.next_1d(), rng.next_1d(), rng.next_1d()) * 1.4 - 0.2;
+            let mut d: Vec<(f32, u32)> = pts
+                .iter()
+                .map(|(p, i)| (p.distance_squared(q), *i))
+                .collect();
+            d.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            assert_eq!(tree.two_nearest(q), Some((d[0].1, d[0].0, d[1].0)));
+        }
+        assert_eq!(
+            KdTree::new(vec![(Vec3::ONE, 7)]).two_nearest(Vec3::ZERO),
+            Some((7, 3.0, f32::INFINITY))
+        );
+        assert_eq!(KdTree::new(Vec::new()).two_nearest(Vec3::ZERO), None);
+    }
 
     #[test]
     fn kd_tree_matches_linear_scan() {

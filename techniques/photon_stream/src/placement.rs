@@ -11,9 +11,18 @@
 //!    removal only rescans the VSLs that had the removed one as a neighbour: O(n) per
 //!    removal instead of O(n²). The last VSL of an object is never removed.
 //! 4. Each VSL's represented area A_s is its share of its object's area: the object's
-//!    surface is sampled uniformly and every sample is assigned to its nearest VSL (the
-//!    same rule that assigns photons), so A_s is the area of its Voronoi cell on the
-//!    surface.
+//!    surface is sampled uniformly and every sample is assigned to its VSL by the same
+//!    rule that assigns photons (below), so A_s is the area of its cell.
+//!
+//! **Cells follow orientation (beyond the paper).** A point of the surface belongs to the
+//! nearest VSL of its object *in its orientation class*: the dominant axis and sign of
+//! the object-space geometric normal (±X, ±Y, ±Z), the VSL's class being its triangle's;
+//! only when the object has no VSL of that class does the nearest VSL of any class take
+//! it. The paper's rule (nearest VSL of the object) makes cells of a one-mesh building
+//! straddle floor, walls, column bases and arch undersides: flux landing on the lit
+//! floor then leaves from a VSL with a wall's normal, and a cell's mean exitance mixes
+//! bright and dark, hidden and exposed surface (a final gather over such cells read
+//! Sponza's indirect light 22 % too dark with 3200 cells; `BENCHMARKS.md`).
 //!
 //! VSLs live in object space (they move with their object); distances in Algorithm 1
 //! are measured in world space at construction time.
@@ -21,7 +30,7 @@
 use illume_core::sampling::{AliasTable, Pcg32, SampleStream, uniform_triangle};
 use illume_core::{Aabb, Vec3, transform_normal};
 use illume_scene::{InstanceId, Scene};
-use illume_transport::nearest::NearestIndex;
+use illume_transport::nearest::{KdTree, NearestIndex};
 
 /// One virtual surface light (§0.4.1): a surface element attached to an object.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,58 +45,88 @@ pub struct Vsl {
     pub area_m2: f32,
 }
 
-/// All VSLs of a scene, grouped by instance, with one nearest-neighbour index per
+/// All VSLs of a scene, grouped by instance, with nearest-neighbour indices per
 /// instance in object space (built once: VSLs never move relative to their object).
 #[derive(Clone, Debug)]
 pub struct VslSet {
     vsls: Vec<Vsl>,
     /// `first[i]..first[i + 1]` are the VSLs of instance `i`.
     first: Vec<u32>,
+    /// Orientation class of each VSL (its triangle's; from its normal for sets built
+    /// without a scene).
+    classes: Vec<u8>,
+    /// Per instance, all its VSLs.
     trees: Vec<NearestIndex>,
-    /// Per instance, per triangle of its mesh: the VSL nearest to every point of the
-    /// triangle, or [`NO_OWNER`] when the triangle straddles a Voronoi boundary (empty
-    /// for sets built without a scene).
+    /// Per instance, its VSLs of each orientation class.
+    class_trees: Vec<[NearestIndex; CLASSES]>,
+    /// Per instance, per triangle of its mesh: the triangle's orientation class (empty
+    /// for sets built without a scene: cells are then the paper's).
+    triangle_class: Vec<Vec<u8>>,
+    /// Per instance, per triangle of its mesh: the VSL whose cell holds the whole
+    /// triangle, or [`NO_OWNER`] when the triangle straddles a cell boundary (empty for
+    /// sets built without a scene).
     triangle_owner: Vec<Vec<u32>>,
 }
 
 /// No single VSL is nearest to the whole triangle.
 const NO_OWNER: u32 = u32::MAX;
 
-/// For each triangle of `mesh`, the id among `points` nearest to all of its points, if
-/// one is. Whether point o or v is nearer to x is the sign of an affine function of x,
-/// `|x − o|² − |x − v|²`, so over a triangle it is smallest at a corner: a triangle
-/// whose three corners have the same nearest point v, each with a margin over its
-/// second nearest, lies inside v's Voronoi cell. The margin (relative to the mesh's
-/// coordinate magnitude) keeps rounding in the per-impact distances from ever choosing
-/// another point inside such a triangle, so the answer equals [`NearestIndex::nearest`].
-fn triangle_owners(mesh: &illume_scene::Mesh, points: &[(Vec3, u32)]) -> Vec<u32> {
-    if points.is_empty() {
-        return Vec::new();
-    }
+/// Orientation classes: ±X, ±Y, ±Z.
+const CLASSES: usize = 6;
+
+/// The orientation class of a (geometric, object-space) normal: its dominant axis and
+/// that axis's sign, +X, −X, +Y, −Y, +Z, −Z → 0…5.
+pub fn orientation_class(n: Vec3) -> u8 {
+    let a = n.abs();
+    let axis = if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    };
+    (2 * axis + usize::from(n[axis] < 0.0)) as u8
+}
+
+/// The orientation class of triangle `t` of `mesh` (its geometric normal's).
+fn triangle_class(mesh: &illume_scene::Mesh, t: usize) -> u8 {
+    let [a, b, c] = mesh.triangle(t);
+    orientation_class((b - a).cross(c - a))
+}
+
+/// For each triangle of `mesh` (of orientation class `classes[t]`), the VSL whose cell
+/// holds all of its points, if one does. Whether point o or v is nearer to x is the sign
+/// of an affine function of x, `|x − o|² − |x − v|²`, so over a triangle it is smallest
+/// at a corner: a triangle whose three corners have the same nearest VSL v of its class,
+/// each with a margin over its second nearest, lies inside v's cell. The margin
+/// (relative to the mesh's coordinate magnitude) keeps rounding in the per-impact
+/// distances from ever choosing another VSL inside such a triangle, so the answer equals
+/// the search's. A triangle whose class has no VSL gets none (the search falls back).
+fn triangle_owners(
+    mesh: &illume_scene::Mesh,
+    classes: &[u8],
+    class_points: &[Vec<(Vec3, u32)>; CLASSES],
+) -> Vec<u32> {
     let b = mesh.bounds();
     let magnitude = b.min.abs().max(b.max.abs()).max_element();
     let margin = 1e-4 * magnitude * magnitude;
-    let owner_of_vertex: Vec<u32> = mesh
-        .positions
-        .iter()
-        .map(|&x| {
-            let (mut d1, mut n1, mut d2) = (f32::INFINITY, NO_OWNER, f32::INFINITY);
-            for &(p, id) in points {
-                let d = p.distance_squared(x);
-                if d < d1 {
-                    (d2, d1, n1) = (d1, d, id);
-                } else if d < d2 {
-                    d2 = d;
-                }
-            }
-            if d2 - d1 > margin { n1 } else { NO_OWNER }
-        })
-        .collect();
+    let trees: [KdTree; CLASSES] = std::array::from_fn(|c| KdTree::new(class_points[c].clone()));
     mesh.indices
         .iter()
-        .map(|tri| {
-            let [a, b, c] = tri.map(|i| owner_of_vertex[i as usize]);
-            if a == b && b == c { a } else { NO_OWNER }
+        .zip(classes)
+        .map(|(tri, &c)| {
+            let tree = &trees[c as usize];
+            let mut owner = NO_OWNER;
+            for (k, &v) in tri.iter().enumerate() {
+                let Some((id, d1, d2)) = tree.two_nearest(mesh.positions[v as usize]) else {
+                    return NO_OWNER;
+                };
+                if d2 - d1 <= margin || (k > 0 && id != owner) {
+                    return NO_OWNER;
+                }
+                owner = id;
+            }
+            owner
         })
         .collect()
 }
@@ -107,6 +146,7 @@ pub struct PlacementSettings {
 
 struct Candidate {
     instance: u32,
+    class: u8,
     position_object: Vec3,
     normal_object: Vec3,
     position_world: Vec3,
@@ -179,6 +219,25 @@ fn object_indices(
         .collect()
 }
 
+/// [`object_indices`] split by orientation class (`classes[g]` of VSL `g`).
+fn class_indices(
+    vsls: &[Vsl],
+    classes: &[u8],
+    first: &[u32],
+    bounds_of: impl Fn(usize) -> Aabb,
+) -> Vec<[NearestIndex; CLASSES]> {
+    (0..first.len() - 1)
+        .map(|i| {
+            let mut items: [Vec<(Vec3, u32)>; CLASSES] = Default::default();
+            for g in first[i] as usize..first[i + 1] as usize {
+                items[classes[g] as usize].push((vsls[g].position_object, g as u32));
+            }
+            let bounds = bounds_of(i);
+            items.map(|it| NearestIndex::new(it, bounds))
+        })
+        .collect()
+}
+
 impl VslSet {
     /// Places VSLs on every instance of `scene` at its current time (§0.4.2). Instances
     /// without area get none; every other instance gets at least one.
@@ -208,6 +267,7 @@ impl VslSet {
                 let (p, n) = point_on_triangle(mesh, t, settings.triangle_scale, rng.next_2d());
                 candidates.push(Candidate {
                     instance: i as u32,
+                    class: triangle_class(mesh, t),
                     position_object: p,
                     normal_object: n,
                     position_world: inst.world_from_object.transform_point3(p),
@@ -231,7 +291,7 @@ impl VslSet {
         for i in 0..scene.instances.len() {
             first[i + 1] += first[i];
         }
-        let mut vsls: Vec<Vsl> = kept
+        let vsls: Vec<Vsl> = kept
             .iter()
             .map(|c| Vsl {
                 instance: InstanceId(c.instance),
@@ -240,23 +300,40 @@ impl VslSet {
                 area_m2: 0.0,
             })
             .collect();
-        let trees = object_indices(&vsls, &first, |i| {
-            scene.meshes[scene.instances[i].mesh.index()].bounds()
-        });
-        let triangle_owner: Vec<Vec<u32>> = (0..scene.instances.len())
+        let mesh_of = |i: usize| &scene.meshes[scene.instances[i].mesh.index()];
+        let trees = object_indices(&vsls, &first, |i| mesh_of(i).bounds());
+        let classes: Vec<u8> = kept.iter().map(|c| c.class).collect();
+        let class_trees = class_indices(&vsls, &classes, &first, |i| mesh_of(i).bounds());
+        let triangle_class: Vec<Vec<u8>> = (0..scene.instances.len())
             .map(|i| {
-                let r = first[i] as usize..first[i + 1] as usize;
-                let points: Vec<(Vec3, u32)> = vsls[r.clone()]
-                    .iter()
-                    .zip(r)
-                    .map(|(v, g)| (v.position_object, g as u32))
-                    .collect();
-                triangle_owners(&scene.meshes[scene.instances[i].mesh.index()], &points)
+                let mesh = mesh_of(i);
+                (0..mesh.triangle_count())
+                    .map(|t| triangle_class(mesh, t))
+                    .collect()
             })
             .collect();
-        // A_s: the object's area split by nearest-VSL assignment of uniform samples.
+        let triangle_owner: Vec<Vec<u32>> = (0..scene.instances.len())
+            .map(|i| {
+                let mut points: [Vec<(Vec3, u32)>; CLASSES] = Default::default();
+                for g in first[i] as usize..first[i + 1] as usize {
+                    points[classes[g] as usize].push((vsls[g].position_object, g as u32));
+                }
+                triangle_owners(mesh_of(i), &triangle_class[i], &points)
+            })
+            .collect();
+        let mut set = Self {
+            vsls,
+            first,
+            classes,
+            trees,
+            class_trees,
+            triangle_class,
+            triangle_owner,
+        };
+        // A_s: the object's area split among its cells by assigning uniform samples with
+        // the photons' rule.
         for (i, inst) in scene.instances.iter().enumerate() {
-            let (lo, hi) = (first[i] as usize, first[i + 1] as usize);
+            let (lo, hi) = (set.first[i] as usize, set.first[i + 1] as usize);
             let Some(table) = AliasTable::new(&areas[i]) else {
                 continue;
             };
@@ -266,22 +343,17 @@ impl VslSet {
             for _ in 0..samples {
                 let (t, _) = table.sample(rng.next_1d());
                 let (p, _) = point_on_triangle(mesh, t, 1.0, rng.next_2d());
-                if let Some((g, _)) = trees[i].nearest(p) {
+                if let Some(g) = set.nearest_on(InstanceId(i as u32), t as u32, p) {
                     counts[g as usize - lo] += 1;
                 }
             }
             for (k, c) in counts.iter().enumerate() {
                 // At least one sample's worth, so no VSL claims zero area.
-                vsls[lo + k].area_m2 =
+                set.vsls[lo + k].area_m2 =
                     (object_area[i] * (*c).max(1) as f64 / samples as f64) as f32;
             }
         }
-        Self {
-            vsls,
-            first,
-            trees,
-            triangle_owner,
-        }
+        set
     }
 
     /// A set from explicit VSLs (tests, tools); `instance_count` instances.
@@ -296,10 +368,18 @@ impl VslSet {
             first[i + 1] += first[i];
         }
         let trees = object_indices(&vsls, &first, |_| bounds);
+        let classes: Vec<u8> = vsls
+            .iter()
+            .map(|v| orientation_class(v.normal_object))
+            .collect();
+        let class_trees = class_indices(&vsls, &classes, &first, |_| bounds);
         Self {
             vsls,
             first,
+            classes,
             trees,
+            class_trees,
+            triangle_class: Vec::new(),
             triangle_owner: Vec::new(),
         }
     }
@@ -307,6 +387,11 @@ impl VslSet {
     /// The VSLs, grouped by instance.
     pub fn vsls(&self) -> &[Vsl] {
         &self.vsls
+    }
+
+    /// The orientation class of VSL `g` (module doc).
+    pub fn class_of(&self, g: usize) -> u8 {
+        self.classes[g]
     }
 
     /// Number of VSLs.
@@ -325,8 +410,9 @@ impl VslSet {
         (self.first[i + 1] - self.first[i]) as usize
     }
 
-    /// The VSL of `instance` nearest to `position_object` (object space), by the
-    /// per-object index; `None` if the instance has no VSL.
+    /// The VSL of `instance` nearest to `position_object` (object space) whatever its
+    /// orientation class, by the per-object index; `None` if the instance has no VSL.
+    /// Photons and gather hits use [`VslSet::nearest_on`].
     #[inline]
     pub fn nearest(&self, instance: InstanceId, position_object: Vec3) -> Option<u32> {
         self.trees
@@ -335,9 +421,12 @@ impl VslSet {
             .map(|(g, _)| g)
     }
 
-    /// [`VslSet::nearest`] for a point of triangle `triangle` of `instance`'s mesh: the
-    /// same answer, found without a search when one VSL is nearest to the whole
-    /// triangle (most triangles of finely tessellated objects; this runs per impact).
+    /// The VSL whose cell holds `position_object`, a point of triangle `triangle` of
+    /// `instance`'s mesh (module doc: the nearest VSL of the triangle's orientation
+    /// class, else the nearest of any class). Found without a search when one cell
+    /// holds the whole triangle (most triangles of finely tessellated objects; this
+    /// runs per photon impact). For a set built without a scene it is
+    /// [`VslSet::nearest`].
     #[inline]
     pub fn nearest_on(
         &self,
@@ -345,13 +434,22 @@ impl VslSet {
         triangle: u32,
         position_object: Vec3,
     ) -> Option<u32> {
+        let i = instance.index();
         if let Some(&owner) = self
             .triangle_owner
-            .get(instance.index())
+            .get(i)
             .and_then(|t| t.get(triangle as usize))
             && owner != NO_OWNER
         {
             return Some(owner);
+        }
+        if let Some(&class) = self
+            .triangle_class
+            .get(i)
+            .and_then(|t| t.get(triangle as usize))
+            && let Some((g, _)) = self.class_trees[i][class as usize].nearest(position_object)
+        {
+            return Some(g);
         }
         self.nearest(instance, position_object)
     }
@@ -468,14 +566,39 @@ mod tests {
                 for _ in 0..200 {
                     let u = uniform_triangle(rng.next_2d());
                     let p = a * (1.0 - u.x - u.y) + b * u.x + c * u.y;
+                    // The rule by brute force: nearest of the triangle's class, else of
+                    // any class; ties to the lowest id.
+                    let class = triangle_class(mesh, t);
+                    let on = |want: Option<u8>| {
+                        set.vsls()
+                            .iter()
+                            .enumerate()
+                            .filter(|(g, v)| {
+                                v.instance == id && want.is_none_or(|c| set.classes[*g] == c)
+                            })
+                            .map(|(g, v)| (v.position_object.distance_squared(p), g as u32))
+                            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
+                            .map(|(_, g)| g)
+                    };
+                    let expected = on(Some(class)).or_else(|| on(None));
                     assert_eq!(
                         set.nearest_on(id, t as u32, p),
-                        set.nearest(id, p),
+                        expected,
                         "instance {i} triangle {t}"
                     );
                 }
             }
         }
         assert!(owned > 0, "some triangle lies inside one VSL's cell");
+    }
+
+    #[test]
+    fn orientation_classes_are_dominant_axis_and_sign() {
+        assert_eq!(orientation_class(Vec3::new(0.9, 0.1, -0.3)), 0);
+        assert_eq!(orientation_class(Vec3::new(-0.9, 0.1, -0.3)), 1);
+        assert_eq!(orientation_class(Vec3::Y), 2);
+        assert_eq!(orientation_class(Vec3::new(0.1, -2.0, 0.0)), 3);
+        assert_eq!(orientation_class(Vec3::new(0.0, 0.5, 0.7)), 4);
+        assert_eq!(orientation_class(Vec3::NEG_Z), 5);
     }
 }
