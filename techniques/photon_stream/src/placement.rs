@@ -27,10 +27,11 @@
 //! VSLs live in object space (they move with their object); distances in Algorithm 1
 //! are measured in world space at construction time.
 
-use illume_core::sampling::{AliasTable, Pcg32, SampleStream, uniform_triangle};
+use illume_core::sampling::{AliasTable, Pcg32, SampleStream, mix64, uniform_triangle};
 use illume_core::{Aabb, Vec3, transform_normal};
 use illume_scene::{InstanceId, Scene};
 use illume_transport::nearest::{KdTree, NearestIndex};
+use rayon::prelude::*;
 
 /// One virtual surface light (§0.4.1): a surface element attached to an object.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -219,12 +220,13 @@ fn object_indices(
         .collect()
 }
 
-/// [`object_indices`] split by orientation class (`classes[g]` of VSL `g`).
+/// [`object_indices`] split by orientation class (`classes[g]` of VSL `g`), class `c`
+/// of object `i` over the box `bounds_of(i, c)`.
 fn class_indices(
     vsls: &[Vsl],
     classes: &[u8],
     first: &[u32],
-    bounds_of: impl Fn(usize) -> Aabb,
+    bounds_of: impl Fn(usize, usize) -> Aabb,
 ) -> Vec<[NearestIndex; CLASSES]> {
     (0..first.len() - 1)
         .map(|i| {
@@ -232,8 +234,12 @@ fn class_indices(
             for g in first[i] as usize..first[i + 1] as usize {
                 items[classes[g] as usize].push((vsls[g].position_object, g as u32));
             }
-            let bounds = bounds_of(i);
-            items.map(|it| NearestIndex::new(it, bounds))
+            let mut c = 0;
+            items.map(|it| {
+                let index = NearestIndex::new(it, bounds_of(i, c));
+                c += 1;
+                index
+            })
         })
         .collect()
 }
@@ -301,9 +307,10 @@ impl VslSet {
             })
             .collect();
         let mesh_of = |i: usize| &scene.meshes[scene.instances[i].mesh.index()];
-        let trees = object_indices(&vsls, &first, |i| mesh_of(i).bounds());
+        // Any-class indices answer only the rare point whose class has no VSL on its
+        // object (and `nearest`): a k-d tree alone (an empty box builds no grid).
+        let trees = object_indices(&vsls, &first, |_| Aabb::EMPTY);
         let classes: Vec<u8> = kept.iter().map(|c| c.class).collect();
-        let class_trees = class_indices(&vsls, &classes, &first, |i| mesh_of(i).bounds());
         let triangle_class: Vec<Vec<u8>> = (0..scene.instances.len())
             .map(|i| {
                 let mesh = mesh_of(i);
@@ -312,6 +319,22 @@ impl VslSet {
                     .collect()
             })
             .collect();
+        // A class's grid spans the triangles of that class only: its queries come from
+        // them, and a box around the whole object would list far more candidates per
+        // cell (a wall's VSLs seen from across the room).
+        let class_bounds: Vec<[Aabb; CLASSES]> = (0..scene.instances.len())
+            .map(|i| {
+                let mesh = mesh_of(i);
+                let mut b = [Aabb::EMPTY; CLASSES];
+                for (t, &c) in triangle_class[i].iter().enumerate() {
+                    for p in mesh.triangle(t) {
+                        b[c as usize] = b[c as usize].grow(p);
+                    }
+                }
+                b
+            })
+            .collect();
+        let class_trees = class_indices(&vsls, &classes, &first, |i, c| class_bounds[i][c]);
         let triangle_owner: Vec<Vec<u32>> = (0..scene.instances.len())
             .map(|i| {
                 let mut points: [Vec<(Vec3, u32)>; CLASSES] = Default::default();
@@ -339,14 +362,33 @@ impl VslSet {
             };
             let mesh = &scene.meshes[inst.mesh.index()];
             let samples = 256 * (hi - lo);
-            let mut counts = vec![0u32; hi - lo];
-            for _ in 0..samples {
-                let (t, _) = table.sample(rng.next_1d());
-                let (p, _) = point_on_triangle(mesh, t, 1.0, rng.next_2d());
-                if let Some(g) = set.nearest_on(InstanceId(i as u32), t as u32, p) {
-                    counts[g as usize - lo] += 1;
-                }
-            }
+            // In chunks with their own PCG streams: the same counts whatever the threads.
+            const CHUNK: usize = 4096;
+            let set_ref = &set;
+            let counts = (0..samples.div_ceil(CHUNK))
+                .into_par_iter()
+                .map(|k| {
+                    let mut rng = Pcg32::new(
+                        mix64(settings.seed ^ 0xa_5a4e),
+                        ((i as u64) << 32) | k as u64,
+                    );
+                    let mut counts = vec![0u32; hi - lo];
+                    for _ in 0..CHUNK.min(samples - k * CHUNK) {
+                        let (t, _) = table.sample(rng.next_1d());
+                        let (p, _) = point_on_triangle(mesh, t, 1.0, rng.next_2d());
+                        if let Some(g) = set_ref.nearest_on(InstanceId(i as u32), t as u32, p) {
+                            counts[g as usize - lo] += 1;
+                        }
+                    }
+                    counts
+                })
+                .reduce(
+                    || vec![0u32; hi - lo],
+                    |mut a, b| {
+                        a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                        a
+                    },
+                );
             for (k, c) in counts.iter().enumerate() {
                 // At least one sample's worth, so no VSL claims zero area.
                 set.vsls[lo + k].area_m2 =
@@ -372,7 +414,7 @@ impl VslSet {
             .iter()
             .map(|v| orientation_class(v.normal_object))
             .collect();
-        let class_trees = class_indices(&vsls, &classes, &first, |_| bounds);
+        let class_trees = class_indices(&vsls, &classes, &first, |_, _| bounds);
         Self {
             vsls,
             first,
