@@ -212,9 +212,12 @@ pub struct TechniqueSpec {
     /// The series name in tables, CSV and plots; must be unique in the scenario.
     /// Default: `name`.
     pub label: Option<String>,
+    /// A named preset of the technique (`illume render --help` lists them) that
+    /// `settings` then override key by key. Default: none (the technique's defaults).
+    pub preset: Option<String>,
     /// The technique's settings: the same keys as its table in a configuration file
     /// (e.g. `[technique.settings]` → the `[photon_stream]` table). Default: the
-    /// technique's defaults.
+    /// technique's defaults (or `preset`'s).
     pub settings: Option<toml::Table>,
     /// Wall-clock budget of the technique's `advance` per frame \[ms\], finite and in
     /// (0, [`MAX_BUDGET_MS`]]. Default: none (the technique's default budget).
@@ -662,8 +665,24 @@ impl Scenario {
         render.insert("width".into(), toml::Value::Integer(self.width.into()));
         render.insert("height".into(), toml::Value::Integer(self.height.into()));
         table.insert("render".into(), toml::Value::Table(render));
-        if let Some(settings) = &spec.settings {
-            table.insert(spec.name.clone(), toml::Value::Table(settings.clone()));
+        let mut settings = match &spec.preset {
+            Some(name) => Some(kind.preset_table(name).ok_or_else(|| {
+                let available: Vec<&str> = kind.presets().iter().map(|(n, _)| *n).collect();
+                error(format!(
+                    "unknown preset `{name}`; {kind}'s presets are {}",
+                    available.join(", ")
+                ))
+            })?),
+            None => None,
+        };
+        if let Some(keys) = &spec.settings {
+            let merged = settings.get_or_insert_with(toml::Table::new);
+            for (key, value) in keys {
+                merged.insert(key.clone(), value.clone());
+            }
+        }
+        if let Some(settings) = settings {
+            table.insert(spec.name.clone(), toml::Value::Table(settings));
         }
         let config: Config = toml::Value::Table(table)
             .try_into()

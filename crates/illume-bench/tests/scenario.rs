@@ -88,6 +88,36 @@ fn technique_settings_go_through_the_technique_table() {
 }
 
 #[test]
+fn a_preset_is_the_base_and_settings_override_its_keys() {
+    let text = MINIMAL.replace("name = \"reference\"", "name = \"photon_stream\"");
+    let s = parse(&format!(
+        "{text}preset = \"balanced\"\nsettings = {{ vsl_count = 7 }}\n"
+    ))
+    .unwrap();
+    let c = s.technique_config(0).unwrap();
+    let balanced = TechniqueKind::PhotonStream
+        .preset_table("balanced")
+        .unwrap();
+    let int = |key: &str| balanced[key].as_integer().unwrap();
+    assert_eq!(c.photon_stream.vsl_count, 7);
+    assert_ne!(int("vsl_count"), 7);
+    assert_eq!(
+        i64::from(c.photon_stream.near_field_rays),
+        int("near_field_rays")
+    );
+    assert_eq!(
+        i64::from(c.photon_stream.shading_stride),
+        int("shading_stride")
+    );
+    assert_eq!(c.photon_stream.near_field_scale, f32::INFINITY);
+    let e = error(&format!("{text}preset = \"fastest\"\n"));
+    assert!(
+        e.contains("technique[0]") && e.contains("fastest") && e.contains("balanced"),
+        "{e}"
+    );
+}
+
+#[test]
 fn unknown_technique_names_file_entry_and_valid_names() {
     let text = MINIMAL.replace("name = \"reference\"", "name = \"photon_streem\"");
     let e = error(&text);

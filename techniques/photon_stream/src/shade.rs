@@ -47,8 +47,9 @@
 //! cell near x are averaged); w is evaluated at the VSL's centre on one side and at the
 //! hit on the other, so the two parts overlap or leave a gap of order ℓ in the window's
 //! transition band; far VSLs keep one normal and one point per cell. Noise: the rays of
-//! a pixel follow a rank-1 lattice shifted per pixel and frame, so the near field has
-//! some per-pixel noise, small where the surroundings' exitance is smooth.
+//! a pixel follow a rank-1 lattice shifted per pixel (the same shifts every frame, so
+//! the residual noise does not shimmer), small where the surroundings' exitance is
+//! smooth.
 
 use crate::placement::VslSet;
 use crate::settings::{PhotonStreamSettings, VisibilityMode};
@@ -792,7 +793,9 @@ fn shade_tile(
         }
     };
     if let Some(nf) = near {
-        let seed = mix64(frame_seed ^ settings.seed ^ 0x6e65_6172);
+        // The same lattice shifts every frame (not `frame_seed`): what gather noise is
+        // left stays put on the screen instead of shimmering from frame to frame.
+        let seed = mix64(settings.seed ^ 0x6e65_6172);
         world.tracer.scoped(|tracer| {
             for (idx, sum) in out.iter_mut() {
                 let px = gbuffer.pixels[*idx as usize]
