@@ -79,6 +79,7 @@ enum Command {
 }
 
 fn main() {
+    default_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(a) => render::run(a),
@@ -94,6 +95,20 @@ fn main() {
     if let Err(e) = result {
         eprintln!("error: {}", error_message(&e));
         std::process::exit(1);
+    }
+}
+
+/// Output piped into a command that stops reading (`illume compare … | head -1`) ends
+/// the process quietly, as it does for other Unix tools. Rust ignores SIGPIPE by
+/// default, so a write to a closed pipe fails with EPIPE, and `println!` panics on it.
+fn default_sigpipe() {
+    #[cfg(unix)]
+    #[expect(unsafe_code, reason = "restoring the default SIGPIPE action")]
+    // SAFETY: `signal` only changes this process's disposition of SIGPIPE to the
+    // default; it runs first thing in `main`, before any thread or Rust state that a
+    // signal could interrupt, and SIG_DFL runs no handler code.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

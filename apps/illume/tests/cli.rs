@@ -984,3 +984,27 @@ fn data_flag_reads_a_precomputed_file_like_the_set_key() {
         "{err}"
     );
 }
+
+/// Output into a pipe whose reader has gone (`illume … | head -1`) ends the process
+/// quietly (SIGPIPE's default action, or exit 0 if everything fitted in the pipe before
+/// the reader left), never with a panic in `println!`.
+#[test]
+fn a_closed_pipe_ends_the_output_without_a_panic() {
+    use std::process::Stdio;
+    for _ in 0..3 {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_illume"))
+            .args(["render", "--help"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("illume starts");
+        drop(child.stdout.take()); // the reader leaves before reading anything
+        let out = child.wait_with_output().expect("illume ends");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !stderr.contains("panicked") && out.status.code() != Some(101),
+            "{:?}: {stderr}",
+            out.status
+        );
+    }
+}
