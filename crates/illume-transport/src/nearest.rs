@@ -198,9 +198,10 @@ impl KdTree {
         if self.points.is_empty() {
             return None;
         }
-        let mut best = (0usize, f32::INFINITY);
-        self.search(0, self.points.len(), q, &mut best);
-        Some((self.ids[best.0], best.1))
+        let mut best = Nearest([(0, f32::INFINITY)]);
+        self.visit(0, self.points.len(), q, &mut best);
+        let [(i, d)] = best.0;
+        Some((self.ids[i], d))
     }
 
     /// The id of the point nearest to `q` (of equally near points, the lowest id), its
@@ -210,24 +211,21 @@ impl KdTree {
         if self.points.is_empty() {
             return None;
         }
-        let mut best = [(0usize, f32::INFINITY), (0usize, f32::INFINITY)];
-        self.search_two(0, self.points.len(), q, &mut best);
-        Some((self.ids[best[0].0], best[0].1, best[1].1))
+        let mut best = Nearest([(0, f32::INFINITY); 2]);
+        self.visit(0, self.points.len(), q, &mut best);
+        let [(i, d1), (_, d2)] = best.0;
+        Some((self.ids[i], d1, d2))
     }
 
-    fn search_two(&self, lo: usize, hi: usize, q: Vec3, best: &mut [(usize, f32); 2]) {
+    /// Offers the points of `lo..hi` to `best`, near side first, skipping a far side
+    /// that lies beyond `best`'s radius.
+    fn visit<const K: usize>(&self, lo: usize, hi: usize, q: Vec3, best: &mut Nearest<K>) {
         if lo >= hi {
             return;
         }
         let mid = lo + (hi - lo) / 2;
         let p = self.points[mid];
-        let d = p.distance_squared(q);
-        if d < best[0].1 || (d == best[0].1 && self.ids[mid] < self.ids[best[0].0]) {
-            best[1] = best[0];
-            best[0] = (mid, d);
-        } else if d < best[1].1 {
-            best[1] = (mid, d);
-        }
+        best.offer(mid, p.distance_squared(q), &self.ids);
         let axis = self.axes[mid] as usize;
         let diff = q[axis] - p[axis];
         let (near, far) = if diff < 0.0 {
@@ -235,33 +233,36 @@ impl KdTree {
         } else {
             ((mid + 1, hi), (lo, mid))
         };
-        self.search_two(near.0, near.1, q, best);
-        if diff * diff <= best[1].1 {
-            self.search_two(far.0, far.1, q, best);
+        self.visit(near.0, near.1, q, best);
+        if diff * diff <= best.radius() {
+            self.visit(far.0, far.1, q, best);
         }
     }
+}
 
-    fn search(&self, lo: usize, hi: usize, q: Vec3, best: &mut (usize, f32)) {
-        if lo >= hi {
+/// The K nearest points found so far, nearest first, as (index into the tree's arrays,
+/// squared distance); of equally near points the lowest id comes first.
+struct Nearest<const K: usize>([(usize, f32); K]);
+
+impl<const K: usize> Nearest<K> {
+    #[inline]
+    fn offer(&mut self, i: usize, d: f32, ids: &[u32]) {
+        let b = &mut self.0;
+        if d > b[K - 1].1 || (d == b[K - 1].1 && ids[i] >= ids[b[K - 1].0]) {
             return;
         }
-        let mid = lo + (hi - lo) / 2;
-        let p = self.points[mid];
-        let d = p.distance_squared(q);
-        if d < best.1 || (d == best.1 && self.ids[mid] < self.ids[best.0]) {
-            *best = (mid, d);
+        let mut k = K - 1;
+        while k > 0 && (d < b[k - 1].1 || (d == b[k - 1].1 && ids[i] < ids[b[k - 1].0])) {
+            b[k] = b[k - 1];
+            k -= 1;
         }
-        let axis = self.axes[mid] as usize;
-        let diff = q[axis] - p[axis];
-        let (near, far) = if diff < 0.0 {
-            ((lo, mid), (mid + 1, hi))
-        } else {
-            ((mid + 1, hi), (lo, mid))
-        };
-        self.search(near.0, near.1, q, best);
-        if diff * diff <= best.1 {
-            self.search(far.0, far.1, q, best);
-        }
+        b[k] = (i, d);
+    }
+
+    /// The squared distance within which points can still enter.
+    #[inline]
+    fn radius(&self) -> f32 {
+        self.0[K - 1].1
     }
 }
 

@@ -5,7 +5,7 @@ use illume_core::Vec2;
 use illume_core::image::RgbImage;
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings, VisibilityMode};
 use illume_reference::{ReferenceSettings, ReferenceTechnique};
-use illume_transport::{Budget, GBuffer, Technique, World};
+use illume_transport::{Budget, GBuffer, SharedWorld, Technique, World};
 use std::time::Instant;
 
 const W: u32 = 96;
@@ -19,6 +19,21 @@ fn block_error(img: &RgbImage, reference: &RgbImage) -> f64 {
 
 fn mean_ratio(img: &RgbImage, reference: &RgbImage) -> f64 {
     img.mean().element_sum() as f64 / reference.mean().element_sum() as f64
+}
+
+/// The indirect image of `settings` after 400 000 photons (a 10⁶-impact pool holds them
+/// all), at the points of `g`.
+fn converged(world: &SharedWorld, settings: PhotonStreamSettings, g: &GBuffer) -> RgbImage {
+    let mut ps = PhotonStream::new(world, settings).unwrap();
+    let w = world.read().unwrap();
+    ps.advance(
+        &w,
+        &Budget {
+            work: Some(400_000),
+            ..Default::default()
+        },
+    );
+    ps.indirect(&w, g)
 }
 
 fn average(a: &RgbImage, b: &RgbImage) -> RgbImage {
@@ -96,15 +111,7 @@ fn converged_vsl_indirect_agrees_with_reference_indirect_and_visibility_reduces_
             warm_up: false,
             ..PhotonStreamSettings::deterministic()
         };
-        let mut ps = PhotonStream::new(&world, settings).unwrap();
-        ps.advance(
-            &w,
-            &Budget {
-                work: Some(400_000),
-                ..Default::default()
-            },
-        );
-        let img = ps.indirect(&w, &g);
+        let img = converged(&world, settings, &g);
         let (e, r) = (block_error(&img, &ref_img), mean_ratio(&img, &ref_img));
         eprintln!(
             "{vis:?}: {:.1} s, mean {:?}, block L1 {e:.3}, mean ratio {r:.3}",
@@ -162,15 +169,7 @@ fn in_the_empty_box_vsl_shading_converges_to_the_reference_as_the_vsl_count_grow
                 warm_up: false,
                 ..PhotonStreamSettings::deterministic()
             };
-            let mut ps = PhotonStream::new(&world, settings).unwrap();
-            ps.advance(
-                &w,
-                &Budget {
-                    work: Some(400_000),
-                    ..Default::default()
-                },
-            );
-            mean_ratio(&ps.indirect(&w, &g), &ref_img)
+            mean_ratio(&converged(&world, settings, &g), &ref_img)
         })
         .collect();
     eprintln!("energy ratios for 25/100/400 VSLs: {ratios:.3?}");
@@ -200,15 +199,7 @@ fn in_the_empty_box_vsl_shading_converges_to_the_reference_as_the_vsl_count_grow
             shading_stride: 1,
             ..PhotonStreamSettings::deterministic()
         };
-        let mut ps = PhotonStream::new(&world, settings).unwrap();
-        ps.advance(
-            &w,
-            &Budget {
-                work: Some(400_000),
-                ..Default::default()
-            },
-        );
-        let ratio = mean_ratio(&ps.indirect(&w, &g), &ref_img);
+        let ratio = mean_ratio(&converged(&world, settings, &g), &ref_img);
         eprintln!("{n} VSLs, near field at {scale} cell sizes: energy ratio {ratio:.3}");
         assert!(
             (ratio - 1.0).abs() < bound,
