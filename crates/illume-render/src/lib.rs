@@ -60,9 +60,9 @@ pub struct RenderSettings {
     /// How the rasterized G-buffer (`primary_visibility = "raster"`) reads base-colour
     /// textures and normal maps. `trilinear` (default): mip-mapped by each pixel's
     /// footprint — where a pixel covers many texels it sees their mean (no moiré, no
-    /// shimmering under a moving camera, and ≈ 2× cheaper G-buffers on Sponza, whose
-    /// bilinear lookups miss the cache at every pixel; `BENCHMARKS.md`), elsewhere the
-    /// bilinear lookup itself. `bilinear`: one lookup at the pixel centre's texture
+    /// shimmering under a moving camera, and a G-buffer of 0.86× the CPU time on Sponza,
+    /// whose bilinear lookups of minified textures miss the cache; `BENCHMARKS.md`),
+    /// elsewhere the bilinear lookup itself. `bilinear`: one lookup at the pixel centre's texture
     /// coordinates, the same values as `primary_visibility = "rays"` (which always reads
     /// textures this way) — pick it to compare G-buffers texel for texel. The reference
     /// technique shades from the same G-buffer, so both see the same filtered texture;
