@@ -730,6 +730,24 @@ mod tests {
     }
 
     #[test]
+    fn texture_filter_defaults_to_trilinear_and_parses_snake_case_names() {
+        assert_eq!(
+            RenderSettings::default().texture_filter,
+            TextureFilter::Trilinear
+        );
+        for (name, filter) in [
+            ("bilinear", TextureFilter::Bilinear),
+            ("trilinear", TextureFilter::Trilinear),
+        ] {
+            let value = serde::de::value::StrDeserializer::<serde::de::value::Error>::new(name);
+            assert_eq!(
+                <TextureFilter as serde::Deserialize>::deserialize(value).expect("known name"),
+                filter
+            );
+        }
+    }
+
+    #[test]
     fn primary_visibility_defaults_to_raster() {
         assert_eq!(
             RenderSettings::default().primary_visibility,
