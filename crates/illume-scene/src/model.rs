@@ -186,6 +186,24 @@ impl WrapMode {
         };
         r as usize
     }
+
+    /// `(wrap(i, n), wrap(i + 1, n))`, the two texels a bilinear lookup reads along one
+    /// axis, equal to two [`WrapMode::wrap`] calls but with one integer division at most
+    /// (none inside the row).
+    #[inline]
+    pub fn wrap_pair(self, i: i64, n: u32) -> (usize, usize) {
+        let n64 = i64::from(n);
+        if i >= 0 && i < n64 - 1 {
+            return (i as usize, i as usize + 1);
+        }
+        match self {
+            WrapMode::Repeat => {
+                let a = self.wrap(i, n);
+                (a, if a + 1 == n as usize { 0 } else { a + 1 })
+            }
+            WrapMode::Clamp | WrapMode::Mirror => (self.wrap(i, n), self.wrap(i + 1, n)),
+        }
+    }
 }
 
 /// An RGB texture, linear values (sRGB base-colour images are decoded on load).
@@ -239,14 +257,12 @@ impl Texture {
         let y = uv.y * self.height as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let t = |ix: i64, iy: i64| {
-            let cx = self.wrap_u.wrap(ix, self.width);
-            let cy = self.wrap_v.wrap(iy, self.height);
-            self.texels[cy * self.width as usize + cx]
-        };
-        let (ix, iy) = (x0 as i64, y0 as i64);
-        let top = t(ix, iy) * (1.0 - fx) + t(ix + 1, iy) * fx;
-        let bottom = t(ix, iy + 1) * (1.0 - fx) + t(ix + 1, iy + 1) * fx;
+        let (cx0, cx1) = self.wrap_u.wrap_pair(x0 as i64, self.width);
+        let (cy0, cy1) = self.wrap_v.wrap_pair(y0 as i64, self.height);
+        let w = self.width as usize;
+        let t = &self.texels;
+        let top = t[cy0 * w + cx0] * (1.0 - fx) + t[cy0 * w + cx1] * fx;
+        let bottom = t[cy1 * w + cx0] * (1.0 - fx) + t[cy1 * w + cx1] * fx;
         top * (1.0 - fy) + bottom * fy
     }
 

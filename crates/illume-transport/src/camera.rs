@@ -63,6 +63,15 @@ impl CameraRays {
         }
     }
 
+    /// The change of the unnormalised centre direction ([`RowRays::direction`]) from one
+    /// image row to the next (downwards).
+    #[inline]
+    pub fn row_step(&self) -> Vec3 {
+        let sy = -2.0 / self.height as f32 * self.tan_half_y;
+        self.world_from_camera
+            .transform_vector3(Vec3::new(0.0, sy, 0.0))
+    }
+
     /// The camera position.
     pub fn origin(&self) -> Vec3 {
         self.origin
@@ -89,6 +98,12 @@ impl RowRays {
     #[inline]
     pub fn ray(&self, x: u32) -> Ray {
         Ray::new(self.origin, self.direction(x).normalize())
+    }
+
+    /// The change of [`RowRays::direction`] from one pixel to the next (rightwards).
+    #[inline]
+    pub fn step(&self) -> Vec3 {
+        self.step
     }
 
     /// The unnormalised direction through the centre of pixel `x` of the row (its

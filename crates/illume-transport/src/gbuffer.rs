@@ -2,11 +2,30 @@
 //! technique's indirect light shade.
 
 use crate::camera::CameraRays;
+use crate::mip::UvFootprint;
 use crate::raster::VisibilityBuffer;
 use crate::surface::SurfaceHit;
 use crate::world::World;
 use illume_core::{Rgb, Vec2, Vec3};
 use rayon::prelude::*;
+
+/// How the rasterized G-buffer reads base-colour textures and normal maps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TextureFilter {
+    /// One bilinear lookup at the pixel centre's texture coordinates, as a ray through
+    /// the centre reads them ([`GBuffer::render`]): minified textures alias (moiré,
+    /// shimmering under a moving camera), and each pixel's lookup is a cache miss where
+    /// a texel is smaller than a pixel.
+    #[default]
+    Bilinear,
+    /// Trilinear mip-mapping by the pixel's footprint ([`crate::mip`]): the same lookup
+    /// as `Bilinear` where a texel covers the pixel or more; where the pixel covers more
+    /// than a texel, the texture's mean over the footprint (a blend of the two nearest
+    /// box-filtered levels) — what many jittered samples per pixel average to, without
+    /// the aliasing, at a fraction of the cost.
+    Trilinear,
+}
 
 /// What a pixel sees.
 #[derive(Clone, Copy, Debug)]
@@ -45,11 +64,12 @@ pub(crate) struct BuildState {
     size: (u32, u32),
     instances: Vec<(illume_core::Affine3A, u32)>,
     materials: Vec<illume_scene::Material>,
+    filter: TextureFilter,
 }
 
 impl BuildState {
     /// The state of `world` for a `width × height` image.
-    pub(crate) fn of(world: &World, width: u32, height: u32) -> Self {
+    pub(crate) fn of(world: &World, width: u32, height: u32, filter: TextureFilter) -> Self {
         let scene = &world.scene;
         Self {
             camera: Some(scene.camera.clone()),
@@ -60,6 +80,7 @@ impl BuildState {
                 .map(|i| (i.world_from_object, i.mask))
                 .collect(),
             materials: scene.materials.clone(),
+            filter,
         }
     }
 
@@ -71,6 +92,7 @@ impl BuildState {
             || self.camera != next.camera
             || self.size != next.size
             || self.materials != next.materials
+            || self.filter != next.filter
             || self.instances.len() != next.instances.len()
         {
             return Vec::new();
@@ -148,6 +170,10 @@ pub(crate) struct PrimarySurfaces<'a> {
     /// determinant's sign is left out: interpolated normals are flipped to the geometric
     /// normal's side anyway.
     frames: Vec<crate::hit_tables::InstanceFrame>,
+    /// How textures are read.
+    filter: TextureFilter,
+    /// The change of the unnormalised centre direction from one row to the next.
+    row_step: Vec3,
 }
 
 /// The world-space data of one triangle, shared by the pixels that see it.
@@ -203,17 +229,20 @@ impl<'a> PrimarySurfaces<'a> {
     /// would; such pixels are a few per thousand at most.
     pub(crate) const EDGE_SLACK: f32 = 0.0;
 
-    pub(crate) fn new(world: &'a World, width: u32, height: u32) -> Self {
+    pub(crate) fn new(world: &'a World, width: u32, height: u32, filter: TextureFilter) -> Self {
         let frames = world
             .scene
             .instances
             .iter()
             .map(|inst| crate::hit_tables::InstanceFrame::new(&inst.world_from_object))
             .collect();
+        let camera = CameraRays::new(&world.scene.camera, width, height);
         Self {
             world,
-            camera: CameraRays::new(&world.scene.camera, width, height),
+            camera,
             frames,
+            filter,
+            row_step: camera.row_step(),
         }
     }
 
@@ -294,11 +323,11 @@ impl<'a> PrimarySurfaces<'a> {
     }
 
     /// The G-buffer entry of a pixel whose centre ray (unnormalised direction `d` from
-    /// the camera) sees `tri` per the rasterizer, or a BVH ray's answer when the ray does
-    /// not actually hit it.
+    /// the camera, `step_x` its change to the next pixel of the row) sees `tri` per the
+    /// rasterizer, or a BVH ray's answer when the ray does not actually hit it.
     #[inline]
-    pub(crate) fn pixel(&self, d: Vec3, tri: &TriangleSetup) -> Option<GBufferPixel> {
-        self.on_triangle(d, tri)
+    pub(crate) fn pixel(&self, d: Vec3, step_x: Vec3, tri: &TriangleSetup) -> Option<GBufferPixel> {
+        self.on_triangle(d, step_x, tri)
             .or_else(|| self.traced(&illume_core::Ray::new(self.camera.origin(), d.normalize())))
     }
 
@@ -317,7 +346,7 @@ impl<'a> PrimarySurfaces<'a> {
     /// triangle's (per-triangle) camera height over its plane — so normalising `d` for
     /// `to_camera` and `t` is off the chain of dependent divisions and square roots.
     #[inline]
-    fn on_triangle(&self, d: Vec3, tri: &TriangleSetup) -> Option<GBufferPixel> {
+    fn on_triangle(&self, d: Vec3, step_x: Vec3, tri: &TriangleSetup) -> Option<GBufferPixel> {
         if !tri.usable {
             return None;
         }
@@ -349,25 +378,52 @@ impl<'a> PrimarySurfaces<'a> {
             Some([u0, u1, u2]) => u0 * b0 + u1 * b1 + u2 * b2,
             None => Vec2::ZERO,
         };
+        // The footprint: texture coordinates where the neighbouring pixels' centre rays
+        // meet the triangle's plane (ray differentials), for textured triangles only.
+        let footprint = match tri.uvs {
+            Some([u0, u1, u2])
+                if self.filter == TextureFilter::Trilinear
+                    && (tri.textured || tri.normal_map.is_some()) =>
+            {
+                let uv_along = |dd: Vec3| {
+                    let e = origin + dd * (tri.height / ng.dot(dd)) - tri.p0;
+                    let (c1, c2) = (e.dot(tri.dual1), e.dot(tri.dual2));
+                    u0 * (1.0 - c1 - c2) + u1 * c1 + u2 * c2
+                };
+                Some(UvFootprint {
+                    duv_dx: uv_along(d + step_x) - uv,
+                    duv_dy: uv_along(d + self.row_step) - uv,
+                })
+            }
+            _ => None,
+        };
+        let scene = &self.world.scene;
         if let Some(map) = &tri.normal_map {
             let [t0, t1, t2] = map.tangents;
-            shading_normal = crate::surface::normal_mapped(
-                &self.world.scene,
-                map.texture,
-                &self.world.scene.materials[tri.material.index()],
+            let mat = &scene.materials[tri.material.index()];
+            let tables = &self.world.hit_tables;
+            shading_normal = crate::surface::normal_mapped_with(
+                mat,
                 shading_normal,
                 t0 * b0 + t1 * b1 + t2 * b2,
                 map.sign,
-                uv,
+                || match &footprint {
+                    Some(f) => {
+                        let at = mat.normal_uv(uv);
+                        let f = f.through(uv, |uv| mat.normal_uv(uv));
+                        tables.sample_footprint(scene, map.texture, at, &f)
+                    }
+                    None => scene.textures[map.texture.index()].sample(mat.normal_uv(uv)),
+                },
             );
         }
         if shading_normal.dot(ng) < 0.0 {
             shading_normal = -shading_normal;
         }
-        let albedo = if tri.textured {
-            self.world.albedo(tri.material, uv)
-        } else {
-            tri.albedo
+        let albedo = match (tri.textured, &footprint) {
+            (false, _) => tri.albedo,
+            (true, Some(f)) => self.world.albedo_footprint(tri.material, uv, f),
+            (true, None) => self.world.albedo(tri.material, uv),
         };
         let (metallic, roughness) = if tri.metal_rough_textured {
             self.world.scene.metal_rough(tri.material, uv)
@@ -419,8 +475,14 @@ impl GBuffer {
     /// empty pixels next to covered ones (silhouettes against the background), a full BVH
     /// ray decides.
     pub fn rasterize(world: &World, width: u32, height: u32) -> Self {
+        Self::rasterize_with(world, width, height, TextureFilter::Bilinear)
+    }
+
+    /// [`GBuffer::rasterize`] with textures read through `filter` (the plain
+    /// rasterization reads them as [`TextureFilter::Bilinear`], like rays).
+    pub fn rasterize_with(world: &World, width: u32, height: u32, filter: TextureFilter) -> Self {
         let mut g = Self::empty();
-        g.rasterize_into(world, width, height);
+        g.rasterize_into_with(world, width, height, filter);
         g
     }
 
@@ -432,8 +494,20 @@ impl GBuffer {
     /// [`GBuffer::reused_pixels`]). The result is bit-identical to a fresh build; only
     /// the pixels of moving objects (where they are and where they were) cost anything.
     pub fn rasterize_into(&mut self, world: &World, width: u32, height: u32) {
+        self.rasterize_into_with(world, width, height, TextureFilter::Bilinear);
+    }
+
+    /// [`GBuffer::rasterize_into`] with textures read through `filter`; pixels are kept
+    /// from the previous build only when it used the same filter.
+    pub fn rasterize_into_with(
+        &mut self,
+        world: &World,
+        width: u32,
+        height: u32,
+        filter: TextureFilter,
+    ) {
         let n = (width * height) as usize;
-        let next = BuildState::of(world, width, height);
+        let next = BuildState::of(world, width, height, filter);
         let unchanged = self.built_from.unchanged_instances(&next);
         let nothing_moved = !unchanged.is_empty() && unchanged.iter().all(|&u| u);
         self.built_from = next;
@@ -455,7 +529,7 @@ impl GBuffer {
         if n == 0 {
             return;
         }
-        let surfaces = PrimarySurfaces::new(world, width, height);
+        let surfaces = PrimarySurfaces::new(world, width, height, filter);
         let vis = &self.visibility;
         let w = width as usize;
         self.reused_pixels = self
@@ -486,7 +560,7 @@ impl GBuffer {
                                     current = Some(surfaces.setup(instance.0, triangle));
                                 }
                                 let tri = current.as_ref().expect("set up above");
-                                *px = surfaces.pixel(rays.direction(x), tri);
+                                *px = surfaces.pixel(rays.direction(x), rays.step(), tri);
                             }
                             None if next_to_covered(vis, x, y) => {
                                 *px = surfaces.traced(&rays.ray(x))

@@ -2,6 +2,7 @@
 //! (transform and normal cofactor matrix) and base-colour textures packed to 8-bit sRGB
 //! indices, with box-filtered copies for photons ([`HitTables`]).
 
+use crate::mip::{MipChain, UvFootprint};
 use illume_core::{Affine3A, Mat3A, Rgb, Vec2, Vec3, Vec3A};
 use illume_scene::{InstanceId, Scene, Texture, TextureId, WrapMode};
 use rayon::prelude::*;
@@ -63,6 +64,9 @@ pub struct HitTables {
     /// Copies of `textures` box-filtered to at most [`PHOTON_TEXTURE_SIDE`] texels a
     /// side (`None` where the texture is no larger, or not packed).
     filtered: Vec<Option<Arc<PackedTexture>>>,
+    /// Mip chains of every texture for footprint-filtered lookups
+    /// ([`HitTables::sample_footprint`]); `None` for one-texel textures.
+    mips: Vec<Option<Arc<MipChain>>>,
 }
 
 /// Longest side, in texels, of the texture copies photons read with
@@ -137,6 +141,12 @@ impl HitTables {
             })
             .collect::<Vec<_>>();
         self.filtered.extend(added);
+        self.mips.truncate(known);
+        let chains = scene.textures[known..]
+            .iter()
+            .map(|t| MipChain::new(t).map(Arc::new))
+            .collect::<Vec<_>>();
+        self.mips.extend(chains);
     }
 
     /// The frame of `instance` (whose transform is `world_from_object`); computed on the
@@ -159,6 +169,27 @@ impl HitTables {
             _ => scene.textures[texture.index()].sample(uv),
         }
     }
+    /// Trilinear mip-mapped lookup of scene texture `texture` at `uv` for a pixel whose
+    /// texture coordinates change by `footprint` to its neighbours (see [`crate::mip`]):
+    /// exactly [`HitTables::sample`] where the footprint is at most one texel.
+    #[inline]
+    pub fn sample_footprint(
+        &self,
+        scene: &Scene,
+        texture: TextureId,
+        uv: Vec2,
+        footprint: &UvFootprint,
+    ) -> Rgb {
+        let level0 = |uv| self.sample(scene, texture, uv);
+        match self.mips.get(texture.index()) {
+            Some(Some(chain)) => {
+                let t = &scene.textures[texture.index()];
+                chain.sample(uv, footprint.lod(t.width, t.height), level0)
+            }
+            _ => level0(uv),
+        }
+    }
+
     /// The texel at `uv` of the texture's copy box-filtered to at most
     /// [`PHOTON_TEXTURE_SIDE`] texels a side, unfiltered (a filtered texel is already
     /// the mean of the area it covers, so a uniform `uv` over that area reads its mean);
@@ -274,14 +305,9 @@ impl PackedTexture {
         let (ix, iy) = (floor_i64(x), floor_i64(y));
         let (x0, y0) = (ix as f32, iy as f32);
         let (fx, fy) = (x - x0, y - y0);
-        let (cx0, cx1) = (
-            self.wrap_u.wrap(ix, self.width),
-            self.wrap_u.wrap(ix + 1, self.width),
-        );
-        let (r0, r1) = (
-            self.wrap_v.wrap(iy, self.height) * self.width as usize,
-            self.wrap_v.wrap(iy + 1, self.height) * self.width as usize,
-        );
+        let (cx0, cx1) = self.wrap_u.wrap_pair(ix, self.width);
+        let (cy0, cy1) = self.wrap_v.wrap_pair(iy, self.height);
+        let (r0, r1) = (cy0 * self.width as usize, cy1 * self.width as usize);
         let t = |i: usize| {
             let [r, g, b, _] = self.texels[i];
             Rgb::new(lut[r as usize], lut[g as usize], lut[b as usize])
@@ -294,7 +320,7 @@ impl PackedTexture {
 
 /// For each of `dst` texels spanning the same extent as `src`, the source texels it
 /// overlaps and the fraction of its width each covers (the fractions sum to 1).
-fn box_weights(src: u32, dst: u32) -> Vec<Vec<(usize, f32)>> {
+pub(crate) fn box_weights(src: u32, dst: u32) -> Vec<Vec<(usize, f32)>> {
     let scale = src as f64 / dst as f64;
     (0..dst)
         .map(|i| {

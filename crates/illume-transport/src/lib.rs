@@ -32,6 +32,7 @@ pub mod gbuffer;
 pub mod hit_tables;
 pub mod lights;
 pub mod metal_rough;
+pub mod mip;
 pub mod nearest;
 pub mod path;
 pub mod photon;
@@ -42,7 +43,7 @@ pub mod technique;
 pub mod world;
 
 pub use camera::CameraRays;
-pub use gbuffer::{GBuffer, GBufferPixel};
+pub use gbuffer::{GBuffer, GBufferPixel, TextureFilter};
 pub use lights::{EmissionSample, LightSample, LightSet};
 pub use raster::VisibilityBuffer;
 pub use shadow_map::{LightMapPlan, ShadowMapError, ShadowMapSettings, ShadowMaps};

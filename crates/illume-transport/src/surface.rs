@@ -395,12 +395,27 @@ pub(crate) fn normal_mapped(
     sign: f32,
     uv: Vec2,
 ) -> Vec3 {
+    normal_mapped_with(mat, n, tangent, sign, || {
+        scene.textures[texture.index()].sample(mat.normal_uv(uv))
+    })
+}
+
+/// [`normal_mapped`] with the normal map's texel (in [0, 1]³) read by `texel`, which is
+/// called only where the tangent frame does not degenerate.
+#[inline]
+pub(crate) fn normal_mapped_with(
+    mat: &illume_scene::Material,
+    n: Vec3,
+    tangent: Vec3,
+    sign: f32,
+    texel: impl FnOnce() -> Rgb,
+) -> Vec3 {
     let t = (tangent - n * n.dot(tangent)).normalize_or_zero();
     if t == Vec3::ZERO {
         return n;
     }
     let b = n.cross(t) * sign;
-    let c = scene.textures[texture.index()].sample(mat.normal_uv(uv)) * 2.0 - Vec3::ONE;
+    let c = texel() * 2.0 - Vec3::ONE;
     let local = Vec3::new(c.x * mat.normal_scale, c.y * mat.normal_scale, c.z);
     let mapped = (t * local.x + b * local.y + n * local.z).normalize_or_zero();
     if mapped == Vec3::ZERO { n } else { mapped }

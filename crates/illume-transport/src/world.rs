@@ -28,7 +28,7 @@ pub struct World {
     /// Every emitter of `scene`, with power-proportional selection.
     pub lights: LightSet,
     /// Instance frames and packed textures for [`World::photon_hit`].
-    hit_tables: HitTables,
+    pub(crate) hit_tables: HitTables,
 }
 
 impl std::fmt::Debug for World {
@@ -145,6 +145,29 @@ impl World {
         let m = &self.scene.materials[material.index()];
         match m.base_color_texture {
             Some(t) => m.base_color * self.hit_tables.sample(&self.scene, t, m.base_color_uv(uv)),
+            None => m.base_color,
+        }
+    }
+
+    /// [`World::albedo`] filtered over a pixel's `footprint` (trilinear mip-mapping,
+    /// [`crate::mip`]): equal to [`World::albedo`] where the footprint is at most one
+    /// texel, the texture's mean over the footprint where it is larger.
+    #[inline]
+    pub fn albedo_footprint(
+        &self,
+        material: illume_scene::MaterialId,
+        uv: illume_core::Vec2,
+        footprint: &crate::mip::UvFootprint,
+    ) -> illume_core::Rgb {
+        let m = &self.scene.materials[material.index()];
+        match m.base_color_texture {
+            Some(t) => {
+                let f = footprint.through(uv, |uv| m.base_color_uv(uv));
+                m.base_color
+                    * self
+                        .hit_tables
+                        .sample_footprint(&self.scene, t, m.base_color_uv(uv), &f)
+            }
             None => m.base_color,
         }
     }
