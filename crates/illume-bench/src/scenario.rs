@@ -676,10 +676,10 @@ impl Scenario {
             None => None,
         };
         if let Some(keys) = &spec.settings {
-            let merged = settings.get_or_insert_with(toml::Table::new);
-            for (key, value) in keys {
-                merged.insert(key.clone(), value.clone());
-            }
+            illume_engine::config::merge(
+                settings.get_or_insert_with(toml::Table::new),
+                keys.clone(),
+            );
         }
         if let Some(settings) = settings {
             table.insert(spec.name.clone(), toml::Value::Table(settings));

@@ -324,8 +324,9 @@ fn insert_path(table: &mut toml::Table, path: &[String], value: toml::Value) {
     t.insert(last.clone(), value);
 }
 
-/// `over`'s keys replace `base`'s, recursively for tables.
-fn merge(base: &mut toml::Table, over: toml::Table) {
+/// `over`'s keys replace `base`'s, recursively for tables: how a preset's table and the
+/// keys set over it (a configuration file's, a bench scenario's) combine.
+pub fn merge(base: &mut toml::Table, over: toml::Table) {
     for (k, v) in over {
         match (base.get_mut(&k), v) {
             (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),

@@ -341,8 +341,8 @@ pub(crate) fn box_weights(src: u32, dst: u32) -> Vec<Vec<(usize, f32)>> {
 /// `x.floor() as i64` without the libm call (x86-64's baseline has no SSE4.1 `roundss`):
 /// exact for every f32 — above 2²³ in magnitude an f32 is already an integer — and 0
 /// for NaN, as the cast gives.
-#[inline]
-fn floor_i64(x: f32) -> i64 {
+#[inline(always)]
+pub(crate) fn floor_i64(x: f32) -> i64 {
     let i = x as i64;
     if (i as f32) > x {
         i.saturating_sub(1)

@@ -12,6 +12,7 @@
 //! (`lod ≤ 0`: magnification), the lookup is the texture's plain bilinear one, bit for
 //! bit.
 
+use crate::hit_tables::floor_i64;
 use illume_core::{Rgb, Vec2, Vec4};
 use illume_scene::{Texture, WrapMode};
 use rayon::prelude::*;
@@ -154,7 +155,7 @@ impl MipChain {
     fn bilinear(&self, i: usize, uv: Vec2) -> Vec4 {
         let l = &self.levels[i];
         let p = uv * l.size - Vec2::splat(0.5);
-        let (ix, iy) = (floor_i32(p.x), floor_i32(p.y));
+        let (ix, iy) = (floor_i64(p.x), floor_i64(p.y));
         let (fx, fy) = (p.x - ix as f32, p.y - iy as f32);
         let (cx0, cx1) = wrap_pair(self.wrap_u, ix, l.width);
         let (cy0, cy1) = wrap_pair(self.wrap_v, iy, l.height);
@@ -167,14 +168,14 @@ impl MipChain {
     }
 }
 
-/// `(mode.wrap(i, n), mode.wrap(i + 1, n))` ([`WrapMode::wrap_pair`]) for an index
-/// within ±2³¹.
+/// `(mode.wrap(i, n), mode.wrap(i + 1, n))` ([`WrapMode::wrap_pair`]), with the
+/// interior of the texture answered inline.
 #[inline(always)]
-fn wrap_pair(mode: WrapMode, i: i32, n: u32) -> (usize, usize) {
-    if i >= 0 && i < n as i32 - 1 {
+fn wrap_pair(mode: WrapMode, i: i64, n: u32) -> (usize, usize) {
+    if i >= 0 && i < i64::from(n) - 1 {
         return (i as usize, i as usize + 1);
     }
-    mode.wrap_pair(i64::from(i), n)
+    mode.wrap_pair(i, n)
 }
 
 /// `source` (`w × h`) box-filtered to `nw × nh`: area-weighted means, separably.
@@ -201,18 +202,6 @@ fn downsample(source: &[Rgb], w: u32, h: u32, nw: u32, nh: u32) -> Vec<Rgb> {
             })
         })
         .collect()
-}
-
-/// `x.floor() as i32` without the libm call (x86-64's baseline has no `roundss`):
-/// exact within ±2³¹, saturating beyond, 0 for NaN.
-#[inline(always)]
-fn floor_i32(x: f32) -> i32 {
-    let i = x as i32;
-    if (i as f32) > x {
-        i.saturating_sub(1)
-    } else {
-        i
-    }
 }
 
 #[cfg(test)]

@@ -108,6 +108,11 @@ impl NearestIndex {
         }
         self.kd.nearest(q)
     }
+
+    /// [`KdTree::two_nearest`] over the same points.
+    pub fn two_nearest(&self, q: Vec3) -> Option<(u32, f32, f32)> {
+        self.kd.two_nearest(q)
+    }
 }
 
 impl CandidateGrid {

@@ -30,7 +30,7 @@
 use illume_core::sampling::{AliasTable, Pcg32, SampleStream, mix64, uniform_triangle};
 use illume_core::{Aabb, Vec3, transform_normal};
 use illume_scene::{InstanceId, Scene};
-use illume_transport::nearest::{KdTree, NearestIndex};
+use illume_transport::nearest::NearestIndex;
 use rayon::prelude::*;
 
 /// One virtual surface light (§0.4.1): a surface element attached to an object.
@@ -106,12 +106,11 @@ fn triangle_class(mesh: &illume_scene::Mesh, t: usize) -> u8 {
 fn triangle_owners(
     mesh: &illume_scene::Mesh,
     classes: &[u8],
-    class_points: &[Vec<(Vec3, u32)>; CLASSES],
+    trees: &[NearestIndex; CLASSES],
 ) -> Vec<u32> {
     let b = mesh.bounds();
     let magnitude = b.min.abs().max(b.max.abs()).max_element();
     let margin = 1e-4 * magnitude * magnitude;
-    let trees: [KdTree; CLASSES] = std::array::from_fn(|c| KdTree::new(class_points[c].clone()));
     mesh.indices
         .iter()
         .zip(classes)
@@ -336,13 +335,7 @@ impl VslSet {
             .collect();
         let class_trees = class_indices(&vsls, &classes, &first, |i, c| class_bounds[i][c]);
         let triangle_owner: Vec<Vec<u32>> = (0..scene.instances.len())
-            .map(|i| {
-                let mut points: [Vec<(Vec3, u32)>; CLASSES] = Default::default();
-                for g in first[i] as usize..first[i + 1] as usize {
-                    points[classes[g] as usize].push((vsls[g].position_object, g as u32));
-                }
-                triangle_owners(mesh_of(i), &triangle_class[i], &points)
-            })
+            .map(|i| triangle_owners(mesh_of(i), &triangle_class[i], &class_trees[i]))
             .collect();
         let mut set = Self {
             vsls,
