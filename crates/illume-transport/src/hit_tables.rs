@@ -64,8 +64,9 @@ pub struct HitTables {
     /// Copies of `textures` box-filtered to at most [`PHOTON_TEXTURE_SIDE`] texels a
     /// side (`None` where the texture is no larger, or not packed).
     filtered: Vec<Option<Arc<PackedTexture>>>,
-    /// Mip chains of every texture for footprint-filtered lookups
-    /// ([`HitTables::sample_footprint`]); `None` for one-texel textures.
+    /// Mip chains for footprint-filtered lookups ([`HitTables::sample_footprint`]) of the
+    /// textures some material uses as base colour or normal map; `None` for the others
+    /// and for one-texel textures (lookups then read the texture itself).
     mips: Vec<Option<Arc<MipChain>>>,
 }
 
@@ -141,12 +142,34 @@ impl HitTables {
             })
             .collect::<Vec<_>>();
         self.filtered.extend(added);
+        // Mip chains only for the textures the G-buffer filters (base colour and normal
+        // maps of some material): a chain costs a third more than its texture in 16-byte
+        // texels (≈ 90 MB for one 4096² texture), wasted on emissive and
+        // metal-roughness maps. A material added later that filters an older texture gets
+        // its chain then.
         self.mips.truncate(known);
-        let chains = scene.textures[known..]
+        self.mips.resize(scene.textures.len(), None);
+        let mut filtered_by_gbuffer = vec![false; scene.textures.len()];
+        for m in &scene.materials {
+            for t in [m.base_color_texture, m.normal_texture]
+                .into_iter()
+                .flatten()
+            {
+                if let Some(f) = filtered_by_gbuffer.get_mut(t.index()) {
+                    *f = true;
+                }
+            }
+        }
+        let missing: Vec<usize> = (0..scene.textures.len())
+            .filter(|&i| filtered_by_gbuffer[i] && self.mips[i].is_none())
+            .collect();
+        let chains: Vec<_> = missing
             .iter()
-            .map(|t| MipChain::new(t).map(Arc::new))
-            .collect::<Vec<_>>();
-        self.mips.extend(chains);
+            .map(|&i| MipChain::new(&scene.textures[i]).map(Arc::new))
+            .collect();
+        for (i, chain) in missing.into_iter().zip(chains) {
+            self.mips[i] = chain;
+        }
     }
 
     /// The frame of `instance` (whose transform is `world_from_object`); computed on the
@@ -379,6 +402,34 @@ mod tests {
             acc + Rgb::new(lut[*r as usize], lut[*g as usize], lut[*b as usize])
         });
         sum / t.texels.len() as f32
+    }
+
+    #[test]
+    fn mip_chains_only_for_textures_the_gbuffer_filters() {
+        use illume_scene::Material;
+        use illume_scene::builtin::SceneBuilder;
+        let mut b = SceneBuilder::new();
+        let albedo = b.texture(srgb8_texture(16, 16, |x, y| [x as u8, y as u8, 7]));
+        let emissive = b.texture(srgb8_texture(16, 16, |x, _| [x as u8, 1, 2]));
+        b.material(Material {
+            base_color_texture: Some(albedo),
+            emissive_texture: Some(emissive),
+            ..Default::default()
+        });
+        let mut scene = b.finish("test:mips");
+        let mut tables = HitTables::new(&scene);
+        assert!(tables.mips[albedo.index()].is_some());
+        assert!(
+            tables.mips[emissive.index()].is_none(),
+            "emissive map got a chain"
+        );
+        // A material added later that filters the older texture gets its chain.
+        scene.materials.push(Material {
+            normal_texture: Some(emissive),
+            ..Default::default()
+        });
+        tables.update(&scene);
+        assert!(tables.mips[emissive.index()].is_some());
     }
 
     #[test]
