@@ -3,8 +3,9 @@
 //! a leaf is one contiguous run of packets.
 
 use crate::BvhSettings;
-use crate::build::{BuildParams, build_binary};
+use crate::build::{BinaryBvh, BuildParams, build_binary};
 use crate::kernel::BoxKernel;
+use crate::split::split_references;
 use crate::wide::{MAX_LEAF, PreparedRay, StackEntry, WideBvh, traverse};
 
 use illume_core::{Aabb, Vec2, Vec3, Vec4};
@@ -125,6 +126,63 @@ impl TrianglePacket {
     }
 }
 
+/// A binary tree whose leaves index triangle packets, with its SAH cost.
+struct PackedTree {
+    bin: BinaryBvh,
+    packets: Vec<TrianglePacket>,
+    /// Expected cost of a ray through the root: Σ over nodes of (area ÷ root area) ×
+    /// (node cost for an interior node, packets for a leaf).
+    sah: f32,
+}
+
+impl PackedTree {
+    /// The binary SAH tree over `boxes` (references to the triangles `owner` names, or one
+    /// box per triangle when `owner` is empty), its leaves repacked into whole packets. A
+    /// triangle whose references land twice in one leaf is stored there once.
+    fn build(corners: &[[Vec3; 3]], boxes: &[Aabb], owner: &[u32], params: BuildParams) -> Self {
+        let mut bin = build_binary(boxes, owner, params);
+        let triangle = |r: u32| {
+            if owner.is_empty() {
+                r
+            } else {
+                owner[r as usize]
+            }
+        };
+        let mut packets = Vec::with_capacity(boxes.len() / 6 + 1);
+        let mut tris: Vec<(u32, [Vec3; 3])> = Vec::with_capacity(4 * MAX_LEAF);
+        for node in bin.nodes.iter_mut().filter(|n| n.count > 0) {
+            tris.clear();
+            for &r in &bin.order[node.first as usize..(node.first + node.count) as usize] {
+                let t = triangle(r);
+                if !tris.iter().any(|&(u, _)| u == t) {
+                    tris.push((t, corners[t as usize]));
+                }
+            }
+            let first = packets.len() as u32;
+            packets.extend(tris.chunks(LANES).map(TrianglePacket::new));
+            node.first = first;
+            node.count = packets.len() as u32 - first;
+        }
+        let root = bin.nodes.first().map_or(0.0, |n| n.bounds.surface_area());
+        let sah = if root > 0.0 {
+            bin.nodes
+                .iter()
+                .map(|n| {
+                    let cost = if n.count > 0 {
+                        n.count as f32
+                    } else {
+                        params.traversal_cost
+                    };
+                    n.bounds.surface_area() / root * cost
+                })
+                .sum()
+        } else {
+            0.0
+        };
+        Self { bin, packets, sah }
+    }
+}
+
 /// One mesh's BVH, in the mesh's object space.
 #[derive(Clone, Debug)]
 pub(crate) struct Blas {
@@ -142,36 +200,62 @@ pub(crate) struct Blas {
 impl Blas {
     /// Builds the BVH of `mesh` (binned SAH, then collapsed to eight-wide nodes), whose
     /// alpha-masked triangles have the holes of `cutout`.
+    ///
+    /// With a split budget (see [`BvhSettings::split_budget`]), two trees are built at
+    /// once (rayon): one over the triangles, one over pre-split references
+    /// ([`crate::split`]); the one the surface area heuristic expects to be cheaper to
+    /// traverse is kept. Splitting pays where long diagonal triangles cross a large mesh
+    /// (Sponza's floors and arches) and costs where the pieces of a few large triangles
+    /// join the boxes of their small neighbours (a Cornell box's walls around its
+    /// spheres); the heuristic tells the two apart.
     pub fn build(mesh: &Mesh, cutout: Option<MeshCutout>, settings: &BvhSettings) -> Blas {
-        let boxes: Vec<Aabb> = (0..mesh.triangle_count())
-            .map(|t| Aabb::from_points(mesh.triangle(t)))
+        let corners: Vec<[Vec3; 3]> = (0..mesh.triangle_count())
+            .map(|t| mesh.triangle(t))
             .collect();
         let params = BuildParams {
             traversal_cost: settings.node_cost,
             max_leaf: settings.max_leaf_triangles.clamp(1, 4 * MAX_LEAF),
             block: if settings.packet_aware_sah { 4 } else { 1 },
         };
-        let mut bin = build_binary(&boxes, params);
-        // Repack every leaf's triangles into whole packets; leaves then index packets.
-        let mut packets = Vec::with_capacity(mesh.triangle_count() / 6 + 1);
-        for node in bin.nodes.iter_mut().filter(|n| n.count > 0) {
-            let tris: Vec<(u32, [Vec3; 3])> = bin.order
-                [node.first as usize..(node.first + node.count) as usize]
-                .iter()
-                .map(|&t| (t, mesh.triangle(t as usize)))
-                .collect();
-            let first = packets.len() as u32;
-            packets.extend(tris.chunks(LANES).map(TrianglePacket::new));
-            node.first = first;
-            node.count = packets.len() as u32 - first;
-        }
-        let bvh = WideBvh::from_binary(&bin, &|_, _| u32::MAX);
+        let plain = || {
+            let boxes: Vec<Aabb> = corners.iter().map(|&c| Aabb::from_points(c)).collect();
+            PackedTree::build(&corners, &boxes, &[], params)
+        };
+        let split = || {
+            let (boxes, owner) = split_references(&corners, settings.split_budget);
+            // No reference made: the same tree as without splitting.
+            (boxes.len() > corners.len())
+                .then(|| PackedTree::build(&corners, &boxes, &owner, params))
+        };
+        let tree = if settings.split_budget > 0.0 {
+            match rayon::join(plain, split) {
+                (plain, Some(split)) if split.sah < plain.sah => split,
+                (plain, _) => plain,
+            }
+        } else {
+            plain()
+        };
+        let bvh = WideBvh::from_binary(&tree.bin, &|_, _| u32::MAX);
         Blas {
             bvh,
-            packets,
+            packets: tree.packets,
             triangle_count: mesh.triangle_count(),
             cutout,
         }
+    }
+
+    /// Triangle slots used in the leaves: the triangle count, or more where pre-split
+    /// triangles sit in several leaves.
+    pub fn stored_triangles(&self) -> usize {
+        self.packets
+            .iter()
+            .map(|p| {
+                p.index
+                    .iter()
+                    .filter(|&&i| i != TrianglePacket::UNUSED)
+                    .count()
+            })
+            .sum()
     }
 
     /// Object-space bounds.

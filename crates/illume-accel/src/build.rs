@@ -57,23 +57,87 @@ pub(crate) struct BinaryBvh {
     pub order: Vec<u32>,
 }
 
+/// A primitive's box during the build, kept in the build's order (so binning reads
+/// memory in sequence rather than through the permutation).
+#[derive(Clone, Copy)]
+struct Ref {
+    lo: Vec3A,
+    hi: Vec3A,
+}
+
+impl Ref {
+    /// The centroid doubled (min + max): the factor 2 does not change any split.
+    #[inline(always)]
+    fn centroid(&self) -> Vec3A {
+        self.lo + self.hi
+    }
+}
+
+/// Box bounds and centroid bounds of a set of references, with its count.
 #[derive(Clone, Copy)]
 struct Bin {
-    bounds: Aabb,
+    lo: Vec3A,
+    hi: Vec3A,
+    clo: Vec3A,
+    chi: Vec3A,
     count: u32,
 }
 
 impl Default for Bin {
     fn default() -> Self {
         Self {
-            bounds: Aabb::EMPTY,
+            lo: Vec3A::splat(f32::INFINITY),
+            hi: Vec3A::splat(f32::NEG_INFINITY),
+            clo: Vec3A::splat(f32::INFINITY),
+            chi: Vec3A::splat(f32::NEG_INFINITY),
             count: 0,
         }
     }
 }
 
+impl Bin {
+    #[inline(always)]
+    fn add(&mut self, r: &Ref, c: Vec3A) {
+        self.lo = self.lo.min(r.lo);
+        self.hi = self.hi.max(r.hi);
+        self.clo = self.clo.min(c);
+        self.chi = self.chi.max(c);
+        self.count += 1;
+    }
+
+    #[inline(always)]
+    fn merge(&mut self, o: &Bin) {
+        self.lo = self.lo.min(o.lo);
+        self.hi = self.hi.max(o.hi);
+        self.clo = self.clo.min(o.clo);
+        self.chi = self.chi.max(o.chi);
+        self.count += o.count;
+    }
+
+    fn of(refs: &[Ref]) -> Bin {
+        let mut b = Bin::default();
+        for r in refs {
+            b.add(r, r.centroid());
+        }
+        b
+    }
+
+    #[inline(always)]
+    fn bounds(&self) -> Aabb {
+        Aabb::new(self.lo.into(), self.hi.into())
+    }
+}
+
 /// Builds a binary BVH over `boxes` (none may be empty). An empty input gives an empty tree.
-pub(crate) fn build_binary(boxes: &[Aabb], params: BuildParams) -> BinaryBvh {
+/// `owner[i]` names the primitive box `i` belongs to (pre-split references of one
+/// triangle share it; empty: every box is its own): a node whose boxes belong to few
+/// enough primitives becomes a leaf of those primitives when that is cheaper than a split.
+///
+/// Binned SAH (Wald 2007): each node bins its references' centroids on all three axes in
+/// one pass over its references, kept contiguous in build order; the bins also give the
+/// children's box and centroid bounds, so a node reads its references once to bin them
+/// and once to partition them.
+pub(crate) fn build_binary(boxes: &[Aabb], owner: &[u32], params: BuildParams) -> BinaryBvh {
     let n = boxes.len();
     let mut order: Vec<u32> = (0..n as u32).collect();
     if n == 0 {
@@ -82,23 +146,29 @@ pub(crate) fn build_binary(boxes: &[Aabb], params: BuildParams) -> BinaryBvh {
             order,
         };
     }
-    // Centroids doubled (min + max): the factor 2 does not change any split.
-    let centroids: Vec<Vec3A> = boxes.iter().map(|b| Vec3A::from(b.min + b.max)).collect();
+    let mut refs: Vec<Ref> = boxes
+        .iter()
+        .map(|b| Ref {
+            lo: b.min.into(),
+            hi: b.max.into(),
+        })
+        .collect();
     let mut nodes = Vec::with_capacity(2 * n);
     nodes.push(BinaryNode {
         bounds: Aabb::EMPTY,
         first: 0,
         count: n as u32,
     });
-    // (node index, start, end, depth)
-    let mut work = vec![(0usize, 0usize, n, 0u32)];
-    while let Some((node, start, end, depth)) = work.pop() {
-        let prims = &mut order[start..end];
-        let bounds = prims
-            .iter()
-            .fold(Aabb::EMPTY, |b, &p| b.union(boxes[p as usize]));
+    // (node index, start, end, depth, bounds of the range when known)
+    let mut work = vec![(0usize, 0usize, n, 0u32, Some(Bin::of(&refs)))];
+    let mut owners: Vec<u32> = Vec::new();
+    let mut scratch = [[Bin::default(); BINS]; 3];
+    while let Some((node, start, end, depth, known)) = work.pop() {
+        let range = &mut refs[start..end];
+        let all = known.unwrap_or_else(|| Bin::of(range));
+        let bounds = all.bounds();
         nodes[node].bounds = bounds;
-        let count = prims.len();
+        let count = range.len();
         let make_leaf = |nodes: &mut Vec<BinaryNode>| {
             nodes[node].first = start as u32;
             nodes[node].count = count as u32;
@@ -107,55 +177,67 @@ pub(crate) fn build_binary(boxes: &[Aabb], params: BuildParams) -> BinaryBvh {
             make_leaf(&mut nodes);
             continue;
         }
-        let (cmin, cmax) = prims.iter().fold(
-            (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &p| {
-                let c = centroids[p as usize];
-                (lo.min(c), hi.max(c))
-            },
-        );
+        let (cmin, cmax) = (all.clo, all.chi);
         let extent = cmax - cmin;
+        // Primitives the node's boxes belong to (counted for small nodes only).
+        let owned = if owner.is_empty() || count > 4 * params.max_leaf {
+            count
+        } else {
+            owners.clear();
+            owners.extend(order[start..end].iter().map(|&p| owner[p as usize]));
+            owners.sort_unstable();
+            owners.dedup();
+            owners.len()
+        };
         let split = if depth >= MEDIAN_DEPTH || extent.max_element() <= 0.0 {
             None
         } else {
             best_binned_split(
-                prims,
-                boxes,
-                &centroids,
+                range,
                 cmin,
                 extent,
                 bounds.surface_area(),
                 params,
+                bins_for(count),
+                &mut scratch,
             )
         };
-        let mid = match split {
-            Some((axis, bin, cost)) => {
-                if cost >= params.leaf_cost(count as u32) && count <= params.max_leaf {
+        let (mid, children) = match split {
+            Some((axis, bin, cost, left, right)) => {
+                if cost >= params.leaf_cost(owned as u32) && owned <= params.max_leaf {
                     make_leaf(&mut nodes);
                     continue;
                 }
-                let scale = BINS as f32 / extent[axis];
-                let left_count = partition(prims, |p| {
-                    bin_of(centroids[p as usize][axis], cmin[axis], scale) <= bin
+                let nb = bins_for(count);
+                let scale = nb as f32 / extent[axis];
+                let left_count = partition(range, &mut order[start..end], |r| {
+                    bin_of(r.centroid()[axis], cmin[axis], scale, nb) <= bin
                 });
                 if left_count == 0 || left_count == count {
-                    count / 2
+                    (count / 2, None)
                 } else {
-                    left_count
+                    (left_count, Some((left, right)))
                 }
             }
             None => {
-                if count <= params.max_leaf {
+                if owned <= params.max_leaf {
                     make_leaf(&mut nodes);
                     continue;
                 }
                 // Object median along the widest centroid axis.
                 let axis = extent.max_position();
                 let mid = count / 2;
-                prims.select_nth_unstable_by(mid, |&a, &b| {
-                    centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+                let mut perm: Vec<u32> = (0..count as u32).collect();
+                perm.select_nth_unstable_by(mid, |&a, &b| {
+                    range[a as usize].centroid()[axis]
+                        .total_cmp(&range[b as usize].centroid()[axis])
                 });
-                mid
+                let moved_refs: Vec<Ref> = perm.iter().map(|&i| range[i as usize]).collect();
+                let moved_order: Vec<u32> =
+                    perm.iter().map(|&i| order[start + i as usize]).collect();
+                range.copy_from_slice(&moved_refs);
+                order[start..end].copy_from_slice(&moved_order);
+                (mid, None)
             }
         };
         let left = nodes.len();
@@ -171,75 +253,107 @@ pub(crate) fn build_binary(boxes: &[Aabb], params: BuildParams) -> BinaryBvh {
         });
         nodes[node].first = left as u32;
         nodes[node].count = 0;
-        work.push((left + 1, start + mid, end, depth + 1));
-        work.push((left, start, start + mid, depth + 1));
+        let (l, r) = children.map_or((None, None), |(l, r)| (Some(l), Some(r)));
+        work.push((left + 1, start + mid, end, depth + 1, r));
+        work.push((left, start, start + mid, depth + 1, l));
     }
     BinaryBvh { nodes, order }
 }
 
-#[inline]
-fn bin_of(c: f32, cmin: f32, scale: f32) -> usize {
-    (((c - cmin) * scale) as usize).min(BINS - 1)
+#[inline(always)]
+fn bin_of(c: f32, cmin: f32, scale: f32, bins: usize) -> usize {
+    (((c - cmin) * scale) as usize).min(bins - 1)
 }
 
-/// Best split as (axis, last bin of the left side, SAH cost in units of a primitive test).
+/// Bins for a node of `count` references: [`BINS`], or fewer for small nodes, whose
+/// fixed cost (clearing and sweeping the bins) would otherwise dominate the build.
+#[inline]
+fn bins_for(count: usize) -> usize {
+    count.clamp(4, BINS)
+}
+
+/// The best split as (axis, last bin of the left side, SAH cost in units of a primitive
+/// test, left side's bins, right side's bins).
 fn best_binned_split(
-    prims: &[u32],
-    boxes: &[Aabb],
-    centroids: &[Vec3A],
+    refs: &[Ref],
     cmin: Vec3A,
     extent: Vec3A,
     parent_area: f32,
     params: BuildParams,
-) -> Option<(usize, usize, f32)> {
+    nb: usize,
+    all: &mut [[Bin; BINS]; 3],
+) -> Option<(usize, usize, f32, Bin, Bin)> {
+    // Axes without extent bin everything into bin 0 and are skipped below.
+    let scale = Vec3A::select(
+        extent.cmpgt(Vec3A::ZERO),
+        Vec3A::splat(nb as f32) / extent,
+        Vec3A::ZERO,
+    );
+    let [b0, b1, b2] = all;
+    let (b0, b1, b2) = (&mut b0[..nb], &mut b1[..nb], &mut b2[..nb]);
+    for b in b0.iter_mut().chain(b1.iter_mut()).chain(b2.iter_mut()) {
+        *b = Bin::default();
+    }
+    for r in refs {
+        let c = r.centroid();
+        let t = (c - cmin) * scale;
+        b0[(t.x as usize).min(nb - 1)].add(r, c);
+        b1[(t.y as usize).min(nb - 1)].add(r, c);
+        b2[(t.z as usize).min(nb - 1)].add(r, c);
+    }
+    let bins = [&all[0][..nb], &all[1][..nb], &all[2][..nb]];
     let mut best: Option<(usize, usize, f32)> = None;
-    for axis in 0..3 {
+    for (axis, bins) in bins.iter().enumerate() {
         if extent[axis] <= 0.0 {
             continue;
-        }
-        let scale = BINS as f32 / extent[axis];
-        let mut bins = [Bin::default(); BINS];
-        for &p in prims {
-            let b = &mut bins[bin_of(centroids[p as usize][axis], cmin[axis], scale)];
-            b.bounds = b.bounds.union(boxes[p as usize]);
-            b.count += 1;
         }
         // Sweep from the right: area·count of bins (i+1)..BINS.
         let mut right_cost = [0.0f32; BINS];
         let mut acc = Bin::default();
-        for i in (1..BINS).rev() {
-            acc.bounds = acc.bounds.union(bins[i].bounds);
-            acc.count += bins[i].count;
-            right_cost[i - 1] = acc.bounds.surface_area() * params.leaf_cost(acc.count);
+        for i in (1..nb).rev() {
+            acc.merge(&bins[i]);
+            right_cost[i - 1] = acc.bounds().surface_area() * params.leaf_cost(acc.count);
         }
         let mut acc = Bin::default();
-        for i in 0..BINS - 1 {
-            acc.bounds = acc.bounds.union(bins[i].bounds);
-            acc.count += bins[i].count;
-            if acc.count == 0 || acc.count as usize == prims.len() {
+        for i in 0..nb - 1 {
+            acc.merge(&bins[i]);
+            if acc.count == 0 || acc.count as usize == refs.len() {
                 continue;
             }
             let cost = params.traversal_cost
-                + (acc.bounds.surface_area() * params.leaf_cost(acc.count) + right_cost[i])
+                + (acc.bounds().surface_area() * params.leaf_cost(acc.count) + right_cost[i])
                     / parent_area.max(f32::MIN_POSITIVE);
             if best.is_none_or(|(_, _, c)| cost < c) {
                 best = Some((axis, i, cost));
             }
         }
     }
-    best
+    best.map(|(axis, bin, cost)| {
+        let mut left = Bin::default();
+        let mut right = Bin::default();
+        for (i, b) in bins[axis].iter().enumerate() {
+            if i <= bin {
+                left.merge(b);
+            } else {
+                right.merge(b);
+            }
+        }
+        (axis, bin, cost, left, right)
+    })
 }
 
-/// Reorders `prims` so those satisfying `left` come first; returns their count.
-fn partition(prims: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+/// Reorders `refs` (and `order` alike) so those satisfying `left` come first; returns
+/// their count.
+fn partition(refs: &mut [Ref], order: &mut [u32], left: impl Fn(&Ref) -> bool) -> usize {
     let mut i = 0;
-    let mut j = prims.len();
+    let mut j = refs.len();
     while i < j {
-        if left(prims[i]) {
+        if left(&refs[i]) {
             i += 1;
         } else {
             j -= 1;
-            prims.swap(i, j);
+            refs.swap(i, j);
+            order.swap(i, j);
         }
     }
     i

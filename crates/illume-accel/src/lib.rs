@@ -19,8 +19,11 @@
 //!
 //! # Design
 //!
-//! * Mesh level: binned SAH (32 bins, all three axes) over triangle boxes, with the cost
-//!   of a leaf counted in groups of four triangles, builds a binary tree that is
+//! * Mesh level: binned SAH (up to 32 bins, all three axes in one pass) over triangle
+//!   boxes, with the cost of a leaf counted in groups of four triangles, builds a binary
+//!   tree. Alongside it a second tree is built over pre-split triangle references
+//!   ([`BvhSettings::split_budget`], `split.rs`), and the one the heuristic expects to be
+//!   cheaper is kept (Sponza's is split, a Cornell box's is not). The tree is
 //!   collapsed into eight-wide nodes of 256 bytes (child boxes as structure of arrays, so
 //!   one ray meets eight boxes in one 8-lane test). Triangles are copied in leaf order,
 //!   eight to a 320-byte packet (five cache lines; corner and two edges per lane, structure of arrays), so a
@@ -57,6 +60,7 @@ pub mod brute_force;
 mod build;
 mod kernel;
 pub mod ray_sets;
+mod split;
 mod tracer;
 pub mod triangle;
 mod validate;

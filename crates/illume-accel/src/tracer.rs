@@ -44,6 +44,9 @@ pub struct TracerStats {
     pub instance_nodes: usize,
     /// Triangles stored over all mesh BVHs (each mesh once, however often instanced).
     pub triangles: usize,
+    /// Triangle slots used in the mesh BVHs' leaves: `triangles`, or more where
+    /// pre-splitting ([`BvhSettings::split_budget`]) put a triangle in several leaves.
+    pub stored_triangles: usize,
     /// Instances in the instance level (empty meshes and singular transforms are left out).
     pub instances: usize,
     /// Bytes of nodes, triangles and instance records.
@@ -97,6 +100,16 @@ pub struct BvhSettings {
     /// Count a leaf's cost in groups of four triangles (a packet's 4-lane halves) rather
     /// than in triangles. True favours leaves of 4 and 8 triangles.
     pub packet_aware_sah: bool,
+    /// Extra triangle references the build may make by splitting badly fitting triangle
+    /// boxes, as a fraction of the triangle count (pre-splitting, Karras & Aila 2013 §4;
+    /// see `split.rs`). Higher: tighter leaves for long thin diagonal triangles (fewer
+    /// wasted box hits), at the cost of build time and memory roughly in proportion.
+    /// With a budget, each mesh BVH is built both with and without splitting and the
+    /// tree the surface area heuristic prefers is kept, so splitting never makes a tree
+    /// worse by that measure; the build then costs about twice the CPU time (the two
+    /// builds run in parallel). 0 turns splitting off. Default 0.6 (BENCHMARKS.md,
+    /// "Issue 16, third pass": the fastest Sponza of 0–1.2).
+    pub split_budget: f32,
 }
 
 impl Default for BvhSettings {
@@ -105,6 +118,7 @@ impl Default for BvhSettings {
             max_leaf_triangles: 8,
             node_cost: 2.0,
             packet_aware_sah: true,
+            split_budget: 0.6,
         }
     }
 }
@@ -207,7 +221,7 @@ impl Tracer {
             })
             .collect();
         let boxes: Vec<Aabb> = records.iter().map(|r| r.world_bounds).collect();
-        let bin = build_binary(&boxes, INSTANCE_PARAMS);
+        let bin = build_binary(&boxes, &[], INSTANCE_PARAMS);
         self.instances = bin.order.iter().map(|&i| records[i as usize]).collect();
         self.record_of_instance = vec![u32::MAX; scene.instances.len()];
         for (k, r) in self.instances.iter().enumerate() {
@@ -224,6 +238,7 @@ impl Tracer {
         self.stats.mesh_nodes = self.blases.iter().map(|b| b.bvh.nodes.len()).sum();
         self.stats.instance_nodes = self.tlas.nodes.len();
         self.stats.triangles = self.blases.iter().map(|b| b.triangle_count).sum();
+        self.stats.stored_triangles = self.blases.iter().map(|b| b.stored_triangles()).sum();
         self.stats.instances = self.instances.len();
         self.stats.memory_bytes = self.blases.iter().map(|b| b.memory_bytes()).sum::<usize>()
             + self.tlas.memory_bytes()

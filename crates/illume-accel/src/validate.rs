@@ -1,6 +1,6 @@
-//! Structural checks of a [`Tracer`]: every node box contains its children and
-//! triangles, every triangle and instance is referenced exactly once, and masks cover
-//! what lies below them.
+//! Structural checks of a [`Tracer`]: every node box contains its children, the leaves
+//! holding a triangle cover it (a split triangle is in several), every instance is
+//! referenced exactly once, and masks cover what lies below them.
 
 use crate::Tracer;
 use crate::blas::Blas;
@@ -9,8 +9,9 @@ use crate::wide::{self, Item, WideBvh};
 use illume_core::Aabb;
 
 impl Tracer {
-    /// Checks the structure's invariants (bounds contain children and triangles, every
-    /// triangle referenced once); the message says what is broken.
+    /// Checks the structure's invariants (bounds contain children, every triangle is
+    /// covered by the boxes of the leaves holding it, every instance referenced once);
+    /// the message says what is broken.
     pub fn validate(&self) -> Result<(), String> {
         for (m, blas) in self.blases.iter().enumerate() {
             validate_blas(blas).map_err(|e| format!("mesh {m} BVH: {e}"))?;
@@ -46,22 +47,33 @@ impl Tracer {
 fn validate_blas(blas: &Blas) -> Result<(), String> {
     let n = blas.triangle_count;
     let mut packet_refs = vec![0u32; blas.packets.len()];
-    let mut index_refs = vec![0u32; n];
+    // Boxes of the leaves holding each triangle (pre-splitting puts a triangle in one or
+    // more leaves, each box covering a part of it).
+    let mut leaf_boxes: Vec<Vec<Aabb>> = vec![Vec::new(); n];
+    let mut corners_of: Vec<Option<[illume_core::Vec3; 3]>> = vec![None; n];
     validate_tree(&blas.bvh, &mut |range, bounds, _, place| {
         for (k, packet) in blas.packets[range.clone()].iter().enumerate() {
             packet_refs[range.start + k] += 1;
             for (index, corners) in packet.triangles() {
-                let Some(c) = index_refs.get_mut(index as usize) else {
+                let Some(boxes) = leaf_boxes.get_mut(index as usize) else {
                     return Err(format!(
                         "{place}: triangle index {index} out of range 0..{n}"
                     ));
                 };
-                *c += 1;
-                let tb = Aabb::from_points(corners);
-                if !bounds.contains_box(&tb, tolerance(&tb)) {
+                if boxes.contains(bounds) {
                     return Err(format!(
-                        "{place}: box {bounds:?} does not contain triangle {index} {corners:?}"
+                        "{place}: triangle {index} stored twice in one leaf"
                     ));
+                }
+                boxes.push(*bounds);
+                match corners_of[index as usize] {
+                    None => corners_of[index as usize] = Some(corners),
+                    Some(c) if c == corners => {}
+                    Some(c) => {
+                        return Err(format!(
+                            "{place}: triangle {index} stored as {corners:?} here and {c:?} elsewhere"
+                        ));
+                    }
                 }
             }
         }
@@ -73,11 +85,26 @@ fn validate_blas(blas: &Blas) -> Result<(), String> {
             packet_refs[i]
         ));
     }
-    if let Some(i) = index_refs.iter().position(|&c| c != 1) {
-        return Err(format!(
-            "mesh triangle {i} is stored {} times",
-            index_refs[i]
-        ));
+    for (t, boxes) in leaf_boxes.iter().enumerate() {
+        let Some(c) = corners_of[t] else {
+            return Err(format!("mesh triangle {t} is in no leaf"));
+        };
+        // The leaves' boxes must cover the triangle: its corners, edge points and a
+        // lattice of inner points each lie in one of them.
+        const STEPS: usize = 8;
+        for i in 0..=STEPS {
+            for j in 0..=STEPS - i {
+                let (u, v) = (i as f32 / STEPS as f32, j as f32 / STEPS as f32);
+                let p = c[0] + (c[1] - c[0]) * u + (c[2] - c[0]) * v;
+                let tol = tolerance(&Aabb::from_points(c));
+                if !boxes.iter().any(|b| b.contains_box(&Aabb::new(p, p), tol)) {
+                    return Err(format!(
+                        "mesh triangle {t} {c:?}: point {p:?} lies in none of its {} leaf boxes {boxes:?}",
+                        boxes.len()
+                    ));
+                }
+            }
+        }
     }
     Ok(())
 }
@@ -184,7 +211,7 @@ mod tests {
             err.contains("outside the node's box") || err.contains("does not contain triangle"),
             "{err}"
         );
-        // Losing a triangle reference is caught too.
+        // A packet lane pointing at another triangle's index is caught too.
         let mut tracer = Tracer::new(&scene);
         let first = tracer.blases[mesh].packets[0].index[0];
         Arc::get_mut(&mut tracer.blases[mesh])
@@ -192,7 +219,7 @@ mod tests {
             .packets[1]
             .index[0] = first;
         let err = tracer.validate().unwrap_err();
-        assert!(err.contains(" times"), "{err}");
+        assert!(err.contains("stored as"), "{err}");
         // An instance box that no longer covers its mesh.
         let mut tracer = Tracer::new(&scene);
         tracer.instances[0].world_bounds.max.y -= 0.5;
