@@ -136,7 +136,8 @@ impl Bin {
 /// Binned SAH (Wald 2007): each node bins its references' centroids on all three axes in
 /// one pass over its references, kept contiguous in build order; the bins also give the
 /// children's box and centroid bounds, so a node reads its references once to bin them
-/// and once to partition them.
+/// and once to partition them. Below a node of [`PARALLEL_MIN`] or more references the
+/// two subtrees are built in parallel (rayon) into disjoint slots of one node array.
 pub(crate) fn build_binary(boxes: &[Aabb], owner: &[u32], params: BuildParams) -> BinaryBvh {
     let n = boxes.len();
     let mut order: Vec<u32> = (0..n as u32).collect();
@@ -153,38 +154,193 @@ pub(crate) fn build_binary(boxes: &[Aabb], owner: &[u32], params: BuildParams) -
             hi: b.max.into(),
         })
         .collect();
-    let mut nodes = Vec::with_capacity(2 * n);
-    nodes.push(BinaryNode {
-        bounds: Aabb::EMPTY,
-        first: 0,
-        count: n as u32,
-    });
-    // (node index, start, end, depth, bounds of the range when known)
-    let mut work = vec![(0usize, 0usize, n, 0u32, Some(Bin::of(&refs)))];
-    let mut owners: Vec<u32> = Vec::new();
-    let mut scratch = [[Bin::default(); BINS]; 3];
-    while let Some((node, start, end, depth, known)) = work.pop() {
-        let range = &mut refs[start..end];
-        let all = known.unwrap_or_else(|| Bin::of(range));
-        let bounds = all.bounds();
-        nodes[node].bounds = bounds;
-        let count = range.len();
-        let make_leaf = |nodes: &mut Vec<BinaryNode>| {
-            nodes[node].first = start as u32;
-            nodes[node].count = count as u32;
-        };
-        if count <= 1 {
-            make_leaf(&mut nodes);
-            continue;
+    let all = Bin::of(&refs);
+    let ctx = Context { owner, params };
+    // A subtree over c references has at most 2c − 1 nodes: each subtree gets that many
+    // slots, so parallel subtrees write disjoint parts of one array. Slots a subtree
+    // leaves unused stay empty interior-looking nodes no link points to.
+    let mut nodes = vec![leaf(Aabb::EMPTY, 0, 0); 2 * n - 1];
+    let (root, rest) = nodes.split_at_mut(1);
+    ctx.subtree(
+        &mut refs,
+        &mut order,
+        0,
+        0,
+        Some(all),
+        &mut root[0],
+        rest,
+        1,
+    );
+    BinaryBvh { nodes, order }
+}
+
+/// Ranges of at least this many references split their two halves between threads.
+const PARALLEL_MIN: usize = 4096;
+
+/// What a node becomes.
+enum Decision {
+    Leaf,
+    /// Children `[..mid]` and `[mid..]` of the (partitioned) range, with their bins when
+    /// the split gives them.
+    Split {
+        mid: usize,
+        children: Option<(Bin, Bin)>,
+    },
+}
+
+/// The build's inputs shared by every node.
+struct Context<'a> {
+    owner: &'a [u32],
+    params: BuildParams,
+}
+
+impl Context<'_> {
+    /// Builds the subtree over `refs` (whose first reference is number `base` of the
+    /// build order; `order` alike): its root into `root`, its other nodes into `rest`
+    /// (2·len − 2 slots, the first at index `rest_base` of the whole array). Large ranges
+    /// build their two halves in parallel (rayon); the tree is the same whatever the
+    /// thread count.
+    #[allow(clippy::too_many_arguments)]
+    fn subtree(
+        &self,
+        refs: &mut [Ref],
+        order: &mut [u32],
+        base: usize,
+        depth: u32,
+        known: Option<Bin>,
+        root: &mut BinaryNode,
+        rest: &mut [BinaryNode],
+        rest_base: usize,
+    ) {
+        if refs.len() < PARALLEL_MIN {
+            return self.sequential(refs, order, base, depth, known, root, rest, rest_base);
         }
+        let all = known.unwrap_or_else(|| Bin::of(refs));
+        let mut scratch = [[Bin::default(); BINS]; 3];
+        let mut owners = Vec::new();
+        let decision = self.decide(refs, order, depth, &all, &mut scratch, &mut owners);
+        let Decision::Split { mid, children } = decision else {
+            *root = leaf(all.bounds(), base, refs.len());
+            return;
+        };
+        *root = BinaryNode {
+            bounds: all.bounds(),
+            first: rest_base as u32,
+            count: 0,
+        };
+        let (l, r) = children.map_or((None, None), |(l, r)| (Some(l), Some(r)));
+        let (refs_l, refs_r) = refs.split_at_mut(mid);
+        let (order_l, order_r) = order.split_at_mut(mid);
+        // The children as a pair, then the left subtree's slots, then the right's.
+        let (pair, rest) = rest.split_at_mut(2);
+        let (rest_l, rest_r) = rest.split_at_mut(2 * mid - 2);
+        let (root_l, root_r) = pair.split_at_mut(1);
+        let (base_l, base_r) = (rest_base + 2, rest_base + 2 * mid);
+        rayon::join(
+            || {
+                self.subtree(
+                    refs_l,
+                    order_l,
+                    base,
+                    depth + 1,
+                    l,
+                    &mut root_l[0],
+                    rest_l,
+                    base_l,
+                )
+            },
+            || {
+                self.subtree(
+                    refs_r,
+                    order_r,
+                    base + mid,
+                    depth + 1,
+                    r,
+                    &mut root_r[0],
+                    rest_r,
+                    base_r,
+                )
+            },
+        );
+    }
+
+    /// [`Context::subtree`] on this thread.
+    #[allow(clippy::too_many_arguments)]
+    fn sequential(
+        &self,
+        refs: &mut [Ref],
+        order: &mut [u32],
+        base: usize,
+        depth: u32,
+        known: Option<Bin>,
+        root: &mut BinaryNode,
+        rest: &mut [BinaryNode],
+        rest_base: usize,
+    ) {
+        let n = refs.len();
+        // (slot in `rest`, None for the root; start, end, depth, bins when known)
+        let mut work = vec![(None, 0usize, n, depth, known)];
+        let mut next = 0usize;
+        let mut owners: Vec<u32> = Vec::new();
+        let mut scratch = [[Bin::default(); BINS]; 3];
+        while let Some((slot, start, end, depth, known)) = work.pop() {
+            let range = &mut refs[start..end];
+            let all = known.unwrap_or_else(|| Bin::of(range));
+            let decision = self.decide(
+                range,
+                &mut order[start..end],
+                depth,
+                &all,
+                &mut scratch,
+                &mut owners,
+            );
+            let node = match decision {
+                Decision::Leaf => leaf(all.bounds(), base + start, end - start),
+                Decision::Split { mid, children } => {
+                    let left = next;
+                    next += 2;
+                    let (l, r) = children.map_or((None, None), |(l, r)| (Some(l), Some(r)));
+                    work.push((Some(left + 1), start + mid, end, depth + 1, r));
+                    work.push((Some(left), start, start + mid, depth + 1, l));
+                    BinaryNode {
+                        bounds: all.bounds(),
+                        first: (rest_base + left) as u32,
+                        count: 0,
+                    }
+                }
+            };
+            match slot {
+                None => *root = node,
+                Some(i) => rest[i] = node,
+            }
+        }
+    }
+
+    /// Decides a node over `range` (all of whose references `all` bins), partitioning the
+    /// range (and `order` alike) when it splits.
+    fn decide(
+        &self,
+        range: &mut [Ref],
+        order: &mut [u32],
+        depth: u32,
+        all: &Bin,
+        scratch: &mut [[Bin; BINS]; 3],
+        owners: &mut Vec<u32>,
+    ) -> Decision {
+        let params = self.params;
+        let count = range.len();
+        if count <= 1 {
+            return Decision::Leaf;
+        }
+        let bounds = all.bounds();
         let (cmin, cmax) = (all.clo, all.chi);
         let extent = cmax - cmin;
         // Primitives the node's boxes belong to (counted for small nodes only).
-        let owned = if owner.is_empty() || count > 4 * params.max_leaf {
+        let owned = if self.owner.is_empty() || count > 4 * params.max_leaf {
             count
         } else {
             owners.clear();
-            owners.extend(order[start..end].iter().map(|&p| owner[p as usize]));
+            owners.extend(order.iter().map(|&p| self.owner[p as usize]));
             owners.sort_unstable();
             owners.dedup();
             owners.len()
@@ -199,30 +355,34 @@ pub(crate) fn build_binary(boxes: &[Aabb], owner: &[u32], params: BuildParams) -
                 bounds.surface_area(),
                 params,
                 bins_for(count),
-                &mut scratch,
+                scratch,
             )
         };
-        let (mid, children) = match split {
+        match split {
             Some((axis, bin, cost, left, right)) => {
                 if cost >= params.leaf_cost(owned as u32) && owned <= params.max_leaf {
-                    make_leaf(&mut nodes);
-                    continue;
+                    return Decision::Leaf;
                 }
                 let nb = bins_for(count);
                 let scale = nb as f32 / extent[axis];
-                let left_count = partition(range, &mut order[start..end], |r| {
+                let left_count = partition(range, order, |r| {
                     bin_of(r.centroid()[axis], cmin[axis], scale, nb) <= bin
                 });
                 if left_count == 0 || left_count == count {
-                    (count / 2, None)
+                    Decision::Split {
+                        mid: count / 2,
+                        children: None,
+                    }
                 } else {
-                    (left_count, Some((left, right)))
+                    Decision::Split {
+                        mid: left_count,
+                        children: Some((left, right)),
+                    }
                 }
             }
             None => {
                 if owned <= params.max_leaf {
-                    make_leaf(&mut nodes);
-                    continue;
+                    return Decision::Leaf;
                 }
                 // Object median along the widest centroid axis.
                 let axis = extent.max_position();
@@ -233,31 +393,25 @@ pub(crate) fn build_binary(boxes: &[Aabb], owner: &[u32], params: BuildParams) -
                         .total_cmp(&range[b as usize].centroid()[axis])
                 });
                 let moved_refs: Vec<Ref> = perm.iter().map(|&i| range[i as usize]).collect();
-                let moved_order: Vec<u32> =
-                    perm.iter().map(|&i| order[start + i as usize]).collect();
+                let moved_order: Vec<u32> = perm.iter().map(|&i| order[i as usize]).collect();
                 range.copy_from_slice(&moved_refs);
-                order[start..end].copy_from_slice(&moved_order);
-                (mid, None)
+                order.copy_from_slice(&moved_order);
+                Decision::Split {
+                    mid,
+                    children: None,
+                }
             }
-        };
-        let left = nodes.len();
-        nodes.push(BinaryNode {
-            bounds: Aabb::EMPTY,
-            first: 0,
-            count: 0,
-        });
-        nodes.push(BinaryNode {
-            bounds: Aabb::EMPTY,
-            first: 0,
-            count: 0,
-        });
-        nodes[node].first = left as u32;
-        nodes[node].count = 0;
-        let (l, r) = children.map_or((None, None), |(l, r)| (Some(l), Some(r)));
-        work.push((left + 1, start + mid, end, depth + 1, r));
-        work.push((left, start, start + mid, depth + 1, l));
+        }
     }
-    BinaryBvh { nodes, order }
+}
+
+/// A leaf over references `first..first + count` of the build order.
+fn leaf(bounds: Aabb, first: usize, count: usize) -> BinaryNode {
+    BinaryNode {
+        bounds,
+        first: first as u32,
+        count: count as u32,
+    }
 }
 
 #[inline(always)]

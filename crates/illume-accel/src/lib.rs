@@ -21,7 +21,7 @@
 //!
 //! * Mesh level: binned SAH (up to 32 bins, all three axes in one pass) over triangle
 //!   boxes, with the cost of a leaf counted in groups of four triangles, builds a binary
-//!   tree. Alongside it a second tree is built over pre-split triangle references
+//!   tree (large subtrees in parallel). Alongside it a second tree is built over pre-split triangle references
 //!   ([`BvhSettings::split_budget`], `split.rs`), and the one the heuristic expects to be
 //!   cheaper is kept (Sponza's is split, a Cornell box's is not). The tree is
 //!   collapsed into eight-wide nodes of 256 bytes (child boxes as structure of arrays, so

@@ -762,3 +762,33 @@ fn pre_split_trees_agree_with_brute_force_and_are_kept_only_when_cheaper() {
         sponza.triangles
     );
 }
+
+/// The build splits large ranges between threads (and builds the split and unsplit
+/// trees at once): the tree must not depend on how many threads there are.
+#[test]
+fn the_tree_is_the_same_whatever_the_thread_count() {
+    let scene = shared_scene("dabrovic_sponza/sponza.obj");
+    let build = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| Tracer::new(&scene))
+    };
+    let (one, four) = (build(1), build(4));
+    let (a, b) = (one.stats(), four.stats());
+    assert_eq!(
+        (a.mesh_nodes, a.stored_triangles, a.memory_bytes),
+        (b.mesh_nodes, b.stored_triangles, b.memory_bytes)
+    );
+    assert!(a.stored_triangles > a.triangles, "Sponza is built split");
+    let rays = random_rays(scene.bounds(), 20_000, 51);
+    let (ha, hb) = (
+        one.intersect_batch(&rays, MASK_DEFAULT),
+        four.intersect_batch(&rays, MASK_DEFAULT),
+    );
+    for (i, (x, y)) in ha.iter().zip(&hb).enumerate() {
+        assert_eq!(hit_bits(x), hit_bits(y), "ray {i}");
+    }
+    four.validate().unwrap();
+}
