@@ -201,8 +201,9 @@ impl Blas {
     /// Builds the BVH of `mesh` (binned SAH, then collapsed to eight-wide nodes), whose
     /// alpha-masked triangles have the holes of `cutout`.
     ///
-    /// With a split budget (see [`BvhSettings::split_budget`]), two trees are built at
-    /// once (rayon): one over the triangles, one over pre-split references
+    /// With a split budget (see [`BvhSettings::split_budget`]), two trees are built, one
+    /// after the other (each in parallel inside): one over the triangles, one over
+    /// pre-split references
     /// ([`crate::split`]); the one the surface area heuristic expects to be cheaper to
     /// traverse is kept. Splitting pays where long diagonal triangles cross a large mesh
     /// (Sponza's floors and arches) and costs where the pieces of a few large triangles
@@ -228,7 +229,9 @@ impl Blas {
                 .then(|| PackedTree::build(&corners, &boxes, &owner, params))
         };
         let tree = if settings.split_budget > 0.0 {
-            match rayon::join(plain, split) {
+            // One after the other: each build is parallel inside, and two at once
+            // contend for the cores and the memory bus.
+            match (plain(), split()) {
                 (plain, Some(split)) if split.sah < plain.sah => split,
                 (plain, _) => plain,
             }

@@ -106,8 +106,8 @@ pub struct BvhSettings {
     /// wasted box hits), at the cost of build time and memory roughly in proportion.
     /// With a budget, each mesh BVH is built both with and without splitting and the
     /// tree the surface area heuristic prefers is kept, so splitting never makes a tree
-    /// worse by that measure; the build then costs about twice the CPU time (the two
-    /// builds run in parallel). 0 turns splitting off. Default 0.6 (BENCHMARKS.md,
+    /// worse by that measure; the build then costs about twice the CPU time (less in
+    /// wall time on several cores: each build is parallel). 0 turns splitting off. Default 0.6 (BENCHMARKS.md,
     /// "Issue 16, third pass": the fastest Sponza of 0–1.2).
     pub split_budget: f32,
 }
