@@ -763,8 +763,8 @@ fn pre_split_trees_agree_with_brute_force_and_are_kept_only_when_cheaper() {
     );
 }
 
-/// The build splits large ranges between threads (and builds the split and unsplit
-/// trees at once): the tree must not depend on how many threads there are.
+/// The build splits large ranges between threads: the tree (split or not) must not depend
+/// on how many threads there are.
 #[test]
 fn the_tree_is_the_same_whatever_the_thread_count() {
     let scene = shared_scene("dabrovic_sponza/sponza.obj");
