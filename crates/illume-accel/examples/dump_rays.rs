@@ -31,6 +31,17 @@ use std::time::Instant;
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // mimalloc asks for transparent huge pages on its arena (MADV_HUGEPAGE); where the
+    // kernel compacts memory on such faults (`defrag = madvise`, this project's machines),
+    // a fault can stall for milliseconds, and a timed build then takes 55–82 ms instead of
+    // 41–50 (Sponza, BENCHMARKS.md "Issue 16, third pass"). The measurement should not
+    // depend on how fragmented the machine's memory is: huge pages off for this process.
+    #[cfg(target_os = "linux")]
+    #[allow(unsafe_code)]
+    // SAFETY: PR_SET_THP_DISABLE takes integer arguments only and touches no memory of ours.
+    unsafe {
+        libc::prctl(libc::PR_SET_THP_DISABLE, 1, 0, 0, 0);
+    }
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [scene_arg, kind, rays_arg, threads_arg, out] = args.as_slice() else {
         return Err("usage: dump_rays SCENE incoherent|primary RAYS THREADS OUT_DIR".into());
