@@ -161,16 +161,16 @@ pub(crate) fn build_binary(boxes: &[Aabb], owner: &[u32], params: BuildParams) -
     // leaves unused stay empty interior-looking nodes no link points to.
     let mut nodes = vec![leaf(Aabb::EMPTY, 0, 0); 2 * n - 1];
     let (root, rest) = nodes.split_at_mut(1);
-    ctx.subtree(
-        &mut refs,
-        &mut order,
-        0,
-        0,
-        Some(all),
-        &mut root[0],
+    ctx.subtree(Span {
+        refs: &mut refs,
+        order: &mut order,
+        base: 0,
+        depth: 0,
+        known: Some(all),
+        root: &mut root[0],
         rest,
-        1,
-    );
+        rest_base: 1,
+    });
     BinaryBvh { nodes, order }
 }
 
@@ -194,27 +194,38 @@ struct Context<'a> {
     params: BuildParams,
 }
 
+/// A subtree to build: references `refs` (the first is number `base` of the build order;
+/// `order` alike) at `depth`, with their bins when known; its root goes into `root`, its
+/// other nodes into `rest` (2·len − 2 slots, the first at index `rest_base` of the whole
+/// node array).
+struct Span<'a> {
+    refs: &'a mut [Ref],
+    order: &'a mut [u32],
+    base: usize,
+    depth: u32,
+    known: Option<Bin>,
+    root: &'a mut BinaryNode,
+    rest: &'a mut [BinaryNode],
+    rest_base: usize,
+}
+
 impl Context<'_> {
-    /// Builds the subtree over `refs` (whose first reference is number `base` of the
-    /// build order; `order` alike): its root into `root`, its other nodes into `rest`
-    /// (2·len − 2 slots, the first at index `rest_base` of the whole array). Large ranges
-    /// build their two halves in parallel (rayon); the tree is the same whatever the
-    /// thread count.
-    #[allow(clippy::too_many_arguments)]
-    fn subtree(
-        &self,
-        refs: &mut [Ref],
-        order: &mut [u32],
-        base: usize,
-        depth: u32,
-        known: Option<Bin>,
-        root: &mut BinaryNode,
-        rest: &mut [BinaryNode],
-        rest_base: usize,
-    ) {
-        if refs.len() < PARALLEL_MIN {
-            return self.sequential(refs, order, base, depth, known, root, rest, rest_base);
+    /// Builds `span`. Large spans build their two halves in parallel (rayon); the tree is
+    /// the same whatever the thread count.
+    fn subtree(&self, span: Span<'_>) {
+        if span.refs.len() < PARALLEL_MIN {
+            return self.sequential(span);
         }
+        let Span {
+            refs,
+            order,
+            base,
+            depth,
+            known,
+            root,
+            rest,
+            rest_base,
+        } = span;
         let all = known.unwrap_or_else(|| Bin::of(refs));
         let mut scratch = [[Bin::default(); BINS]; 3];
         let mut owners = Vec::new();
@@ -235,48 +246,41 @@ impl Context<'_> {
         let (pair, rest) = rest.split_at_mut(2);
         let (rest_l, rest_r) = rest.split_at_mut(2 * mid - 2);
         let (root_l, root_r) = pair.split_at_mut(1);
-        let (base_l, base_r) = (rest_base + 2, rest_base + 2 * mid);
-        rayon::join(
-            || {
-                self.subtree(
-                    refs_l,
-                    order_l,
-                    base,
-                    depth + 1,
-                    l,
-                    &mut root_l[0],
-                    rest_l,
-                    base_l,
-                )
-            },
-            || {
-                self.subtree(
-                    refs_r,
-                    order_r,
-                    base + mid,
-                    depth + 1,
-                    r,
-                    &mut root_r[0],
-                    rest_r,
-                    base_r,
-                )
-            },
-        );
+        let left = Span {
+            refs: refs_l,
+            order: order_l,
+            base,
+            depth: depth + 1,
+            known: l,
+            root: &mut root_l[0],
+            rest: rest_l,
+            rest_base: rest_base + 2,
+        };
+        let right = Span {
+            refs: refs_r,
+            order: order_r,
+            base: base + mid,
+            depth: depth + 1,
+            known: r,
+            root: &mut root_r[0],
+            rest: rest_r,
+            rest_base: rest_base + 2 * mid,
+        };
+        rayon::join(|| self.subtree(left), || self.subtree(right));
     }
 
     /// [`Context::subtree`] on this thread.
-    #[allow(clippy::too_many_arguments)]
-    fn sequential(
-        &self,
-        refs: &mut [Ref],
-        order: &mut [u32],
-        base: usize,
-        depth: u32,
-        known: Option<Bin>,
-        root: &mut BinaryNode,
-        rest: &mut [BinaryNode],
-        rest_base: usize,
-    ) {
+    fn sequential(&self, span: Span<'_>) {
+        let Span {
+            refs,
+            order,
+            base,
+            depth,
+            known,
+            root,
+            rest,
+            rest_base,
+        } = span;
         let n = refs.len();
         // (slot in `rest`, None for the root; start, end, depth, bins when known)
         let mut work = vec![(None, 0usize, n, depth, known)];
