@@ -235,6 +235,40 @@ mod tests {
     }
 
     #[test]
+    fn degenerate_triangles_keep_covering_boxes() {
+        // A point, a needle along a diagonal (no area, a large box), a flat sliver.
+        let point = [Vec3::ONE; 3];
+        let needle = [Vec3::ZERO, Vec3::splat(5.0), Vec3::splat(2.5)];
+        let flat = [
+            Vec3::ZERO,
+            Vec3::new(4.0, 0.0, 0.0),
+            Vec3::new(4.0, 0.0, 0.0),
+        ];
+        let tris = [point, needle, flat];
+        let (boxes, refs) = split_references(&tris, 4.0);
+        for (t, c) in tris.iter().enumerate() {
+            let mine: Vec<&Aabb> = boxes
+                .iter()
+                .zip(&refs)
+                .filter(|(_, r)| **r == t as u32)
+                .map(|(b, _)| b)
+                .collect();
+            assert!(!mine.is_empty(), "triangle {t} lost");
+            for k in 0..=20 {
+                let p = c[0] + (c[1] - c[0]) * (k as f32 / 20.0);
+                assert!(
+                    mine.iter().any(|b| b.contains_box(&Aabb::new(p, p), 1e-5)),
+                    "triangle {t}: {p:?} uncovered"
+                );
+            }
+        }
+        assert!(
+            refs.iter().filter(|&&r| r == 1).count() > 1,
+            "the needle is split"
+        );
+    }
+
+    #[test]
     fn slivers_get_the_splits() {
         // A right triangle in the z = 0 plane with legs on the axes wastes half its box
         // area, a diagonal sliver far more: the sliver gets the splits.
