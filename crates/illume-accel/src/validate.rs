@@ -49,7 +49,7 @@ fn validate_blas(blas: &Blas) -> Result<(), String> {
     let mut packet_refs = vec![0u32; blas.packets.len()];
     // Boxes of the leaves holding each triangle (pre-splitting puts a triangle in one or
     // more leaves, each box covering a part of it).
-    let mut leaf_boxes: Vec<Vec<Aabb>> = vec![Vec::new(); n];
+    let mut leaf_boxes: Vec<Vec<(usize, Aabb)>> = vec![Vec::new(); n];
     let mut corners_of: Vec<Option<[illume_core::Vec3; 3]>> = vec![None; n];
     validate_tree(&blas.bvh, &mut |range, bounds, _, place| {
         for (k, packet) in blas.packets[range.clone()].iter().enumerate() {
@@ -60,12 +60,13 @@ fn validate_blas(blas: &Blas) -> Result<(), String> {
                         "{place}: triangle index {index} out of range 0..{n}"
                     ));
                 };
-                if boxes.contains(bounds) {
+                // A leaf is known by its first packet.
+                if boxes.iter().any(|&(leaf, _)| leaf == range.start) {
                     return Err(format!(
                         "{place}: triangle {index} stored twice in one leaf"
                     ));
                 }
-                boxes.push(*bounds);
+                boxes.push((range.start, *bounds));
                 match corners_of[index as usize] {
                     None => corners_of[index as usize] = Some(corners),
                     Some(c) if c == corners => {}
@@ -92,12 +93,15 @@ fn validate_blas(blas: &Blas) -> Result<(), String> {
         // The leaves' boxes must cover the triangle: its corners, edge points and a
         // lattice of inner points each lie in one of them.
         const STEPS: usize = 8;
+        let tol = tolerance(&Aabb::from_points(c));
         for i in 0..=STEPS {
             for j in 0..=STEPS - i {
                 let (u, v) = (i as f32 / STEPS as f32, j as f32 / STEPS as f32);
                 let p = c[0] + (c[1] - c[0]) * u + (c[2] - c[0]) * v;
-                let tol = tolerance(&Aabb::from_points(c));
-                if !boxes.iter().any(|b| b.contains_box(&Aabb::new(p, p), tol)) {
+                if !boxes
+                    .iter()
+                    .any(|(_, b)| b.contains_box(&Aabb::new(p, p), tol))
+                {
                     return Err(format!(
                         "mesh triangle {t} {c:?}: point {p:?} lies in none of its {} leaf boxes {boxes:?}",
                         boxes.len()
