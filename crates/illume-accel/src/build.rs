@@ -271,19 +271,11 @@ impl Context<'_> {
 
     /// [`Context::subtree`] on this thread.
     fn sequential(&self, span: Span<'_>) {
-        let Span {
-            refs,
-            order,
-            base,
-            depth,
-            known,
-            root,
-            rest,
-            rest_base,
-        } = span;
+        let (refs, order, base, rest_base) = (span.refs, span.order, span.base, span.rest_base);
+        let (root, rest) = (span.root, span.rest);
         let n = refs.len();
         // (slot in `rest`, None for the root; start, end, depth, bins when known)
-        let mut work = vec![(None, 0usize, n, depth, known)];
+        let mut work = vec![(None, 0usize, n, span.depth, span.known)];
         let mut next = 0usize;
         let mut owners: Vec<u32> = Vec::new();
         let mut scratch = [[Bin::default(); BINS]; 3];

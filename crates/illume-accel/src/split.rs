@@ -187,6 +187,16 @@ mod tests {
     use super::*;
     use illume_core::sampling::{Pcg32, SampleStream};
 
+    /// The boxes of triangle `t`'s references.
+    fn references_of<'a>(boxes: &'a [Aabb], refs: &[u32], t: usize) -> Vec<&'a Aabb> {
+        boxes
+            .iter()
+            .zip(refs)
+            .filter(|(_, r)| **r == t as u32)
+            .map(|(b, _)| b)
+            .collect()
+    }
+
     fn random_triangles(n: usize, seed: u64) -> Vec<[Vec3; 3]> {
         let mut rng = Pcg32::new(seed, 3);
         let mut p = || Vec3::new(rng.next_1d(), rng.next_1d(), rng.next_1d()) * 10.0 - 5.0;
@@ -202,12 +212,7 @@ mod tests {
         let mut rng = Pcg32::new(9, 9);
         for (t, c) in tris.iter().enumerate() {
             let whole = Aabb::from_points(*c);
-            let mine: Vec<&Aabb> = boxes
-                .iter()
-                .zip(&refs)
-                .filter(|(_, r)| **r == t as u32)
-                .map(|(b, _)| b)
-                .collect();
+            let mine = references_of(&boxes, &refs, t);
             assert!(!mine.is_empty());
             for b in &mine {
                 assert!(
@@ -247,12 +252,7 @@ mod tests {
         let tris = [point, needle, flat];
         let (boxes, refs) = split_references(&tris, 4.0);
         for (t, c) in tris.iter().enumerate() {
-            let mine: Vec<&Aabb> = boxes
-                .iter()
-                .zip(&refs)
-                .filter(|(_, r)| **r == t as u32)
-                .map(|(b, _)| b)
-                .collect();
+            let mine = references_of(&boxes, &refs, t);
             assert!(!mine.is_empty(), "triangle {t} lost");
             for k in 0..=20 {
                 let p = c[0] + (c[1] - c[0]) * (k as f32 / 20.0);
