@@ -228,6 +228,23 @@ pub struct Texture {
 }
 
 impl Texture {
+    /// An opaque `width`×`height` texture, repeating in both directions, whose texel
+    /// `(x, y)` (row `y` from the top) is `f(x, y)`.
+    pub fn from_fn(name: &str, width: u32, height: u32, f: impl Fn(u32, u32) -> Rgb) -> Self {
+        Self {
+            name: name.into(),
+            width,
+            height,
+            texels: (0..height)
+                .flat_map(|y| (0..width).map(move |x| (x, y)))
+                .map(|(x, y)| f(x, y))
+                .collect(),
+            wrap_u: WrapMode::Repeat,
+            wrap_v: WrapMode::Repeat,
+            alpha: vec![],
+        }
+    }
+
     /// Bilinear lookup of the opacity in [0, 1] at `uv` (1 for a texture without alpha).
     pub fn sample_alpha(&self, uv: Vec2) -> f32 {
         if self.alpha.len() != self.texels.len() || self.alpha.is_empty() {

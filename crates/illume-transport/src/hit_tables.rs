@@ -382,18 +382,7 @@ mod tests {
     /// A texture of sRGB-8 values (so it packs), `w`×`h`, from `f(x, y)` codes.
     fn srgb8_texture(w: u32, h: u32, f: impl Fn(u32, u32) -> [u8; 3]) -> Texture {
         let lut = &*SRGB8_LUT;
-        Texture {
-            name: "test".into(),
-            width: w,
-            height: h,
-            texels: (0..h)
-                .flat_map(|y| (0..w).map(move |x| (x, y)))
-                .map(|(x, y)| f(x, y).map(|c| lut[c as usize]).into())
-                .collect(),
-            wrap_u: WrapMode::Repeat,
-            wrap_v: WrapMode::Repeat,
-            alpha: vec![],
-        }
+        Texture::from_fn("test", w, h, |x, y| f(x, y).map(|c| lut[c as usize]).into())
     }
 
     fn mean(t: &PackedTexture) -> Rgb {

@@ -209,18 +209,7 @@ mod tests {
     use super::*;
 
     fn texture(w: u32, h: u32, f: impl Fn(u32, u32) -> Rgb) -> Texture {
-        Texture {
-            name: "test".into(),
-            width: w,
-            height: h,
-            texels: (0..h)
-                .flat_map(|y| (0..w).map(move |x| (x, y)))
-                .map(|(x, y)| f(x, y))
-                .collect(),
-            wrap_u: WrapMode::Repeat,
-            wrap_v: WrapMode::Repeat,
-            alpha: vec![],
-        }
+        Texture::from_fn("test", w, h, f)
     }
 
     fn mean(t: &[Rgb]) -> Rgb {

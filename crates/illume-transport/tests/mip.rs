@@ -3,8 +3,8 @@
 //! one reads exactly what the bilinear G-buffer (and rays) read.
 
 use illume_core::{Quat, Rgb, Vec2, Vec3};
-use illume_scene::builtin::SceneBuilder;
-use illume_scene::{Material, Mesh, Texture, Trs, WrapMode};
+use illume_scene::builtin::{SceneBuilder, quad};
+use illume_scene::{Material, Mesh, Texture, Trs};
 use illume_transport::{GBuffer, TextureFilter, World};
 
 /// A 2 m square facing +y, seen from 3 m straight above, textured with a 64 × 64
@@ -13,40 +13,20 @@ use illume_transport::{GBuffer, TextureFilter, World};
 fn checkerboard_floor(repeats: f32) -> World {
     let mut b = SceneBuilder::new();
     let side = 64;
-    let tex = b.texture(Texture {
-        name: "checks".into(),
-        width: side,
-        height: side,
-        texels: (0..side * side)
-            .map(|i| Rgb::splat(((i % side + i / side) % 2) as f32))
-            .collect(),
-        wrap_u: WrapMode::Repeat,
-        wrap_v: WrapMode::Repeat,
-        alpha: vec![],
-    });
+    let tex = b.texture(Texture::from_fn("checks", side, side, |x, y| {
+        Rgb::splat(((x + y) % 2) as f32)
+    }));
     let m = b.material(Material {
         base_color: Rgb::ONE,
         base_color_texture: Some(tex),
         ..Default::default()
     });
+    // Facing +y (z × x), texture coordinates scaled to repeat the checks.
+    let mut floor = quad(Vec3::ZERO, Vec3::Z, Vec3::X, m);
+    floor.uvs.iter_mut().for_each(|uv| *uv *= repeats);
     let mesh = b.mesh(Mesh {
         name: "floor".into(),
-        positions: vec![
-            Vec3::new(-1.0, 0.0, -1.0),
-            Vec3::new(1.0, 0.0, -1.0),
-            Vec3::new(1.0, 0.0, 1.0),
-            Vec3::new(-1.0, 0.0, 1.0),
-        ],
-        normals: vec![Vec3::Y; 4],
-        uvs: vec![
-            Vec2::new(0.0, 0.0),
-            Vec2::new(repeats, 0.0),
-            Vec2::new(repeats, repeats),
-            Vec2::new(0.0, repeats),
-        ],
-        indices: vec![[0, 2, 1], [0, 3, 2]],
-        triangle_materials: vec![m, m],
-        ..Default::default()
+        ..floor
     });
     b.placed("floor", mesh, Trs::IDENTITY, false);
     let cam = b.node(
