@@ -17,7 +17,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use illume_core::{Affine3A, Vec2};
 use illume_scene::Edit;
-use illume_transport::{GBuffer, VisibilityBuffer, World};
+use illume_transport::{GBuffer, TextureFilter, VisibilityBuffer, World};
 use std::time::Duration;
 
 const SIZES: [(u32, u32); 3] = [(640, 480), (800, 600), (1280, 1024)];
@@ -56,27 +56,34 @@ fn gbuffer(c: &mut Criterion) {
             g.bench_function(format!("{name} {w}x{h} raster static"), |b| {
                 b.iter(|| reused.rasterize_into(&world, w, h))
             });
-            // Turn the camera by ±0.05° every frame: no pixel can be kept.
+            // Turn the camera by ±0.05° every frame: no pixel can be kept. `moving camera`
+            // reads textures bilinearly (as rays do); `moving trilinear` mip-maps them,
+            // as the renderer's default does.
             let mut moving = World::new(world.scene.clone());
             let home = moving.scene.camera.world_from_camera;
             let mut frame = 0u32;
-            g.bench_function(format!("{name} {w}x{h} raster moving camera"), |b| {
-                b.iter(|| {
-                    frame += 1;
-                    let yaw = if frame.is_multiple_of(2) {
-                        8.7e-4
-                    } else {
-                        -8.7e-4
-                    };
-                    moving
-                        .apply_edit(&Edit::SetCameraTransform {
-                            world_from_camera: home * Affine3A::from_rotation_y(yaw),
-                        })
-                        .expect("edit");
-                    reused.rasterize_into(&moving, w, h);
-                    assert_eq!(reused.reused_pixels, 0);
-                })
-            });
+            for (label, filter) in [
+                ("raster moving camera", TextureFilter::Bilinear),
+                ("raster moving trilinear", TextureFilter::Trilinear),
+            ] {
+                g.bench_function(format!("{name} {w}x{h} {label}"), |b| {
+                    b.iter(|| {
+                        frame += 1;
+                        let yaw = if frame.is_multiple_of(2) {
+                            8.7e-4
+                        } else {
+                            -8.7e-4
+                        };
+                        moving
+                            .apply_edit(&Edit::SetCameraTransform {
+                                world_from_camera: home * Affine3A::from_rotation_y(yaw),
+                            })
+                            .expect("edit");
+                        reused.rasterize_into_with(&moving, w, h, filter);
+                        assert_eq!(reused.reused_pixels, 0);
+                    })
+                });
+            }
             g.bench_function(format!("{name} {w}x{h} visibility"), |b| {
                 b.iter(|| VisibilityBuffer::render(&world.scene, w, h))
             });

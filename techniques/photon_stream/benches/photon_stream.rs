@@ -14,6 +14,10 @@
 //! * `rate` — photon impacts per second of the streaming thread (alone) against the
 //!   tracer's incoherent closest-hit rays per second on one thread.
 //! * `visibility` — cost of the VSL visibility modes (beyond the paper).
+//! * `target` — the frame-rate targets only (Cornell box and Sponza, 800×600, 100 VSLs,
+//!   static and moving camera), five rounds each, medians of fps and of each phase. With
+//!   `ILLUME_BENCH_PAUSED=1` the streaming thread stays paused: the frame alone, to
+//!   measure what the thread beside it costs.
 //! * `latency` — time until no photon from before a change is left in the pool,
 //!   against pool size / impact rate, on `builtin:cornell-spot`.
 
@@ -161,6 +165,48 @@ fn fps_table() {
     println!("|---|---|---|---|---|---|---|---|---|");
     for r in shading {
         println!("{r}");
+    }
+}
+
+/// The frame-rate targets of issue 15 (800×600, 100 VSLs): five rounds per row, rows
+/// interleaved so that machine load touches them alike; medians.
+fn target_table() {
+    println!(
+        "\n### Frame-rate targets (800×600, 100 VSLs, streaming thread running; medians of 5 rounds)\n"
+    );
+    println!("| scene | camera | fps | G-buffer [ms] | direct [ms] | VSL indirect [ms] |");
+    println!("|---|---|---:|---:|---:|---:|");
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    for (label, file) in [SCENES[0], SCENES[2]] {
+        let world: SharedWorld = World::new(load(file)).shared();
+        let mut runs: [Vec<FrameRun>; 2] = [Vec::new(), Vec::new()];
+        for _ in 0..5 {
+            for (i, moving) in [false, true].into_iter().enumerate() {
+                runs[i].push(run_frames(
+                    &world,
+                    (800, 600),
+                    PhotonStreamSettings {
+                        start_paused: std::env::var_os("ILLUME_BENCH_PAUSED").is_some(),
+                        ..Default::default()
+                    },
+                    moving,
+                ));
+            }
+        }
+        for (i, view) in ["static", "moving"].into_iter().enumerate() {
+            let r = &runs[i];
+            let m = |f: fn(&FrameRun) -> f64| median(r.iter().map(f).collect());
+            println!(
+                "| {label} | {view} | {:.1} | {:.1} | {:.1} | {:.1} |",
+                m(|r| r.fps),
+                m(|r| r.gbuffer_ms),
+                m(|r| r.direct_ms),
+                m(|r| r.indirect_ms)
+            );
+        }
     }
 }
 
@@ -390,5 +436,8 @@ fn main() {
     }
     if want("priority") {
         priority_table();
+    }
+    if want("target") {
+        target_table();
     }
 }

@@ -26,10 +26,12 @@ pub enum StreamPriority {
     /// render threads it takes about a third of the machine while a frame renders, all
     /// of it in between): the highest photon rate, the lowest latency, slower frames.
     Normal,
-    /// The thread runs at the lowest OS priority (nice 19 on Linux): frames take the
-    /// cores first and photons fill the time the renderer leaves — as in the paper,
-    /// where the GPU renders and the CPU streams: faster frames, a lower photon rate and
-    /// so a longer latency than `normal` (measured in `BENCHMARKS.md`, photon_stream).
+    /// The thread runs at the lowest OS priority (`SCHED_IDLE` on Linux, else the
+    /// lowest nice level): frames take the cores first and photons fill the time the
+    /// renderer leaves — as in the paper, where the GPU renders and the CPU streams:
+    /// faster frames, a lower photon rate and so a longer latency than `normal`
+    /// (measured in `BENCHMARKS.md`, photon_stream). Where frames leave no idle time
+    /// (rendered back to back, no frame pacing), the stream gets only the gaps.
     #[default]
     Low,
 }

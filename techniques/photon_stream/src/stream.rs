@@ -231,13 +231,7 @@ pub fn spawn(
         .name("photon_stream".into())
         .spawn(move || {
             if config.priority == StreamPriority::Low {
-                // Lowering one's own priority needs no privilege on Linux; elsewhere it
-                // may be refused, and streaming at normal priority is still correct.
-                if let Err(e) = thread_priority::set_current_thread_priority(
-                    thread_priority::ThreadPriority::Min,
-                ) {
-                    eprintln!("photon_stream: cannot lower the streaming thread's priority: {e:?}");
-                }
+                lower_own_priority();
             }
             while shared.wait_running() {
                 // The epoch before the world: a flush publishes its world first, so a
@@ -254,4 +248,25 @@ pub fn spawn(
                 shared.apply(&batch, epoch);
             }
         })
+}
+
+/// Puts the calling thread at the OS's lowest priority: `SCHED_IDLE` where the OS has it
+/// (Linux: it runs only on a core no other thread wants, and a waking render thread
+/// takes the core back at once), else the lowest nice level. Lowering one's own
+/// priority needs no privilege on Linux; where it is refused, streaming at normal
+/// priority is still correct, and the refusal is said once on stderr.
+fn lower_own_priority() {
+    use thread_priority::ThreadPriority;
+    #[cfg(target_os = "linux")]
+    {
+        use thread_priority::{NormalThreadSchedulePolicy, ThreadSchedulePolicy};
+        let idle = ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Idle);
+        let id = thread_priority::thread_native_id();
+        if thread_priority::set_thread_priority_and_policy(id, ThreadPriority::Min, idle).is_ok() {
+            return;
+        }
+    }
+    if let Err(e) = thread_priority::set_current_thread_priority(ThreadPriority::Min) {
+        eprintln!("photon_stream: cannot lower the streaming thread's priority: {e:?}");
+    }
 }

@@ -255,6 +255,16 @@ fn streaming_thread_checks(stream_priority: StreamPriority) {
     wait_for(&|| stat(&ps, "pool_fill") > 0.99);
     wait_for(&|| stat(&ps, "impacts_per_s") > 0.0);
     ps.validate().unwrap();
+    // A low-priority thread is SCHED_IDLE on Linux (policy 5): it runs only on a core
+    // no render thread wants. (Other tests' normal-priority threads share the name.)
+    #[cfg(target_os = "linux")]
+    if stream_priority == StreamPriority::Low {
+        assert!(
+            streaming_thread_policies().contains(&5),
+            "no SCHED_IDLE photon_stream thread: {:?}",
+            streaming_thread_policies()
+        );
+    }
     // Scene update under the write lock while the thread runs (announced, as the
     // engine does: the thread ends its batch early).
     ps.before_world_write();
@@ -282,4 +292,26 @@ fn streaming_thread_checks(stream_priority: StreamPriority) {
     let (front, _) = fluxes(&ps.snapshot());
     assert!(front.iter().all(|f| f.is_finite()) && front.iter().any(|f| f.x > 0.0));
     drop(ps); // joins the thread
+}
+
+/// The scheduling policy (`/proc/self/task/*/stat` field 41) of every thread of this
+/// process named `photon_stream`.
+#[cfg(target_os = "linux")]
+fn streaming_thread_policies() -> Vec<u32> {
+    let mut policies = Vec::new();
+    for task in std::fs::read_dir("/proc/self/task").expect("/proc/self/task") {
+        let dir = task.expect("a task entry").path();
+        let comm = std::fs::read_to_string(dir.join("comm")).unwrap_or_default();
+        if comm.trim() != "photon_stream" {
+            continue;
+        }
+        let Ok(stat) = std::fs::read_to_string(dir.join("stat")) else {
+            continue; // the thread ended meanwhile
+        };
+        // Fields after the parenthesised name start at field 3.
+        let rest = &stat[stat.rfind(')').expect("stat has a name") + 1..];
+        let policy = rest.split_whitespace().nth(41 - 3).expect("field 41");
+        policies.push(policy.parse().expect("a number"));
+    }
+    policies
 }
