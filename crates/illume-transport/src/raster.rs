@@ -136,7 +136,8 @@ impl VisibilityBuffer {
     /// [`VisibilityBuffer::render`] into this buffer's size, reusing its allocation.
     pub fn render_into(&mut self, scene: &Scene) {
         let (width, height) = (self.width, self.height);
-        self.pixels.clear();
+        // Cleared strip by strip below, on every core (one thread clearing 5.8 MB at
+        // 800×600 left the other idle).
         self.pixels
             .resize((width * height) as usize, VisibilitySample::EMPTY);
         if width == 0 || height == 0 {
@@ -153,6 +154,7 @@ impl VisibilityBuffer {
             .for_each(|(strip, out)| {
                 let rows = strip as i32 * STRIP_ROWS as i32
                     ..((strip as i32 + 1) * STRIP_ROWS as i32).min(height as i32);
+                out.fill(VisibilitySample::EMPTY);
                 for &t in bins.strip(strip) {
                     let tri = &triangles[t as usize];
                     tri.rasterize(rows.clone(), |x, y, z| {

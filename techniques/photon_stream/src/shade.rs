@@ -371,7 +371,7 @@ pub fn shade(
     let stride = settings.shading_stride.max(1);
     // Σ_s Φ_s·G_s per pixel, without ρ/π (multiplied in at the end so that texture
     // detail stays at full resolution whatever the stride).
-    let mut gathered = vec![Rgb::ZERO; n];
+    let mut gathered = zeros(n);
     let grid = Include::Grid(stride);
     let mut stats = gather(
         world,
@@ -413,6 +413,16 @@ pub fn shade(
         }
     }
     (img, stats)
+}
+
+/// `n` black pixels, written (and first touched) on every core: a frame's buffers are
+/// megabytes, whose zeroing on one thread left the other core idle.
+fn zeros(n: usize) -> Vec<Rgb> {
+    (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|_| Rgb::ZERO)
+        .collect()
 }
 
 /// Radiance ρ/π · Σ Φ·G of every pixel.
@@ -547,7 +557,7 @@ fn interpolate(
             }
         })
         .collect();
-    let mut img = RgbImage::black(w, h);
+    let mut img = RgbImage::from_vec(w, h, zeros((w * h) as usize)).expect("w × h pixels");
     let rows: Vec<(u64, Vec<u32>)> = img
         .pixels_mut()
         .par_chunks_mut(w as usize)
