@@ -17,6 +17,7 @@
 
 pub mod atomic;
 pub mod counters;
+pub mod cpu_time;
 pub mod files;
 pub mod image;
 pub mod math;

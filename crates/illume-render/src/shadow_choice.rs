@@ -341,32 +341,7 @@ fn time_batches<T, R>(batches: &[Vec<T>], f: impl Fn(&T) -> R) -> Option<f64> {
 /// (wall-clock time would grow with their load; the probes, too short to be preempted,
 /// do not).
 fn pool_cpu_ns() -> f64 {
-    rayon::broadcast(|_| thread_cpu_ns()).iter().sum()
-}
-
-/// CPU time of the calling thread \[ns\].
-#[cfg(unix)]
-fn thread_cpu_ns() -> f64 {
-    let mut t = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    #[expect(
-        unsafe_code,
-        reason = "clock_gettime through libc, no safe std equivalent"
-    )]
-    // SAFETY: `t` is a valid, writable timespec; CLOCK_THREAD_CPUTIME_ID exists on every
-    // unix this builds for; the call has no other precondition.
-    let status = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
-    if status != 0 {
-        return 0.0;
-    }
-    t.tv_sec as f64 * 1e9 + t.tv_nsec as f64
-}
-
-/// Elsewhere: wall-clock time since the first call, as if each thread were busy.
-#[cfg(not(unix))]
-fn thread_cpu_ns() -> f64 {
-    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
-    START.get_or_init(Instant::now).elapsed().as_secs_f64() * 1e9
+    rayon::broadcast(|_| illume_core::cpu_time::thread_cpu_ns())
+        .iter()
+        .sum()
 }

@@ -95,6 +95,16 @@ pub struct PhotonStreamSettings {
     /// has the trade-off). Where the OS refuses, the thread keeps normal priority and
     /// says so once on stderr.
     pub stream_priority: StreamPriority,
+    /// With `stream_priority = "low"`: the share of a core the streaming thread keeps
+    /// while render threads want both cores, in [0, 1] (a fraction of one core). Above
+    /// it the thread hands its core back within microseconds; below, it keeps the core
+    /// while it has it. On an idle machine (paced frames, a paused view) the thread takes
+    /// what is free whatever the share. Higher: more photons and a shorter latency while
+    /// frames render back to back, slower frames; 0: frames as fast as with the thread
+    /// paused, photons only in idle time. Default 0.25: Cornell box frames 1.2× faster
+    /// than without a share, at 0.6× the photons (`BENCHMARKS.md`, photon_stream, has the
+    /// sweep).
+    pub stream_share: f32,
     /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
     /// cost linear in the count. Default 20 000.
@@ -181,6 +191,7 @@ impl Default for PhotonStreamSettings {
             pool_size: 100_000,
             mode: StreamMode::Streaming,
             stream_priority: StreamPriority::Low,
+            stream_share: 0.25,
             photons_per_frame: 20_000,
             batch_photons: 256,
             on_change: ChangePolicy::AgeOut,
@@ -311,6 +322,15 @@ impl PhotonStreamSettings {
                 format!(
                     "{} cannot hold one photon path of max_bounces + 1 impacts",
                     self.pool_size
+                ),
+            );
+        }
+        if !(0.0..=1.0).contains(&self.stream_share) {
+            return bad(
+                "stream_share",
+                format!(
+                    "{} is not a fraction of a core in [0, 1]",
+                    self.stream_share
                 ),
             );
         }

@@ -101,6 +101,7 @@ impl PhotonStream {
                         path: settings.photon_path(),
                         seed: settings.seed,
                         inv_quantum,
+                        share: settings.stream_share,
                     },
                 )
                 .map_err(PhotonStreamError::Thread)?,

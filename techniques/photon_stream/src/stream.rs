@@ -219,6 +219,11 @@ pub struct StreamConfig {
     pub seed: u64,
     /// 1 / (watts per quantum).
     pub inv_quantum: f64,
+    /// With [`StreamPriority::Low`]: the share of one core the thread may take from
+    /// render threads that want it ([`PhotonStreamSettings::stream_share`]).
+    ///
+    /// [`PhotonStreamSettings::stream_share`]: crate::PhotonStreamSettings::stream_share
+    pub share: f32,
 }
 
 /// Starts the simulation thread; it runs until [`SharedPool::request_stop`].
@@ -230,9 +235,10 @@ pub fn spawn(
     std::thread::Builder::new()
         .name("photon_stream".into())
         .spawn(move || {
-            if config.priority == StreamPriority::Low {
+            let mut governor = (config.priority == StreamPriority::Low).then(|| {
                 lower_own_priority();
-            }
+                ShareGovernor::new(config.share)
+            });
             while shared.wait_running() {
                 // The epoch before the world: a flush publishes its world first, so a
                 // batch that reads the new epoch traces in the new world.
@@ -241,7 +247,17 @@ pub fn spawn(
                 let w = shared.world();
                 let emitter = Emitter::new(&w, &vsls, config.inv_quantum, config.path, config.seed);
                 let first = shared.reserve(config.batch_photons);
-                let wanted = || shared.world_generation.load(Ordering::Acquire) != generation;
+                let governor = std::cell::RefCell::new(governor.as_mut());
+                let traced = std::cell::Cell::new(0u32);
+                let wanted = || {
+                    traced.set(traced.get().wrapping_add(1));
+                    if traced.get().is_multiple_of(ShareGovernor::EVERY_PHOTONS)
+                        && let Some(g) = governor.borrow_mut().as_mut()
+                    {
+                        g.check();
+                    }
+                    shared.world_generation.load(Ordering::Acquire) != generation
+                };
                 let batch = emitter.trace_until(&w, first, config.batch_photons, wanted);
                 drop(w);
                 // Photon indices reserved but not traced are simply skipped.
@@ -268,5 +284,121 @@ fn lower_own_priority() {
     }
     if let Err(e) = thread_priority::set_current_thread_priority(ThreadPriority::Min) {
         eprintln!("photon_stream: cannot lower the streaming thread's priority: {e:?}");
+    }
+}
+
+/// Keeps a low-priority streaming thread to about its share of a core while render
+/// threads want the cores, and lets it have all of a core nobody wants.
+///
+/// Why it is needed: `SCHED_IDLE` alone does not keep the thread off a render thread's
+/// core. Rayon's workers, out of work for a moment, spin and call `sched_yield`; the
+/// scheduler then runs the streaming thread, and the worker, runnable rather than
+/// waking, gets its core back only at the next scheduler tick (milliseconds), its next
+/// job long waiting. Measured (BENCHMARKS.md, photon_stream, "the streaming thread
+/// beside the frame"): the thread took ≈ 45 % of a core and frames rendered back to back
+/// were 1.3–1.5× slower than with the thread paused.
+///
+/// How: every [`Self::EVERY_PHOTONS`] photons the thread checks the wall clock; every
+/// [`Self::READ_EVERY_S`] it reads its CPU clock and updates the share of a core it had,
+/// averaged over ≈ [`Self::AVERAGE_S`]. At or above `share` it yields at every check,
+/// which hands the core back to a waiting render thread within microseconds (with
+/// nothing waiting, the yield returns at once: an idle machine still streams at full
+/// rate); below, it keeps the core while it has it. The CPU clock is read rarely: read
+/// at every check (a system call every few microseconds) it cost the frames most of
+/// what the yields win.
+struct ShareGovernor {
+    /// The share of a core kept while render threads want the cores.
+    share: f64,
+    /// The thread's share of a core, averaged over ≈ [`Self::AVERAGE_S`].
+    average: f64,
+    /// When the CPU clock was last read [s since `start`], and what it said [s].
+    wall: std::time::Instant,
+    cpu_s: f64,
+    /// Yielding at every check (the average is at or above the share).
+    yielding: bool,
+}
+
+impl ShareGovernor {
+    /// Photons between checks: 5–30 µs of tracing.
+    const EVERY_PHOTONS: u32 = 8;
+    /// Wall time between readings of the thread's CPU clock [s].
+    const READ_EVERY_S: f64 = 0.001;
+    /// Time constant of the average share [s].
+    const AVERAGE_S: f64 = 0.05;
+
+    fn new(share: f32) -> Self {
+        Self {
+            share: f64::from(share),
+            average: 0.0,
+            wall: std::time::Instant::now(),
+            cpu_s: thread_cpu_s(),
+            yielding: false,
+        }
+    }
+
+    /// Updates the average now and then; yields the core while at or above the share.
+    fn check(&mut self) {
+        let now = std::time::Instant::now();
+        let dt = (now - self.wall).as_secs_f64();
+        if dt >= Self::READ_EVERY_S {
+            let cpu_s = thread_cpu_s();
+            self.book(dt, cpu_s - self.cpu_s);
+            (self.wall, self.cpu_s) = (now, cpu_s);
+        }
+        if self.yielding {
+            std::thread::yield_now();
+        }
+    }
+
+    /// Books `ran_s` seconds of CPU in the last `dt_s` seconds of wall time.
+    fn book(&mut self, dt_s: f64, ran_s: f64) {
+        let a = (dt_s / Self::AVERAGE_S).min(1.0);
+        self.average += a * (ran_s / dt_s - self.average);
+        self.yielding = self.average >= self.share;
+    }
+}
+
+/// CPU time of the calling thread [s].
+fn thread_cpu_s() -> f64 {
+    illume_core::cpu_time::thread_cpu_ns() * 1e-9
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ShareGovernor;
+
+    /// The fraction of 1 ms steps in which a thread that runs whenever it does not
+    /// yield (and is off the core when it yields) is let run, over 10 s.
+    fn running_fraction(share: f32) -> f64 {
+        let mut g = ShareGovernor::new(share);
+        let steps = 10_000;
+        let ran = (0..steps)
+            .filter(|_| {
+                let runs = !g.yielding;
+                g.book(1e-3, if runs { 1e-3 } else { 0.0 });
+                runs
+            })
+            .count();
+        ran as f64 / steps as f64
+    }
+
+    #[test]
+    fn a_thread_held_to_its_share_runs_that_share_of_the_time() {
+        for share in [0.1f32, 0.25, 0.5, 0.9] {
+            let f = running_fraction(share);
+            assert!(
+                (f - f64::from(share)).abs() < 0.02,
+                "share {share}: ran {f:.3} of the time"
+            );
+        }
+        // Share 0 yields from the first reading on. A thread that runs all the time
+        // (alone on an idle core, where its yields return at once) averages a whole
+        // core and yields at every check.
+        assert!(running_fraction(0.0) < 0.001);
+        let mut g = ShareGovernor::new(0.25);
+        for _ in 0..1000 {
+            g.book(1e-3, 1e-3);
+        }
+        assert!(g.yielding && (g.average - 1.0).abs() < 1e-6);
     }
 }

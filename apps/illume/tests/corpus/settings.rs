@@ -193,6 +193,16 @@ pub fn cases() -> Vec<Case> {
             error(&[c, "vsl_count"]),
         ),
         config(
+            "photon_stream_share_above_one",
+            "[render]\nwidth = 8\nheight = 8\n[photon_stream]\nstream_share = 1.5\n",
+            error(&[c, "stream_share"]),
+        ),
+        config(
+            "photon_stream_share_nan",
+            "[render]\nwidth = 8\nheight = 8\n[photon_stream]\nstream_share = nan\n",
+            error(&[c, "stream_share"]),
+        ),
+        config(
             "selective_nan",
             "technique = \"selective\"\n[render]\nwidth = 8\nheight = 8\n[selective]\nmasking_contrast_threshold = nan\n",
             error(&[c, "masking_contrast_threshold"]),
