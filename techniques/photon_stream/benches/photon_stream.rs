@@ -17,7 +17,8 @@
 //! * `target` — the frame-rate targets only (Cornell box and Sponza, 800×600, 100 VSLs,
 //!   static and moving camera), five rounds each, medians of fps and of each phase. With
 //!   `ILLUME_BENCH_PAUSED=1` the streaming thread stays paused: the frame alone, to
-//!   measure what the thread beside it costs.
+//!   measure what the thread beside it costs; `ILLUME_BENCH_SHARE=S` sets its
+//!   `stream_share`.
 //! * `latency` — time until no photon from before a change is left in the pool,
 //!   against pool size / impact rate, on `builtin:cornell-spot`.
 
@@ -171,6 +172,11 @@ fn fps_table() {
 /// The frame-rate targets of issue 15 (800×600, 100 VSLs): five rounds per row, rows
 /// interleaved so that machine load touches them alike; medians.
 fn target_table() {
+    let share = match std::env::var("ILLUME_BENCH_SHARE") {
+        Ok(v) => v.parse().expect("ILLUME_BENCH_SHARE is a number in [0, 1]"),
+        Err(_) => PhotonStreamSettings::default().stream_share,
+    };
+    println!("`stream_share` = {share}\n");
     println!(
         "\n### Frame-rate targets (800×600, 100 VSLs, streaming thread running; medians of 5 rounds)\n"
     );
@@ -190,6 +196,7 @@ fn target_table() {
                     (800, 600),
                     PhotonStreamSettings {
                         start_paused: std::env::var_os("ILLUME_BENCH_PAUSED").is_some(),
+                        stream_share: share,
                         ..Default::default()
                     },
                     moving,

@@ -26,12 +26,11 @@ pub enum StreamPriority {
     /// render threads it takes about a third of the machine while a frame renders, all
     /// of it in between): the highest photon rate, the lowest latency, slower frames.
     Normal,
-    /// The thread runs at the lowest OS priority (`SCHED_IDLE` on Linux, else the
-    /// lowest nice level): frames take the cores first and photons fill the time the
-    /// renderer leaves — as in the paper, where the GPU renders and the CPU streams:
-    /// faster frames, a lower photon rate and so a longer latency than `normal`
-    /// (measured in `BENCHMARKS.md`, photon_stream). Where frames leave no idle time
-    /// (rendered back to back, no frame pacing), the stream gets only the gaps.
+    /// The thread runs at the lowest OS priority (nice 19 on Linux): frames take the
+    /// cores first and photons fill the time the renderer leaves — as in the paper,
+    /// where the GPU renders and the CPU streams: faster frames, a lower photon rate and
+    /// so a longer latency than `normal` (measured in `BENCHMARKS.md`, photon_stream).
+    /// `stream_share` limits what it takes from frames rendered back to back.
     #[default]
     Low,
 }
@@ -96,14 +95,15 @@ pub struct PhotonStreamSettings {
     /// says so once on stderr.
     pub stream_priority: StreamPriority,
     /// With `stream_priority = "low"`: the share of a core the streaming thread keeps
-    /// while render threads want both cores, in [0, 1] (a fraction of one core). Above
-    /// it the thread hands its core back within microseconds; below, it keeps the core
-    /// while it has it. On an idle machine (paced frames, a paused view) the thread takes
-    /// what is free whatever the share. Higher: more photons and a shorter latency while
-    /// frames render back to back, slower frames; 0: frames as fast as with the thread
-    /// paused, photons only in idle time. Default 0.25: Cornell box frames 1.2× faster
-    /// than without a share, at 0.6× the photons (`BENCHMARKS.md`, photon_stream, has the
-    /// sweep).
+    /// while render threads want both cores, in [0, 1] (a fraction of one core); 1 sets
+    /// no limit (the thread takes what nice 19 gives it, ≈ 45 % of a core beside frames
+    /// rendered back to back). Below 1, above its share the thread hands its core back
+    /// within microseconds; on an idle machine (paced frames, a paused view) it takes
+    /// what is free whatever the share. Lower: faster frames, fewer photons while frames
+    /// render and so a longer latency and more error in motion (Cornell box at 800×600,
+    /// moving camera: 29–31 fps and 2.6–3.0 M impacts/s at 1, 35–36 fps and 2.2 M at
+    /// 0.25, 52–53 fps and 0.1–0.3 M at 0). Default 1: the frame rate is not bought with
+    /// the light's latency (`BENCHMARKS.md`, photon_stream, has the sweep).
     pub stream_share: f32,
     /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
@@ -191,7 +191,7 @@ impl Default for PhotonStreamSettings {
             pool_size: 100_000,
             mode: StreamMode::Streaming,
             stream_priority: StreamPriority::Low,
-            stream_share: 0.25,
+            stream_share: 1.0,
             photons_per_frame: 20_000,
             batch_photons: 256,
             on_change: ChangePolicy::AgeOut,

@@ -235,10 +235,12 @@ pub fn spawn(
     std::thread::Builder::new()
         .name("photon_stream".into())
         .spawn(move || {
-            let mut governor = (config.priority == StreamPriority::Low).then(|| {
+            if config.priority == StreamPriority::Low {
                 lower_own_priority();
-                ShareGovernor::new(config.share)
-            });
+            }
+            // A share of 1 is no limit: no checks at all.
+            let mut governor = (config.priority == StreamPriority::Low && config.share < 1.0)
+                .then(|| ShareGovernor::new(config.share));
             while shared.wait_running() {
                 // The epoch before the world: a flush publishes its world first, so a
                 // batch that reads the new epoch traces in the new world.
@@ -266,23 +268,18 @@ pub fn spawn(
         })
 }
 
-/// Puts the calling thread at the OS's lowest priority: `SCHED_IDLE` where the OS has it
-/// (Linux: it runs only on a core no other thread wants, and a waking render thread
-/// takes the core back at once), else the lowest nice level. Lowering one's own
+/// Puts the calling thread at the lowest nice level (19 on Linux). Lowering one's own
 /// priority needs no privilege on Linux; where it is refused, streaming at normal
 /// priority is still correct, and the refusal is said once on stderr.
+///
+/// Not `SCHED_IDLE`: tried (issue 15), it made frames rendered back to back 1.06–1.21×
+/// faster but starved the thread there, and `illume bench scenarios/moving_light.toml`
+/// (balanced preset) went from FLIP 0.069–0.075, settled within 5 frames, to 0.14–0.15,
+/// never settled (BENCHMARKS.md, photon_stream).
 fn lower_own_priority() {
-    use thread_priority::ThreadPriority;
-    #[cfg(target_os = "linux")]
+    if let Err(e) =
+        thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min)
     {
-        use thread_priority::{NormalThreadSchedulePolicy, ThreadSchedulePolicy};
-        let idle = ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Idle);
-        let id = thread_priority::thread_native_id();
-        if thread_priority::set_thread_priority_and_policy(id, ThreadPriority::Min, idle).is_ok() {
-            return;
-        }
-    }
-    if let Err(e) = thread_priority::set_current_thread_priority(ThreadPriority::Min) {
         eprintln!("photon_stream: cannot lower the streaming thread's priority: {e:?}");
     }
 }
@@ -290,13 +287,12 @@ fn lower_own_priority() {
 /// Keeps a low-priority streaming thread to about its share of a core while render
 /// threads want the cores, and lets it have all of a core nobody wants.
 ///
-/// Why it is needed: `SCHED_IDLE` alone does not keep the thread off a render thread's
-/// core. Rayon's workers, out of work for a moment, spin and call `sched_yield`; the
-/// scheduler then runs the streaming thread, and the worker, runnable rather than
-/// waking, gets its core back only at the next scheduler tick (milliseconds), its next
-/// job long waiting. Measured (BENCHMARKS.md, photon_stream, "the streaming thread
-/// beside the frame"): the thread took ≈ 45 % of a core and frames rendered back to back
-/// were 1.3–1.5× slower than with the thread paused.
+/// Why it is wanted: at nice 19 the thread still took ≈ 45 % of a core from frames
+/// rendered back to back, and frames ran 1.3–1.5× slower than with it paused. Rayon's
+/// workers, out of work for a moment, spin and call `sched_yield`; the scheduler then
+/// runs the streaming thread, and the worker, runnable rather than waking, gets its core
+/// back only at the next scheduler tick, its next job long waiting. Measured in
+/// BENCHMARKS.md, photon_stream, "the streaming thread beside the frame".
 ///
 /// How: every [`Self::EVERY_PHOTONS`] photons the thread checks the wall clock; every
 /// [`Self::READ_EVERY_S`] it reads its CPU clock and updates the share of a core it had,
