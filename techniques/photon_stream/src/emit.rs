@@ -92,12 +92,13 @@ impl<'a> Emitter<'a> {
 
     /// [`Emitter::trace`], stopping early (after a whole photon) once `stop` returns
     /// true; the batch holds the photons traced so far, `first..first + photons()`.
+    /// `stop` is called once before each photon.
     pub fn trace_until(
         &self,
         world: &World,
         first: u64,
         count: u64,
-        stop: impl Fn() -> bool,
+        mut stop: impl FnMut() -> bool,
     ) -> PhotonBatch {
         let mut batch = PhotonBatch {
             impacts: Vec::with_capacity(count as usize * 3),

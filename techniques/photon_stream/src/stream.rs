@@ -249,12 +249,11 @@ pub fn spawn(
                 let w = shared.world();
                 let emitter = Emitter::new(&w, &vsls, config.inv_quantum, config.path, config.seed);
                 let first = shared.reserve(config.batch_photons);
-                let governor = std::cell::RefCell::new(governor.as_mut());
-                let traced = std::cell::Cell::new(0u32);
+                let mut traced = 0u32;
                 let wanted = || {
-                    traced.set(traced.get().wrapping_add(1));
-                    if traced.get().is_multiple_of(ShareGovernor::EVERY_PHOTONS)
-                        && let Some(g) = governor.borrow_mut().as_mut()
+                    traced = traced.wrapping_add(1);
+                    if traced.is_multiple_of(ShareGovernor::EVERY_PHOTONS)
+                        && let Some(g) = governor.as_mut()
                     {
                         g.check();
                     }
@@ -307,7 +306,7 @@ struct ShareGovernor {
     share: f64,
     /// The thread's share of a core, averaged over ≈ [`Self::AVERAGE_S`].
     average: f64,
-    /// When the CPU clock was last read [s since `start`], and what it said [s].
+    /// When the CPU clock was last read, and what it said [s].
     wall: std::time::Instant,
     cpu_s: f64,
     /// Yielding at every check (the average is at or above the share).
