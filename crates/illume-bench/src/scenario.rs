@@ -810,8 +810,31 @@ impl Scenario {
 }
 
 /// Replaces each `${VAR}` by the environment variable `VAR`; an unset variable is an
-/// error naming it.
+/// error naming it, except `ILLUME_SCENES`, which then means the shared scenes folder
+/// beside the checkout ([`illume_scene::checkout_scenes_dir`]) when that exists, so the
+/// shipped scenarios run from a clone beside `shared/` with nothing set.
 fn expand_env(text: &str) -> Result<String, String> {
+    expand_with(text, |var| {
+        if let Ok(value) = std::env::var(var) {
+            return Ok(value);
+        }
+        let fallback = (var == "ILLUME_SCENES").then(illume_scene::checkout_scenes_dir);
+        match fallback {
+            Some(dir) if dir.is_dir() => Ok(dir.display().to_string()),
+            Some(dir) => Err(format!(
+                "is not set, and the shared scenes folder beside the checkout ({}) does not exist",
+                dir.display()
+            )),
+            None => Err("is not set".into()),
+        }
+    })
+}
+
+/// [`expand_env`] with `lookup` giving each variable's value, or why it has none.
+fn expand_with(
+    text: &str,
+    lookup: impl Fn(&str) -> Result<String, String>,
+) -> Result<String, String> {
     let mut out = String::new();
     let mut rest = text;
     while let Some(start) = rest.find("${") {
@@ -821,8 +844,8 @@ fn expand_env(text: &str) -> Result<String, String> {
             .find('}')
             .ok_or_else(|| format!("unclosed `${{` in `{text}`"))?;
         let var = &after[..end];
-        let value = std::env::var(var)
-            .map_err(|_| format!("environment variable {var} (used in `{text}`) is not set"))?;
+        let value = lookup(var)
+            .map_err(|why| format!("environment variable {var} (used in `{text}`) {why}"))?;
         out.push_str(&value);
         rest = &after[end + 1..];
     }
@@ -843,6 +866,31 @@ mod tests {
         let e = expand_env("${ILLUME_SURELY_UNSET_VARIABLE}/a").unwrap_err();
         assert!(e.contains("ILLUME_SURELY_UNSET_VARIABLE"), "{e}");
         assert!(expand_env("${OPEN").is_err());
+    }
+
+    #[test]
+    fn unset_illume_scenes_means_the_folder_beside_the_checkout() {
+        // The lookup is injected: the process environment is shared by parallel tests.
+        let unset = |_: &str| -> Result<String, String> { Err("is not set".into()) };
+        let e = expand_with("${ILLUME_SCENES}/a.obj", unset).unwrap_err();
+        assert!(
+            e.contains("ILLUME_SCENES") && e.contains("is not set"),
+            "{e}"
+        );
+        let set = |v: &str| -> Result<String, String> { Ok(format!("<{v}>")) };
+        assert_eq!(
+            expand_with("${ILLUME_SCENES}/a.obj", set).unwrap(),
+            "<ILLUME_SCENES>/a.obj"
+        );
+        // With the variable unset in this process (CI sets nothing), the real expansion
+        // names the checkout's folder, which exists beside this repository.
+        if std::env::var_os("ILLUME_SCENES").is_none() {
+            let dir = illume_scene::checkout_scenes_dir();
+            assert_eq!(
+                expand_env("${ILLUME_SCENES}/x").unwrap(),
+                format!("{}/x", dir.display())
+            );
+        }
     }
 
     #[test]

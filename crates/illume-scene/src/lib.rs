@@ -39,6 +39,13 @@ pub use load::{
 pub use model::*;
 pub use timeline::{Timeline, TimelineError};
 
+/// `shared/scenes` beside the repository's checkout this crate was compiled in: where
+/// [`shared_scenes_dir`] and a scenario's `${ILLUME_SCENES}` look when `ILLUME_SCENES` is
+/// not set. It may not exist (a binary copied elsewhere, a clone not beside `shared/`).
+pub fn checkout_scenes_dir() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes")
+}
+
 /// The shared test scenes folder (Cornell box variants, Dabrovic Sponza, bunny, dragon)
 /// for tests and benchmarks: `$ILLUME_SCENES`, else `shared/scenes` beside the
 /// repository's checkout (fixed when this crate is compiled). Panics, naming the folder,
@@ -46,9 +53,7 @@ pub use timeline::{Timeline, TimelineError};
 pub fn shared_scenes_dir() -> std::path::PathBuf {
     let dir = std::env::var_os("ILLUME_SCENES")
         .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| {
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes")
-        });
+        .unwrap_or_else(checkout_scenes_dir);
     assert!(
         dir.is_dir(),
         "shared scenes folder {} not found (clone the repository beside `shared/`, or set ILLUME_SCENES)",
