@@ -12,7 +12,8 @@
 //! * `priority` — frames per second and photon rate with the streaming thread at normal
 //!   and at low OS priority (800×600, 100 VSLs, static and moving camera).
 //! * `rate` — photon impacts per second of the streaming thread (alone) against the
-//!   tracer's incoherent closest-hit rays per second on one thread.
+//!   tracer's incoherent closest-hit rays per second on one thread, and the photon
+//!   paths' own rays traced alone (the ratio's ceiling with free photon work).
 //! * `visibility` — cost of the VSL visibility modes (beyond the paper).
 //! * `target` — the frame-rate targets only (Cornell box and Sponza, 800×600, 100 VSLs,
 //!   static and moving camera), five rounds each, medians of fps and of each phase. With
@@ -27,6 +28,7 @@ use illume_core::{Affine3A, Ray, Vec3};
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings, StreamPriority, VisibilityMode};
 use illume_render::{RenderSettings, Renderer};
 use illume_scene::{Edit, InstanceId, Scene};
+use illume_transport::photon::{PhotonPath, PhotonPathSettings};
 use illume_transport::{SharedWorld, Technique, World};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -250,9 +252,43 @@ fn priority_table() {
     }
 }
 
-/// Incoherent closest-hit rays/s and photon impacts/s (with rays/s) on this one thread,
-/// measured in alternating slices so machine load affects both alike.
-fn rates_on_one_thread(world: &World, ps: &PhotonStream) -> (f64, f64, f64) {
+/// Every segment of photons `0..n` (emission, bounces and escapes), as the photon path
+/// traces them: the rays photon tracing has to trace, without its other work.
+fn photon_path_rays(world: &World, path: &PhotonPathSettings, n: u64) -> Vec<Ray> {
+    let mut rays = Vec::new();
+    world.tracer.scoped(|tracer| {
+        for seq in 0..n {
+            let mut rng = Pcg32::new(0x5eed, seq);
+            let Some(mut p) = PhotonPath::emit(world, &mut rng) else {
+                continue;
+            };
+            while p.alive(path) {
+                rays.push(p.ray);
+                match p.trace(world, tracer, path.mask, path) {
+                    Some(hit) if hit.reflects => {
+                        if !p.scatter(hit, &mut rng, path).1 {
+                            break;
+                        }
+                    }
+                    _ => break,
+                }
+            }
+        }
+    });
+    rays
+}
+
+/// On this one thread, in alternating 0.2 s slices (so machine load affects all alike):
+/// incoherent closest-hit rays/s, photon impacts/s and the photon paths' rays/s, and the
+/// photon paths' rays traced alone (closest hit only) per second.
+struct OneThreadRates {
+    tracer_rays: f64,
+    impacts: f64,
+    photon_rays: f64,
+    bare_photon_rays: f64,
+}
+
+fn rates_on_one_thread(world: &World, ps: &PhotonStream) -> OneThreadRates {
     let b = world.scene.bounds();
     let mut rng = Pcg32::new(1, 2);
     let emitter = illume_photon_stream::emit::Emitter::new(
@@ -262,13 +298,14 @@ fn rates_on_one_thread(world: &World, ps: &PhotonStream) -> (f64, f64, f64) {
         ps.settings().photon_path(),
         7,
     );
+    let recorded = photon_path_rays(world, &ps.settings().photon_path(), 100_000);
     let (mut ray_n, mut ray_s, mut imp_n, mut prays_n, mut imp_s) =
         (0usize, 0.0, 0usize, 0u64, 0.0);
+    let (mut bare_n, mut bare_s, mut next_bare) = (0usize, 0.0, 0usize);
     let mut hits = 0usize;
     let mut next_photon = 0u64;
-    for round in 0..10 {
+    for _round in 0..10 {
         let t0 = Instant::now();
-        let _ = round;
         while t0.elapsed() < Duration::from_millis(200) {
             // Fresh rays every time (never re-traced, so no cache reuse across rounds).
             for _ in 0..5000 {
@@ -290,13 +327,27 @@ fn rates_on_one_thread(world: &World, ps: &PhotonStream) -> (f64, f64, f64) {
             prays_n += batch.rays;
         }
         imp_s += t0.elapsed().as_secs_f64();
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_millis(200) {
+            for _ in 0..5000 {
+                let r = &recorded[next_bare % recorded.len()];
+                next_bare += 1;
+                hits += world
+                    .tracer
+                    .intersect(r, illume_scene::MASK_DEFAULT)
+                    .is_some() as usize;
+            }
+            bare_n += 5000;
+        }
+        bare_s += t0.elapsed().as_secs_f64();
     }
     std::hint::black_box(hits);
-    (
-        ray_n as f64 / ray_s,
-        imp_n as f64 / imp_s,
-        prays_n as f64 / imp_s,
-    )
+    OneThreadRates {
+        tracer_rays: ray_n as f64 / ray_s,
+        impacts: imp_n as f64 / imp_s,
+        photon_rays: prays_n as f64 / imp_s,
+        bare_photon_rays: bare_n as f64 / bare_s,
+    }
 }
 
 fn rate_table() {
@@ -307,11 +358,20 @@ fn rate_table() {
     println!(
         "tracing: emission, closest hit, surface, Russian roulette, nearest VSL (same thread, alternating"
     );
-    println!("0.2 s slices). Stream: the simulation thread alone, pool updates included.\n");
     println!(
-        "| scene | tracer rays/s | photon rays/s | impacts/s | impacts/s ÷ rays/s | stream impacts/s | stream ÷ rays/s |"
+        "0.2 s slices). Photon rays alone: every segment of 100,000 photon paths (emission, bounces,"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!(
+        "escapes) recorded, then traced closest-hit only in the same slices: the rate photon tracing"
+    );
+    println!(
+        "would reach with free photon work, so its ratio to the tracer's rays bounds impacts ÷ rays."
+    );
+    println!("Stream: the simulation thread alone, pool updates included.\n");
+    println!(
+        "| scene | tracer rays/s | photon rays/s | impacts/s | impacts/s ÷ rays/s | photon rays alone /s | ceiling: alone ÷ rays | stream impacts/s | stream ÷ rays/s |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
     for (label, file) in SCENES {
         let world: SharedWorld = World::new(load(file)).shared();
         let mut ps = PhotonStream::new(
@@ -323,15 +383,20 @@ fn rate_table() {
             },
         )
         .expect("photon_stream");
-        let (rays, impacts, prays) = rates_on_one_thread(&world.read().unwrap(), &ps);
+        let r = rates_on_one_thread(&world.read().unwrap(), &ps);
         ps.warm_up(&world.read().unwrap());
         ps.resume();
         std::thread::sleep(Duration::from_secs(2));
         let stream = ps.impacts_per_s();
         println!(
-            "| {label} | {rays:.3e} | {prays:.3e} | {impacts:.3e} | {:.2} | {stream:.3e} | {:.2} |",
-            impacts / rays,
-            stream / rays
+            "| {label} | {:.3e} | {:.3e} | {:.3e} | {:.2} | {:.3e} | {:.2} | {stream:.3e} | {:.2} |",
+            r.tracer_rays,
+            r.photon_rays,
+            r.impacts,
+            r.impacts / r.tracer_rays,
+            r.bare_photon_rays,
+            r.bare_photon_rays / r.tracer_rays,
+            stream / r.tracer_rays
         );
     }
 }
