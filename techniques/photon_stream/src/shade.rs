@@ -369,10 +369,27 @@ pub fn shade(
     let (w, h) = (gbuffer.width, gbuffer.height);
     let n = (w * h) as usize;
     let stride = settings.shading_stride.max(1);
-    // Σ_s Φ_s·G_s per pixel, without ρ/π (multiplied in at the end so that texture
+    // Σ_s Φ_s·G_s per shaded pixel, without ρ/π (multiplied in at the end so that texture
     // detail stays at full resolution whatever the stride).
-    let mut gathered = zeros(n);
     let grid = Include::Grid(stride);
+    if stride == 1 {
+        let mut gathered = zeros(n);
+        let stats = gather(
+            world,
+            gbuffer,
+            field,
+            near,
+            settings,
+            frame_seed,
+            &grid,
+            |i, c| gathered[i as usize] = c,
+        );
+        return (radiance(gbuffer, &gathered), stats);
+    }
+    // One entry per grid cell (a quarter of the image's at stride 2): the pass writes and
+    // the interpolation reads a buffer that stays in cache.
+    let aw = w.div_ceil(stride);
+    let mut on_grid = vec![Rgb::ZERO; (aw * h.div_ceil(stride)) as usize];
     let mut stats = gather(
         world,
         gbuffer,
@@ -381,13 +398,13 @@ pub fn shade(
         settings,
         frame_seed,
         &grid,
-        &mut gathered,
+        |i, c| {
+            let (x, y) = (i % w, i / w);
+            on_grid[((y / stride) * aw + x / stride) as usize] = c;
+        },
     );
-    if stride == 1 {
-        return (radiance(gbuffer, &gathered), stats);
-    }
     let (mut img, interpolated, missing) =
-        interpolate(gbuffer, &gathered, stride, world.scene.camera.yfov_rad);
+        interpolate(gbuffer, &on_grid, stride, world.scene.camera.yfov_rad);
     stats.interpolated = interpolated;
     stats.fallbacks = missing.len() as u64;
     if !missing.is_empty() {
@@ -395,6 +412,7 @@ pub fn shade(
         for &i in &missing {
             mask[i as usize] = true;
         }
+        let pixels = img.pixels_mut();
         let rest = gather(
             world,
             gbuffer,
@@ -403,14 +421,13 @@ pub fn shade(
             settings,
             frame_seed,
             &Include::Mask(&mask),
-            &mut gathered,
+            |i, c| {
+                if let Some(p) = &gbuffer.pixels[i as usize] {
+                    pixels[i as usize] = p.hit.albedo * INV_PI * c;
+                }
+            },
         );
         stats = stats.merge(ShadeStats { tiles: 0, ..rest });
-        for &i in &missing {
-            if let Some(p) = &gbuffer.pixels[i as usize] {
-                img.pixels_mut()[i as usize] = p.hit.albedo * INV_PI * gathered[i as usize];
-            }
-        }
     }
     (img, stats)
 }
@@ -464,7 +481,8 @@ impl Include<'_> {
     }
 }
 
-/// Shades the pixels `include` selects, tile by tile, into `gathered` (Σ Φ·G).
+/// Shades the pixels `include` selects, tile by tile, handing each pixel's Σ Φ·G to
+/// `store` (pixel index, value).
 #[allow(
     clippy::too_many_arguments,
     reason = "the pass's inputs, passed through to every tile"
@@ -477,7 +495,7 @@ fn gather(
     settings: &PhotonStreamSettings,
     frame_seed: u64,
     include: &Include,
-    gathered: &mut [Rgb],
+    mut store: impl FnMut(u32, Rgb),
 ) -> ShadeStats {
     let (w, h) = (gbuffer.width, gbuffer.height);
     let t = settings.tile_size;
@@ -506,7 +524,7 @@ fn gather(
     let mut stats = ShadeStats::default();
     for (px, s) in results {
         for (i, c) in px {
-            gathered[i as usize] = c;
+            store(i, c);
         }
         stats = stats.merge(s);
     }
@@ -522,7 +540,8 @@ struct Anchor {
     usable: bool,
 }
 
-/// Radiance of every pixel: grid pixels from `gathered`, the pixels between from the
+/// Radiance of every pixel: grid pixels from `on_grid` (Σ Φ·G of grid cell
+/// `(y / stride) · ⌈w / stride⌉ + x / stride`), the pixels between from the
 /// up to four grid pixels (`stride` apart) around each, weighted bilinearly, using only
 /// neighbours on the same surface: facing normals within ≈ 25° (cos ≥ 0.9) and the
 /// neighbour's point within `stride` pixel footprints of the pixel's tangent plane
@@ -530,7 +549,7 @@ struct Anchor {
 /// and the pixels no neighbour could fill (left black, to be shaded exactly).
 fn interpolate(
     gbuffer: &GBuffer,
-    gathered: &[Rgb],
+    on_grid: &[Rgb],
     stride: u32,
     yfov_rad: f32,
 ) -> (RgbImage, u64, Vec<u32>) {
@@ -550,7 +569,7 @@ fn interpolate(
                 Some(p) => Anchor {
                     position: p.hit.position,
                     normal: p.hit.facing_normal(),
-                    gathered: gathered[j],
+                    gathered: on_grid[k as usize],
                     usable: true,
                 },
                 None => Anchor::default(),
@@ -575,7 +594,7 @@ fn interpolate(
                 };
                 let f = p.hit.albedo * INV_PI;
                 if on_row && x.is_multiple_of(stride) {
-                    *out = f * gathered[i as usize];
+                    *out = f * on_grid[(ay * aw + x / stride) as usize];
                     continue;
                 }
                 let (ax, fx) = (x / stride, (x % stride) as f32 / stride as f32);
