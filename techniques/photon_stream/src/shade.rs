@@ -372,37 +372,24 @@ pub fn shade(
     // Σ_s Φ_s·G_s per shaded pixel, without ρ/π (multiplied in at the end so that texture
     // detail stays at full resolution whatever the stride).
     let grid = Include::Grid(stride);
+    let run = |include: &Include, store: &mut dyn FnMut(u32, Rgb)| {
+        gather(
+            world, gbuffer, field, near, settings, frame_seed, include, store,
+        )
+    };
     if stride == 1 {
         let mut gathered = zeros(n);
-        let stats = gather(
-            world,
-            gbuffer,
-            field,
-            near,
-            settings,
-            frame_seed,
-            &grid,
-            |i, c| gathered[i as usize] = c,
-        );
+        let stats = run(&grid, &mut |i, c| gathered[i as usize] = c);
         return (radiance(gbuffer, &gathered), stats);
     }
     // One entry per grid cell (a quarter of the image's at stride 2): the pass writes and
     // the interpolation reads a buffer that stays in cache.
     let aw = w.div_ceil(stride);
     let mut on_grid = vec![Rgb::ZERO; (aw * h.div_ceil(stride)) as usize];
-    let mut stats = gather(
-        world,
-        gbuffer,
-        field,
-        near,
-        settings,
-        frame_seed,
-        &grid,
-        |i, c| {
-            let (x, y) = (i % w, i / w);
-            on_grid[((y / stride) * aw + x / stride) as usize] = c;
-        },
-    );
+    let mut stats = run(&grid, &mut |i, c| {
+        let (x, y) = (i % w, i / w);
+        on_grid[((y / stride) * aw + x / stride) as usize] = c;
+    });
     let (mut img, interpolated, missing) =
         interpolate(gbuffer, &on_grid, stride, world.scene.camera.yfov_rad);
     stats.interpolated = interpolated;
@@ -413,20 +400,11 @@ pub fn shade(
             mask[i as usize] = true;
         }
         let pixels = img.pixels_mut();
-        let rest = gather(
-            world,
-            gbuffer,
-            field,
-            near,
-            settings,
-            frame_seed,
-            &Include::Mask(&mask),
-            |i, c| {
-                if let Some(p) = &gbuffer.pixels[i as usize] {
-                    pixels[i as usize] = p.hit.albedo * INV_PI * c;
-                }
-            },
-        );
+        let rest = run(&Include::Mask(&mask), &mut |i, c| {
+            if let Some(p) = &gbuffer.pixels[i as usize] {
+                pixels[i as usize] = p.hit.albedo * INV_PI * c;
+            }
+        });
         stats = stats.merge(ShadeStats { tiles: 0, ..rest });
     }
     (img, stats)
@@ -495,7 +473,7 @@ fn gather(
     settings: &PhotonStreamSettings,
     frame_seed: u64,
     include: &Include,
-    mut store: impl FnMut(u32, Rgb),
+    store: &mut dyn FnMut(u32, Rgb),
 ) -> ShadeStats {
     let (w, h) = (gbuffer.width, gbuffer.height);
     let t = settings.tile_size;

@@ -2,19 +2,14 @@
 //! same surface changes the VSL indirect image by far less than the technique's own
 //! bias against the reference (≈ 25 % block error, tests/reference.rs).
 
-use illume_photon_stream::shade::shade;
+use illume_core::image::RgbImage;
+use illume_photon_stream::shade::{ShadeStats, shade};
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
 use illume_transport::{GBuffer, World};
 
-/// Tolerances (measured at 320×240: p95 0.7 %, p99 6.3 %, mean +0.02 %): indirect
-/// light is smooth, so a pixel interpolated from shaded pixels two apart on the same
-/// surface differs by the light's curvature over two pixels — under 1.5 % for 95 % of
-/// the lit pixels. The worst 5 % are on the tessellated sphere (the light changes with
-/// the normal between facets) and along creases next to VSLs (1/r² varies fast): under
-/// 10 % at the 99th percentile. A pixel that borrowed across a depth or normal
-/// discontinuity would be off by tens of percent; the mean stays within 0.5 %.
-#[test]
-fn stride_two_matches_every_pixel_shading() {
+/// `builtin:cornell-spot` at 320×240 (deterministic settings), shaded at every pixel and
+/// at `stride`; also the number of reflecting pixels.
+fn every_pixel_and_strided(stride: u32) -> ((RgbImage, ShadeStats), (RgbImage, ShadeStats), u64) {
     let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
     let mut ps = PhotonStream::new(&world, PhotonStreamSettings::deterministic()).unwrap();
     let w = world.read().unwrap();
@@ -25,14 +20,29 @@ fn stride_two_matches_every_pixel_shading() {
         shading_stride: 1,
         ..PhotonStreamSettings::deterministic()
     };
-    let half = PhotonStreamSettings {
-        shading_stride: 2,
+    let strided = PhotonStreamSettings {
+        shading_stride: stride,
         ..full.clone()
     };
-    let (a, sa) = shade(&w, &g, &field, ps.vsls(), &full, 0);
-    let (b, sb) = shade(&w, &g, &field, ps.vsls(), &half, 0);
-    assert_eq!(sa.interpolated, 0);
     let lit = g.pixels.iter().flatten().filter(|p| p.hit.reflects).count() as u64;
+    (
+        shade(&w, &g, &field, ps.vsls(), &full, 0),
+        shade(&w, &g, &field, ps.vsls(), &strided, 0),
+        lit,
+    )
+}
+
+/// Tolerances (measured at 320×240: p95 0.7 %, p99 6.3 %, mean +0.02 %): indirect
+/// light is smooth, so a pixel interpolated from shaded pixels two apart on the same
+/// surface differs by the light's curvature over two pixels — under 1.5 % for 95 % of
+/// the lit pixels. The worst 5 % are on the tessellated sphere (the light changes with
+/// the normal between facets) and along creases next to VSLs (1/r² varies fast): under
+/// 10 % at the 99th percentile. A pixel that borrowed across a depth or normal
+/// discontinuity would be off by tens of percent; the mean stays within 0.5 %.
+#[test]
+fn stride_two_matches_every_pixel_shading() {
+    let ((a, sa), (b, sb), lit) = every_pixel_and_strided(2);
+    assert_eq!(sa.interpolated, 0);
     assert!(
         sb.interpolated >= lit * 7 / 10,
         "{} of {lit} pixels interpolated",
@@ -70,22 +80,7 @@ fn stride_two_matches_every_pixel_shading() {
 /// within 2 % of the full shading's.
 #[test]
 fn pixels_without_grid_neighbours_are_shaded_exactly() {
-    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
-    let mut ps = PhotonStream::new(&world, PhotonStreamSettings::deterministic()).unwrap();
-    let w = world.read().unwrap();
-    ps.warm_up(&w);
-    let field = ps.field(&w);
-    let g = GBuffer::rasterize(&w, 320, 240);
-    let full = PhotonStreamSettings {
-        shading_stride: 1,
-        ..PhotonStreamSettings::deterministic()
-    };
-    let coarse = PhotonStreamSettings {
-        shading_stride: 8,
-        ..full.clone()
-    };
-    let (a, _) = shade(&w, &g, &field, ps.vsls(), &full, 0);
-    let (b, sb) = shade(&w, &g, &field, ps.vsls(), &coarse, 0);
+    let ((a, _), (b, sb), _) = every_pixel_and_strided(8);
     assert!(sb.fallbacks > 0, "stride 8 left no pixel to shade exactly");
     let dark = a
         .pixels()
