@@ -19,7 +19,12 @@
 //!   static and moving camera), five rounds each, medians of fps and of each phase. With
 //!   `ILLUME_BENCH_PAUSED=1` the streaming thread stays paused: the frame alone, to
 //!   measure what the thread beside it costs; `ILLUME_BENCH_SHARE=S` sets its
-//!   `stream_share`.
+//!   `stream_share`. The world is still (only the camera moves), so by default the
+//!   thread rests once its pool has turned over; `ILLUME_BENCH_REST=0` keeps it
+//!   streaming, as it does while objects or lights move.
+//!
+//! Every other section keeps the thread streaming (`rest_when_settled = false`): they
+//! measure it, or frames beside it, as in the paper.
 //! * `latency` — time until no photon from before a change is left in the pool,
 //!   against pool size / impact rate, on `builtin:cornell-spot`.
 
@@ -148,6 +153,7 @@ fn fps_table() {
                 for n in [10u32, 50, 100, 200] {
                     let settings = PhotonStreamSettings {
                         vsl_count: n,
+                        rest_when_settled: false,
                         ..Default::default()
                     };
                     let r = run_frames(&world, (w, h), settings, moving);
@@ -178,7 +184,11 @@ fn target_table() {
         Ok(v) => v.parse().expect("ILLUME_BENCH_SHARE is a number in [0, 1]"),
         Err(_) => PhotonStreamSettings::default().stream_share,
     };
-    println!("`stream_share` = {share}\n");
+    let rest = match std::env::var("ILLUME_BENCH_REST") {
+        Ok(v) => v != "0",
+        Err(_) => PhotonStreamSettings::default().rest_when_settled,
+    };
+    println!("`stream_share` = {share}, `rest_when_settled` = {rest}\n");
     println!(
         "\n### Frame-rate targets (800×600, 100 VSLs, streaming thread running; medians of 5 rounds)\n"
     );
@@ -199,6 +209,7 @@ fn target_table() {
                     PhotonStreamSettings {
                         start_paused: std::env::var_os("ILLUME_BENCH_PAUSED").is_some(),
                         stream_share: share,
+                        rest_when_settled: rest,
                         ..Default::default()
                     },
                     moving,
@@ -236,6 +247,7 @@ fn priority_table() {
             for priority in [StreamPriority::Normal, StreamPriority::Low] {
                 let settings = PhotonStreamSettings {
                     stream_priority: priority,
+                    rest_when_settled: false,
                     ..Default::default()
                 };
                 let pool = settings.pool_size as f64;
@@ -379,6 +391,7 @@ fn rate_table() {
             PhotonStreamSettings {
                 vsl_count: 100,
                 start_paused: true,
+                rest_when_settled: false,
                 ..Default::default()
             },
         )
@@ -416,6 +429,7 @@ fn latency_table() {
             &world,
             PhotonStreamSettings {
                 pool_size: pool,
+                rest_when_settled: false,
                 ..Default::default()
             },
         )

@@ -105,6 +105,16 @@ pub struct PhotonStreamSettings {
     /// 0.25, 52–53 fps and 0.1–0.3 M at 0). Default 1: the frame rate is not bought with
     /// the light's latency (`BENCHMARKS.md`, photon_stream, has the sweep).
     pub stream_share: f32,
+    /// Streaming mode: let the streaming thread rest once the pool has turned over since
+    /// the last change that affects lighting (every pooled photon traced in the current
+    /// world, the pool full), until the next such change wakes it. More photons would only
+    /// swap the pool's photons for equally distributed ones — the VSL powers' variance is
+    /// set by `pool_size`, not by how long the thread runs — so resting loses no accuracy;
+    /// it stops the indirect light's frame-to-frame flicker in a still world and gives the
+    /// frames both cores while only the camera moves (the paper notes that streaming may
+    /// pause then, §0.9.1). False: stream without end, as the paper does (for measuring
+    /// photon rates). Default true.
+    pub rest_when_settled: bool,
     /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
     /// cost linear in the count. Default 20 000.
@@ -192,6 +202,7 @@ impl Default for PhotonStreamSettings {
             mode: StreamMode::Streaming,
             stream_priority: StreamPriority::Low,
             stream_share: 1.0,
+            rest_when_settled: true,
             photons_per_frame: 20_000,
             batch_photons: 256,
             on_change: ChangePolicy::AgeOut,

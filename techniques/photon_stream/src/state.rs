@@ -102,6 +102,7 @@ impl PhotonStream {
                         seed: settings.seed,
                         inv_quantum,
                         share: settings.stream_share,
+                        rest_when_settled: settings.rest_when_settled,
                     },
                 )
                 .map_err(PhotonStreamError::Thread)?,
@@ -296,6 +297,10 @@ impl Technique for PhotonStream {
             ("pool_age_s", age),
             ("latency_s", latency),
             ("stale_fraction", stale),
+            (
+                "stream_resting",
+                if self.shared.is_resting() { 1.0 } else { 0.0 },
+            ),
             ("vsl_count", self.vsls.len() as f64),
             ("vsls_per_tile", self.last_shade.vsls_per_tile()),
             ("shading_ms", self.shading_ms),

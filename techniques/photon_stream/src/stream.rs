@@ -68,6 +68,9 @@ pub struct SharedPool {
     world_generation: AtomicU64,
     next_seq: AtomicU64,
     start: Instant,
+    /// False while the thread rests with a settled pool ([`SharedPool::settled`]); set
+    /// under the pool lock, with the settling test or with the change that unsettles it.
+    wanted: AtomicBool,
 }
 
 impl SharedPool {
@@ -92,6 +95,7 @@ impl SharedPool {
             world_generation: AtomicU64::new(0),
             next_seq: AtomicU64::new(0),
             start: Instant::now(),
+            wanted: AtomicBool::new(true),
         }
     }
 
@@ -191,16 +195,53 @@ impl SharedPool {
         Arc::clone(&self.world.lock().unwrap_or_else(|e| e.into_inner()))
     }
 
+    /// Records a change that affects lighting: photons pushed until now are stale, and a
+    /// resting thread is woken to replace them.
+    pub fn lighting_changed(&self) {
+        {
+            let mut s = self.lock();
+            s.photons_at_change = s.pool.photons_pushed();
+            self.wanted.store(true, Ordering::Release);
+        }
+        // Under the mutex the thread waits with, so the wake cannot fall between its test
+        // and its wait.
+        let _paused = self.paused.lock().unwrap_or_else(|e| e.into_inner());
+        self.wake.notify_all();
+    }
+
+    /// True when every photon in the pool was traced after the last change that affects
+    /// lighting and the pool is full: it has evicted a photon traced since that change
+    /// (so a flushed or new pool is never settled).
+    pub fn settled(s: &PoolState) -> bool {
+        s.pool.photons_pushed() - s.pool.photons() > s.photons_at_change
+    }
+
+    /// True while the thread rests on a settled pool.
+    pub fn is_resting(&self) -> bool {
+        !self.wanted.load(Ordering::Acquire)
+    }
+
+    /// Rests the thread if the pool is settled: later `wait_running` calls block until
+    /// [`SharedPool::lighting_changed`] (or a stop).
+    fn rest_if_settled(&self) {
+        let s = self.lock();
+        if Self::settled(&s) {
+            self.wanted.store(false, Ordering::Release);
+        }
+    }
+
     /// Asks the simulation thread to end.
     pub fn request_stop(&self) {
         self.stop.store(true, Ordering::Release);
         self.wake.notify_all();
     }
 
-    /// Blocks while paused; returns false when asked to stop.
+    /// Blocks while paused or resting; returns false when asked to stop.
     fn wait_running(&self) -> bool {
         let mut paused = self.paused.lock().unwrap_or_else(|e| e.into_inner());
-        while *paused && !self.stop.load(Ordering::Acquire) {
+        while (*paused || !self.wanted.load(Ordering::Acquire))
+            && !self.stop.load(Ordering::Acquire)
+        {
             paused = self.wake.wait(paused).unwrap_or_else(|e| e.into_inner());
         }
         !self.stop.load(Ordering::Acquire)
@@ -224,6 +265,10 @@ pub struct StreamConfig {
     ///
     /// [`PhotonStreamSettings::stream_share`]: crate::PhotonStreamSettings::stream_share
     pub share: f32,
+    /// Rest once the pool is settled ([`PhotonStreamSettings::rest_when_settled`]).
+    ///
+    /// [`PhotonStreamSettings::rest_when_settled`]: crate::PhotonStreamSettings::rest_when_settled
+    pub rest_when_settled: bool,
 }
 
 /// Starts the simulation thread; it runs until [`SharedPool::request_stop`].
@@ -263,6 +308,16 @@ pub fn spawn(
                 drop(w);
                 // Photon indices reserved but not traced are simply skipped.
                 shared.apply(&batch, epoch);
+                if shared.world_generation.load(Ordering::Acquire) != generation {
+                    // Cut short by a lighting change: traced in the world before it, so
+                    // as stale as the photons pooled before the change (whichever of
+                    // this and the change's own record comes first).
+                    let mut s = shared.lock();
+                    s.photons_at_change = s.pool.photons_pushed();
+                }
+                if config.rest_when_settled {
+                    shared.rest_if_settled();
+                }
             }
         })
 }

@@ -6,7 +6,10 @@
 //! move or emission change, or a material change takes effect at once for new photons,
 //! and old photons age out of the FIFO pool within one pool turnover (latency = pool
 //! size / impact rate). With [`ChangePolicy::Flush`] the pool is emptied instead.
-//! Camera moves change nothing (the paper: photon streaming may even pause then).
+//! Camera moves change nothing (the paper: photon streaming may even pause then). The
+//! streaming thread rests once the pool has turned over after a change
+//! ([`PhotonStreamSettings::rest_when_settled`](crate::PhotonStreamSettings::rest_when_settled));
+//! a change that affects lighting wakes it.
 //!
 //! A removed object is an ordinary lighting change: rays no longer see it, so its VSLs
 //! receive no new photons and their power ages out with the pool. An added object asks
@@ -40,16 +43,9 @@ pub fn on_changes(
     if !changes.iter().any(affects_lighting) {
         return ChangeResponse::Updated;
     }
-    match policy {
-        ChangePolicy::AgeOut => {
-            let mut s = shared.lock();
-            s.photons_at_change = s.pool.photons_pushed();
-        }
-        ChangePolicy::Flush => {
-            shared.flush();
-            let mut s = shared.lock();
-            s.photons_at_change = s.pool.photons_pushed();
-        }
+    if policy == ChangePolicy::Flush {
+        shared.flush();
     }
+    shared.lighting_changed();
     ChangeResponse::Updated
 }

@@ -47,6 +47,20 @@ fn stat(ps: &PhotonStream, name: &str) -> f64 {
         .unwrap_or_else(|| panic!("no stat {name}"))
 }
 
+/// Moves the camera of `world` one unit along its +Z and tells `ps`.
+fn move_camera(world: &illume_transport::SharedWorld, ps: &mut PhotonStream) {
+    let cam = world.read().unwrap().scene.camera.world_from_camera;
+    ps.before_world_write();
+    let changes = world
+        .write()
+        .unwrap()
+        .apply_edit(&Edit::SetCameraTransform {
+            world_from_camera: Affine3A::from_translation(Vec3::Z) * cam,
+        })
+        .unwrap();
+    ps.scene_changed(&world.read().unwrap(), &changes);
+}
+
 const POOL: u32 = 30_000;
 const PER_FRAME: u64 = 500;
 
@@ -164,15 +178,7 @@ fn flush_policy_empties_the_pool_on_a_change_but_not_on_a_camera_move() {
         },
     );
     assert!(stat(&ps, "pool_impacts") > 0.0);
-    let cam = world.read().unwrap().scene.camera.world_from_camera;
-    let changes = world
-        .write()
-        .unwrap()
-        .apply_edit(&Edit::SetCameraTransform {
-            world_from_camera: Affine3A::from_translation(Vec3::Z) * cam,
-        })
-        .unwrap();
-    ps.scene_changed(&world.read().unwrap(), &changes);
+    move_camera(&world, &mut ps);
     assert!(
         stat(&ps, "pool_impacts") > 0.0,
         "a camera move keeps the pool"
@@ -242,6 +248,8 @@ fn streaming_thread_checks(stream_priority: StreamPriority) {
         pool_size: 20_000,
         batch_photons: 64,
         stream_priority,
+        // The thread's mechanics under a steady stream (resting is tested below).
+        rest_when_settled: false,
         ..PhotonStreamSettings::default()
     };
     let ps = PhotonStream::new(&world, settings).unwrap();
@@ -314,4 +322,65 @@ fn streaming_thread_nice_levels() -> Vec<i32> {
         levels.push(nice.parse().expect("a number"));
     }
     levels
+}
+
+/// With `rest_when_settled` (the default) the streaming thread stops once the pool has
+/// turned over in a still world — no photon stale, the pool full — and stays stopped
+/// through a camera move; a change that affects lighting wakes it until the pool has
+/// turned over again.
+#[test]
+fn the_streaming_thread_rests_on_a_settled_pool_until_the_light_changes() {
+    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
+    let settings = PhotonStreamSettings {
+        vsl_count: 30,
+        pool_size: 20_000,
+        batch_photons: 64,
+        ..PhotonStreamSettings::default()
+    };
+    assert!(settings.rest_when_settled, "resting is the default");
+    let mut ps = PhotonStream::new(&world, settings).unwrap();
+    let wait_for = |ps: &PhotonStream, f: &dyn Fn(&PhotonStream) -> bool, what: &str| {
+        let t = std::time::Instant::now();
+        while !f(ps) {
+            assert!(t.elapsed().as_secs() < 60, "timed out waiting for {what}");
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    };
+    let resting = |ps: &PhotonStream| stat(ps, "stream_resting") == 1.0;
+    wait_for(&ps, &resting, "the first rest");
+    let settled = |ps: &PhotonStream, what: &str| {
+        assert!(stat(ps, "pool_fill") > 0.99, "{what}: pool not full");
+        assert_eq!(stat(ps, "stale_fraction"), 0.0, "{what}: stale photons");
+        let shot = stat(ps, "photons_shot");
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        assert_eq!(
+            stat(ps, "photons_shot"),
+            shot,
+            "{what}: a resting thread shot"
+        );
+        ps.validate().unwrap();
+        shot
+    };
+    let shot = settled(&ps, "still world");
+    // A camera move leaves the photons valid: the thread keeps resting.
+    move_camera(&world, &mut ps);
+    std::thread::sleep(std::time::Duration::from_millis(100));
+    assert!(resting(&ps), "a camera move woke the thread");
+    assert_eq!(stat(&ps, "photons_shot"), shot, "shot after a camera move");
+    // The sphere and the spot light move: every pooled photon is stale, the thread wakes
+    // and rests again only once all of them are replaced.
+    ps.before_world_write();
+    let changes = world.write().unwrap().set_time(0.5);
+    ps.scene_changed(&world.read().unwrap(), &changes);
+    assert!(!resting(&ps), "a light change left the thread resting");
+    wait_for(&ps, &resting, "the rest after the light change");
+    let again = settled(&ps, "after the change");
+    // Every pooled photon was shot after the change (K itself changes with the light:
+    // photons of the new world carry another number of impacts each).
+    let pooled = stat(&ps, "pool_photons");
+    assert!(
+        again - shot >= pooled,
+        "rested after {} photons with {pooled} in the pool",
+        again - shot
+    );
 }

@@ -22,6 +22,8 @@ fn snapshots_under_concurrent_updates_are_never_torn() {
             pool_size: 20_000,
             batch_photons: 64,
             stream_priority: StreamPriority::Normal,
+            // Updates for the whole run, though the world stays still.
+            rest_when_settled: false,
             ..PhotonStreamSettings::default()
         },
     )
