@@ -202,7 +202,8 @@ impl PhotonStream {
         self.shared.lock().pool.validate()
     }
 
-    /// Impacts per second measured by the stream (0 until measured).
+    /// Impacts per second the stream measured while it last streamed (0 until measured;
+    /// kept while the thread rests, where the `impacts_per_s` counter says 0).
     pub fn impacts_per_s(&self) -> f64 {
         self.shared.lock().impacts_per_s
     }
@@ -284,23 +285,24 @@ impl Technique for PhotonStream {
         } else {
             f64::INFINITY
         };
+        let resting = self.shared.is_resting();
+        let now_rate = |r: f64| if resting { 0.0 } else { r };
         let mut c = Counters::new();
         for (name, x) in [
             ("photons_shot", pool.photons_pushed() as f64),
             ("impacts_shot", pool.impacts_pushed() as f64),
-            ("photons_per_s", s.photons_per_s),
-            ("impacts_per_s", s.impacts_per_s),
-            ("rays_per_s", s.rays_per_s),
+            // Rates now: 0 while the thread rests (`latency_s` keeps the last streaming
+            // rate: the time a change would take to turn the pool over).
+            ("photons_per_s", now_rate(s.photons_per_s)),
+            ("impacts_per_s", now_rate(s.impacts_per_s)),
+            ("rays_per_s", now_rate(s.rays_per_s)),
             ("pool_impacts", pool.len() as f64),
             ("pool_fill", pool.len() as f64 / pool.capacity() as f64),
             ("pool_photons", pool.photons() as f64),
             ("pool_age_s", age),
             ("latency_s", latency),
             ("stale_fraction", stale),
-            (
-                "stream_resting",
-                if self.shared.is_resting() { 1.0 } else { 0.0 },
-            ),
+            ("stream_resting", if resting { 1.0 } else { 0.0 }),
             ("vsl_count", self.vsls.len() as f64),
             ("vsls_per_tile", self.last_shade.vsls_per_tile()),
             ("shading_ms", self.shading_ms),

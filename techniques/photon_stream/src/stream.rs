@@ -43,6 +43,22 @@ pub struct PoolState {
     window: Option<(Instant, u64, u64, u64)>,
 }
 
+impl PoolState {
+    /// Sets the rates from the measurement window open since the last batch that opened
+    /// one, and closes it. A window shorter than 10 ms is too noisy to replace a rate,
+    /// but gives the first one (a thread that settles within its first window).
+    fn close_window(&mut self, now: Instant) {
+        if let Some((t0, p0, i0, r0)) = self.window.take() {
+            let dt = (now - t0).as_secs_f64();
+            if dt > 0.0 && (dt >= 0.01 || self.impacts_per_s == 0.0) {
+                self.photons_per_s = (self.pool.photons_pushed() - p0) as f64 / dt;
+                self.impacts_per_s = (self.pool.impacts_pushed() - i0) as f64 / dt;
+                self.rays_per_s = (self.rays - r0) as f64 / dt;
+            }
+        }
+    }
+}
+
 /// A consistent copy of the VSL field.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PoolSnapshot {
@@ -132,12 +148,9 @@ impl SharedPool {
         let (photons, impacts, rays) = (s.pool.photons_pushed(), s.pool.impacts_pushed(), s.rays);
         match s.window {
             None => s.window = Some((now, photons, impacts, rays)),
-            Some((t0, p0, i0, r0)) => {
-                let dt = (now - t0).as_secs_f64();
-                if dt >= 0.25 {
-                    s.photons_per_s = (photons - p0) as f64 / dt;
-                    s.impacts_per_s = (impacts - i0) as f64 / dt;
-                    s.rays_per_s = (rays - r0) as f64 / dt;
+            Some((t0, ..)) => {
+                if (now - t0).as_secs_f64() >= 0.25 {
+                    s.close_window(now);
                     s.window = Some((now, photons, impacts, rays));
                 }
             }
@@ -224,8 +237,10 @@ impl SharedPool {
     /// Rests the thread if the pool is settled: later `wait_running` calls block until
     /// [`SharedPool::lighting_changed`] (or a stop).
     fn rest_if_settled(&self) {
-        let s = self.lock();
+        let mut s = self.lock();
         if Self::settled(&s) {
+            // The rate while streaming, for `latency_s` while the thread rests.
+            s.close_window(Instant::now());
             self.wanted.store(false, Ordering::Release);
         }
     }

@@ -351,6 +351,15 @@ fn the_streaming_thread_rests_on_a_settled_pool_until_the_light_changes() {
     let settled = |ps: &PhotonStream, what: &str| {
         assert!(stat(ps, "pool_fill") > 0.99, "{what}: pool not full");
         assert_eq!(stat(ps, "stale_fraction"), 0.0, "{what}: stale photons");
+        assert_eq!(
+            stat(ps, "impacts_per_s"),
+            0.0,
+            "{what}: a resting thread's rate"
+        );
+        assert!(
+            stat(ps, "latency_s").is_finite(),
+            "{what}: no turnover time"
+        );
         let shot = stat(ps, "photons_shot");
         std::thread::sleep(std::time::Duration::from_millis(200));
         assert_eq!(
