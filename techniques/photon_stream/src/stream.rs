@@ -44,6 +44,11 @@ pub struct PoolState {
 }
 
 impl PoolState {
+    /// Marks every photon pushed so far as stale (traced before the last lighting change).
+    fn mark_stale(&mut self) {
+        self.photons_at_change = self.pool.photons_pushed();
+    }
+
     /// Sets the rates from the measurement window open since the last batch that opened
     /// one, and closes it. A window shorter than 10 ms is too noisy to replace a rate,
     /// but gives the first one (a thread that settles within its first window).
@@ -134,28 +139,40 @@ impl SharedPool {
     /// Applies a traced batch unless a flush happened since `epoch`. Returns whether it
     /// was applied.
     pub fn apply(&self, batch: &PhotonBatch, epoch: u64) -> bool {
+        self.apply_then(batch, epoch, |_| {})
+    }
+
+    /// [`SharedPool::apply`], then `after` on the pool state under the same lock (the
+    /// streaming thread's staleness and rest bookkeeping: one lock per batch).
+    fn apply_then(
+        &self,
+        batch: &PhotonBatch,
+        epoch: u64,
+        after: impl FnOnce(&mut PoolState),
+    ) -> bool {
         let now = Instant::now();
         let t = self.now_s();
         let mut s = self.lock();
-        if s.epoch != epoch {
-            return false;
-        }
-        s.pool.stamp(t);
-        for path in batch.paths() {
-            s.pool.push_photon(path);
-        }
-        s.rays += batch.rays;
-        let (photons, impacts, rays) = (s.pool.photons_pushed(), s.pool.impacts_pushed(), s.rays);
-        match s.window {
-            None => s.window = Some((now, photons, impacts, rays)),
-            Some((t0, ..)) => {
-                if (now - t0).as_secs_f64() >= 0.25 {
-                    s.close_window(now);
-                    s.window = Some((now, photons, impacts, rays));
+        if s.epoch == epoch {
+            s.pool.stamp(t);
+            for path in batch.paths() {
+                s.pool.push_photon(path);
+            }
+            s.rays += batch.rays;
+            let (photons, impacts, rays) =
+                (s.pool.photons_pushed(), s.pool.impacts_pushed(), s.rays);
+            match s.window {
+                None => s.window = Some((now, photons, impacts, rays)),
+                Some((t0, ..)) => {
+                    if (now - t0).as_secs_f64() >= 0.25 {
+                        s.close_window(now);
+                        s.window = Some((now, photons, impacts, rays));
+                    }
                 }
             }
         }
-        true
+        after(&mut s);
+        s.epoch == epoch
     }
 
     /// Copies every VSL power and K under the mutex.
@@ -212,8 +229,9 @@ impl SharedPool {
     /// resting thread is woken to replace them.
     pub fn lighting_changed(&self) {
         {
+            // One lock for both: the thread decides to rest under it too.
             let mut s = self.lock();
-            s.photons_at_change = s.pool.photons_pushed();
+            s.mark_stale();
             self.wanted.store(true, Ordering::Release);
         }
         // Under the mutex the thread waits with, so the wake cannot fall between its test
@@ -234,11 +252,10 @@ impl SharedPool {
         !self.wanted.load(Ordering::Acquire)
     }
 
-    /// Rests the thread if the pool is settled: later `wait_running` calls block until
-    /// [`SharedPool::lighting_changed`] (or a stop).
-    fn rest_if_settled(&self) {
-        let mut s = self.lock();
-        if Self::settled(&s) {
+    /// Rests the thread if the pool `s` (locked) is settled: later `wait_running` calls
+    /// block until [`SharedPool::lighting_changed`] (or a stop).
+    fn rest_if_settled(&self, s: &mut PoolState) {
+        if Self::settled(s) {
             // The rate while streaming, for `latency_s` while the thread rests.
             s.close_window(Instant::now());
             self.wanted.store(false, Ordering::Release);
@@ -322,17 +339,17 @@ pub fn spawn(
                 let batch = emitter.trace_until(&w, first, config.batch_photons, wanted);
                 drop(w);
                 // Photon indices reserved but not traced are simply skipped.
-                shared.apply(&batch, epoch);
-                if shared.world_generation.load(Ordering::Acquire) != generation {
-                    // Cut short by a lighting change: traced in the world before it, so
-                    // as stale as the photons pooled before the change (whichever of
-                    // this and the change's own record comes first).
-                    let mut s = shared.lock();
-                    s.photons_at_change = s.pool.photons_pushed();
-                }
-                if config.rest_when_settled {
-                    shared.rest_if_settled();
-                }
+                shared.apply_then(&batch, epoch, |s| {
+                    if shared.world_generation.load(Ordering::Acquire) != generation {
+                        // Cut short by a lighting change: traced in the world before it,
+                        // so as stale as the photons pooled before the change (whichever
+                        // of this and the change's own record comes first).
+                        s.mark_stale();
+                    }
+                    if config.rest_when_settled {
+                        shared.rest_if_settled(s);
+                    }
+                });
             }
         })
 }
