@@ -116,6 +116,15 @@ pub trait Technique: Send {
         false
     }
 
+    /// True when the technique has nothing left to add while the world and camera stay
+    /// as they are: the next [`Technique::indirect`] would give the last one's image
+    /// (up to noise drawn afresh per frame), and no work of its own is under way. A
+    /// viewer may stop rendering frames until something changes. Default false (keep
+    /// rendering).
+    fn settled(&self) -> bool {
+        false
+    }
+
     /// True when [`Technique::indirect`] already holds the sky's whole light at surface
     /// points (direct and indirect, e.g. a precomputed sky image scaled in time): the
     /// renderer then skips its own sky term so that nothing is counted twice. Pixels that

@@ -27,6 +27,8 @@ pub struct PhotonStream {
     last_shade: ShadeStats,
     shading_ms: f64,
     warmed_up: bool,
+    /// Photons pushed to the pool when the last [`Technique::indirect`] read it.
+    pushed_at_indirect: Option<u64>,
 }
 
 /// VSL fluxes \[W\] from a pool snapshot: front and back side of each VSL.
@@ -119,6 +121,7 @@ impl PhotonStream {
             last_shade: ShadeStats::default(),
             shading_ms: 0.0,
             warmed_up: false,
+            pushed_at_indirect: None,
         })
     }
 
@@ -254,6 +257,9 @@ impl Technique for PhotonStream {
 
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
         let t0 = Instant::now();
+        // Read before the pool's snapshot: a batch pushed in between makes `settled`
+        // false for one more frame, never true too early.
+        self.pushed_at_indirect = Some(self.shared.lock().pool.photons_pushed());
         let field = self.field(world);
         let (img, stats) = shade(
             world,
@@ -314,6 +320,16 @@ impl Technique for PhotonStream {
         c
     }
 
+    /// True once the streaming thread rests on a settled pool
+    /// ([`PhotonStreamSettings::rest_when_settled`]) and the last frame's indirect light
+    /// read that pool: until a change that affects lighting, every frame would shade the
+    /// same VSL powers. False in deterministic mode (every frame shoots photons).
+    fn settled(&self) -> bool {
+        self.thread.is_some()
+            && self.shared.is_resting()
+            && self.pushed_at_indirect == Some(self.shared.lock().pool.photons_pushed())
+    }
+
     /// Photon streaming is the interactive technique (the paper renders with shadow maps).
     fn interactive(&self) -> bool {
         true
@@ -322,6 +338,7 @@ impl Technique for PhotonStream {
     fn reset(&mut self) {
         self.shared.flush();
         self.warmed_up = false;
+        self.pushed_at_indirect = None;
         self.frames = 0;
         self.last_shade = ShadeStats::default();
     }

@@ -187,10 +187,18 @@ impl SharedPool {
 
     /// Empties the pool and invalidates batches in flight.
     pub fn flush(&self) {
-        let mut s = self.lock();
-        s.epoch += 1;
-        s.pool.flush();
-        s.window = None;
+        {
+            let mut s = self.lock();
+            s.epoch += 1;
+            s.pool.flush();
+            s.window = None;
+            // An emptied pool is not settled: without this, its photons pushed before
+            // counted as turned over, and a resting thread stayed at rest on it.
+            s.mark_stale();
+            self.wanted.store(true, Ordering::Release);
+        }
+        let _paused = self.paused.lock().unwrap_or_else(|e| e.into_inner());
+        self.wake.notify_all();
     }
 
     /// The current epoch.

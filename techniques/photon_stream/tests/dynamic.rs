@@ -5,7 +5,7 @@ use illume_core::{Affine3A, Vec3};
 use illume_photon_stream::state::fluxes;
 use illume_photon_stream::{ChangePolicy, PhotonStream, PhotonStreamSettings, StreamPriority};
 use illume_scene::{Edit, InstanceId};
-use illume_transport::{Budget, Technique, World};
+use illume_transport::{Budget, GBuffer, Technique, World};
 
 /// Relative L1 distance between two VSL fields (front + back fluxes).
 fn field_distance(a: &PhotonStream, b: &PhotonStream) -> f64 {
@@ -392,4 +392,19 @@ fn the_streaming_thread_rests_on_a_settled_pool_until_the_light_changes() {
         "rested after {} photons with {pooled} in the pool",
         again - shot
     );
+    // Settled for a viewer only once a frame has shaded the rested pool.
+    let g = GBuffer::rasterize(&world.read().unwrap(), 32, 24);
+    assert!(!ps.settled(), "settled before any frame read the pool");
+    ps.indirect(&world.read().unwrap(), &g);
+    assert!(ps.settled(), "a resting pool, shaded, is not settled");
+    // A reset empties the pool: the resting thread must refill it (no `advance` runs
+    // here, so no warm-up would), and rest again only once it is full.
+    ps.reset();
+    assert!(
+        !resting(&ps),
+        "a reset left the thread resting on an empty pool"
+    );
+    assert!(!ps.settled(), "settled right after a reset");
+    wait_for(&ps, &resting, "the rest after the reset");
+    settled(&ps, "after the reset");
 }
