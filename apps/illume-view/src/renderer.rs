@@ -160,6 +160,9 @@ pub struct Shown {
     pub selection_pivot: Option<Vec3>,
     /// Number of commands handled before this frame was rendered.
     pub commands_applied: u64,
+    /// Another frame would add nothing (the technique is settled, or the reference has
+    /// its samples): the renderer waits for a command after this one.
+    pub settled: bool,
     /// The last pick's result.
     pub pick: Option<Pick>,
     /// Messages for the window (rebuilds, refused edits, errors), newest last.
@@ -600,11 +603,8 @@ impl State {
         let mut last = Instant::now();
         loop {
             // Idle (nothing to add) waits for commands; otherwise takes what is queued.
-            let idle = !self.dirty
-                && !self.playing
-                && self.reference_done()
-                && self.split.is_none()
-                && self.shows_reference();
+            let idle =
+                !self.dirty && !self.playing && self.split.is_none() && self.has_nothing_to_add();
             let mut pending: Vec<Command> = Vec::new();
             if idle {
                 match rx.recv_timeout(Duration::from_millis(100)) {
@@ -641,6 +641,20 @@ impl State {
             let t = ping_pong_time(self.clock_s, duration, self.ping_pong);
             let update_ms = t_update.elapsed().as_secs_f64() * 1e3;
             self.frame(t, duration, update_ms);
+        }
+    }
+
+    /// True when another frame of what is shown would add nothing: the reference has
+    /// all its samples, or the technique is [settled](illume_transport::Technique::settled)
+    /// (photon_stream's thread rests on a pool the last frame shaded). The window keeps
+    /// showing the last frame, and the renderer's cores are free until a command.
+    fn has_nothing_to_add(&self) -> bool {
+        if self.shows_reference() {
+            self.reference_done()
+        } else {
+            self.engine
+                .as_ref()
+                .is_some_and(|e| e.technique().settled())
         }
     }
 
@@ -793,6 +807,7 @@ impl State {
             selection,
             selection_pivot,
             commands_applied: self.commands_applied,
+            settled: !self.playing && self.split.is_none() && self.has_nothing_to_add(),
             pick: self.pick.clone(),
             messages: self.messages.clone(),
             lights: scene

@@ -339,6 +339,14 @@ impl App {
         self.send(Command::Camera(orbit.world_from_camera()));
     }
 
+    /// "27.3 fps", or "idle (settled)" once the renderer waits with nothing to add.
+    fn rate_text(&self) -> String {
+        match &self.shown {
+            Some(s) if s.settled => "idle (settled)".to_owned(),
+            _ => format!("{:.1} fps", self.fps()),
+        }
+    }
+
     fn fps(&self) -> f64 {
         let n = self.new_frames.len();
         if n < 2 {
@@ -515,14 +523,14 @@ impl App {
             self.title_at = Instant::now();
             if let Some(s) = &self.shown {
                 window.set_title(&format!(
-                    "illume view — {}{} — {:.1} fps",
+                    "illume view — {}{} — {}",
                     s.technique,
                     if s.reference_spp.is_some() && s.split.is_none() {
                         " (reference)"
                     } else {
                         ""
                     },
-                    self.fps()
+                    self.rate_text()
                 ));
             }
         }
@@ -764,7 +772,7 @@ impl App {
             .default_open(true)
             .show(ui, |ui| {
                 let t = shown.times;
-                ui.label(format!("fps {:.1}", self.fps()));
+                ui.label(self.rate_text());
                 ui.label(format!(
                     "update {:.1} · advance {:.1} ms",
                     t.update_ms, t.advance_ms
@@ -1049,7 +1057,7 @@ impl App {
     fn draw_overlay(&self, painter: &egui::Painter, rect: egui::Rect, shown: &Shown) {
         let t = shown.times;
         let mut text = format!(
-            "{}{} · {:.1} fps · 1/{} ({}×{})\n",
+            "{}{} · {} · 1/{} ({}×{})\n",
             shown.technique,
             match shown.reference_spp {
                 Some(s) if shown.split.is_none() =>
@@ -1057,7 +1065,7 @@ impl App {
                 Some(s) => format!(" | reference {s}/{} spp", shown.reference_target),
                 None => String::new(),
             },
-            self.fps(),
+            self.rate_text(),
             shown.scale,
             shown.image.width(),
             shown.image.height()

@@ -119,6 +119,59 @@ impl Viewer {
         })
     }
 
+    /// A viewer on `args` at [`SIZE`], its window's id once it has shown a first frame.
+    fn open_small(args: &[&str]) -> (Self, String) {
+        let mut viewer = Self::start(&[args, &SIZE].concat());
+        let id = viewer.window();
+        viewer.wait_for(Duration::from_secs(60), "a first frame", |l| {
+            l.contains("render_ms=")
+        });
+        (viewer, id)
+    }
+
+    /// Waits (at most `timeout`) until no frame is shown for `quiet`; returns the last
+    /// frame line seen before the quiet.
+    fn wait_quiet(&mut self, quiet: Duration, timeout: Duration, what: &str) -> String {
+        let end = Instant::now() + timeout;
+        let mut last_frame = String::new();
+        loop {
+            match self.lines.recv_timeout(quiet) {
+                Ok(line) => {
+                    self.log.push(line.clone());
+                    if line.contains("render_ms=") {
+                        last_frame = line;
+                    }
+                }
+                Err(_) => return last_frame,
+            }
+            if Instant::now() > end {
+                let _ = self.child.kill();
+                let frames = self.log.iter().filter(|l| l.contains("render_ms=")).count();
+                panic!(
+                    "{what}: frames still shown after {timeout:?} ({frames} in all); the last \
+                     lines:\n{}",
+                    self.log[self.log.len().saturating_sub(5)..].join("\n")
+                );
+            }
+        }
+    }
+
+    /// CPU seconds (user + system) the viewer's process has used so far.
+    fn cpu_s(&self) -> f64 {
+        let stat = std::fs::read_to_string(format!("/proc/{}/stat", self.child.id()))
+            .expect("the viewer's /proc stat");
+        // Fields after the command name (in parentheses): utime and stime are the 12th
+        // and 13th, in clock ticks (100 a second on Linux).
+        let rest = &stat[stat.rfind(')').expect("(comm)") + 2..];
+        let f: Vec<f64> = rest
+            .split_whitespace()
+            .skip(11)
+            .take(2)
+            .map(|v| v.parse().unwrap())
+            .collect();
+        (f[0] + f[1]) / 100.0
+    }
+
     fn window(&mut self) -> String {
         // The window exists once the adapter line is printed.
         self.wait_for(Duration::from_secs(30), "the adapter line", |l| {
@@ -126,8 +179,10 @@ impl Viewer {
         });
         let end = Instant::now() + Duration::from_secs(10);
         loop {
+            // This viewer's window: a window of the test before may not be gone yet.
+            let pid = self.child.id().to_string();
             let out = Command::new("xdotool")
-                .args(["search", "--name", "illume view"])
+                .args(["search", "--pid", &pid, "--name", "illume view"])
                 .output()
                 .unwrap();
             let id = String::from_utf8_lossy(&out.stdout)
@@ -137,7 +192,11 @@ impl Viewer {
             if let Some(id) = id {
                 return id;
             }
-            assert!(Instant::now() < end, "no window named 'illume view'");
+            assert!(
+                Instant::now() < end,
+                "no window named 'illume view' of process {}",
+                self.child.id()
+            );
             std::thread::sleep(Duration::from_millis(100));
         }
     }
@@ -520,20 +579,14 @@ fn numbers(line: &str, name: &str) -> Option<Vec<f64>> {
 #[test]
 fn dragging_the_gizmo_moves_the_selection_along_the_axis() {
     let _display = display();
-    let mut args = vec![
+    let (mut viewer, id) = Viewer::open_small(&[
         "builtin:cornell-spot",
         "--technique",
         "reference",
         "--spp",
         "2",
         "--log-input",
-    ];
-    args.extend(SIZE);
-    let mut viewer = Viewer::start(&args);
-    let id = viewer.window();
-    viewer.wait_for(Duration::from_secs(60), "a first frame", |l| {
-        l.contains("render_ms=")
-    });
+    ]);
     focus(&id);
     // Select the sphere (about (50, 85) of the 160×120 image); its gizmo appears.
     xdotool(&["mousemove", "--window", &id, "50", "85", "click", "1"]);
@@ -611,4 +664,54 @@ fn dragging_the_gizmo_moves_the_selection_along_the_axis() {
         !log.iter().any(|l| l.contains("input wheel")),
         "no camera input expected"
     );
+}
+
+#[test]
+fn a_settled_photon_stream_leaves_the_cores_idle_until_the_camera_moves() {
+    let _display = display();
+    let (mut viewer, id) = Viewer::open_small(&[
+        "builtin:cornell-spot",
+        "--technique",
+        "photon_stream",
+        "--log-input",
+    ]);
+    // The streaming thread rests once its pool has turned over; the viewer then stops
+    // rendering (the scene's animation is paused, nothing moves).
+    let quiet = Duration::from_millis(1500);
+    let settled = viewer.wait_quiet(quiet, Duration::from_secs(60), "photon_stream settling");
+    let t0 = Instant::now();
+    let cpu0 = viewer.cpu_s();
+    std::thread::sleep(Duration::from_secs(2));
+    let cpu = (viewer.cpu_s() - cpu0) / t0.elapsed().as_secs_f64();
+    assert!(
+        cpu < 0.1,
+        "an idle viewer used {:.0} % of a core (frames stopped at: {settled})",
+        cpu * 100.0
+    );
+    // A camera move (the wheel dollies) is rendered at once: the photons stay valid, so
+    // the thread keeps resting and the frames stop again after it.
+    focus(&id);
+    xdotool(&["mousemove", "--window", &id, "80", "60", "click", "4"]);
+    let before = field(&settled, "commands").unwrap_or(0.0);
+    let moved = viewer.wait_for(
+        Duration::from_secs(20),
+        "a frame after the camera move",
+        |l| l.contains("render_ms=") && field(l, "commands").is_some_and(|c| c > before),
+    );
+    let last = viewer.wait_quiet(quiet, Duration::from_secs(20), "after the camera move");
+    let index = |l: &str| -> u64 {
+        l.split_whitespace()
+            .nth(3)
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(0)
+    };
+    // Frames follow commands only (the wheel may send a few camera steps): at most
+    // one more frame than commands, for the frame that finds the technique settled.
+    let frames = index(&last).max(index(&moved)) - index(&settled);
+    let commands = field(&last, "commands").unwrap_or(0.0) - before;
+    assert!(
+        frames >= 1 && frames as f64 <= commands + 1.0,
+        "{frames} frames for {commands} commands of a camera move (from {settled} to {last})"
+    );
+    viewer.finish();
 }
