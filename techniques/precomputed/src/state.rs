@@ -686,6 +686,12 @@ impl Technique for Precomputed {
 
     fn reset(&mut self) {}
 
+    /// Always: the indirect light is reconstructed from the file as a function of the
+    /// scene time and the G-buffer alone, and nothing accumulates between frames.
+    fn settled(&self) -> bool {
+        true
+    }
+
     /// Shadow maps for the sun, as in the paper's demo.
     fn interactive(&self) -> bool {
         true

@@ -224,6 +224,13 @@ fn atlas_lights_a_camera_the_precompute_never_used() {
         b_ref > 0.0 && (b_ours - b_ref).abs() < 0.3 * b_ref,
         "box {b_ours} vs {b_ref}"
     );
+    // Settled (a viewer stops rendering): another frame of the same world is the same.
+    assert!(technique.settled());
+    let again = technique.indirect(&w, &g);
+    assert!(
+        again.pixels() == ours.pixels(),
+        "settled, yet the next frame differs"
+    );
 }
 
 #[test]
