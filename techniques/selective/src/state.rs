@@ -194,6 +194,15 @@ impl Selective {
         self.filled
     }
 
+    /// True while [`Selective::step`] would do something: a stale group, the pool not
+    /// yet filled, or room to grow it within `max_photons`.
+    pub fn has_work(&self) -> bool {
+        let round = self.layout.groups * self.layout.pilots;
+        self.stale > 0
+            || self.filled < self.layout.pool()
+            || self.layout.pool() + round <= self.settings.max_photons
+    }
+
     /// Groups shot in an older scene state than the current one.
     pub fn stale_groups(&self) -> u64 {
         self.stale

@@ -87,6 +87,8 @@ pub struct Streaming {
     elements: Arc<Elements>,
     thread: Option<JoinHandle<()>>,
     last_shade_ms: f64,
+    /// The thread's steps when the last [`Technique::indirect`] copied the display values.
+    steps_at_indirect: Option<u64>,
 }
 
 impl Streaming {
@@ -111,6 +113,7 @@ impl Streaming {
             elements,
             thread: Some(thread),
             last_shade_ms: 0.0,
+            steps_at_indirect: None,
         })
     }
 
@@ -222,6 +225,8 @@ impl Technique for Streaming {
         let display = {
             let mut solution = self.shared.lock_for_frame();
             solution.set_aspect(gbuffer.width, gbuffer.height);
+            // Steps are counted under this lock: the count matches the values copied.
+            self.steps_at_indirect = Some(self.shared.steps.load(Ordering::Acquire));
             solution.display(world)
         };
         let img = shade::shade(world, gbuffer, &self.elements, &display);
@@ -234,6 +239,16 @@ impl Technique for Streaming {
         c.set("shading_ms", self.last_shade_ms);
         c.set("thread_steps", self.thread_steps() as f64);
         c
+    }
+
+    /// True once the thread has nothing left to do (nothing stale, the pool full and
+    /// grown to `max_photons`) and the last frame copied its final values. A scene change
+    /// makes groups stale under the same lock, so it is never settled with a change
+    /// waiting for the thread.
+    fn settled(&self) -> bool {
+        let solution = self.shared.lock_for_frame();
+        !solution.has_work()
+            && self.steps_at_indirect == Some(self.shared.steps.load(Ordering::Acquire))
     }
 
     fn reset(&mut self) {

@@ -189,3 +189,50 @@ fn an_announced_world_write_pauses_the_thread_until_the_frame_goes_on() {
         "only {checked} of 20 trials were timed within WORLD_WAIT"
     );
 }
+
+#[test]
+fn settled_once_the_thread_is_done_and_a_frame_took_its_values() {
+    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
+    let mut sel = Streaming::new(&world, settings()).unwrap();
+    let g = GBuffer::render(
+        &world.read().unwrap(),
+        16,
+        12,
+        illume_core::Vec2::splat(0.5),
+    );
+    // A viewer's loop: a frame, then the question; at most a minute.
+    let frame = |sel: &mut Streaming| sel.indirect(&world.read().unwrap(), &g);
+    let wait_settled = |sel: &mut Streaming, what: &str| {
+        let t0 = Instant::now();
+        loop {
+            let img = frame(sel);
+            if sel.settled() {
+                return img;
+            }
+            assert!(
+                t0.elapsed() < Duration::from_secs(60),
+                "not settled within 60 s {what}"
+            );
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    };
+    let settled = wait_settled(&mut sel, "after the fill");
+    assert!(sel.with_solution(|s| !s.has_work() && s.stale_groups() == 0));
+    let steps = sel.thread_steps();
+    std::thread::sleep(Duration::from_millis(50));
+    assert_eq!(sel.thread_steps(), steps, "a settled thread kept stepping");
+    assert!(
+        frame(&mut sel).pixels() == settled.pixels(),
+        "settled, yet the next frame differs"
+    );
+    // A move makes groups stale under the frame's lock: not settled from that moment,
+    // however far the thread has got.
+    move_sphere(&world, &mut sel, Vec3::new(0.3, 0.0, 0.2));
+    assert!(!sel.settled(), "settled with the move not yet re-traced");
+    let moved = wait_settled(&mut sel, "after the move");
+    assert!(sel.thread_steps() > steps, "the thread re-traced nothing");
+    assert!(
+        moved.pixels() != settled.pixels(),
+        "the sphere moved and the indirect light did not change"
+    );
+}
