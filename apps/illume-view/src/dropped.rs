@@ -139,6 +139,7 @@ mod tests {
             reference_spp: Some(1),
             reference: false,
             play: false,
+            max_fps: 0.0,
             on_frame: Box::new(|| {}),
         });
         let wait = |what: &str, f: &dyn Fn(&crate::renderer::Shown) -> bool| {

@@ -75,6 +75,11 @@ pub struct ViewOptions {
     pub duration_s: Option<f64>,
     /// Folder that screenshots (P) and clips (K) go to.
     pub output_dir: PathBuf,
+    /// Most technique frames a second (0: no limit). The window shows at most one frame
+    /// per refresh (≈ 60 a second), so faster frames are never seen; the time they would
+    /// take goes to the technique's own threads, and the cores idle otherwise. A command
+    /// (input) starts a frame at once. The reference and the split view are not paced.
+    pub max_fps: f64,
 }
 
 /// Opens the window and runs until it is closed (or the test mode exits).

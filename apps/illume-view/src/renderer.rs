@@ -209,6 +209,10 @@ pub struct RenderSetup {
     pub reference: bool,
     /// Start playing the animation.
     pub play: bool,
+    /// Most technique frames a second (0: no limit); see [`ViewOptions::max_fps`].
+    ///
+    /// [`ViewOptions::max_fps`]: crate::ViewOptions::max_fps
+    pub max_fps: f64,
     /// Called after each published frame (wakes the window).
     pub on_frame: Box<dyn Fn() + Send>,
 }
@@ -304,6 +308,10 @@ struct State {
     scene_camera: Affine3A,
     /// The next step must be rendered even if nothing else asks (a change happened).
     dirty: bool,
+    /// Shortest time between the starts of two technique frames (from `max_fps`).
+    min_frame: Option<Duration>,
+    /// When the last frame started.
+    frame_started: Option<Instant>,
 }
 
 impl State {
@@ -338,6 +346,9 @@ impl State {
             last_flip: None,
             scene_camera,
             dirty: true,
+            min_frame: (setup.max_fps > 0.0 && setup.max_fps.is_finite())
+                .then(|| Duration::from_secs_f64(1.0 / setup.max_fps)),
+            frame_started: None,
         };
         s.rebuild();
         s
@@ -612,6 +623,13 @@ impl State {
                     Err(RecvTimeoutError::Timeout) => continue,
                     Err(RecvTimeoutError::Disconnected) => return,
                 }
+            } else if let Some(wait) = self.pacing_wait() {
+                // Paced: a command ends the wait at once (input is never delayed).
+                match rx.recv_timeout(wait) {
+                    Ok(c) => pending.push(c),
+                    Err(RecvTimeoutError::Timeout) => {}
+                    Err(RecvTimeoutError::Disconnected) => return,
+                }
             }
             pending.extend(rx.try_iter());
             // Only the newest camera placement matters.
@@ -640,8 +658,22 @@ impl State {
                 .map_or(0.0, |e| read_world(e.world()).scene.animation_duration());
             let t = ping_pong_time(self.clock_s, duration, self.ping_pong);
             let update_ms = t_update.elapsed().as_secs_f64() * 1e3;
+            self.frame_started = Some(Instant::now());
             self.frame(t, duration, update_ms);
         }
+    }
+
+    /// How long to wait before the next technique frame to keep to `max_fps`: frames
+    /// faster than the window shows them are never seen, and the cores they would take
+    /// go to the technique's own threads (photon_stream's streaming thread) instead.
+    /// None for the reference and the split view, whose samples add up frame by frame.
+    fn pacing_wait(&self) -> Option<Duration> {
+        let min = self.min_frame?;
+        if self.shows_reference() || self.split.is_some() {
+            return None;
+        }
+        let wait = min.checked_sub(self.frame_started?.elapsed())?;
+        (!wait.is_zero()).then_some(wait)
     }
 
     /// True when another frame of what is shown would add nothing: the reference has

@@ -1406,6 +1406,7 @@ impl ApplicationHandler for App {
             reference_spp: self.options.reference_spp,
             reference: self.options.reference,
             play: self.options.play,
+            max_fps: self.options.max_fps,
             on_frame: Box::new(move || {
                 let _ = proxy.send_event(());
             }),
@@ -1514,6 +1515,16 @@ impl ApplicationHandler for App {
             self.frames_received,
             self.frames_received as f64 / secs.max(1e-9)
         );
+        // The technique's counters at the last frame shown (photons shot, …), for runs
+        // that compare settings over a fixed `--duration`.
+        if let Some(shown) = &self.shown {
+            let counters: Vec<String> = shown
+                .stats
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect();
+            eprintln!("illume view: last frame's counters: {}", counters.join(" "));
+        }
         if let Some(r) = self.recorder.take() {
             let _ = r.finish();
         }

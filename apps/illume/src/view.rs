@@ -58,6 +58,22 @@ pub struct ViewArgs {
     /// Print a timestamped line for each input event handled and each frame shown.
     #[arg(long)]
     pub log_input: bool,
+    /// Most technique frames a second; 0: no limit. The window shows at most one frame
+    /// per refresh (≈ 60 a second): faster frames are never seen, and their cores go to
+    /// the technique's own threads (more photons a second for photon_stream).
+    #[arg(long, default_value_t = 60.0, value_parser = max_fps, allow_negative_numbers = true)]
+    pub max_fps: f64,
+}
+
+/// `--max-fps`: a finite number ≥ 0.
+fn max_fps(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        Ok(v) => Err(format!(
+            "{v} is not a number of frames a second ≥ 0 (0: no limit)"
+        )),
+        Err(e) => Err(format!("{s:?}: {e}")),
+    }
 }
 
 /// Runs `illume view`.
@@ -88,6 +104,7 @@ pub fn run(a: ViewArgs) -> Result<()> {
         log_input: a.log_input,
         duration_s: a.duration,
         output_dir: a.output,
+        max_fps: a.max_fps,
     })?;
     Ok(())
 }

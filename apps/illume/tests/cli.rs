@@ -169,6 +169,14 @@ fn bad_input_is_named_in_the_error() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(err.contains("fast") && err.contains("quality"), "{err}");
+    // A negative or non-finite frame cap for the window is refused before any window.
+    #[cfg(feature = "view")]
+    for bad in ["-1", "inf", "NaN", "lots"] {
+        let out = illume(&["view", "builtin:cornell-spot", "--max-fps", bad]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "--max-fps {bad} accepted");
+        assert!(err.contains("--max-fps"), "--max-fps {bad}: {err}");
+    }
 }
 
 #[test]

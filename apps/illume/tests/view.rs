@@ -216,6 +216,14 @@ fn field(line: &str, name: &str) -> Option<f64> {
         .and_then(|v| v.parse().ok())
 }
 
+/// The renderer's number of the frame a `frame N …` line shows.
+fn frame_index(line: &str) -> u64 {
+    line.split_whitespace()
+        .nth(3)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no frame number in {line:?}"))
+}
+
 /// `spp=S/T` of a frame line.
 fn spp(line: &str) -> Option<(u32, u32)> {
     let v = line
@@ -699,19 +707,48 @@ fn a_settled_photon_stream_leaves_the_cores_idle_until_the_camera_moves() {
         |l| l.contains("render_ms=") && field(l, "commands").is_some_and(|c| c > before),
     );
     let last = viewer.wait_quiet(quiet, Duration::from_secs(20), "after the camera move");
-    let index = |l: &str| -> u64 {
-        l.split_whitespace()
-            .nth(3)
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(0)
-    };
     // Frames follow commands only (the wheel may send a few camera steps): at most
     // one more frame than commands, for the frame that finds the technique settled.
-    let frames = index(&last).max(index(&moved)) - index(&settled);
+    let frames = frame_index(&last).max(frame_index(&moved)) - frame_index(&settled);
     let commands = field(&last, "commands").unwrap_or(0.0) - before;
     assert!(
         frames >= 1 && frames as f64 <= commands + 1.0,
         "{frames} frames for {commands} commands of a camera move (from {settled} to {last})"
     );
     viewer.finish();
+}
+
+#[test]
+fn technique_frames_keep_to_max_fps_while_the_animation_plays() {
+    let _display = display();
+    let (mut viewer, _id) = Viewer::open_small(&[
+        "builtin:cornell-spot",
+        "--technique",
+        "photon_stream",
+        "--play",
+        "--max-fps",
+        "30",
+        "--log-input",
+    ]);
+    // The renderer numbers every frame it renders; the window logs the ones it shows.
+    let is_frame = |l: &str| l.contains("render_ms=");
+    let first = viewer.wait_for(Duration::from_secs(20), "a frame", is_frame);
+    let t0 = field(&first, "shown_unix_ms").unwrap();
+    std::thread::sleep(Duration::from_secs(3));
+    // The newest frame line (the channel holds every line since `first`).
+    let last = viewer
+        .lines
+        .try_iter()
+        .filter(|l| is_frame(l))
+        .last()
+        .unwrap_or_else(|| panic!("no frame shown in 3 s of animation"));
+    let seconds = (field(&last, "shown_unix_ms").unwrap() - t0) / 1e3;
+    let rate = (frame_index(&last) - frame_index(&first)) as f64 / seconds;
+    viewer.finish();
+    eprintln!("{rate:.1} frames a second rendered over {seconds:.2} s");
+    // Unpaced, this 160×120 animation renders a few hundred frames a second.
+    assert!(
+        (5.0..=33.0).contains(&rate),
+        "{rate:.1} frames a second rendered with --max-fps 30 (over {seconds:.2} s)"
+    );
 }
