@@ -3,8 +3,10 @@
 //!
 //! A key is the reference path tracer's indirect image (light reflected ≥ 2 times) of the
 //! sun alone at the key's time: the paper subtracted direct-only renders from GI renders,
-//! [`ReferenceRenderer::images`]'s `indirect` is that difference without the noise of a
-//! subtraction. The precompute works on a private copy of the scene:
+//! and the `indirect` image of
+//! [`ReferenceRenderer::images`](illume_reference::ReferenceRenderer::images) is that
+//! difference without the noise of a subtraction. The precompute works on a private copy
+//! of the scene:
 //! - dynamic instances are masked out (like the paper's teapot, they neither block nor
 //!   bleed indirect light);
 //! - the sky is off for keys, and the sun off for the one sky image;
