@@ -78,10 +78,9 @@ fn load(path: &Path) -> Result<illume_scene::Scene, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::renderer::{RenderSetup, RenderThread};
-    use illume_engine::{Config, TechniqueKind};
+    use crate::renderer::tests::{small_render_thread, wait_for};
+    use illume_engine::TechniqueKind;
     use std::sync::mpsc::channel;
-    use std::time::{Duration, Instant};
 
     fn temp_file(name: &str, bytes: &[u8]) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("illume-view-drop-{}", std::process::id()));
@@ -127,33 +126,9 @@ mod tests {
     /// file dropped next leaves it running with a message.
     #[test]
     fn a_dropped_scene_is_rendered_and_a_bad_one_is_reported() {
-        let mut config = Config {
-            technique: TechniqueKind::Reference,
-            ..Default::default()
-        };
-        config.render.width = 32;
-        config.render.height = 24;
-        let render = RenderThread::start(RenderSetup {
-            scene: illume_scene::builtin::load("cornell-spot").unwrap(),
-            config,
-            reference_spp: Some(1),
-            reference: false,
-            play: false,
-            max_fps: 0.0,
-            on_frame: Box::new(|| {}),
-        });
-        let wait = |what: &str, f: &dyn Fn(&crate::renderer::Shown) -> bool| {
-            let end = Instant::now() + Duration::from_secs(120);
-            loop {
-                if let Some(s) = render.slot.latest()
-                    && f(&s)
-                {
-                    return s;
-                }
-                assert!(Instant::now() < end, "timed out waiting for {what}");
-                std::thread::sleep(Duration::from_millis(20));
-            }
-        };
+        let render = small_render_thread(TechniqueKind::Reference);
+        let wait =
+            |what: &str, f: &dyn Fn(&crate::renderer::Shown) -> bool| wait_for(&render, what, f);
         let first = wait("a first frame", &|_| true);
         let obj = illume_scene::shared_scenes_dir().join("cornell_box/CornellBox-Original.obj");
         let expected = illume_scene::load_scene_with(&obj, &Default::default()).unwrap();

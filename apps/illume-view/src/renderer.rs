@@ -9,6 +9,7 @@ use glam::{Affine3A, Quat, Vec2, Vec3};
 use illume_core::image::{RgbImage, ToneMap, auto_exposure_ev};
 use illume_engine::settings_doc::Applies;
 use illume_engine::{Config, Engine, TechniqueKind, read_world};
+use illume_radiance_cache::TemporalMode;
 use illume_reference::ReferenceRenderer;
 use illume_scene::timeline::ping_pong_time;
 use illume_scene::{Edit, LightKind, Scene};
@@ -377,6 +378,23 @@ impl State {
         config.render.width = (config.render.width / self.scale).max(1);
         config.render.height = (config.render.height / self.scale).max(1);
         self.engine = None;
+        // The window is real time: radiance_cache's temporal gradients need the frames
+        // known in advance and cannot run here (`animate --realtime` refuses them). A
+        // window with no image helps nobody: it reuses records instead, and says so.
+        if config.technique == TechniqueKind::RadianceCache
+            && matches!(
+                config.radiance_cache.temporal,
+                TemporalMode::Extrapolated | TemporalMode::Interpolated
+            )
+        {
+            let asked = config.radiance_cache.temporal.name();
+            self.config.radiance_cache.temporal = TemporalMode::Reuse;
+            config.radiance_cache.temporal = TemporalMode::Reuse;
+            self.message(format!(
+                "radiance_cache: temporal = \"{asked}\" needs the frames known in advance; \
+                 the window uses \"reuse\""
+            ));
+        }
         match Engine::new(scene.clone(), &config) {
             Ok(e) => self.engine = Some(e),
             Err(e) => {
@@ -941,4 +959,74 @@ fn compose(technique: &RgbImage, reference: &RgbImage, split: f32) -> RgbImage {
         }
     }
     out
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use std::time::{Duration, Instant};
+
+    /// A render thread on `builtin:cornell-spot` at 32×24 with `technique` (the reference
+    /// at 1 sample per pixel, frames unpaced).
+    pub(crate) fn small_render_thread(technique: TechniqueKind) -> RenderThread {
+        let mut config = Config {
+            technique,
+            ..Default::default()
+        };
+        config.render.width = 32;
+        config.render.height = 24;
+        RenderThread::start(RenderSetup {
+            scene: illume_scene::builtin::load("cornell-spot").unwrap(),
+            config,
+            reference_spp: Some(1),
+            reference: false,
+            play: false,
+            max_fps: 0.0,
+            on_frame: Box::new(|| {}),
+        })
+    }
+
+    /// The newest frame once one satisfies `f`; fails after two minutes naming `what`.
+    pub(crate) fn wait_for(
+        render: &RenderThread,
+        what: &str,
+        f: &dyn Fn(&Shown) -> bool,
+    ) -> Arc<Shown> {
+        let end = Instant::now() + Duration::from_secs(120);
+        loop {
+            if let Some(s) = render.slot.latest()
+                && f(&s)
+            {
+                return s;
+            }
+            assert!(Instant::now() < end, "timed out waiting for {what}");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    /// radiance_cache's default (`interpolated`) needs the frames known in advance; the
+    /// window falls back to reusing records, says so, and shows an image.
+    #[test]
+    fn radiance_cache_runs_in_the_window_with_records_reused() {
+        assert_eq!(
+            Config::default().radiance_cache.temporal,
+            TemporalMode::Interpolated
+        );
+        let render = small_render_thread(TechniqueKind::RadianceCache);
+        let shown = wait_for(&render, "a radiance_cache frame", &|s| {
+            s.technique == TechniqueKind::RadianceCache
+        });
+        assert!(
+            shown
+                .messages
+                .iter()
+                .any(|m| m.contains("interpolated") && m.contains("reuse")),
+            "{:?}",
+            shown.messages
+        );
+        assert!(
+            shown.image.mean().length() > 0.0,
+            "the window shows a black image"
+        );
+    }
 }

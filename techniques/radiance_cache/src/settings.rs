@@ -35,6 +35,18 @@ pub enum TemporalMode {
     Interpolated,
 }
 
+impl TemporalMode {
+    /// The mode's name in a settings file (`radiance_cache.temporal`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::PerFrame => "per_frame",
+            Self::Reuse => "reuse",
+            Self::Extrapolated => "extrapolated",
+            Self::Interpolated => "interpolated",
+        }
+    }
+}
+
 /// Temporal radiance caching settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -442,11 +454,7 @@ impl RadianceCacheSettings {
                 TemporalMode::Extrapolated | TemporalMode::Interpolated
             )
         {
-            let name = if self.temporal == TemporalMode::Extrapolated {
-                "extrapolated"
-            } else {
-                "interpolated"
-            };
+            let name = self.temporal.name();
             return bad(
                 "temporal",
                 format!(
