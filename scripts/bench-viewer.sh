@@ -28,7 +28,7 @@ log="$out/latency.log"
     2>"$log" &
 pid=$!
 sleep 8
-id=$(xdotool search --name "illume view" | head -1)
+id=$(xdotool search --pid "$pid" --name "illume view" | head -1)
 xdotool windowfocus --sync "$id"
 xdotool mousemove --window "$id" 250 420 click 1
 sleep 1
