@@ -9,7 +9,6 @@ use glam::{Affine3A, Quat, Vec2, Vec3};
 use illume_core::image::{RgbImage, ToneMap, auto_exposure_ev};
 use illume_engine::settings_doc::Applies;
 use illume_engine::{Config, Engine, TechniqueKind, read_world};
-use illume_radiance_cache::TemporalMode;
 use illume_reference::ReferenceRenderer;
 use illume_scene::timeline::ping_pong_time;
 use illume_scene::{Edit, LightKind, Scene};
@@ -378,22 +377,11 @@ impl State {
         config.render.width = (config.render.width / self.scale).max(1);
         config.render.height = (config.render.height / self.scale).max(1);
         self.engine = None;
-        // The window is real time: radiance_cache's temporal gradients need the frames
-        // known in advance and cannot run here (`animate --realtime` refuses them). A
-        // window with no image helps nobody: it reuses records instead, and says so.
-        if config.technique == TechniqueKind::RadianceCache
-            && matches!(
-                config.radiance_cache.temporal,
-                TemporalMode::Extrapolated | TemporalMode::Interpolated
-            )
-        {
-            let asked = config.radiance_cache.temporal.name();
-            self.config.radiance_cache.temporal = TemporalMode::Reuse;
-            config.radiance_cache.temporal = TemporalMode::Reuse;
-            self.message(format!(
-                "radiance_cache: temporal = \"{asked}\" needs the frames known in advance; \
-                 the window uses \"reuse\""
-            ));
+        // Frames come as the user acts: settings that need them known in advance take
+        // their nearest interactive setting (a window with no image helps nobody).
+        if let Some(changed) = self.config.technique_settings_mut().adapt_to_interactive() {
+            config.technique_settings_mut().adapt_to_interactive();
+            self.message(changed);
         }
         match Engine::new(scene.clone(), &config) {
             Ok(e) => self.engine = Some(e),
@@ -632,8 +620,7 @@ impl State {
         let mut last = Instant::now();
         loop {
             // Idle (nothing to add) waits for commands; otherwise takes what is queued.
-            let idle =
-                !self.dirty && !self.playing && self.split.is_none() && self.has_nothing_to_add();
+            let idle = !self.dirty && self.would_idle();
             let mut pending: Vec<Command> = Vec::new();
             if idle {
                 match rx.recv_timeout(Duration::from_millis(100)) {
@@ -692,6 +679,12 @@ impl State {
         }
         let wait = min.checked_sub(self.frame_started?.elapsed())?;
         (!wait.is_zero()).then_some(wait)
+    }
+
+    /// True when the renderer waits for a command once nothing is left to render (no
+    /// animation playing, no split view, nothing to add).
+    fn would_idle(&self) -> bool {
+        !self.playing && self.split.is_none() && self.has_nothing_to_add()
     }
 
     /// True when another frame of what is shown would add nothing: the reference has
@@ -857,7 +850,7 @@ impl State {
             selection,
             selection_pivot,
             commands_applied: self.commands_applied,
-            settled: !self.playing && self.split.is_none() && self.has_nothing_to_add(),
+            settled: self.would_idle(),
             pick: self.pick.clone(),
             messages: self.messages.clone(),
             lights: scene
@@ -1009,8 +1002,8 @@ pub(crate) mod tests {
     #[test]
     fn radiance_cache_runs_in_the_window_with_records_reused() {
         assert_eq!(
-            Config::default().radiance_cache.temporal,
-            TemporalMode::Interpolated
+            Config::default().radiance_cache.temporal.name(),
+            "interpolated"
         );
         let render = small_render_thread(TechniqueKind::RadianceCache);
         let shown = wait_for(&render, "a radiance_cache frame", &|s| {

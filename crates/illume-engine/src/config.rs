@@ -112,6 +112,8 @@ pub trait AnySettings {
     fn set_seed(&mut self, seed: u64);
     /// See [`TechniqueSettings::set_samples_per_pixel`].
     fn set_samples_per_pixel(&mut self, spp: u32) -> bool;
+    /// See [`TechniqueSettings::adapt_to_interactive`].
+    fn adapt_to_interactive(&mut self) -> Option<String>;
 }
 
 impl<T: TechniqueSettings> AnySettings for T {
@@ -126,6 +128,9 @@ impl<T: TechniqueSettings> AnySettings for T {
     }
     fn set_samples_per_pixel(&mut self, spp: u32) -> bool {
         TechniqueSettings::set_samples_per_pixel(self, spp)
+    }
+    fn adapt_to_interactive(&mut self) -> Option<String> {
+        TechniqueSettings::adapt_to_interactive(self)
     }
 }
 

@@ -175,4 +175,12 @@ pub trait TechniqueSettings:
         let _ = spp;
         false
     }
+
+    /// Turns settings that need the frames known in advance into their nearest setting
+    /// that does not, for a window whose frames come as the user acts; returns what
+    /// changed, for the user, or None. `animate --realtime` does not call it: there the
+    /// flag is the user's choice, and such settings are refused. Default: nothing to do.
+    fn adapt_to_interactive(&mut self) -> Option<String> {
+        None
+    }
 }

@@ -245,6 +245,24 @@ impl TechniqueSettings for RadianceCacheSettings {
     fn set_seed(&mut self, seed: u64) {
         self.seed = seed;
     }
+
+    /// `extrapolated` and `interpolated` reproject records into frames known in advance:
+    /// records are reused in their place (`reuse`, the same lifespans without temporal
+    /// gradients).
+    fn adapt_to_interactive(&mut self) -> Option<String> {
+        matches!(
+            self.temporal,
+            TemporalMode::Extrapolated | TemporalMode::Interpolated
+        )
+        .then(|| {
+            let asked = self.temporal.name();
+            self.temporal = TemporalMode::Reuse;
+            format!(
+                "radiance_cache: temporal = \"{asked}\" needs the frames known in advance; \
+                 the window uses \"reuse\""
+            )
+        })
+    }
 }
 
 impl RadianceCacheSettings {

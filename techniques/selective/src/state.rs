@@ -197,10 +197,12 @@ impl Selective {
     /// True while [`Selective::step`] would do something: a stale group, the pool not
     /// yet filled, or room to grow it within `max_photons`.
     pub fn has_work(&self) -> bool {
-        let round = self.layout.groups * self.layout.pilots;
-        self.stale > 0
-            || self.filled < self.layout.pool()
-            || self.layout.pool() + round <= self.settings.max_photons
+        self.stale > 0 || self.filled < self.layout.pool() || self.can_grow()
+    }
+
+    /// True when one more round of N_p correctives per group stays within `max_photons`.
+    fn can_grow(&self) -> bool {
+        self.layout.pool() + self.layout.groups * self.layout.pilots <= self.settings.max_photons
     }
 
     /// Groups shot in an older scene state than the current one.
@@ -428,8 +430,7 @@ impl Selective {
     /// shape) if that stays within `max_photons`. Only called with every group current
     /// and the pool full: a static scene.
     fn grow(&mut self) -> bool {
-        let round = self.layout.groups * self.layout.pilots;
-        if self.layout.pool() + round > self.settings.max_photons {
+        if !self.can_grow() {
             return false;
         }
         self.layout.ratio += 1;
