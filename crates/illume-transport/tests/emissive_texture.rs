@@ -1,11 +1,13 @@
 //! An emitter with an emissive texture: what rays see, next-event estimation and photon
-//! emission all use the radiance at the point (factor × texel), and stay unbiased.
+//! emission all use the radiance at the point (factor × texel), and stay unbiased; the
+//! rasterized G-buffer shows the same emission as rays (it hands such triangles to a BVH
+//! ray per pixel).
 
 use illume_core::sampling::Pcg32;
-use illume_core::{Ray, Rgb, Vec3};
+use illume_core::{Quat, Ray, Rgb, Vec2, Vec3};
 use illume_scene::builtin::{SceneBuilder, quad};
-use illume_scene::{Material, Texture, Trs, WrapMode};
-use illume_transport::World;
+use illume_scene::{Material, Mesh, Texture, Trs, WrapMode};
+use illume_transport::{GBuffer, TextureFilter, World};
 
 const LE: f32 = 3.0;
 
@@ -139,4 +141,67 @@ fn nee_and_photons_match_quadrature(w: &World) {
         (flux / power - 1.0).abs() < 0.01,
         "photon power {flux} vs {power}"
     );
+}
+
+/// A 2 m square facing +y, seen from 3 m above, emitting 4 × a texture that is bright
+/// (1) on its left half and dark (0.25) on its right half.
+fn glowing_floor() -> World {
+    let mut b = SceneBuilder::new();
+    let tex = b.texture(Texture::from_fn("halves", 8, 8, |x, _| {
+        Rgb::splat(if x < 4 { 1.0 } else { 0.25 })
+    }));
+    let m = b.material(Material {
+        base_color: Rgb::splat(0.5),
+        emission: Rgb::splat(4.0),
+        emissive_texture: Some(tex),
+        ..Default::default()
+    });
+    let floor = quad(Vec3::ZERO, Vec3::Z, Vec3::X, m);
+    let mesh = b.mesh(Mesh {
+        name: "floor".into(),
+        ..floor
+    });
+    b.placed("floor", mesh, Trs::IDENTITY, false);
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+            ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
+        },
+    );
+    b.camera("camera", 40f32.to_radians(), cam);
+    let scene = b.finish("test:glowing-floor");
+    scene.validate().unwrap();
+    World::new(scene)
+}
+
+#[test]
+fn rasterized_emission_reads_the_emissive_texture_as_rays_do() {
+    let world = glowing_floor();
+    let (w, h) = (64, 48);
+    let rays = GBuffer::render(&world, w, h, Vec2::splat(0.5));
+    for filter in [TextureFilter::Bilinear, TextureFilter::Trilinear] {
+        let raster = GBuffer::rasterize_with(&world, w, h, filter);
+        let (mut compared, mut bright, mut dark) = (0, 0, 0);
+        for (r, t) in raster.pixels.iter().zip(&rays.pixels) {
+            let (Some(r), Some(t)) = (r, t) else { continue };
+            let (re, te) = (r.hit.emission, t.hit.emission);
+            // Bilinear lookups at uv a rounding apart: equal but for the texels'
+            // boundary column.
+            assert!(
+                (re - te).abs().max_element() <= 0.05 * te.max_element() + 1e-3,
+                "{filter:?}: raster emission {re}, rays {te}"
+            );
+            compared += 1;
+            bright += usize::from(re.x > 3.9);
+            dark += usize::from(re.x < 1.1);
+        }
+        assert!(compared > 500, "only {compared} pixels see the floor");
+        // Both halves show: the texture, not the bare factor 4 everywhere.
+        assert!(
+            bright > compared / 4 && dark > compared / 4,
+            "{filter:?}: {bright} bright and {dark} dark of {compared} pixels"
+        );
+    }
 }
