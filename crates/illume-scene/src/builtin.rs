@@ -164,6 +164,20 @@ impl SceneBuilder {
         };
     }
 
+    /// Sets the camera: `height` metres above the origin looking straight down (−y), with
+    /// vertical field of view `yfov_rad`; the image's up is −z.
+    pub fn camera_looking_down(&mut self, height: f32, yfov_rad: f32) {
+        let node = self.node(
+            "camera",
+            None,
+            Trs {
+                rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+                ..Trs::from_translation(Vec3::new(0.0, height, 0.0))
+            },
+        );
+        self.camera("camera", yfov_rad, node);
+    }
+
     /// Adds an animation; the first one added becomes active.
     pub fn animation(&mut self, a: Animation) {
         self.scene.animations.push(a);
@@ -322,15 +336,7 @@ pub fn lit_plane(kind: LightKind, light_at: Trs, rho: f32, occluder: bool) -> Sc
     }
     let ln = b.node("light", None, light_at);
     b.light("light", kind, ln);
-    let cam = b.node(
-        "camera",
-        None,
-        Trs {
-            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-            ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
-        },
-    );
-    b.camera("camera", 60f32.to_radians(), cam);
+    b.camera_looking_down(3.0, 60f32.to_radians());
     b.finish("builtin:lit-plane")
 }
 

@@ -4,7 +4,7 @@
 //! ray per pixel).
 
 use illume_core::sampling::Pcg32;
-use illume_core::{Quat, Ray, Rgb, Vec2, Vec3};
+use illume_core::{Ray, Rgb, Vec2, Vec3};
 use illume_scene::builtin::{SceneBuilder, quad};
 use illume_scene::{Material, Mesh, Texture, Trs, WrapMode};
 use illume_transport::{GBuffer, TextureFilter, World};
@@ -162,15 +162,7 @@ fn glowing_floor() -> World {
         ..floor
     });
     b.placed("floor", mesh, Trs::IDENTITY, false);
-    let cam = b.node(
-        "camera",
-        None,
-        Trs {
-            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-            ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
-        },
-    );
-    b.camera("camera", 40f32.to_radians(), cam);
+    b.camera_looking_down(3.0, 40f32.to_radians());
     let scene = b.finish("test:glowing-floor");
     scene.validate().unwrap();
     World::new(scene)

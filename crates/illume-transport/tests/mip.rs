@@ -2,7 +2,7 @@
 //! minified checkerboard reads as its mean grey instead of aliasing, and a magnified
 //! one reads exactly what the bilinear G-buffer (and rays) read.
 
-use illume_core::{Quat, Rgb, Vec2, Vec3};
+use illume_core::{Rgb, Vec2, Vec3};
 use illume_scene::builtin::{SceneBuilder, quad};
 use illume_scene::{Material, Mesh, Texture, Trs};
 use illume_transport::{GBuffer, TextureFilter, World};
@@ -29,15 +29,7 @@ fn checkerboard_floor(repeats: f32) -> World {
         ..floor
     });
     b.placed("floor", mesh, Trs::IDENTITY, false);
-    let cam = b.node(
-        "camera",
-        None,
-        Trs {
-            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-            ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
-        },
-    );
-    b.camera("camera", 40f32.to_radians(), cam);
+    b.camera_looking_down(3.0, 40f32.to_radians());
     let scene = b.finish("test:checkerboard");
     scene.validate().unwrap();
     World::new(scene)

@@ -46,15 +46,7 @@ fn plane(tilt_deg: f32, world_from_object: Trs) -> World {
         triangle_materials: vec![m, m],
     });
     b.placed("plane", mesh, world_from_object, false);
-    let cam = b.node(
-        "camera",
-        None,
-        Trs {
-            rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-            ..Trs::from_translation(Vec3::new(0.0, 3.0, 0.0))
-        },
-    );
-    b.camera("camera", 40f32.to_radians(), cam);
+    b.camera_looking_down(3.0, 40f32.to_radians());
     let scene = b.finish("test:normal-map");
     scene.validate().unwrap();
     World::new(scene)
