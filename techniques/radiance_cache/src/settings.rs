@@ -99,12 +99,17 @@ pub struct RadianceCacheSettings {
     /// irradiance does not change: a change that a record's rays do not yet see (an
     /// object about to enter its hemisphere, Fig. 4) is caught within this many frames.
     /// Lower: fewer ghosts, at the cost of more records. 1–100 000, default 20 (§6).
+    /// Beyond the paper, in real time (`--realtime`, the window): records made since the
+    /// world last changed (camera moves aside) do not age, so a still world stops
+    /// computing records and settles; records made before a change still expire within
+    /// δt_max frames of it.
     pub max_age_frames: u32,
     /// How records follow time. Default [`TemporalMode::Interpolated`] (the paper's
     /// choice). `extrapolated` and `interpolated` need the frames known in advance (a
     /// timeline) and are refused with `--realtime`, whose frame times are known only as
-    /// they come; `per_frame` and `reuse` run anywhere (in real time every frame is a
-    /// surprise, so `reuse` then lives on δt_max and surprise expiry alone).
+    /// they come; `per_frame` and `reuse` run anywhere (in real time every change is a
+    /// surprise, so `reuse` then lives on δt_max, surprise expiry and the ageless records
+    /// of a still world, [`max_age_frames`](Self::max_age_frames)).
     pub temporal: TemporalMode,
     /// Surfaces that are not exactly Lambertian and whose perceptual roughness is at or
     /// below this are glossy: their specular lobe is shaded from radiance records

@@ -140,6 +140,8 @@ struct Slot {
     seen: Vec<InstanceId>,
     /// Its entry in the pass-1 history (`interpolated`), if recorded.
     history: Option<u32>,
+    /// The real-time age clock when it was made (see `RadianceCache::age_clock`).
+    made_clock: u32,
     /// Incoming radiance in hemispherical harmonics (a radiance record, made where a
     /// glossy surface needed one), in the frame `Frame::from_normal(record.normal)`.
     radiance: Option<Box<RadianceData>>,
@@ -195,6 +197,20 @@ pub struct RadianceCache {
     expire_all: bool,
     /// Instances whose records (on them, or whose rays hit them) a surprise expired.
     expire_instances: Vec<InstanceId>,
+    /// The first frame rendered after the last change of anything but the camera.
+    last_world_change: Option<u32>,
+    /// In real time, what records age by instead of frames: it ticks once a frame while
+    /// the world changes and for δt_max − 1 frames after the last change, then stops. A
+    /// record made since then sees the world as it still is and lives until the next
+    /// change, so a still world settles (nothing computed, the same image every frame)
+    /// instead of replacing every record each δt_max frames with new noise. δt_max
+    /// exists for changes a record's rays do not see yet (an object entering its
+    /// hemisphere, Fig. 4): every record made before a change still expires within
+    /// δt_max frames of it. On a timeline (the paper's setting) records age by frames.
+    /// Starts at δt_max, so that ages can be spread back from it (`stagger_ages`).
+    age_clock: u32,
+    /// A scene change (the camera's too) came after the last frame.
+    changed_since_frame: bool,
     counters: FrameCounters,
     glossy: GlossyShading,
     /// Records a frame may compute (the last `advance`'s `Budget::work`, or the
@@ -332,6 +348,7 @@ impl RadianceCache {
     ) -> Result<Self, RadianceCacheError> {
         settings.validate()?;
         let settings_order = settings.hsh_order as usize;
+        let max_age_frames = settings.max_age_frames;
         let work_cap =
             (settings.records_per_frame_max > 0).then_some(settings.records_per_frame_max);
         let bounds = world.scene.bounds();
@@ -355,6 +372,9 @@ impl RadianceCache {
             plan: None,
             recording: false,
             expire_all: false,
+            last_world_change: None,
+            age_clock: max_age_frames,
+            changed_since_frame: true,
             expire_instances: Vec::new(),
             counters: FrameCounters::default(),
             glossy: GlossyShading::new(settings_order)?,
@@ -571,6 +591,7 @@ impl RadianceCache {
                 key,
                 seen,
                 history: None,
+                made_clock: self.age_clock,
                 radiance,
             },
             holes,
@@ -599,6 +620,7 @@ impl RadianceCache {
         let frame = self.frame;
         let per_frame = !self.temporal();
         let all = self.expire_all;
+        let (real_time, clock) = (self.settings.paced_real_time, self.age_clock);
         let replaying = self.plan.is_some();
         let mut doomed = Vec::new();
         let mut successors = Vec::new();
@@ -614,7 +636,13 @@ impl RadianceCache {
             if surprised {
                 self.counters.surprise_expired += 1;
                 doomed.push(id as u32);
-            } else if per_frame || !is_valid(r.frame, r.lifespan_frames, frame) {
+            } else if per_frame
+                || !if real_time {
+                    is_valid(slot.made_clock, r.lifespan_frames, clock)
+                } else {
+                    is_valid(r.frame, r.lifespan_frames, frame)
+                }
+            {
                 doomed.push(id as u32);
                 if !per_frame && !replaying {
                     successors.push(id as u32);
@@ -1043,6 +1071,9 @@ impl RadianceCache {
         } else {
             self.frame_cap()
         };
+        if self.age_clock_running() {
+            self.age_clock += 1;
+        }
         self.prepare_next(world);
         self.expire(world);
         self.counters.reused = before - self.counters.expired;
@@ -1067,6 +1098,7 @@ impl RadianceCache {
         self.counters.place_ms = (t2 - t1).as_secs_f64() * 1e3;
         self.counters.shade_ms = t2.elapsed().as_secs_f64() * 1e3;
         self.frame += 1;
+        self.changed_since_frame = false;
         img
     }
 
@@ -1109,6 +1141,28 @@ impl RadianceCache {
         }
     }
 
+    /// True when the frame being made (`self.frame`) ticks the real-time age clock (at
+    /// its start): it is the frame of the last change or one of the δt_max − 1 after it.
+    fn age_clock_running(&self) -> bool {
+        self.settings.paced_real_time
+            && self
+                .last_world_change
+                .is_some_and(|c| self.frame < c.saturating_add(self.settings.max_age_frames))
+    }
+
+    /// The world changes after resting: records that stopped ageing resume with their
+    /// remaining lives spread over 1 to their lifespan (by their key), as records made
+    /// frame after frame have them, so that they expire over the next δt_max frames
+    /// instead of all at once.
+    fn stagger_ages(&mut self) {
+        let clock = self.age_clock;
+        for slot in self.slots.iter_mut().flatten() {
+            let lifespan = slot.record.lifespan_frames.max(1);
+            let age = (mix64(slot.key) % u64::from(lifespan)) as u32;
+            slot.made_clock = slot.made_clock.min(clock.saturating_sub(age));
+        }
+    }
+
     /// Drops the cache (records, octree, frame count, pending expiries), keeping the
     /// plan and the history.
     fn clear_cache(&mut self) {
@@ -1120,6 +1174,9 @@ impl RadianceCache {
         self.next_world = None;
         self.expire_all = false;
         self.expire_instances.clear();
+        self.last_world_change = None;
+        self.age_clock = self.settings.max_age_frames;
+        self.changed_since_frame = true;
         self.counters = FrameCounters::default();
     }
 
@@ -1199,6 +1256,20 @@ impl Technique for RadianceCache {
         NAME
     }
 
+    /// In real time only (a timeline ages every record): the records have stopped
+    /// ageing, the last frame computed, replaced, expired and left out none, and nothing
+    /// changed since, so the next frame would shade the same records into the same image.
+    fn settled(&self) -> bool {
+        let c = &self.counters;
+        self.settings.paced_real_time
+            && self.frame > 0
+            && !self.changed_since_frame
+            && !self.age_clock_running()
+            && !self.expire_all
+            && self.expire_instances.is_empty()
+            && c.created + c.replaced + c.expired + c.deferred + c.skipped + c.failed == 0
+    }
+
     fn precompute(
         &mut self,
         world: &World,
@@ -1211,6 +1282,16 @@ impl Technique for RadianceCache {
     }
 
     fn scene_changed(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        self.changed_since_frame = true;
+        if changes
+            .iter()
+            .any(|c| !matches!(c, SceneChange::CameraMoved { .. }))
+        {
+            if self.settings.paced_real_time && !self.age_clock_running() {
+                self.stagger_ages();
+            }
+            self.last_world_change = Some(self.frame);
+        }
         // On the timeline: the frame about to be rendered is the timeline's, in time and
         // in everything records depend on. τ and the lifespans handle such changes.
         let on_timeline = self.temporal()
