@@ -192,8 +192,12 @@ pub(crate) struct TriangleSetup {
     /// A corner: barycentrics are measured from it (close to the hit, so precise far
     /// from the camera, unlike sums of large terms measured from the camera).
     p0: Vec3,
-    /// World shading normals at the corners (not normalised), `None` without normals.
+    /// World shading normals at the corners (not normalised); `None` without normals or
+    /// where the three are equal (then `flat_normal` is every pixel's).
     normals: Option<[Vec3; 3]>,
+    /// The shading normal of a triangle without `normals`: its corners' common normal,
+    /// normalised once, else the geometric normal.
+    flat_normal: Vec3,
     uvs: Option<[Vec2; 3]>,
     /// The normal map and its tangent frame, for normal-mapped triangles.
     normal_map: Option<NormalMap>,
@@ -275,7 +279,7 @@ impl<'a> PrimarySurfaces<'a> {
         let geometric_normal = (n * self.frames[instance as usize].det_sign).normalize_or(Vec3::Y);
         let front_face = (p0 - origin).dot(geometric_normal) < 0.0;
         let frame = &self.frames[instance as usize];
-        let normals =
+        let mut normals =
             (!mesh.normals.is_empty()).then(|| idx.map(|i| frame.normal(mesh.normals[i])));
         let uvs = (!mesh.uvs.is_empty()).then(|| idx.map(|i| mesh.uvs[i]));
         // World tangents (a linear map: transforming the corners transforms every
@@ -292,6 +296,16 @@ impl<'a> PrimarySurfaces<'a> {
             }),
             _ => None,
         };
+        // Flat-shaded triangles (three equal corner normals: walls, floors, most of an
+        // interior) skip the per-pixel interpolation and its square root.
+        let mut flat_normal = None;
+        if let Some([n0, n1, n2]) = normals
+            && n0 == n1
+            && n1 == n2
+        {
+            flat_normal = Some(n0.normalize_or(geometric_normal));
+            normals = None;
+        }
         let material = mesh.triangle_materials[t];
         let mat = &scene.materials[material.index()];
         let reflects = front_face || mat.double_sided;
@@ -307,6 +321,7 @@ impl<'a> PrimarySurfaces<'a> {
             height: geometric_normal.dot(p0 - origin),
             p0,
             normals,
+            flat_normal: flat_normal.unwrap_or(geometric_normal),
             uvs,
             normal_map,
             material,
@@ -372,7 +387,7 @@ impl<'a> PrimarySurfaces<'a> {
                 let n = (n0 * b0 + n1 * b1 + n2 * b2).normalize_or_zero();
                 if n == Vec3::ZERO { ng } else { n }
             }
-            None => ng,
+            None => tri.flat_normal,
         };
         let uv = match tri.uvs {
             Some([u0, u1, u2]) => u0 * b0 + u1 * b1 + u2 * b2,
