@@ -487,13 +487,17 @@ impl RadianceCache {
     /// `neighbour_aging`: the records usable at new record `id`'s position end their
     /// lives no later than it, when its lifespan is shorter than `max_age_frames`.
     fn age_neighbours(&mut self, id: u32) {
-        let Some(new) = self.slots[id as usize].as_ref().map(|s| s.record) else {
+        let Some((new, new_made)) = self.slots[id as usize]
+            .as_ref()
+            .map(|s| (s.record, self.made(s)))
+        else {
             return;
         };
         if new.lifespan_frames >= self.settings.max_age_frames {
             return;
         }
-        let end = new.frame + new.lifespan_frames;
+        let end = new_made + new.lifespan_frames;
+        let real_time = self.settings.paced_real_time;
         let mut neighbours = Vec::new();
         self.octree.for_each_containing(new.position, |k| {
             if k != id {
@@ -506,11 +510,16 @@ impl RadianceCache {
             let Some(slot) = self.slots[k as usize].as_mut() else {
                 continue;
             };
+            let made = if real_time {
+                slot.made_clock
+            } else {
+                slot.record.frame
+            };
             let r = &mut slot.record;
             if usable(r.ward_error(new.position, new.normal), accuracy)
-                && r.frame + r.lifespan_frames > end
+                && made + r.lifespan_frames > end
             {
-                r.lifespan_frames = end.saturating_sub(r.frame).max(1);
+                r.lifespan_frames = end.saturating_sub(made).max(1);
                 self.counters.aged += 1;
             }
         }
@@ -620,7 +629,12 @@ impl RadianceCache {
         let frame = self.frame;
         let per_frame = !self.temporal();
         let all = self.expire_all;
-        let (real_time, clock) = (self.settings.paced_real_time, self.age_clock);
+        // What records age by: the age clock in real time, frames otherwise.
+        let now = if self.settings.paced_real_time {
+            self.age_clock
+        } else {
+            frame
+        };
         let replaying = self.plan.is_some();
         let mut doomed = Vec::new();
         let mut successors = Vec::new();
@@ -636,13 +650,7 @@ impl RadianceCache {
             if surprised {
                 self.counters.surprise_expired += 1;
                 doomed.push(id as u32);
-            } else if per_frame
-                || !if real_time {
-                    is_valid(slot.made_clock, r.lifespan_frames, clock)
-                } else {
-                    is_valid(r.frame, r.lifespan_frames, frame)
-                }
-            {
+            } else if per_frame || !is_valid(self.made(slot), r.lifespan_frames, now) {
                 doomed.push(id as u32);
                 if !per_frame && !replaying {
                     successors.push(id as u32);
@@ -1138,6 +1146,16 @@ impl RadianceCache {
             }
             let t = ((r.lifespan_frames as f32 - 1.0) / (max_age - 1.0)).clamp(0.0, 1.0);
             *img.get_mut(x, y) = Rgb::new(1.0 - t, t, 0.0) * level;
+        }
+    }
+
+    /// When `slot`'s record was made, in what records age by: the age clock in real
+    /// time, frames otherwise.
+    fn made(&self, slot: &Slot) -> u32 {
+        if self.settings.paced_real_time {
+            slot.made_clock
+        } else {
+            slot.record.frame
         }
     }
 
