@@ -504,7 +504,10 @@ pub fn direct_at_with(
     direct_at_sky(world, px, shadows, area_light_samples, rng, true)
 }
 
-/// [`direct_at_with`], the sky's term only when `sky`.
+/// [`direct_at_with`], the sky's term only when `sky`. Always inlined: called per pixel,
+/// its colour came back through memory, and reading it back stalled on store-to-load
+/// forwarding (13 % of the direct pass's samples; BENCHMARKS.md).
+#[inline(always)]
 fn direct_at_sky(
     world: &World,
     px: &GBufferPixel,
