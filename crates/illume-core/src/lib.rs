@@ -21,11 +21,13 @@ pub mod cpu_time;
 pub mod files;
 pub mod image;
 pub mod math;
+pub mod prefetch;
 pub mod progress;
 pub mod sampling;
 pub mod shard;
 
 pub use counters::Counters;
 pub use math::*;
+pub use prefetch::{PREFETCH_AHEAD, prefetch};
 pub use progress::{Progress, Silent};
 pub use shard::Shard;

@@ -462,19 +462,22 @@ pub fn direct_light_sky(
         .par_iter()
         .enumerate()
         .with_min_len(1024)
-        .map(|(i, px)| match px {
-            Some(px) => {
-                let mut rng = Pcg32::new(seed, i as u64);
-                px.hit.emission
-                    + direct_at_sky(world, px, shadows, area_light_samples, &mut rng, sky)
-            }
-            None => match &camera {
-                Some(c) => {
-                    let (x, y) = (i as u32 % gbuffer.width, i as u32 / gbuffer.width);
-                    world.lights.sky_radiance(c.ray(x, y, Vec2::splat(0.5)).dir)
+        .map(|(i, px)| {
+            illume_core::prefetch(&gbuffer.pixels, i + illume_core::PREFETCH_AHEAD);
+            match px {
+                Some(px) => {
+                    let mut rng = Pcg32::new(seed, i as u64);
+                    px.hit.emission
+                        + direct_at_sky(world, px, shadows, area_light_samples, &mut rng, sky)
                 }
-                None => Rgb::ZERO,
-            },
+                None => match &camera {
+                    Some(c) => {
+                        let (x, y) = (i as u32 % gbuffer.width, i as u32 / gbuffer.width);
+                        world.lights.sky_radiance(c.ray(x, y, Vec2::splat(0.5)).dir)
+                    }
+                    None => Rgb::ZERO,
+                },
+            }
         })
         .collect();
     RgbImage::from_vec(gbuffer.width, gbuffer.height, pixels).expect("one value per pixel")

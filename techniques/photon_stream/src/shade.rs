@@ -567,6 +567,7 @@ fn interpolate(
             for (x, out) in row.iter_mut().enumerate() {
                 let x = x as u32;
                 let i = y * w + x;
+                illume_core::prefetch(&gbuffer.pixels, i as usize + illume_core::PREFETCH_AHEAD);
                 let Some(p) = gbuffer.pixels[i as usize].as_ref().filter(|p| shades(p)) else {
                     continue;
                 };
