@@ -279,7 +279,7 @@ impl<'a> PrimarySurfaces<'a> {
         let geometric_normal = (n * self.frames[instance as usize].det_sign).normalize_or(Vec3::Y);
         let front_face = (p0 - origin).dot(geometric_normal) < 0.0;
         let frame = &self.frames[instance as usize];
-        let mut normals =
+        let normals =
             (!mesh.normals.is_empty()).then(|| idx.map(|i| frame.normal(mesh.normals[i])));
         let uvs = (!mesh.uvs.is_empty()).then(|| idx.map(|i| mesh.uvs[i]));
         // World tangents (a linear map: transforming the corners transforms every
@@ -298,14 +298,10 @@ impl<'a> PrimarySurfaces<'a> {
         };
         // Flat-shaded triangles (three equal corner normals: walls, floors, most of an
         // interior) skip the per-pixel interpolation and its square root.
-        let mut flat_normal = None;
-        if let Some([n0, n1, n2]) = normals
-            && n0 == n1
-            && n1 == n2
-        {
-            flat_normal = Some(n0.normalize_or(geometric_normal));
-            normals = None;
-        }
+        let (normals, flat_normal) = match normals {
+            Some([n0, n1, n2]) if n0 == n1 && n1 == n2 => (None, n0.normalize_or(geometric_normal)),
+            corners => (corners, geometric_normal),
+        };
         let material = mesh.triangle_materials[t];
         let mat = &scene.materials[material.index()];
         let reflects = front_face || mat.double_sided;
@@ -321,7 +317,7 @@ impl<'a> PrimarySurfaces<'a> {
             height: geometric_normal.dot(p0 - origin),
             p0,
             normals,
-            flat_normal: flat_normal.unwrap_or(geometric_normal),
+            flat_normal,
             uvs,
             normal_map,
             material,

@@ -147,6 +147,18 @@ struct Slot {
     radiance: Option<Box<RadianceData>>,
 }
 
+impl Slot {
+    /// When its record was made, in what records age by: the age clock in real time,
+    /// frames otherwise.
+    fn made(&self, real_time: bool) -> u32 {
+        if real_time {
+            self.made_clock
+        } else {
+            self.record.frame
+        }
+    }
+}
+
 /// A record made by pass 1 of `interpolated`, and the one that replaced it.
 #[derive(Clone, Debug)]
 struct Planned {
@@ -487,9 +499,10 @@ impl RadianceCache {
     /// `neighbour_aging`: the records usable at new record `id`'s position end their
     /// lives no later than it, when its lifespan is shorter than `max_age_frames`.
     fn age_neighbours(&mut self, id: u32) {
+        let real_time = self.settings.paced_real_time;
         let Some((new, new_made)) = self.slots[id as usize]
             .as_ref()
-            .map(|s| (s.record, self.made(s)))
+            .map(|s| (s.record, s.made(real_time)))
         else {
             return;
         };
@@ -497,7 +510,6 @@ impl RadianceCache {
             return;
         }
         let end = new_made + new.lifespan_frames;
-        let real_time = self.settings.paced_real_time;
         let mut neighbours = Vec::new();
         self.octree.for_each_containing(new.position, |k| {
             if k != id {
@@ -510,11 +522,7 @@ impl RadianceCache {
             let Some(slot) = self.slots[k as usize].as_mut() else {
                 continue;
             };
-            let made = if real_time {
-                slot.made_clock
-            } else {
-                slot.record.frame
-            };
+            let made = slot.made(real_time);
             let r = &mut slot.record;
             if usable(r.ward_error(new.position, new.normal), accuracy)
                 && made + r.lifespan_frames > end
@@ -629,12 +637,7 @@ impl RadianceCache {
         let frame = self.frame;
         let per_frame = !self.temporal();
         let all = self.expire_all;
-        // What records age by: the age clock in real time, frames otherwise.
-        let now = if self.settings.paced_real_time {
-            self.age_clock
-        } else {
-            frame
-        };
+        let (real_time, now) = (self.settings.paced_real_time, self.age_now());
         let replaying = self.plan.is_some();
         let mut doomed = Vec::new();
         let mut successors = Vec::new();
@@ -650,7 +653,7 @@ impl RadianceCache {
             if surprised {
                 self.counters.surprise_expired += 1;
                 doomed.push(id as u32);
-            } else if per_frame || !is_valid(self.made(slot), r.lifespan_frames, now) {
+            } else if per_frame || !is_valid(slot.made(real_time), r.lifespan_frames, now) {
                 doomed.push(id as u32);
                 if !per_frame && !replaying {
                     successors.push(id as u32);
@@ -1149,13 +1152,12 @@ impl RadianceCache {
         }
     }
 
-    /// When `slot`'s record was made, in what records age by: the age clock in real
-    /// time, frames otherwise.
-    fn made(&self, slot: &Slot) -> u32 {
+    /// The present in what records age by: the age clock in real time, frames otherwise.
+    fn age_now(&self) -> u32 {
         if self.settings.paced_real_time {
-            slot.made_clock
+            self.age_clock
         } else {
-            slot.record.frame
+            self.frame
         }
     }
 
@@ -1301,10 +1303,10 @@ impl Technique for RadianceCache {
 
     fn scene_changed(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
         self.changed_since_frame = true;
-        if changes
+        let world_changed = changes
             .iter()
-            .any(|c| !matches!(c, SceneChange::CameraMoved { .. }))
-        {
+            .any(|c| !matches!(c, SceneChange::CameraMoved { .. }));
+        if world_changed {
             if self.settings.paced_real_time && !self.age_clock_running() {
                 self.stagger_ages();
             }
@@ -1324,10 +1326,7 @@ impl Technique for RadianceCache {
         if on_timeline {
             return ChangeResponse::Updated;
         }
-        if changes
-            .iter()
-            .any(|c| !matches!(c, SceneChange::CameraMoved { .. }))
-        {
+        if world_changed {
             // Pass 2's plan assumed the timeline: online from here.
             self.plan = None;
             self.next_world = None;
