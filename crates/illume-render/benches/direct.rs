@@ -30,8 +30,9 @@
 use criterion::{Criterion, criterion_group};
 use illume_core::{Affine3A, Quat, Rgb, Vec3};
 use illume_render::{ShadowChooser, Shadows, direct_light, direct_light_with};
+use illume_render::{ShadowMapSettings, ShadowMaps};
 use illume_scene::{Edit, Light, LightId, LightKind, Node, Scene, Trs};
-use illume_transport::{GBuffer, ShadowMapSettings, ShadowMaps, World};
+use illume_transport::{GBuffer, World};
 use std::time::Duration;
 
 const SIZE: (u32, u32) = (800, 600);

@@ -3,7 +3,7 @@
 //!
 //! Direct light is the renderer's job for every technique, as in all four papers: each
 //! analytic light (point, spot, directional) is evaluated exactly, its visibility decided
-//! by one shadow ray or by a shadow map ([`illume_transport::shadow_map`]), chosen per
+//! by one shadow ray or by a shadow map ([`shadow_map`]), chosen per
 //! light and frame by cost ([`RenderSettings::shadows`], [`shadow_choice`]); emissive triangles (area lights)
 //! are sampled [`RenderSettings::area_light_samples`] times per pixel, chosen by power,
 //! each sample with a shadow ray. The G-buffer samples each pixel once at its centre,
@@ -22,17 +22,16 @@
 use illume_core::image::RgbImage;
 use illume_core::sampling::{Pcg32, mix64};
 use illume_core::{INV_PI, Rgb, Vec2};
-use illume_transport::{
-    GBuffer, GBufferPixel, ShadowMapError, ShadowMapSettings, ShadowMaps, Technique, TextureFilter,
-    World,
-};
+use illume_transport::{GBuffer, GBufferPixel, Technique, TextureFilter, World};
 use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 pub mod shadow_choice;
+pub mod shadow_map;
 
 pub use shadow_choice::{LightShadowChoice, ShadowChooser, ShadowStats};
+pub use shadow_map::{LightMapPlan, ShadowMapError, ShadowMapSettings, ShadowMaps};
 
 /// Renderer settings.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -33,11 +33,9 @@
 //! still light keeps its map (lookups only); a light that stops moving goes back to maps
 //! once the one rendering pays off over as many frames as it has been still.
 
+use crate::shadow_map::{LightMapPlan, ShadowMapError, ShadowMapSettings, ShadowMaps};
 use illume_core::Vec2;
-use illume_transport::{
-    GBuffer, GBufferPixel, LightMapPlan, LightSample, ShadowMapError, ShadowMapSettings,
-    ShadowMaps, SurfaceHit, World,
-};
+use illume_transport::{GBuffer, GBufferPixel, LightSample, SurfaceHit, World};
 use std::time::Instant;
 
 /// Cost of one shadow-map lookup before one is measured, as a fraction of the light's

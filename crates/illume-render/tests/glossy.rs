@@ -5,10 +5,11 @@
 
 use illume_core::sampling::Pcg32;
 use illume_core::{Quat, Rgb, Vec3};
+use illume_render::{ShadowMapSettings, ShadowMaps};
 use illume_render::{Shadows, direct_light_with};
 use illume_scene::{LightKind, Trs};
 use illume_transport::path::{PathRadiance, PathSettings, continue_path};
-use illume_transport::{GBuffer, ShadowMapSettings, ShadowMaps, World};
+use illume_transport::{GBuffer, World};
 
 /// glTF 2.0 Appendix B, straight from the specification's formulas, in f64.
 fn gltf_brdf(

@@ -3,9 +3,10 @@
 
 use illume_core::image::RgbImage;
 use illume_core::{PI, Quat, Rgb, Vec2, Vec3, channel_mean};
+use illume_render::{ShadowMapSettings, ShadowMaps};
 use illume_render::{Shadows, direct_light, direct_light_with};
 use illume_scene::{LightKind, Trs};
-use illume_transport::{GBuffer, ShadowMapSettings, ShadowMaps, World};
+use illume_transport::{GBuffer, World};
 
 /// Direct light of `world` at `w × h` with rays and with default shadow maps.
 fn rays_and_maps(world: &World, w: u32, h: u32) -> (GBuffer, RgbImage, RgbImage) {

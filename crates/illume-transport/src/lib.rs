@@ -18,8 +18,6 @@
 //!   [`SampleStream`](illume_core::sampling::SampleStream) (same index ⇒ same path).
 //! * [`gbuffer`] — the per-pixel primary-hit buffer a technique shades.
 //! * [`raster`] — the CPU visibility-buffer rasterizer behind [`GBuffer::rasterize`].
-//! * [`shadow_map`] — per-light depth maps from the same rasterizer, looked up instead of
-//!   shadow rays for analytic lights.
 //! * [`technique`] — the [`Technique`] trait every GI technique implements.
 //!
 //! Radiometric conventions follow `shared/DESIGN.md`: lights and pixels carry linear RGB
@@ -37,7 +35,6 @@ pub mod nearest;
 pub mod path;
 pub mod photon;
 pub mod raster;
-pub mod shadow_map;
 pub mod surface;
 pub mod technique;
 pub mod world;
@@ -46,7 +43,6 @@ pub use camera::CameraRays;
 pub use gbuffer::{GBuffer, GBufferPixel, TextureFilter};
 pub use lights::{EmissionSample, LightSample, LightSet};
 pub use raster::VisibilityBuffer;
-pub use shadow_map::{LightMapPlan, ShadowMapError, ShadowMapSettings, ShadowMaps};
 pub use surface::SurfaceHit;
 pub use technique::{Budget, ChangeResponse, Pacing, Technique, TechniqueError, TechniqueSettings};
 pub use world::{SharedWorld, World};

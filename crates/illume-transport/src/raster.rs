@@ -39,7 +39,7 @@
 //! L2.
 //!
 //! The same setup, binning and strips render shadow-map depth from a light
-//! ([`crate::shadow_map`]): a viewport is any perspective projection (spot lights, cube
+//! (`illume_render::shadow_map`): a viewport is any perspective projection (spot lights, cube
 //! faces) or an orthographic one (directional lights), whose depth attribute is `1/w` or,
 //! orthographically, a plane of world position.
 
@@ -181,7 +181,7 @@ impl VisibilityBuffer {
 /// The image and the projection shared by every triangle of a frame: the camera's, or a
 /// light's for shadow maps (perspective for spot lights and cube faces, orthographic for
 /// directional lights).
-pub(crate) struct Viewport {
+pub struct Viewport {
     width: u32,
     height: u32,
     /// Maps world points to clip space `(x, y, w)`: `x/w`, `y/w` are NDC (−1..1 across
@@ -203,7 +203,7 @@ impl Viewport {
 
     /// A `width × height` perspective view: `clip_from_world` maps world points to
     /// `(x, y, w)` with `w` the view depth; the attribute compared is `1/w`.
-    pub(crate) fn perspective(width: u32, height: u32, clip_from_world: Affine3A) -> Self {
+    pub fn perspective(width: u32, height: u32, clip_from_world: Affine3A) -> Self {
         Self {
             width,
             height,
@@ -214,7 +214,7 @@ impl Viewport {
 
     /// A `width × height` orthographic view: `clip_from_world` maps world points to
     /// `(x, y, 1)`, and the attribute compared is `depth_plane · (p, 1)` (larger is nearer).
-    pub(crate) fn orthographic(
+    pub fn orthographic(
         width: u32,
         height: u32,
         clip_from_world: Affine3A,
@@ -750,7 +750,7 @@ fn bin_by_strip(triangles: &[ScreenTriangle], strips: usize) -> StripBins {
 
 /// What a shadow map stores per texel, from the rasterizer's depth attribute.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum StoredDepth {
+pub enum StoredDepth {
     /// Perspective views: the attribute is `1/w`; store `w`.
     ViewDepth,
     /// Orthographic views whose depth plane gives `−depth`; store `depth`.
@@ -763,7 +763,7 @@ pub(crate) enum StoredDepth {
 /// `f32::INFINITY`. `depth` is resized to the viewport (row-major, row 0 at the top) and
 /// its allocation reused. Same setup, binning and parallel strips as
 /// [`VisibilityBuffer::render`], so the same pixel-centre coverage rules hold.
-pub(crate) fn rasterize_depth(
+pub fn rasterize_depth(
     scene: &Scene,
     viewport: &Viewport,
     depth: &mut Vec<f32>,

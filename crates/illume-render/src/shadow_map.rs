@@ -1,5 +1,5 @@
 //! Shadow maps for the analytic lights (point, spot, directional): a depth image per light
-//! (six for a point light) rendered each frame with the CPU rasterizer of [`crate::raster`],
+//! (six for a point light) rendered each frame with the CPU rasterizer of [`illume_transport::raster`],
 //! then looked up instead of casting one BVH shadow ray per pixel and light.
 //!
 //! Photon streaming (Meneveaux & Bridault 2008, §0.7.3): "for each light source, compute
@@ -36,11 +36,11 @@
 //! dragon a few cm from the surface it shades). Everywhere else the bias keeps lit surfaces lit (no "acne")
 //! and occluders further than the bias from the receiver shadow exactly.
 
-use crate::lights::{Emitter, LightSample};
-use crate::raster::{StoredDepth, Viewport, rasterize_depth};
-use crate::surface::SurfaceHit;
-use crate::world::World;
 use glam::{Affine3A, Mat3, Vec2, Vec3, Vec4};
+use illume_transport::lights::{Emitter, LightSample};
+use illume_transport::raster::{StoredDepth, Viewport, rasterize_depth};
+use illume_transport::surface::SurfaceHit;
+use illume_transport::world::World;
 use rayon::prelude::*;
 
 /// Spot lights whose outer cone half-angle exceeds this \[rad\] (60°) are mapped with a
@@ -400,7 +400,7 @@ const CUBE_AXES: [Vec3; 6] = [
 #[derive(Clone, Debug, Default)]
 pub struct ShadowMaps {
     settings: ShadowMapSettings,
-    /// Per analytic light, in [`LightSet::analytic_range`](crate::LightSet::analytic_range) order.
+    /// Per analytic light, in [`LightSet::analytic_range`](illume_transport::LightSet::analytic_range) order.
     lights: Vec<LightMaps>,
     /// Per analytic light: its maps are current and were chosen for this frame.
     active: Vec<bool>,
@@ -719,7 +719,7 @@ impl ShadowMaps {
     }
 
     /// Fraction in [0, 1] of analytic light `light` (an index of
-    /// [`LightSet::analytic_range`](crate::LightSet::analytic_range)) that reaches `hit`
+    /// [`LightSet::analytic_range`](illume_transport::LightSet::analytic_range)) that reaches `hit`
     /// along `sample` (which came from that light): filtered, biased depth comparisons
     /// standing in for [`World::unoccluded`]. `None` when the light has no map (the caller
     /// casts a ray).
