@@ -2,6 +2,7 @@
 //! the JSON before the `gltf` crate reads it) on light and material properties.
 
 use super::Ctx;
+use super::materials::emissive_strength;
 use crate::animation::{
     Animation, Channel, ChannelValues, Interpolation, PropertyChannel, PropertyTarget,
 };
@@ -144,98 +145,9 @@ impl Ctx<'_> {
                 p.channel,
                 excerpt(&p.pointer)
             );
-            let parts: Vec<&str> = p.pointer.trim_start_matches('/').split('/').collect();
-            let index = |s: &str| s.parse::<usize>().ok();
-            let lights = root
-                .extensions
-                .as_ref()
-                .and_then(|e| e.khr_lights_punctual.as_ref());
-            let mut targets = Vec::new();
-            match parts[..] {
-                [
-                    "extensions",
-                    "KHR_lights_punctual",
-                    "lights",
-                    i,
-                    ref rest @ ..,
-                ] => {
-                    let Some(l) = index(i).and_then(|i| lights.and_then(|ls| ls.lights.get(i)))
-                    else {
-                        return Err(self.malformed(place, "the light does not exist"));
-                    };
-                    let ids = self
-                        .light_ids
-                        .get(&index(i).unwrap_or(0))
-                        .cloned()
-                        .unwrap_or_default();
-                    for light in ids {
-                        match rest {
-                            ["intensity"] => targets.push(PropertyTarget::LightIntensity {
-                                light,
-                                colour: Rgb::from(l.color),
-                            }),
-                            ["color"] => targets.push(PropertyTarget::LightColour {
-                                light,
-                                intensity: l.intensity,
-                            }),
-                            ["spot", "innerConeAngle"] => {
-                                targets.push(PropertyTarget::SpotInnerCone { light })
-                            }
-                            ["spot", "outerConeAngle"] => {
-                                targets.push(PropertyTarget::SpotOuterCone { light })
-                            }
-                            _ => {}
-                        }
-                    }
-                    if !matches!(
-                        rest,
-                        ["intensity"]
-                            | ["color"]
-                            | ["spot", "innerConeAngle"]
-                            | ["spot", "outerConeAngle"]
-                    ) {
-                        self.warn(format!(
-                            "{place}: this light property is not animated; ignored"
-                        ));
-                        continue;
-                    }
-                }
-                ["materials", m, ref rest @ ..] => {
-                    let Some((gm, &material)) = index(m)
-                        .and_then(|m| Some((root.materials.get(m)?, self.materials.get(m)?)))
-                    else {
-                        return Err(self.malformed(place, "the material does not exist"));
-                    };
-                    let strength = gm
-                        .extensions
-                        .as_ref()
-                        .and_then(|e| e.emissive_strength.as_ref())
-                        .map(|s| s.emissive_strength.0)
-                        .unwrap_or(1.0);
-                    targets.push(match rest {
-                        ["pbrMetallicRoughness", "baseColorFactor"] => {
-                            PropertyTarget::BaseColour { material }
-                        }
-                        ["pbrMetallicRoughness", "metallicFactor"] => {
-                            PropertyTarget::Metallic { material }
-                        }
-                        ["pbrMetallicRoughness", "roughnessFactor"] => {
-                            PropertyTarget::Roughness { material }
-                        }
-                        ["emissiveFactor"] => PropertyTarget::Emissive { material, strength },
-                        _ => {
-                            self.warn(format!(
-                                "{place}: this material property is not animated; ignored"
-                            ));
-                            continue;
-                        }
-                    });
-                }
-                _ => {
-                    self.warn(format!("{place}: unsupported pointer target; ignored"));
-                    continue;
-                }
-            }
+            let Some(targets) = self.pointer_targets(&p.pointer, &place)? else {
+                continue;
+            };
             let a = &root.animations[ai];
             let sampler = a.samplers.get(p.sampler).ok_or_else(|| {
                 self.malformed(&place, format!("sampler {} does not exist", p.sampler))
@@ -257,6 +169,111 @@ impl Ctx<'_> {
             }
         }
         Ok(out)
+    }
+
+    /// The properties `KHR_animation_pointer` `pointer` (of the channel at `place`)
+    /// animates: a light's (one target per illume light made from it) or a material's;
+    /// `None`, with a warning, for a property or target illume does not animate.
+    fn pointer_targets(
+        &mut self,
+        pointer: &str,
+        place: &str,
+    ) -> Result<Option<Vec<PropertyTarget>>, LoadError> {
+        let parts: Vec<&str> = pointer.trim_start_matches('/').split('/').collect();
+        match parts[..] {
+            [
+                "extensions",
+                "KHR_lights_punctual",
+                "lights",
+                i,
+                ref rest @ ..,
+            ] => self.light_targets(i, rest, place),
+            ["materials", m, ref rest @ ..] => self.material_targets(m, rest, place),
+            _ => {
+                self.warn(format!("{place}: unsupported pointer target; ignored"));
+                Ok(None)
+            }
+        }
+    }
+
+    /// [`Ctx::pointer_targets`] for property `rest` of light `i`.
+    fn light_targets(
+        &mut self,
+        i: &str,
+        rest: &[&str],
+        place: &str,
+    ) -> Result<Option<Vec<PropertyTarget>>, LoadError> {
+        let index = |s: &str| s.parse::<usize>().ok();
+        let lights = self
+            .root
+            .extensions
+            .as_ref()
+            .and_then(|e| e.khr_lights_punctual.as_ref());
+        let Some(l) = index(i).and_then(|i| lights.and_then(|ls| ls.lights.get(i))) else {
+            return Err(self.malformed(place, "the light does not exist"));
+        };
+        let ids = self
+            .light_ids
+            .get(&index(i).unwrap_or(0))
+            .cloned()
+            .unwrap_or_default();
+        let mut targets = Vec::new();
+        for light in ids {
+            match rest {
+                ["intensity"] => targets.push(PropertyTarget::LightIntensity {
+                    light,
+                    colour: Rgb::from(l.color),
+                }),
+                ["color"] => targets.push(PropertyTarget::LightColour {
+                    light,
+                    intensity: l.intensity,
+                }),
+                ["spot", "innerConeAngle"] => targets.push(PropertyTarget::SpotInnerCone { light }),
+                ["spot", "outerConeAngle"] => targets.push(PropertyTarget::SpotOuterCone { light }),
+                _ => {}
+            }
+        }
+        if !matches!(
+            rest,
+            ["intensity"] | ["color"] | ["spot", "innerConeAngle"] | ["spot", "outerConeAngle"]
+        ) {
+            self.warn(format!(
+                "{place}: this light property is not animated; ignored"
+            ));
+            return Ok(None);
+        }
+        Ok(Some(targets))
+    }
+
+    /// [`Ctx::pointer_targets`] for property `rest` of material `m`.
+    fn material_targets(
+        &mut self,
+        m: &str,
+        rest: &[&str],
+        place: &str,
+    ) -> Result<Option<Vec<PropertyTarget>>, LoadError> {
+        let root = self.root;
+        let Some((gm, &material)) = m
+            .parse::<usize>()
+            .ok()
+            .and_then(|m| Some((root.materials.get(m)?, self.materials.get(m)?)))
+        else {
+            return Err(self.malformed(place, "the material does not exist"));
+        };
+        let strength = emissive_strength(gm);
+        let target = match rest {
+            ["pbrMetallicRoughness", "baseColorFactor"] => PropertyTarget::BaseColour { material },
+            ["pbrMetallicRoughness", "metallicFactor"] => PropertyTarget::Metallic { material },
+            ["pbrMetallicRoughness", "roughnessFactor"] => PropertyTarget::Roughness { material },
+            ["emissiveFactor"] => PropertyTarget::Emissive { material, strength },
+            _ => {
+                self.warn(format!(
+                    "{place}: this material property is not animated; ignored"
+                ));
+                return Ok(None);
+            }
+        };
+        Ok(Some(vec![target]))
     }
 
     pub(super) fn animations(

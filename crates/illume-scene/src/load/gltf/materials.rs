@@ -58,6 +58,15 @@ pub(super) enum ImageFailure {
     Image(LoadError),
 }
 
+/// Material `m`'s `KHR_materials_emissive_strength` (1 without it).
+pub(super) fn emissive_strength(m: &json::Material) -> f32 {
+    m.extensions
+        .as_ref()
+        .and_then(|e| e.emissive_strength.as_ref())
+        .map(|s| s.emissive_strength.0)
+        .unwrap_or(1.0)
+}
+
 pub(super) fn wrap_mode(m: &Checked<json::texture::WrappingMode>) -> WrapMode {
     use json::texture::WrappingMode as W;
     match m {
@@ -70,156 +79,176 @@ pub(super) fn wrap_mode(m: &Checked<json::texture::WrappingMode>) -> WrapMode {
 impl Ctx<'_> {
     pub(super) fn convert_materials(&mut self) -> Result<(), LoadError> {
         for (i, m) in self.root.materials.iter().enumerate() {
-            let name = m.name.clone().unwrap_or_else(|| format!("material {i}"));
-            let pbr = &m.pbr_metallic_roughness;
-            let [r, g, b, alpha] = pbr.base_color_factor.0;
-            let strength = m
-                .extensions
-                .as_ref()
-                .and_then(|e| e.emissive_strength.as_ref())
-                .map(|s| s.emissive_strength.0)
-                .unwrap_or(1.0);
-            let user = format!("material {i} '{}'", excerpt(&name));
-            if ![r, g, b].iter().all(|v| (0.0..=1.0).contains(v)) {
-                return Err(self.malformed(
-                    &user,
-                    format!("baseColorFactor {:?} is not in [0, 1]", [r, g, b]),
-                ));
-            }
-            let emissive = m.emissive_factor.0;
-            if !emissive.iter().all(|v| v.is_finite() && *v >= 0.0) {
-                return Err(self.malformed(
-                    &user,
-                    format!("emissiveFactor {emissive:?} must be finite and ≥ 0"),
-                ));
-            }
-            if !(strength.is_finite() && strength >= 0.0) {
-                return Err(self.malformed(
-                    &user,
-                    format!(
-                        "KHR_materials_emissive_strength emissiveStrength {strength} must be finite and ≥ 0"
-                    ),
-                ));
-            }
-            let (base_color_texture, base_color_transform) = self.info_slot(
-                pbr.base_color_texture.as_ref(),
-                &user,
-                "baseColorTexture",
-                true,
-            )?;
-            // glTF's defaults are 1 for both factors (a rough metal), as the spec says.
-            let (metallic, roughness) = (pbr.metallic_factor.0, pbr.roughness_factor.0);
-            for (field, v) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
-                if !(0.0..=1.0).contains(&v) {
-                    return Err(self.malformed(&user, format!("{field} {v} is not in [0, 1]")));
-                }
-            }
-            let (metallic_roughness_texture, metallic_roughness_transform) = self.info_slot(
-                pbr.metallic_roughness_texture.as_ref(),
-                &user,
-                "metallicRoughnessTexture",
-                false,
-            )?;
-            let (emissive_texture, emissive_transform) =
-                self.info_slot(m.emissive_texture.as_ref(), &user, "emissiveTexture", true)?;
-            let (normal_texture, normal_transform, normal_scale) = match &m.normal_texture {
-                Some(info) => {
-                    if !info.scale.is_finite() {
-                        return Err(self.malformed(&user, "normalTexture.scale is not finite"));
-                    }
-                    // `gltf` types this slot's extensions as an open map.
-                    let parsed = info
-                        .extensions
-                        .as_ref()
-                        .and_then(|e| e.others.get("KHR_texture_transform"))
-                        .map(|v| serde_json::from_value::<TextureTransform>(v.clone()));
-                    let parsed = match parsed {
-                        Some(Ok(t)) => Some(t),
-                        Some(Err(e)) => {
-                            return Err(self.malformed(
-                                &user,
-                                format!("normalTexture KHR_texture_transform: {e}"),
-                            ));
-                        }
-                        None => None,
-                    };
-                    let (texture, transform) = self.texture_slot(
-                        info.index.value(),
-                        info.tex_coord,
-                        transform_of(parsed.as_ref()),
-                        &user,
-                        "normalTexture",
-                        false,
-                    )?;
-                    (texture, transform, info.scale)
-                }
-                None => (None, None, 1.0),
-            };
-            // Material extensions illume does not read: one warning each, saying what the
-            // material is rendered as instead.
-            if let Some(ext) = &m.extensions {
-                let mut names: Vec<&String> = ext.others.keys().collect();
-                names.sort();
-                for name in names {
-                    self.warn(format!(
-                        "{user}: extension {} is not supported, ignored: {}",
-                        excerpt(name),
-                        unsupported_material_extension_effect(name)
-                    ));
-                }
-            }
-            let alpha_cutoff = match m.alpha_mode {
-                Checked::Valid(json::material::AlphaMode::Opaque) => None,
-                Checked::Valid(json::material::AlphaMode::Mask) => {
-                    let cutoff = m.alpha_cutoff.map_or(0.5, |c| c.0);
-                    if !(cutoff.is_finite() && cutoff >= 0.0) {
-                        return Err(self.malformed(
-                            &user,
-                            format!("alphaCutoff {cutoff} is not a finite number ≥ 0"),
-                        ));
-                    }
-                    Some(cutoff)
-                }
-                Checked::Valid(json::material::AlphaMode::Blend) => {
-                    self.warn(format!(
-                        "{user}: alphaMode BLEND is rendered as MASK with alphaCutoff 0.5 (no partial transparency)"
-                    ));
-                    Some(0.5)
-                }
-                Checked::Invalid => {
-                    return Err(self.malformed(&user, "alphaMode is not OPAQUE, MASK or BLEND"));
-                }
-            };
-            if !(alpha.is_finite() && (0.0..=1.0).contains(&alpha)) {
-                return Err(self.malformed(
-                    &user,
-                    format!("baseColorFactor alpha {alpha} is not in [0, 1]"),
-                ));
-            }
-            let material = Material {
-                name,
-                alpha,
-                alpha_texture: base_color_texture,
-                alpha_cutoff,
-                base_color: Rgb::new(r, g, b),
-                base_color_transform,
-                metallic_roughness_transform,
-                normal_transform,
-                emissive_transform,
-                normal_texture,
-                normal_scale,
-                base_color_texture,
-                emission: Rgb::from(m.emissive_factor.0) * strength,
-                emissive_texture,
-                metallic,
-                roughness,
-                metallic_roughness_texture,
-                double_sided: m.double_sided,
-            };
+            let material = self.material(i, m)?;
             let id = self.builder.material(material);
             self.materials.push(id);
         }
         Ok(())
+    }
+
+    /// glTF material `i` (`m`) as illume's, checked (see the module docs), with a
+    /// warning for each extension illume does not read.
+    fn material(&mut self, i: usize, m: &json::Material) -> Result<Material, LoadError> {
+        let name = m.name.clone().unwrap_or_else(|| format!("material {i}"));
+        let pbr = &m.pbr_metallic_roughness;
+        let [r, g, b, alpha] = pbr.base_color_factor.0;
+        let strength = emissive_strength(m);
+        let user = format!("material {i} '{}'", excerpt(&name));
+        if ![r, g, b].iter().all(|v| (0.0..=1.0).contains(v)) {
+            return Err(self.malformed(
+                &user,
+                format!("baseColorFactor {:?} is not in [0, 1]", [r, g, b]),
+            ));
+        }
+        let emissive = m.emissive_factor.0;
+        if !emissive.iter().all(|v| v.is_finite() && *v >= 0.0) {
+            return Err(self.malformed(
+                &user,
+                format!("emissiveFactor {emissive:?} must be finite and ≥ 0"),
+            ));
+        }
+        if !(strength.is_finite() && strength >= 0.0) {
+            return Err(self.malformed(
+                &user,
+                format!(
+                    "KHR_materials_emissive_strength emissiveStrength {strength} must be finite and ≥ 0"
+                ),
+            ));
+        }
+        let (base_color_texture, base_color_transform) = self.info_slot(
+            pbr.base_color_texture.as_ref(),
+            &user,
+            "baseColorTexture",
+            true,
+        )?;
+        // glTF's defaults are 1 for both factors (a rough metal), as the spec says.
+        let (metallic, roughness) = (pbr.metallic_factor.0, pbr.roughness_factor.0);
+        for (field, v) in [("metallicFactor", metallic), ("roughnessFactor", roughness)] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(self.malformed(&user, format!("{field} {v} is not in [0, 1]")));
+            }
+        }
+        let (metallic_roughness_texture, metallic_roughness_transform) = self.info_slot(
+            pbr.metallic_roughness_texture.as_ref(),
+            &user,
+            "metallicRoughnessTexture",
+            false,
+        )?;
+        let (emissive_texture, emissive_transform) =
+            self.info_slot(m.emissive_texture.as_ref(), &user, "emissiveTexture", true)?;
+        let (normal_texture, normal_transform, normal_scale) =
+            self.normal_slot(m.normal_texture.as_ref(), &user)?;
+        self.warn_unread_extensions(m, &user);
+        let alpha_cutoff = self.alpha_cutoff(m, &user)?;
+        if !(alpha.is_finite() && (0.0..=1.0).contains(&alpha)) {
+            return Err(self.malformed(
+                &user,
+                format!("baseColorFactor alpha {alpha} is not in [0, 1]"),
+            ));
+        }
+        Ok(Material {
+            name,
+            alpha,
+            alpha_texture: base_color_texture,
+            alpha_cutoff,
+            base_color: Rgb::new(r, g, b),
+            base_color_transform,
+            metallic_roughness_transform,
+            normal_transform,
+            emissive_transform,
+            normal_texture,
+            normal_scale,
+            base_color_texture,
+            emission: Rgb::from(m.emissive_factor.0) * strength,
+            emissive_texture,
+            metallic,
+            roughness,
+            metallic_roughness_texture,
+            double_sided: m.double_sided,
+        })
+    }
+
+    /// The normal map slot (`normalTexture`) of the material named `user`: texture,
+    /// transform and scale; `(None, None, 1)` without one.
+    fn normal_slot(
+        &mut self,
+        info: Option<&json::material::NormalTexture>,
+        user: &str,
+    ) -> Result<(Option<TextureId>, Option<UvTransform>, f32), LoadError> {
+        Ok(match info {
+            Some(info) => {
+                if !info.scale.is_finite() {
+                    return Err(self.malformed(user, "normalTexture.scale is not finite"));
+                }
+                // `gltf` types this slot's extensions as an open map.
+                let parsed = info
+                    .extensions
+                    .as_ref()
+                    .and_then(|e| e.others.get("KHR_texture_transform"))
+                    .map(|v| serde_json::from_value::<TextureTransform>(v.clone()));
+                let parsed = match parsed {
+                    Some(Ok(t)) => Some(t),
+                    Some(Err(e)) => {
+                        return Err(self
+                            .malformed(user, format!("normalTexture KHR_texture_transform: {e}")));
+                    }
+                    None => None,
+                };
+                let (texture, transform) = self.texture_slot(
+                    info.index.value(),
+                    info.tex_coord,
+                    transform_of(parsed.as_ref()),
+                    user,
+                    "normalTexture",
+                    false,
+                )?;
+                (texture, transform, info.scale)
+            }
+            None => (None, None, 1.0),
+        })
+    }
+
+    /// Material extensions illume does not read: one warning each, saying what the
+    /// material is rendered as instead.
+    fn warn_unread_extensions(&mut self, m: &json::Material, user: &str) {
+        if let Some(ext) = &m.extensions {
+            let mut names: Vec<&String> = ext.others.keys().collect();
+            names.sort();
+            for name in names {
+                self.warn(format!(
+                    "{user}: extension {} is not supported, ignored: {}",
+                    excerpt(name),
+                    unsupported_material_extension_effect(name)
+                ));
+            }
+        }
+    }
+
+    /// The alpha cut-off of material `m` (named `user`): `None` for OPAQUE, MASK's
+    /// `alphaCutoff` (0.5 by default), BLEND as MASK at 0.5 with a warning.
+    fn alpha_cutoff(&mut self, m: &json::Material, user: &str) -> Result<Option<f32>, LoadError> {
+        Ok(match m.alpha_mode {
+            Checked::Valid(json::material::AlphaMode::Opaque) => None,
+            Checked::Valid(json::material::AlphaMode::Mask) => {
+                let cutoff = m.alpha_cutoff.map_or(0.5, |c| c.0);
+                if !(cutoff.is_finite() && cutoff >= 0.0) {
+                    return Err(self.malformed(
+                        user,
+                        format!("alphaCutoff {cutoff} is not a finite number ≥ 0"),
+                    ));
+                }
+                Some(cutoff)
+            }
+            Checked::Valid(json::material::AlphaMode::Blend) => {
+                self.warn(format!(
+                    "{user}: alphaMode BLEND is rendered as MASK with alphaCutoff 0.5 (no partial transparency)"
+                ));
+                Some(0.5)
+            }
+            Checked::Invalid => {
+                return Err(self.malformed(user, "alphaMode is not OPAQUE, MASK or BLEND"));
+            }
+        })
     }
 
     /// [`Ctx::texture_slot`] for a slot given as a glTF texture info (all but the normal

@@ -125,6 +125,8 @@ struct Ctx<'a> {
     light_ids: HashMap<usize, Vec<LightId>>,
 }
 
+/// Loads the glTF document (`.gltf` or `.glb`) at `path` (see the module docs); with
+/// `strict`, a missing or undecodable image is an error instead of a warning.
 pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
     let bytes = read_file(path)?;
     let is_glb = bytes.starts_with(b"glTF");
@@ -140,6 +142,51 @@ pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
         )
     })?;
     let root = document.document.as_json();
+    check_document(path, root)?;
+    let folder = path
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    let buffers = load_buffers(path, &folder, root, document.blob.as_deref())?;
+    let ctx = Ctx {
+        path,
+        folder,
+        root,
+        buffers,
+        builder: SceneBuilder::new(),
+        materials: Vec::new(),
+        default_material: None,
+        textures: HashMap::new(),
+        strict,
+        uv_sets: HashMap::new(),
+        meshes: HashMap::new(),
+        camera_set: false,
+        pointers,
+        light_ids: HashMap::new(),
+    };
+    let sky = sky_from_extras(path, root)?;
+    let mut scene = ctx.convert()?;
+    scene.sky = sky;
+    // Extensions used (not required) that illume does not read at all; material
+    // extensions are named per material by `convert`.
+    for ext in &root.extensions_used {
+        let read = SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str())
+            || ext.starts_with("KHR_materials_");
+        if !read {
+            scene.warnings.push(format!(
+                "{}: extension {} is not supported, ignored (the file says it can be read without it)",
+                path.display(),
+                excerpt(ext)
+            ));
+        }
+    }
+    Ok(scene)
+}
+
+/// The document's checks before conversion: `asset.version` 2.x, only supported
+/// `extensionsRequired`, attribute accessors that exist (on which the `gltf` crate's
+/// validation would panic), then that validation, reported with its JSON paths.
+fn check_document(path: &Path, root: &json::Root) -> Result<(), LoadError> {
     let version = &root.asset.version;
     if version.split('.').next() != Some("2") {
         return Err(LoadError::unsupported(
@@ -199,44 +246,7 @@ pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
             format!("{}{more}", problems.join("; ")),
         ));
     }
-    let folder = path
-        .parent()
-        .map(Path::to_path_buf)
-        .unwrap_or_else(|| PathBuf::from("."));
-    let buffers = load_buffers(path, &folder, root, document.blob.as_deref())?;
-    let ctx = Ctx {
-        path,
-        folder,
-        root,
-        buffers,
-        builder: SceneBuilder::new(),
-        materials: Vec::new(),
-        default_material: None,
-        textures: HashMap::new(),
-        strict,
-        uv_sets: HashMap::new(),
-        meshes: HashMap::new(),
-        camera_set: false,
-        pointers,
-        light_ids: HashMap::new(),
-    };
-    let sky = sky_from_extras(path, root)?;
-    let mut scene = ctx.convert()?;
-    scene.sky = sky;
-    // Extensions used (not required) that illume does not read at all; material
-    // extensions are named per material by `convert`.
-    for ext in &root.extensions_used {
-        let read = SUPPORTED_REQUIRED_EXTENSIONS.contains(&ext.as_str())
-            || ext.starts_with("KHR_materials_");
-        if !read {
-            scene.warnings.push(format!(
-                "{}: extension {} is not supported, ignored (the file says it can be read without it)",
-                path.display(),
-                excerpt(ext)
-            ));
-        }
-    }
-    Ok(scene)
+    Ok(())
 }
 
 impl Ctx<'_> {
