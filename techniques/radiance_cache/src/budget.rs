@@ -1,24 +1,24 @@
 //! The frame's **work budget** (beyond the paper): how many records a frame computes.
 //!
-//! A frame's records are computed in [`Technique::indirect`] (the G-buffer says where).
-//! [`Budget::work`] (from [`Technique::advance`], else the settings'
-//! `records_per_frame_max`) caps the records a frame computes: replacements first, in
-//! record order (those past the cap live one frame longer: `records_deferred`), then
-//! new records pass by pass, coarse to fine, spread evenly over a pass's pixels
-//! (`records_skipped` counts those left out; a later frame places them). Pixels that
-//! no record reaches then take the mean light of their neighbours on the same surface,
-//! pass after pass (`pixels_filled`, `pixels_unfilled`). Pass 1 of `interpolated` and
-//! the planned records pass 2 admits are not capped. [`Budget::time_ms`] becomes a
-//! record cap the same way: the limit divided by the cost of a record measured on the
-//! previous frames (the gathers' wall time over the records made, smoothed; at least
-//! one record per frame), the smaller of the two caps when both are set. The first
-//! frame, with no cost measured yet, is capped by `Budget::work` alone. The time limit
-//! covers the records' gathers only: expiry, reprojection and shading are not in it.
+//! A frame's records are computed in
+//! [`Technique::indirect`](illume_transport::Technique::indirect) (the G-buffer says where).
+//! [`Budget::work`](illume_transport::Budget::work) (from
+//! [`Technique::advance`](illume_transport::Technique::advance), else the settings'
+//! `records_per_frame_max`) caps the records a frame computes: replacements first, in record
+//! order (those past the cap live one frame longer: `records_deferred`), then new records pass
+//! by pass, coarse to fine, spread evenly over a pass's pixels (`records_skipped` counts those
+//! left out; a later frame places them). Pixels that no record reaches then take the mean light
+//! of their neighbours on the same surface, pass after pass (`pixels_filled`,
+//! `pixels_unfilled`). Pass 1 of `interpolated` and the planned records pass 2 admits are not
+//! capped. [`Budget::time_ms`](illume_transport::Budget::time_ms) becomes a record cap the same
+//! way: the limit divided by the cost of a record measured on the previous frames (the gathers'
+//! wall time over the records made, smoothed; at least one record per frame), the smaller of
+//! the two caps when both are set. The first frame, with no cost measured yet, is capped by
+//! `Budget::work` alone. The time limit covers the records' gathers only: expiry, reprojection
+//! and shading are not in it.
 
 use crate::placement::Candidate;
 use crate::state::RadianceCache;
-#[cfg(doc)]
-use illume_transport::{Budget, Technique};
 
 impl RadianceCache {
     /// The records this frame may compute: the smaller of `work_cap` and the time

@@ -1,20 +1,18 @@
 //! The **temporal modes** and pass 1 of `interpolated` (§4.4, Fig. 5).
 //!
-//! `reuse`: lifespans and replacement, no temporal gradient (Fig. 5c).
-//! `extrapolated`: also the extrapolated gradients (Fig. 5d), one pass. `interpolated`
-//! (Fig. 5e): [`Technique::precompute`] runs the extrapolated loop over the whole
-//! timeline (pass 1) on a private world, keeping every record with its successor; each
-//! replaced record's temporal gradient then becomes the interpolated one towards its
-//! replacement (Eq. 21–23), and the frames (pass 2) replay that plan: a frame admits
-//! the records made at it and drops the expired, with no new gather except for pixels
+//! `reuse`: lifespans and replacement, no temporal gradient (Fig. 5c). `extrapolated`: also the
+//! extrapolated gradients (Fig. 5d), one pass. `interpolated` (Fig. 5e):
+//! [`Technique::precompute`](illume_transport::Technique::precompute) runs the extrapolated
+//! loop over the whole timeline (pass 1) on a private world, keeping every record with its
+//! successor; each replaced record's temporal gradient then becomes the interpolated one
+//! towards its replacement (Eq. 21–23), and the frames (pass 2) replay that plan: a frame
+//! admits the records made at it and drops the expired, with no new gather except for pixels
 //! the plan does not cover (counted as `records_created`).
 
 use crate::RadianceCacheError;
 use crate::state::{RadianceCache, Slot};
 use crate::temporal::interpolated_gradient;
 use illume_core::progress::Progress;
-#[cfg(doc)]
-use illume_transport::Technique;
 use illume_transport::{GBuffer, World};
 
 impl RadianceCache {
