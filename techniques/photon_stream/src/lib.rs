@@ -17,7 +17,9 @@
 //! | §0.3, §0.5, Algorithm 2: photon pool, O(1) VSL updates | [`pool`] |
 //! | §0.7.1: photon tracing with Russian roulette | [`emit`] |
 //! | §0.7.2: simulation thread, mutual exclusion | [`stream`] |
-//! | §0.4.1, §0.6, §0.7.3: VSL shading, ε culling | [`shade`] |
+//! | §0.4.1, §0.6: VSL shading, tile by tile | [`shade`] |
+//! | §0.7.3: ε culling of VSLs per tile | [`cull`] |
+//! | beyond the paper: shadow rays to VSLs, near-field gather, shading stride | [`visibility`], [`near_field`], [`interpolate`] |
 //! | §0.5, §0.9.1: dynamic scenes, latency, flush | [`update`] |
 //! | the [`Technique`](illume_transport::Technique) the renderer drives | [`state`] |
 //! | settings (a tuning guide) and presets | [`settings`] |
@@ -48,8 +50,11 @@
 //! ps.validate().unwrap(); // Σ VSL power = Σ pooled photon power, exactly
 //! ```
 
+pub mod cull;
 pub mod emit;
 pub mod error;
+pub mod interpolate;
+pub mod near_field;
 pub mod placement;
 pub mod pool;
 pub mod settings;
@@ -57,6 +62,7 @@ pub mod shade;
 pub mod state;
 pub mod stream;
 pub mod update;
+pub mod visibility;
 
 pub use error::PhotonStreamError;
 pub use placement::{Vsl, VslSet};

@@ -243,6 +243,42 @@ fn class_indices(
         .collect()
 }
 
+/// Algorithm 1's first step: `(1 + oversampling) · vsl_count` candidates spread over
+/// the instances in proportion to their area (`object_area`, at least one each with
+/// area), uniformly over each one's triangles (`areas`).
+fn candidates(
+    scene: &Scene,
+    settings: &PlacementSettings,
+    areas: &[Vec<f32>],
+    object_area: &[f64],
+) -> Vec<Candidate> {
+    let total: f64 = object_area.iter().sum();
+    let mut candidates = Vec::new();
+    let mut rng = Pcg32::new(settings.seed, 0x7a5c_e11e);
+    for (i, inst) in scene.instances.iter().enumerate() {
+        let Some(table) = AliasTable::new(&areas[i]) else {
+            continue;
+        };
+        let share = object_area[i] / total;
+        let count = ((1.0 + settings.oversampling as f64) * settings.vsl_count as f64 * share)
+            .ceil()
+            .max(1.0) as usize;
+        let mesh = &scene.meshes[inst.mesh.index()];
+        for _ in 0..count {
+            let (t, _) = table.sample(rng.next_1d());
+            let (p, n) = point_on_triangle(mesh, t, settings.triangle_scale, rng.next_2d());
+            candidates.push(Candidate {
+                instance: i as u32,
+                class: triangle_class(mesh, t),
+                position_object: p,
+                normal_object: n,
+                position_world: inst.world_from_object.transform_point3(p),
+            });
+        }
+    }
+    candidates
+}
+
 impl VslSet {
     /// Places VSLs on every instance of `scene` at its current time (§0.4.2). Instances
     /// without area get none; every other instance gets at least one.
@@ -254,31 +290,8 @@ impl VslSet {
             .iter()
             .map(|a| a.iter().map(|&x| x as f64).sum())
             .collect();
-        let total: f64 = object_area.iter().sum();
         let objects_with_area = object_area.iter().filter(|&&a| a > 0.0).count();
-        let mut candidates = Vec::new();
-        let mut rng = Pcg32::new(settings.seed, 0x7a5c_e11e);
-        for (i, inst) in scene.instances.iter().enumerate() {
-            let Some(table) = AliasTable::new(&areas[i]) else {
-                continue;
-            };
-            let share = object_area[i] / total;
-            let count = ((1.0 + settings.oversampling as f64) * settings.vsl_count as f64 * share)
-                .ceil()
-                .max(1.0) as usize;
-            let mesh = &scene.meshes[inst.mesh.index()];
-            for _ in 0..count {
-                let (t, _) = table.sample(rng.next_1d());
-                let (p, n) = point_on_triangle(mesh, t, settings.triangle_scale, rng.next_2d());
-                candidates.push(Candidate {
-                    instance: i as u32,
-                    class: triangle_class(mesh, t),
-                    position_object: p,
-                    normal_object: n,
-                    position_world: inst.world_from_object.transform_point3(p),
-                });
-            }
-        }
+        let candidates = candidates(scene, settings, &areas, &object_area);
         let positions: Vec<Vec3> = candidates.iter().map(|c| c.position_world).collect();
         let objects: Vec<u32> = candidates.iter().map(|c| c.instance).collect();
         let target = (settings.vsl_count as usize).max(objects_with_area);
@@ -289,8 +302,16 @@ impl VslSet {
             .filter_map(|(c, k)| k.then_some(c))
             .collect();
         kept.sort_by_key(|c| c.instance); // stable: placement order within an object
+        let mut set = Self::indexed(scene, &kept);
+        set.assign_areas(scene, settings, &areas, &object_area);
+        set
+    }
+
+    /// The set of VSLs `kept` (sorted by instance, areas 0) with its per-object and
+    /// per-class nearest-VSL indices and each triangle's owner.
+    fn indexed(scene: &Scene, kept: &[Candidate]) -> Self {
         let mut first = vec![0u32; scene.instances.len() + 1];
-        for c in &kept {
+        for c in kept {
             first[c.instance as usize + 1] += 1;
         }
         for i in 0..scene.instances.len() {
@@ -337,7 +358,7 @@ impl VslSet {
         let triangle_owner: Vec<Vec<u32>> = (0..scene.instances.len())
             .map(|i| triangle_owners(mesh_of(i), &triangle_class[i], &class_trees[i]))
             .collect();
-        let mut set = Self {
+        Self {
             vsls,
             first,
             classes,
@@ -345,9 +366,20 @@ impl VslSet {
             class_trees,
             triangle_class,
             triangle_owner,
-        };
-        // A_s: the object's area split among its cells by assigning uniform samples with
-        // the photons' rule.
+        }
+    }
+
+    /// A_s of every VSL: the object's area split among its cells by assigning uniform
+    /// samples with the photons' rule (`areas`: each instance's world triangle areas,
+    /// `object_area` their sums).
+    fn assign_areas(
+        &mut self,
+        scene: &Scene,
+        settings: &PlacementSettings,
+        areas: &[Vec<f32>],
+        object_area: &[f64],
+    ) {
+        let set = self;
         for (i, inst) in scene.instances.iter().enumerate() {
             let (lo, hi) = (set.first[i] as usize, set.first[i + 1] as usize);
             let Some(table) = AliasTable::new(&areas[i]) else {
@@ -357,7 +389,7 @@ impl VslSet {
             let samples = 256 * (hi - lo);
             // In chunks with their own PCG streams: the same counts whatever the threads.
             const CHUNK: usize = 4096;
-            let set_ref = &set;
+            let set_ref = &*set;
             let counts = (0..samples.div_ceil(CHUNK))
                 .into_par_iter()
                 .map(|k| {
@@ -388,7 +420,6 @@ impl VslSet {
                     (object_area[i] * (*c).max(1) as f64 / samples as f64) as f32;
             }
         }
-        set
     }
 
     /// A set from explicit VSLs (tests, tools); `instance_count` instances.

@@ -18,12 +18,17 @@
 //! radius r_ε = sqrt(Φ_s·R_max/(π ε)) (R_max = the tile's largest ρ/π) meets the box and
 //! the box is not entirely behind the VSL's emitting side(s) (cosθ' ≤ 0 everywhere).
 //! The kept VSLs are evaluated over the tile's pixels in a branch-free loop over
-//! structure-of-arrays data that the compiler vectorises.
+//! structure-of-arrays data that the compiler vectorises. The culling is in
+//! [`crate::cull`].
 //!
 //! **Visibility (beyond the paper).** Optionally a shadow ray tests each VSL (or a
-//! subset chosen ∝ contribution) from each pixel, removing Figure 7's over-illumination.
+//! subset chosen ∝ contribution) from each pixel, removing Figure 7's over-illumination
+//! ([`crate::visibility`]).
 //!
-//! **Near field (beyond the paper,
+//! **Stride (beyond the paper).** Optionally the sum is evaluated on a grid of pixels
+//! and interpolated between them ([`crate::interpolate`]).
+//!
+//! **Near field (beyond the paper, [`crate::near_field`],
 //! [`near_field_rays`](PhotonStreamSettings::near_field_rays) > 0).** A VSL stands for
 //! its Voronoi cell at one point and one normal. Far away that is a good approximation;
 //! close to the cell it is not: a point on a wall a few centimetres above the floor sees
@@ -51,13 +56,17 @@
 //! the residual noise does not shimmer), small where the surroundings' exitance is
 //! smooth.
 
+use crate::interpolate::interpolate;
+use crate::near_field::{NearField, add_near_field};
 use crate::placement::VslSet;
 use crate::settings::{PhotonStreamSettings, VisibilityMode};
+use crate::visibility::shadowed_sums;
 use illume_core::image::RgbImage;
-use illume_core::sampling::{Pcg32, SampleStream, cosine_hemisphere, mix64};
-use illume_core::{Aabb, Frame, INV_PI, PI, Ray, Rgb, Vec2, Vec3, channel_mean};
-use illume_transport::{GBuffer, World};
+use illume_core::{Aabb, INV_PI, PI, Rgb, Vec3};
+use illume_transport::{GBuffer, GBufferPixel, World};
 use rayon::prelude::*;
+
+pub use crate::cull::cull;
 
 /// The VSL field in world space for one frame.
 #[derive(Clone, Debug, Default)]
@@ -107,13 +116,17 @@ pub fn far_weight(d2: f32, area_m2: f32, scale2: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// What the near-field gather reads besides the field: the VSLs (to find a hit's cell),
-/// the rays per pixel and the window's squared scale.
+/// The inputs of one shading pass, shared by its tiles.
 #[derive(Clone, Copy)]
-struct NearField<'a> {
-    vsls: &'a VslSet,
-    rays: u32,
-    scale2: f32,
+pub(crate) struct ShadePass<'a> {
+    pub(crate) world: &'a World,
+    pub(crate) gbuffer: &'a GBuffer,
+    pub(crate) field: &'a VslField,
+    /// The near-field gather's inputs; `None` without a near field.
+    pub(crate) near: Option<NearField<'a>>,
+    pub(crate) settings: &'a PhotonStreamSettings,
+    /// Decorrelates stochastic visibility between frames.
+    pub(crate) frame_seed: u64,
 }
 
 /// Counters of one shading pass.
@@ -173,6 +186,8 @@ struct TilePixels {
     r: Vec<f32>,
     g: Vec<f32>,
     b: Vec<f32>,
+    /// The VSLs culling kept for the tile.
+    kept: Vec<u32>,
 }
 
 /// One VSL as the shading loop reads it.
@@ -295,60 +310,6 @@ fn accumulate_loop<const WINDOW: bool>(
     }
 }
 
-/// VSLs of `field` that may light any point of `bounds` (see the module doc). With a
-/// near field (`near_scale2` > 0, the window's squared scale) a VSL whose far-field
-/// weight is 0 over the whole box (every corner inside its inner radius) is left out
-/// too: its light there is all gathered.
-pub fn cull(
-    field: &VslField,
-    bounds: &Aabb,
-    max_reflectance: f32,
-    epsilon: f32,
-    near_scale2: f32,
-    out: &mut Vec<u32>,
-) {
-    out.clear();
-    let corners = bounds.corners();
-    for s in 0..field.len() {
-        let (pf, pb) = (
-            field.front_w[s].max_element(),
-            field.back_w[s].max_element(),
-        );
-        if pf <= 0.0 && pb <= 0.0 {
-            continue;
-        }
-        let p = field.positions[s];
-        if epsilon > 0.0 {
-            let r2 = pf.max(pb) * max_reflectance / (PI * epsilon);
-            let closest = p.clamp(bounds.min, bounds.max);
-            if closest.distance_squared(p) > r2 {
-                continue;
-            }
-        }
-        if near_scale2 > 0.0 {
-            let farthest = corners
-                .iter()
-                .map(|c| c.distance_squared(p))
-                .fold(0.0f32, f32::max);
-            if far_weight(farthest, field.area_m2[s], near_scale2) <= 0.0 {
-                continue;
-            }
-        }
-        let n = field.normals[s];
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        for c in &corners {
-            let h = n.dot(*c - p);
-            lo = lo.min(h);
-            hi = hi.max(h);
-        }
-        // Points within 0.1 mm of the VSL's plane get cosθ' ≈ 0: nothing to add.
-        let tol = 1e-4;
-        if (pf > 0.0 && hi > tol) || (pb > 0.0 && lo < -tol) {
-            out.push(s as u32);
-        }
-    }
-}
-
 /// Indirect radiance of every G-buffer pixel from `field` (see the module doc).
 /// `frame_seed` decorrelates stochastic visibility between frames.
 /// `vsls` are the VSLs `field` was made from (the near-field gather finds a hit's cell
@@ -372,11 +333,15 @@ pub fn shade(
     // Σ_s Φ_s·G_s per shaded pixel, without ρ/π (multiplied in at the end so that texture
     // detail stays at full resolution whatever the stride).
     let grid = Include::Grid(stride);
-    let run = |include: &Include, store: &mut dyn FnMut(u32, Rgb)| {
-        gather(
-            world, gbuffer, field, near, settings, frame_seed, include, store,
-        )
+    let pass = ShadePass {
+        world,
+        gbuffer,
+        field,
+        near,
+        settings,
+        frame_seed,
     };
+    let run = |include: &Include, store: &mut dyn FnMut(u32, Rgb)| gather(&pass, include, store);
     if stride == 1 {
         let mut gathered = zeros(n);
         let stats = run(&grid, &mut |i, c| gathered[i as usize] = c);
@@ -412,7 +377,7 @@ pub fn shade(
 
 /// `n` black pixels, written (and first touched) on every core: a frame's buffers are
 /// megabytes, whose zeroing on one thread left the other core idle.
-fn zeros(n: usize) -> Vec<Rgb> {
+pub(crate) fn zeros(n: usize) -> Vec<Rgb> {
     (0..n)
         .into_par_iter()
         .with_min_len(4096)
@@ -437,7 +402,7 @@ fn radiance(gbuffer: &GBuffer, gathered: &[Rgb]) -> RgbImage {
 
 /// True for G-buffer points that receive indirect light (reflecting, non-black).
 #[inline]
-fn shades(p: &illume_transport::GBufferPixel) -> bool {
+pub(crate) fn shades(p: &GBufferPixel) -> bool {
     p.hit.reflects && p.hit.albedo != Rgb::ZERO
 }
 
@@ -461,43 +426,22 @@ impl Include<'_> {
 
 /// Shades the pixels `include` selects, tile by tile, handing each pixel's Σ Φ·G to
 /// `store` (pixel index, value).
-#[allow(
-    clippy::too_many_arguments,
-    reason = "the pass's inputs, passed through to every tile"
-)]
-fn gather(
-    world: &World,
-    gbuffer: &GBuffer,
-    field: &VslField,
-    near: Option<NearField>,
-    settings: &PhotonStreamSettings,
-    frame_seed: u64,
-    include: &Include,
-    store: &mut dyn FnMut(u32, Rgb),
-) -> ShadeStats {
-    let (w, h) = (gbuffer.width, gbuffer.height);
-    let t = settings.tile_size;
+fn gather(pass: &ShadePass, include: &Include, store: &mut dyn FnMut(u32, Rgb)) -> ShadeStats {
+    let (w, h) = (pass.gbuffer.width, pass.gbuffer.height);
+    let t = pass.settings.tile_size;
     let (tx, ty) = (w.div_ceil(t), h.div_ceil(t));
     let results: Vec<(Vec<(u32, Rgb)>, ShadeStats)> = (0..tx * ty)
         .into_par_iter()
-        .map_init(
-            || (TilePixels::default(), Vec::new()),
-            |(tile, kept), k| {
-                let (x0, y0) = ((k % tx) * t, (k / tx) * t);
-                shade_tile(
-                    world,
-                    gbuffer,
-                    field,
-                    near,
-                    settings,
-                    frame_seed,
-                    (x0, y0, (x0 + t).min(w), (y0 + t).min(h)),
-                    include,
-                    tile,
-                    kept,
-                )
-            },
-        )
+        .map_init(TilePixels::default, |tile, k| {
+            let (x0, y0) = ((k % tx) * t, (k / tx) * t);
+            let rect = TileRect {
+                x0,
+                y0,
+                x1: (x0 + t).min(w),
+                y1: (y0 + t).min(h),
+            };
+            shade_tile(pass, rect, include, tile)
+        })
         .collect();
     let mut stats = ShadeStats::default();
     for (px, s) in results {
@@ -509,368 +453,147 @@ fn gather(
     stats
 }
 
-/// A shaded grid pixel as interpolation reads it.
-#[derive(Clone, Copy, Default)]
-struct Anchor {
-    position: Vec3,
-    normal: Vec3,
-    gathered: Rgb,
-    usable: bool,
+/// A tile of the screen: pixels `x0..x1` × `y0..y1`.
+#[derive(Clone, Copy)]
+struct TileRect {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
 }
 
-/// Radiance of every pixel: grid pixels from `on_grid` (Σ Φ·G of grid cell
-/// `(y / stride) · ⌈w / stride⌉ + x / stride`), the pixels between from the
-/// up to four grid pixels (`stride` apart) around each, weighted bilinearly, using only
-/// neighbours on the same surface: facing normals within ≈ 25° (cos ≥ 0.9) and the
-/// neighbour's point within `stride` pixel footprints of the pixel's tangent plane
-/// (depth discontinuities fail). Returns the image, how many pixels were interpolated,
-/// and the pixels no neighbour could fill (left black, to be shaded exactly).
-fn interpolate(
-    gbuffer: &GBuffer,
-    on_grid: &[Rgb],
-    stride: u32,
-    yfov_rad: f32,
-) -> (RgbImage, u64, Vec<u32>) {
-    let (w, h) = (gbuffer.width, gbuffer.height);
-    // World size of one pixel at unit distance (the camera's vertical field of view
-    // spread over the image height; a pixel is square).
-    let footprint = 2.0 * (yfov_rad * 0.5).tan() / h.max(1) as f32;
-    // The grid pixels, compact (a G-buffer entry is ~100 bytes; each is read by up to
-    // eight neighbours).
-    let (aw, ah) = (w.div_ceil(stride), h.div_ceil(stride));
-    let anchors: Vec<Anchor> = (0..aw * ah)
-        .into_par_iter()
-        .with_min_len(256)
-        .map(|k| {
-            let j = ((k / aw) * stride * w + (k % aw) * stride) as usize;
-            match gbuffer.pixels[j].as_ref().filter(|p| shades(p)) {
-                Some(p) => Anchor {
-                    position: p.hit.position,
-                    normal: p.hit.facing_normal(),
-                    gathered: on_grid[k as usize],
-                    usable: true,
-                },
-                None => Anchor::default(),
-            }
-        })
-        .collect();
-    let mut img = RgbImage::from_vec(w, h, zeros((w * h) as usize)).expect("w × h pixels");
-    let rows: Vec<(u64, Vec<u32>)> = img
-        .pixels_mut()
-        .par_chunks_mut(w as usize)
-        .enumerate()
-        .map(|(y, row)| {
-            let y = y as u32;
-            let (mut interpolated, mut missing) = (0u64, Vec::new());
-            let (ay, fy) = (y / stride, (y % stride) as f32 / stride as f32);
-            let on_row = y.is_multiple_of(stride);
-            for (x, out) in row.iter_mut().enumerate() {
-                let x = x as u32;
-                let i = y * w + x;
-                illume_core::prefetch(&gbuffer.pixels, i as usize + illume_core::PREFETCH_AHEAD);
-                let Some(p) = gbuffer.pixels[i as usize].as_ref().filter(|p| shades(p)) else {
-                    continue;
-                };
-                let f = p.hit.albedo * INV_PI;
-                if on_row && x.is_multiple_of(stride) {
-                    *out = f * on_grid[(ay * aw + x / stride) as usize];
-                    continue;
-                }
-                let (ax, fx) = (x / stride, (x % stride) as f32 / stride as f32);
-                let n = p.hit.facing_normal();
-                let tol = stride as f32 * footprint * p.hit.t;
-                let (mut sum, mut weight) = (Rgb::ZERO, 0.0f32);
-                for (dx, dy, wx, wy) in [
-                    (0, 0, 1.0 - fx, 1.0 - fy),
-                    (1, 0, fx, 1.0 - fy),
-                    (0, 1, 1.0 - fx, fy),
-                    (1, 1, fx, fy),
-                ] {
-                    let (qx, qy) = (ax + dx, ay + dy);
-                    if qx >= aw || qy >= ah {
-                        continue;
-                    }
-                    let q = &anchors[(qy * aw + qx) as usize];
-                    if !q.usable
-                        || q.normal.dot(n) < 0.9
-                        || n.dot(q.position - p.hit.position).abs() > tol
-                    {
-                        continue;
-                    }
-                    // Bilinear weight, floored so that a pixel on a grid line still
-                    // borrows from the far neighbours when its near ones are unusable.
-                    let wgt = (wx * wy).max(1e-3);
-                    sum += q.gathered * wgt;
-                    weight += wgt;
-                }
-                if weight > 0.0 {
-                    *out = f * (sum / weight);
-                    interpolated += 1;
-                } else {
-                    missing.push(i);
-                }
-            }
-            (interpolated, missing)
-        })
-        .collect();
-    let interpolated = rows.iter().map(|r| r.0).sum();
-    let missing = rows.into_iter().flat_map(|r| r.1).collect();
-    (img, interpolated, missing)
-}
-
-#[allow(
-    clippy::too_many_arguments,
-    reason = "one tile's private scratch buffers"
-)]
+/// Σ Φ·G (before ρ/π) of the pixels of tile `rect` that `include` selects, in pixel
+/// order, and the tile's counters; `tile` is the thread's scratch.
 fn shade_tile(
-    world: &World,
-    gbuffer: &GBuffer,
-    field: &VslField,
-    near: Option<NearField>,
-    settings: &PhotonStreamSettings,
-    frame_seed: u64,
-    (x0, y0, x1, y1): (u32, u32, u32, u32),
+    pass: &ShadePass,
+    rect: TileRect,
     include: &Include,
     tile: &mut TilePixels,
-    kept: &mut Vec<u32>,
 ) -> (Vec<(u32, Rgb)>, ShadeStats) {
     let mut stats = ShadeStats::default();
-    let tp = tile;
-    for v in [
-        &mut tp.px, &mut tp.py, &mut tp.pz, &mut tp.nx, &mut tp.ny, &mut tp.nz,
-    ] {
-        v.clear();
-    }
-    tp.index.clear();
-    let mut bounds = Aabb::EMPTY;
-    let mut max_albedo = 0.0f32;
-    // A grid pass visits only its rows and columns (the G-buffer is large: touching
-    // pixels it will not shade costs memory traffic).
-    let step = match include {
-        Include::Grid(s) => *s,
-        Include::Mask(_) => 1,
-    };
-    let first = |v: u32| v.next_multiple_of(step);
-    for y in (first(y0)..y1).step_by(step as usize) {
-        for x in (first(x0)..x1).step_by(step as usize) {
-            let i = y * gbuffer.width + x;
-            if !include.contains(x, y, i) {
-                continue;
-            }
-            let Some(px) = &gbuffer.pixels[i as usize] else {
-                continue;
-            };
-            if !px.hit.reflects || px.hit.albedo == Rgb::ZERO {
-                continue;
-            }
-            let p = px.hit.position;
-            let n = px.hit.facing_normal();
-            tp.index.push(i);
-            tp.px.push(p.x);
-            tp.py.push(p.y);
-            tp.pz.push(p.z);
-            tp.nx.push(n.x);
-            tp.ny.push(n.y);
-            tp.nz.push(n.z);
-            bounds = bounds.grow(p);
-            max_albedo = max_albedo.max(px.hit.albedo.max_element());
-        }
-    }
-    let m = tp.index.len();
-    if m == 0 {
+    let Some((bounds, max_albedo)) = tile.collect(pass.gbuffer, rect, include) else {
         return (Vec::new(), stats);
-    }
+    };
+    let m = tile.index.len();
+    let (settings, near) = (pass.settings, pass.near);
     cull(
-        field,
+        pass.field,
         &bounds,
         max_albedo * INV_PI,
         settings.epsilon,
         near.map_or(0.0, |nf| nf.scale2),
-        kept,
+        &mut tile.kept,
     );
     stats.tiles = 1;
-    stats.vsls_kept = kept.len() as u64;
-    stats.evaluations = (kept.len() * m) as u64;
+    stats.vsls_kept = tile.kept.len() as u64;
+    stats.evaluations = (tile.kept.len() * m) as u64;
     let mut out: Vec<(u32, Rgb)> = match settings.visibility {
-        VisibilityMode::Off => {
-            for v in [&mut tp.r, &mut tp.g, &mut tp.b] {
-                v.clear();
-                v.resize(m, 0.0);
-            }
-            let (r, g, b) = (&mut tp.r[..m], &mut tp.g[..m], &mut tp.b[..m]);
-            let (px, py, pz) = (&tp.px[..m], &tp.py[..m], &tp.pz[..m]);
-            let (nx, ny, nz) = (&tp.nx[..m], &tp.ny[..m], &tp.nz[..m]);
-            let pixels = TileSoa {
-                px,
-                py,
-                pz,
-                nx,
-                ny,
-                nz,
-            };
-            for &s in kept.iter() {
-                let s = s as usize;
-                let vsl = VslTerm {
-                    p: field.positions[s],
-                    n: field.normals[s],
-                    front: field.front_w[s],
-                    back: field.back_w[s],
-                    area: field.area_m2[s],
-                    scale2: near.map_or(0.0, |nf| nf.scale2),
-                };
-                accumulate(&vsl, &pixels, r, g, b);
-            }
-            (0..m)
-                .map(|i| (tp.index[i], Rgb::new(tp.r[i], tp.g[i], tp.b[i])))
-                .collect()
-        }
+        VisibilityMode::Off => tile.unshadowed_sums(pass.field, near),
         VisibilityMode::All | VisibilityMode::Stochastic => {
-            let mut contrib: Vec<(u32, Rgb)> = Vec::with_capacity(kept.len());
-            let mut cdf: Vec<f32> = Vec::with_capacity(kept.len());
-            (0..m)
-                .map(|i| {
-                    let idx = tp.index[i];
-                    let px = gbuffer.pixels[idx as usize]
-                        .as_ref()
-                        .expect("gathered pixels exist");
-                    let x = px.hit.position;
-                    let n = px.hit.facing_normal();
-                    contrib.clear();
-                    for &s in kept.iter() {
-                        let (mut wgt, front) = field.geometry(s as usize, x, n);
-                        if let Some(nf) = near {
-                            let d2 = field.positions[s as usize].distance_squared(x);
-                            wgt *= far_weight(d2, field.area_m2[s as usize], nf.scale2);
-                        }
-                        let phi = if front {
-                            field.front_w[s as usize]
-                        } else {
-                            field.back_w[s as usize]
-                        };
-                        let c = phi * wgt;
-                        if c.max_element() > 0.0 {
-                            contrib.push((s, c));
-                        }
-                    }
-                    let visible = |s: u32, rays: &mut u64| -> bool {
-                        let to = field.positions[s as usize] - x;
-                        let dist = to.length();
-                        if dist < 1e-3 {
-                            return true;
-                        }
-                        let dir = to / dist;
-                        *rays += 1;
-                        let t_max = dist * 0.999 - 1e-4;
-                        !world.tracer.occluded(
-                            &Ray::segment(px.hit.spawn_origin(dir), dir, t_max),
-                            illume_scene::MASK_DEFAULT,
-                        )
-                    };
-                    let mut sum = Rgb::ZERO;
-                    if settings.visibility == VisibilityMode::All
-                        || contrib.len() <= settings.visibility_rays as usize
-                    {
-                        for &(s, c) in &contrib {
-                            if visible(s, &mut stats.shadow_rays) {
-                                sum += c;
-                            }
-                        }
-                    } else {
-                        // Choose VSLs ∝ mean-channel contribution: estimate = total/k · Σ V.
-                        cdf.clear();
-                        let mut total = 0.0f32;
-                        for &(_, c) in &contrib {
-                            total += channel_mean(c);
-                            cdf.push(total);
-                        }
-                        let k = settings.visibility_rays;
-                        let mut rng = Pcg32::new(mix64(frame_seed ^ settings.seed), idx as u64);
-                        for _ in 0..k {
-                            let u = rng.next_1d() * total;
-                            let j = cdf.partition_point(|&v| v <= u).min(contrib.len() - 1);
-                            let (s, c) = contrib[j];
-                            if visible(s, &mut stats.shadow_rays) {
-                                let p = channel_mean(c) / total;
-                                sum += c / (p * k as f32);
-                            }
-                        }
-                    }
-                    (idx, sum)
-                })
-                .collect()
+            shadowed_sums(pass, &tile.index, &tile.kept, &mut stats.shadow_rays)
         }
     };
     if let Some(nf) = near {
-        // The same lattice shifts every frame (not `frame_seed`): what gather noise is
-        // left stays put on the screen instead of shimmering from frame to frame.
-        let seed = mix64(settings.seed ^ 0x6e65_6172);
-        world.tracer.scoped(|tracer| {
-            for (idx, sum) in out.iter_mut() {
-                let px = gbuffer.pixels[*idx as usize]
-                    .as_ref()
-                    .expect("gathered pixels exist");
-                *sum += near_gather(world, tracer, field, nf, &px.hit, seed, *idx);
-            }
-        });
-        stats.near_rays = (out.len() as u64) * nf.rays as u64;
+        stats.near_rays = add_near_field(
+            pass.world,
+            pass.gbuffer,
+            pass.field,
+            nf,
+            settings.seed,
+            &mut out,
+        );
     }
     (out, stats)
 }
 
-/// The near-field share at `hit` (module doc), in the units of the VSL sum (Σ Φ·G,
-/// before ρ/π): (π/N) Σ_k (1 − w(r_k)) Φ_k/(π A_k) over N cosine-distributed rays.
-fn near_gather(
-    world: &World,
-    tracer: &mut illume_accel::ScopedTracer<'_>,
-    field: &VslField,
-    nf: NearField,
-    hit: &illume_transport::SurfaceHit,
-    seed: u64,
-    pixel: u32,
-) -> Rgb {
-    /// The rank-1 lattice's generator: the golden ratio's fractional part (a Fibonacci
-    /// lattice, the best-spread rank-1 set in 2D for any N).
-    const ALPHA: f32 = 0.618_034;
-    let n = hit.facing_normal();
-    let ng = hit.facing_geometric_normal();
-    let frame = Frame::from_normal(n);
-    let mut rng = Pcg32::new(seed, pixel as u64);
-    let shift = rng.next_2d();
-    let inv_n = 1.0 / nf.rays as f32;
-    let mut sum = Rgb::ZERO;
-    for k in 0..nf.rays {
-        let u = Vec2::new(
-            ((k as f32 + 0.5) * inv_n + shift.x).fract(),
-            (k as f32 * ALPHA + shift.y).fract(),
-        );
-        let dir = frame.to_world(cosine_hemisphere(u));
-        if dir.dot(ng) <= 0.0 {
-            continue; // below the geometric surface: no light from there
+impl TilePixels {
+    /// Gathers the pixels of `rect` that `include` selects and that receive indirect
+    /// light; returns their world box and largest albedo channel, `None` when there is
+    /// none.
+    fn collect(
+        &mut self,
+        gbuffer: &GBuffer,
+        rect: TileRect,
+        include: &Include,
+    ) -> Option<(Aabb, f32)> {
+        let tp = self;
+        for v in [
+            &mut tp.px, &mut tp.py, &mut tp.pz, &mut tp.nx, &mut tp.ny, &mut tp.nz,
+        ] {
+            v.clear();
         }
-        let ray = Ray::new(hit.spawn_origin(dir), dir);
-        // A side that does not reflect (the back of a one-sided surface) or a black one
-        // received no photon: its VSL side has no power, nothing to test here.
-        let Some((y, position_object, front_face)) =
-            world.trace_side(tracer, &ray, illume_scene::MASK_DEFAULT)
-        else {
-            continue;
+        tp.index.clear();
+        let mut bounds = Aabb::EMPTY;
+        let mut max_albedo = 0.0f32;
+        // A grid pass visits only its rows and columns (the G-buffer is large: touching
+        // pixels it will not shade costs memory traffic).
+        let step = match include {
+            Include::Grid(s) => *s,
+            Include::Mask(_) => 1,
         };
-        let Some(s) = nf.vsls.nearest_on(y.instance, y.triangle, position_object) else {
-            continue;
-        };
-        let s = s as usize;
-        let area = field.area_m2[s];
-        // The ray is unit, so the hit is y.t from the (offset) origin.
-        let w = far_weight(y.t * y.t, area, nf.scale2);
-        if w >= 1.0 {
-            continue;
+        let first = |v: u32| v.next_multiple_of(step);
+        for y in (first(rect.y0)..rect.y1).step_by(step as usize) {
+            for x in (first(rect.x0)..rect.x1).step_by(step as usize) {
+                let i = y * gbuffer.width + x;
+                if !include.contains(x, y, i) {
+                    continue;
+                }
+                let Some(px) = &gbuffer.pixels[i as usize] else {
+                    continue;
+                };
+                if !px.hit.reflects || px.hit.albedo == Rgb::ZERO {
+                    continue;
+                }
+                let p = px.hit.position;
+                let n = px.hit.facing_normal();
+                tp.index.push(i);
+                tp.px.push(p.x);
+                tp.py.push(p.y);
+                tp.pz.push(p.z);
+                tp.nx.push(n.x);
+                tp.ny.push(n.y);
+                tp.nz.push(n.z);
+                bounds = bounds.grow(p);
+                max_albedo = max_albedo.max(px.hit.albedo.max_element());
+            }
         }
-        let phi = if front_face {
-            field.front_w[s]
-        } else {
-            field.back_w[s]
-        };
-        sum += phi * ((1.0 - w) / area.max(1e-12));
+        (!tp.index.is_empty()).then_some((bounds, max_albedo))
     }
-    sum * inv_n
+
+    /// Σ Φ·G of the collected pixels over the culled VSLs, without visibility, in pixel
+    /// order: the branch-free structure-of-arrays loop ([`accumulate`]).
+    fn unshadowed_sums(&mut self, field: &VslField, near: Option<NearField>) -> Vec<(u32, Rgb)> {
+        let tp = self;
+        let m = tp.index.len();
+        for v in [&mut tp.r, &mut tp.g, &mut tp.b] {
+            v.clear();
+            v.resize(m, 0.0);
+        }
+        let (r, g, b) = (&mut tp.r[..m], &mut tp.g[..m], &mut tp.b[..m]);
+        let (px, py, pz) = (&tp.px[..m], &tp.py[..m], &tp.pz[..m]);
+        let (nx, ny, nz) = (&tp.nx[..m], &tp.ny[..m], &tp.nz[..m]);
+        let pixels = TileSoa {
+            px,
+            py,
+            pz,
+            nx,
+            ny,
+            nz,
+        };
+        for &s in tp.kept.iter() {
+            let s = s as usize;
+            let vsl = VslTerm {
+                p: field.positions[s],
+                n: field.normals[s],
+                front: field.front_w[s],
+                back: field.back_w[s],
+                area: field.area_m2[s],
+                scale2: near.map_or(0.0, |nf| nf.scale2),
+            };
+            accumulate(&vsl, &pixels, r, g, b);
+        }
+        (0..m)
+            .map(|i| (tp.index[i], Rgb::new(tp.r[i], tp.g[i], tp.b[i])))
+            .collect()
+    }
 }

@@ -20,6 +20,13 @@
 //! - [`domain`]: where keys live (`screen`, `cube`, `atlas`) and how each renders them;
 //! - [`atlas`]: the `atlas` domain's lightmap coordinates and probe grid.
 //!
+//! and the run time (the [`Technique`](illume_transport::Technique), [`state`]):
+//!
+//! - [`load`]: the file checked against the scene, camera and image size (§4.2);
+//! - [`reconstruct`]: Eq. 2 — coefficients interpolated between keys, texels rebuilt (§3.1);
+//! - [`lookup`]: per domain, which texels a pixel reads;
+//! - [`update`]: scene changes → a stale file (warned, never rebuilt).
+//!
 //! # Limits (as in the paper)
 //! One day and one place per file; static geometry; Lambertian materials only (§3.1: no
 //! reflective objects); dynamic objects leave the indirect light unchanged (they neither
@@ -29,12 +36,16 @@ pub mod atlas;
 pub mod domain;
 pub mod error;
 pub mod file;
+pub mod load;
+pub mod lookup;
 pub mod pca;
 pub mod precompute;
+pub mod reconstruct;
 pub mod schedule;
 pub mod settings;
 pub mod shard;
 pub mod state;
+pub mod update;
 
 pub use error::PrecomputedError;
 pub use settings::PrecomputedSettings;

@@ -22,7 +22,7 @@
 //! 5e; the default). Glossy surfaces get radiance records (hemispherical harmonics)
 //! for their specular lobe. Beyond the paper: replacement only on a surface, replacements
 //! with their predecessor's rays, surprise expiry and a work budget in records per
-//! frame, and neighbour aging (§7's future work, off by default) ([`state`]).
+//! frame, and neighbour aging (§7's future work, off by default) ([`expiry`], [`budget`]).
 //!
 //! | paper | here |
 //! |---|---|
@@ -33,7 +33,13 @@
 //! | §3, radiance records for glossy surfaces (KGPB05, GKPB04): hemispherical harmonics | [`hsh`], [`radiance`] |
 //! | §4.3, §5, Fig. 7–8: next-frame estimate by reprojection, hole filling | [`reproject`] |
 //! | §6: the paper's parameters and the reasoned ones; presets `paper`, `still`, `fast` | [`settings`] |
-//! | §4–§6: the `Technique` — coarse-to-fine placement, lifespans, replacement (Fig. 5–6), deletion (Fig. 9), the four modes, surprises, glossy shading | [`state`] |
+//! | §4.2, §5, Fig. 6, 9: expiry — lifespans, replacement, deletion; neighbour aging (§7) | [`expiry`] |
+//! | §4.3, §5: coarse-to-fine placement, a new record's lifespan and gradient from the next frame | [`placement`] |
+//! | §3, Eq. 1, 17: shading from the records, glossy surfaces | [`shading`] |
+//! | §4.4, Fig. 5: the temporal modes, pass 1 of `interpolated` and its plan | [`plan`] |
+//! | beyond the paper: a work budget in records (or ms) per frame | [`budget`] |
+//! | scene changes on and off the timeline (surprises) | [`update`] |
+//! | the `Technique` the renderer drives: the frame loop over the stages | [`state`] |
 //!
 //! **Failure modes known from the paper.** (1) Ghosts: a record reused after the light
 //! around it changed keeps showing the old light; the temporal weight sees only the
@@ -67,15 +73,21 @@
 //! assert_eq!(lifespan_frames(change, 0.05, 20), 3);
 //! ```
 
+pub mod budget;
 pub mod error;
+pub mod expiry;
 pub mod hsh;
 pub mod octree;
+pub mod placement;
+pub mod plan;
 pub mod radiance;
 pub mod record;
 pub mod reproject;
 pub mod settings;
+pub mod shading;
 pub mod state;
 pub mod temporal;
+pub mod update;
 
 pub use error::RadianceCacheError;
 pub use octree::Octree;

@@ -18,7 +18,8 @@
 //! | §4.1–4.2, Eqs. 1–5: Halton paths, periodicity, N_g | [`qmc`] |
 //! | §5.1, Fig. 1: pilot and corrective groups | [`groups`] |
 //! | §5.2, Algorithm 1: phantoms, detection, negative/positive re-tracing | [`retrace`] |
-//! | §5.3: priorities P and V | [`groups::Priority`], [`state`] |
+//! | §5.1: the pool filled in index order | [`fill`] |
+//! | §5.2–§5.3, Eq. 6: the next stale group by priorities P and V, re-tracing, raising P | [`groups::Priority`], [`selection`] |
 //! | §5.3: visual masking by textures, Δp/T_e | [`masking`] |
 //! | §1, §3, §6: mesh elements, Gouraud display | [`elements`], [`shade`] |
 //! | §5.2 (BSDF changes), light changes (beyond the paper) | [`update`] |
@@ -65,10 +66,12 @@
 
 pub mod elements;
 pub mod error;
+pub mod fill;
 pub mod groups;
 pub mod masking;
 pub mod qmc;
 pub mod retrace;
+pub mod selection;
 pub mod settings;
 pub mod shade;
 pub mod state;

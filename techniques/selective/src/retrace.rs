@@ -224,6 +224,15 @@ pub enum Met {
     Light,
 }
 
+/// Where a photon's shared path first meets a change: the path there, what it met
+/// (the instance by its original index) and the increment of P a pilot gives.
+struct Fork {
+    at: PhotonPath,
+    met: Met,
+    instance: u32,
+    delta_p: f32,
+}
+
 /// A pilot that met a change (§5.3): the group it raises (Eq. 6) and by how much.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PilotHit {
@@ -435,132 +444,172 @@ impl TraceContext<'_> {
         current: &Snapshot,
         indices: &[u64],
     ) -> TraceOutput {
-        let world = &union.world;
         indices
             .par_iter()
             .fold(TraceOutput::default, |mut out, &i| {
-                out.photons += 1;
-                let is_pilot = self.layout.is_pilot(i);
-                let fresh = photon_stream(i, self.scramble);
-                let mut s = fresh.clone();
-                let now = emit(&current.lights, &current.cells, &mut s);
-                let light_changed = union.changes.all_lights
-                    || now.as_ref().is_some_and(|(_, unit)| {
-                        union.changes.units.get(*unit as usize) != Some(&false)
-                    });
-                if light_changed {
-                    out.invalid += 1;
-                    if is_pilot {
-                        out.pilot_hits.push(PilotHit {
-                            pilot: i,
-                            met: Met::Light,
-                            instance: u32::MAX,
-                            delta_p: DELTA_P,
-                        });
-                    }
-                    let mut old_s = fresh.clone();
-                    if let Some((old_path, _)) = emit(&epoch.lights, &epoch.cells, &mut old_s) {
-                        self.branch(
-                            world,
-                            Some((union, &epoch.materials)),
-                            old_path,
-                            &mut old_s,
-                            OLD,
-                            -1,
-                            &mut out,
-                        );
-                    }
-                    let mut visible = false;
-                    if let Some((path, _)) = now {
-                        visible = self.branch(
-                            world,
-                            Some((union, &epoch.materials)),
-                            path,
-                            &mut s,
-                            NEW,
-                            1,
-                            &mut out,
-                        );
-                    }
-                    if is_pilot {
-                        out.pilots.push((i, visible));
-                    }
-                    return out;
-                }
-                let Some((mut path, _)) = now else {
-                    return out;
-                };
-                // The shared prefix, traced once in the union.
-                let mut visible = false;
-                let mut fork = None;
-                world.tracer.scoped(|tracer| {
-                    while path.alive(&self.path) {
-                        out.rays += 1;
-                        let Some(hit) = path.trace(world, tracer, OLD | NEW, &self.path) else {
-                            break;
-                        };
-                        if union.meets_change(&hit) {
-                            let u = hit.instance.index();
-                            let met = if union.phantom[u] {
-                                Met::Phantom
-                            } else if union.changed_instance[u] {
-                                Met::Moved
-                            } else {
-                                Met::Material
-                            };
-                            let delta_p = if is_pilot {
-                                self.masking.increment(&world.scene, &hit, &self.view)
-                            } else {
-                                DELTA_P
-                            };
-                            fork = Some((path, met, union.original[u], delta_p));
-                            break;
-                        }
-                        if !hit.reflects {
-                            break;
-                        }
-                        visible |= self.frustum.contains(hit.position);
-                        let (_, continues) = path.scatter(hit, &mut s, &self.path);
-                        if !continues {
-                            break;
-                        }
-                    }
-                });
-                if let Some((at, met, instance, delta_p)) = fork {
-                    out.invalid += 1;
-                    if is_pilot {
-                        out.pilot_hits.push(PilotHit {
-                            pilot: i,
-                            met,
-                            instance,
-                            delta_p,
-                        });
-                    }
-                    let mut old_s = s.clone();
-                    self.branch(
-                        world,
-                        Some((union, &epoch.materials)),
-                        at,
-                        &mut old_s,
-                        OLD,
-                        -1,
-                        &mut out,
-                    );
-                    visible |= self.branch(
-                        world,
-                        Some((union, &epoch.materials)),
-                        at,
-                        &mut s,
-                        NEW,
-                        1,
-                        &mut out,
-                    );
-                }
-                if is_pilot {
-                    out.pilots.push((i, visible));
-                }
+                self.retrace_photon(union, epoch, current, i, &mut out);
                 out
             })
             .reduce(TraceOutput::default, TraceOutput::merge)
+    }
+
+    /// Photon `i` from `epoch` to `current`: wholly re-traced with negative and positive
+    /// energy when its light changed, else traced once in the union up to the first
+    /// change it meets and forked there.
+    fn retrace_photon(
+        &self,
+        union: &UnionWorld,
+        epoch: &Snapshot,
+        current: &Snapshot,
+        i: u64,
+        out: &mut TraceOutput,
+    ) {
+        let world = &union.world;
+        out.photons += 1;
+        let is_pilot = self.layout.is_pilot(i);
+        let fresh = photon_stream(i, self.scramble);
+        let mut s = fresh.clone();
+        let now = emit(&current.lights, &current.cells, &mut s);
+        let light_changed = union.changes.all_lights
+            || now
+                .as_ref()
+                .is_some_and(|(_, unit)| union.changes.units.get(*unit as usize) != Some(&false));
+        if light_changed {
+            out.invalid += 1;
+            if is_pilot {
+                out.pilot_hits.push(PilotHit {
+                    pilot: i,
+                    met: Met::Light,
+                    instance: u32::MAX,
+                    delta_p: DELTA_P,
+                });
+            }
+            let mut old_s = fresh.clone();
+            if let Some((old_path, _)) = emit(&epoch.lights, &epoch.cells, &mut old_s) {
+                self.branch(
+                    world,
+                    Some((union, &epoch.materials)),
+                    old_path,
+                    &mut old_s,
+                    OLD,
+                    -1,
+                    out,
+                );
+            }
+            let mut visible = false;
+            if let Some((path, _)) = now {
+                visible = self.branch(
+                    world,
+                    Some((union, &epoch.materials)),
+                    path,
+                    &mut s,
+                    NEW,
+                    1,
+                    out,
+                );
+            }
+            if is_pilot {
+                out.pilots.push((i, visible));
+            }
+            return;
+        }
+        let Some((path, _)) = now else {
+            return;
+        };
+        let (mut visible, fork) = self.shared_prefix(union, path, &mut s, is_pilot, out);
+        if let Some(Fork {
+            at,
+            met,
+            instance,
+            delta_p,
+        }) = fork
+        {
+            out.invalid += 1;
+            if is_pilot {
+                out.pilot_hits.push(PilotHit {
+                    pilot: i,
+                    met,
+                    instance,
+                    delta_p,
+                });
+            }
+            let mut old_s = s.clone();
+            self.branch(
+                world,
+                Some((union, &epoch.materials)),
+                at,
+                &mut old_s,
+                OLD,
+                -1,
+                out,
+            );
+            visible |= self.branch(
+                world,
+                Some((union, &epoch.materials)),
+                at,
+                &mut s,
+                NEW,
+                1,
+                out,
+            );
+        }
+        if is_pilot {
+            out.pilots.push((i, visible));
+        }
+    }
+
+    /// The photon's path shared by the old and the new world, traced once in the union
+    /// (counting rays into `out`): whether it fell in the view frustum, and where it
+    /// first meets a change, if it does.
+    fn shared_prefix(
+        &self,
+        union: &UnionWorld,
+        mut path: PhotonPath,
+        s: &mut HaltonStream<'_>,
+        is_pilot: bool,
+        out: &mut TraceOutput,
+    ) -> (bool, Option<Fork>) {
+        let world = &union.world;
+        let mut visible = false;
+        let mut fork = None;
+        world.tracer.scoped(|tracer| {
+            while path.alive(&self.path) {
+                out.rays += 1;
+                let Some(hit) = path.trace(world, tracer, OLD | NEW, &self.path) else {
+                    break;
+                };
+                if union.meets_change(&hit) {
+                    let u = hit.instance.index();
+                    let met = if union.phantom[u] {
+                        Met::Phantom
+                    } else if union.changed_instance[u] {
+                        Met::Moved
+                    } else {
+                        Met::Material
+                    };
+                    let delta_p = if is_pilot {
+                        self.masking.increment(&world.scene, &hit, &self.view)
+                    } else {
+                        DELTA_P
+                    };
+                    fork = Some(Fork {
+                        at: path,
+                        met,
+                        instance: union.original[u],
+                        delta_p,
+                    });
+                    break;
+                }
+                if !hit.reflects {
+                    break;
+                }
+                visible |= self.frustum.contains(hit.position);
+                let (_, continues) = path.scatter(hit, s, &self.path);
+                if !continues {
+                    break;
+                }
+            }
+        });
+        (visible, fork)
     }
 }

@@ -5,9 +5,8 @@ use crate::elements::Elements;
 use crate::groups::{GroupLayout, Priority};
 use crate::masking::{DEFAULT_PIXELS_HIGH, MaskingView, TextureMasking};
 use crate::qmc::GroupFactors;
-use crate::retrace::{Met, PilotHit, Snapshot, TraceContext, TraceOutput, UnionWorld};
-use crate::settings::{GroupOrder, SelectiveMode, SelectiveSettings};
-use crate::update::{Invalidation, changed_light_fraction, classify};
+use crate::retrace::{Snapshot, TraceContext, TraceOutput, UnionWorld};
+use crate::settings::{SelectiveMode, SelectiveSettings};
 use crate::{SelectiveError, shade};
 use illume_core::image::RgbImage;
 use illume_core::sampling::{HaltonScramble, Pcg32};
@@ -20,11 +19,11 @@ use std::time::Instant;
 
 /// One photon group's state.
 #[derive(Clone, Debug)]
-struct Group {
+pub(crate) struct Group {
     /// The scene state its photons were last traced in.
-    epoch: Arc<Snapshot>,
+    pub(crate) epoch: Arc<Snapshot>,
     /// Its update priority.
-    priority: Priority,
+    pub(crate) priority: Priority,
 }
 
 /// Progress counters.
@@ -48,28 +47,28 @@ pub struct SelectiveCounters {
 
 /// Selective photon tracing (technique name `selective`).
 pub struct Selective {
-    settings: SelectiveSettings,
-    factors: GroupFactors,
-    layout: GroupLayout,
-    scramble: HaltonScramble,
-    elements: Arc<Elements>,
-    accumulators: Vec<[Quanta; 2]>,
-    quantum_w: f64,
-    current: Arc<Snapshot>,
-    next_snapshot: u64,
-    groups: Vec<Group>,
-    stale: u64,
-    filled: u64,
-    union: Option<UnionWorld>,
-    cursor: u64,
-    rng: Pcg32,
-    pilots_since_camera: u64,
-    aspect: f32,
-    pixels_high: u32,
-    masking: TextureMasking,
-    warmed_up: bool,
-    counters: SelectiveCounters,
-    last_shade_ms: f64,
+    pub(crate) settings: SelectiveSettings,
+    pub(crate) factors: GroupFactors,
+    pub(crate) layout: GroupLayout,
+    pub(crate) scramble: HaltonScramble,
+    pub(crate) elements: Arc<Elements>,
+    pub(crate) accumulators: Vec<[Quanta; 2]>,
+    pub(crate) quantum_w: f64,
+    pub(crate) current: Arc<Snapshot>,
+    pub(crate) next_snapshot: u64,
+    pub(crate) groups: Vec<Group>,
+    pub(crate) stale: u64,
+    pub(crate) filled: u64,
+    pub(crate) union: Option<UnionWorld>,
+    pub(crate) cursor: u64,
+    pub(crate) rng: Pcg32,
+    pub(crate) pilots_since_camera: u64,
+    pub(crate) aspect: f32,
+    pub(crate) pixels_high: u32,
+    pub(crate) masking: TextureMasking,
+    pub(crate) warmed_up: bool,
+    pub(crate) counters: SelectiveCounters,
+    pub(crate) last_shade_ms: f64,
 }
 
 impl Selective {
@@ -200,11 +199,6 @@ impl Selective {
         self.stale > 0 || self.filled < self.layout.pool() || self.can_grow()
     }
 
-    /// True when one more round of N_p correctives per group stays within `max_photons`.
-    fn can_grow(&self) -> bool {
-        self.layout.pool() + self.layout.groups * self.layout.pilots <= self.settings.max_photons
-    }
-
     /// Groups shot in an older scene state than the current one.
     pub fn stale_groups(&self) -> u64 {
         self.stale
@@ -225,7 +219,7 @@ impl Selective {
         self.counters
     }
 
-    fn context<'a>(&'a self, frustum: &'a crate::retrace::Frustum) -> TraceContext<'a> {
+    pub(crate) fn context<'a>(&'a self, frustum: &'a crate::retrace::Frustum) -> TraceContext<'a> {
         TraceContext {
             elements: &self.elements,
             layout: self.layout,
@@ -238,7 +232,7 @@ impl Selective {
         }
     }
 
-    fn apply(&mut self, out: &TraceOutput) {
+    pub(crate) fn apply(&mut self, out: &TraceOutput) {
         for &(e, side, q) in &out.deposits {
             self.accumulators[e as usize][side as usize] += q;
         }
@@ -247,218 +241,12 @@ impl Selective {
         self.counters.rays += out.rays;
     }
 
-    /// Traces the next `count` photons of the index-order fill in `world` (clamped to
-    /// the pool), after bringing every stale group up to date: fill photons are traced
-    /// in the current state, so the photons already traced must be current too (a group
-    /// never holds photons of two epochs). Returns the photons traced.
-    pub fn fill(&mut self, world: &World, count: u64) -> u64 {
-        while let Some(g) = self.next_group() {
-            self.retrace_group(world, g);
-        }
-        let end = (self.filled + count).min(self.layout.pool());
-        if end <= self.filled {
-            return 0;
-        }
-        let t0 = Instant::now();
-        let indices: Vec<u64> = (self.filled..end).collect();
-        let frustum = crate::retrace::Frustum::of(&world.scene, self.aspect);
-        let out = self
-            .context(&frustum)
-            .trace_fresh(world, &self.current.cells, &indices);
-        self.apply(&out);
-        self.record_pilots(&out);
-        self.filled = end;
-        self.counters.trace_s += t0.elapsed().as_secs_f64();
-        end - indices[0]
-    }
-
-    /// Fills the whole pool (index order), reporting progress.
-    pub fn fill_all(&mut self, world: &World, progress: &mut dyn Progress) {
-        let total = self.layout.pool();
-        let chunk = self.layout.per_group().max(4096) * 4;
-        progress.begin("selective: tracing the photon pool", total);
-        while self.filled < total {
-            self.fill(world, chunk);
-            progress.set(self.filled);
-        }
-        progress.end();
-    }
-
-    fn record_pilots(&mut self, out: &TraceOutput) {
-        for &(i, visible) in &out.pilots {
-            let h = &mut self.groups[self.layout.raised_by_pilot(i) as usize].priority;
-            h.pilots_seen += 1;
-            h.pilots_visible += visible as u64;
-            self.pilots_since_camera += 1;
-        }
-    }
-
-    /// The next stale group by the settings' order.
-    fn next_group(&mut self) -> Option<u64> {
-        if self.stale == 0 {
-            return None;
-        }
-        let n = self.layout.groups;
-        let current = self.current.id;
-        let is_stale = |g: &Group| g.epoch.id != current;
-        match self.settings.order {
-            GroupOrder::Priority => {
-                let enough = self.pilots_since_camera >= self.settings.visibility_min_pilots as u64;
-                let w = self.settings.visibility_weight as f64;
-                let mut best: Option<(f64, u64)> = None;
-                for k in 0..n {
-                    let g = (self.cursor + k) % n;
-                    let grp = &self.groups[g as usize];
-                    if !is_stale(grp) {
-                        continue;
-                    }
-                    let s = grp.priority.score(enough, w);
-                    if best.is_none_or(|(b, _)| s > b) {
-                        best = Some((s, g));
-                    }
-                }
-                best.map(|(_, g)| g)
-            }
-            GroupOrder::Index => (0..n)
-                .map(|k| (self.cursor + k) % n)
-                .find(|&g| is_stale(&self.groups[g as usize])),
-            GroupOrder::Random => {
-                let start = self.rng.next_f64() * n as f64;
-                (0..n)
-                    .map(|k| (start as u64 + k) % n)
-                    .find(|&g| is_stale(&self.groups[g as usize]))
-            }
-        }
-    }
-
-    /// Re-traces stale group `g` in `world` (current state). Returns the photons traced.
-    pub fn retrace_group(&mut self, world: &World, g: u64) -> u64 {
-        let t0 = Instant::now();
-        let epoch = Arc::clone(&self.groups[g as usize].epoch);
-        let current = Arc::clone(&self.current);
-        let mut traced = 0;
-        if epoch.id != current.id {
-            let key = (epoch.id, current.id);
-            if self.union.as_ref().is_none_or(|u| u.key != key) {
-                self.union = Some(UnionWorld::new(world, &epoch, &current));
-            }
-            let union = self.union.take().expect("built above");
-            if !union.changes.none() {
-                let indices = self.layout.photons_of(g, self.filled);
-                let frustum = crate::retrace::Frustum::of(&world.scene, self.aspect);
-                let out = self
-                    .context(&frustum)
-                    .retrace(&union, &epoch, &current, &indices);
-                self.apply(&out);
-                self.record_pilots(&out);
-                self.raise(&out, &epoch);
-                traced = out.photons;
-            }
-            self.union = Some(union);
-            self.groups[g as usize].epoch = current;
-            self.stale -= 1;
-            self.counters.groups_retraced += 1;
-        }
-        self.groups[g as usize].priority.p = 0.0;
-        self.cursor = (g + 1) % self.layout.groups;
-        self.counters.trace_s += t0.elapsed().as_secs_f64();
-        traced
-    }
-
-    /// Raises P of the groups pilots point at (Eq. 6, §5.3).
-    fn raise(&mut self, out: &TraceOutput, epoch: &Snapshot) {
-        let current = &self.current;
-        for &PilotHit {
-            pilot: i,
-            met,
-            instance: inst,
-            delta_p,
-        } in &out.pilot_hits
-        {
-            let h = self.layout.raised_by_pilot(i) as usize;
-            let held = &self.groups[h].epoch;
-            if held.id == current.id {
-                continue;
-            }
-            let raise = match met {
-                Met::Light | Met::Material => true,
-                Met::Moved => held.instance_differs(current, inst as usize),
-                // A phantom counts only for groups that hold it: shot when the object
-                // stood where this group's epoch had it.
-                Met::Phantom => {
-                    held.instance_differs(current, inst as usize)
-                        && !held.instance_differs(epoch, inst as usize)
-                }
-            };
-            if raise {
-                self.groups[h].priority.p += delta_p as f64;
-            }
-        }
-    }
-
-    /// Restarts the solution: accumulators cleared, every group current and empty.
-    fn restart(&mut self) {
-        for a in &mut self.accumulators {
-            *a = [Quanta::ZERO; 2];
-        }
-        for g in &mut self.groups {
-            g.epoch = Arc::clone(&self.current);
-            g.priority = Priority::default();
-        }
-        self.stale = 0;
-        self.filled = 0;
-        self.union = None;
-        self.counters.restarts += 1;
-    }
-
-    /// One step of work: a stale group, else a fill chunk, else (with
-    /// [`SelectiveSettings::max_photons`]) a fill chunk of a new round of N_p correctives
-    /// per group. Returns photons traced, or None when everything is current and the pool
-    /// is as large as it may grow.
-    pub fn step(&mut self, world: &World) -> Option<u64> {
-        if let Some(g) = self.next_group() {
-            return Some(self.retrace_group(world, g));
-        }
-        if self.filled >= self.layout.pool() && !self.grow() {
-            return None;
-        }
-        Some(self.fill(world, self.layout.per_group().max(4096)))
-    }
-
-    /// Grows the pool by one round of N_p correctives per group (R + 1: the indices
-    /// N_g·N_p·R … N_g·N_p·(R + 1) − 1, N_p more per residue, so every group keeps its
-    /// shape) if that stays within `max_photons`. Only called with every group current
-    /// and the pool full: a static scene.
-    fn grow(&mut self) -> bool {
-        if !self.can_grow() {
-            return false;
-        }
-        self.layout.ratio += 1;
-        self.counters.growth_rounds += 1;
-        true
-    }
-
-    /// Works until nothing is stale and the pool is full (grown to `max_photons` when
-    /// that is set).
-    pub fn converge(&mut self, world: &World) {
-        while self.step(world).is_some() {}
-    }
-
     /// The frames' size: their width over height for the view frustum pilots test
     /// (§5.3's V), their height for the MIP level texture masking reads (§5.3's T_e).
     pub fn set_aspect(&mut self, width: u32, height: u32) {
         if height > 0 && width > 0 {
             self.aspect = width as f32 / height as f32;
             self.pixels_high = height;
-        }
-    }
-
-    /// With `warm_up`, fills the whole pool the first time it is called (unless
-    /// [`Technique::precompute`] already did); otherwise nothing.
-    pub fn warm_up(&mut self, world: &World, progress: &mut dyn Progress) {
-        if self.settings.warm_up && !self.warmed_up {
-            self.fill_all(world, progress);
-            self.warmed_up = true;
         }
     }
 
@@ -487,45 +275,9 @@ impl Technique for Selective {
         Ok(())
     }
 
+    /// See [`crate::update`].
     fn scene_changed(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
-        match classify(changes) {
-            Invalidation::None => ChangeResponse::Updated,
-            Invalidation::Rebuild(reason) => ChangeResponse::Rebuild { reason },
-            Invalidation::Camera => {
-                for g in &mut self.groups {
-                    g.priority.pilots_seen = 0;
-                    g.priority.pilots_visible = 0;
-                }
-                self.pilots_since_camera = 0;
-                ChangeResponse::Updated
-            }
-            Invalidation::Lighting => {
-                let next = Arc::new(Snapshot::of(
-                    world,
-                    self.next_snapshot,
-                    self.factors.exponent(2),
-                ));
-                self.next_snapshot += 1;
-                let fraction = changed_light_fraction(&self.current, &next);
-                self.current = next;
-                if fraction > self.settings.restart_fraction as f64 {
-                    self.restart();
-                } else {
-                    self.stale = self
-                        .groups
-                        .iter()
-                        .filter(|g| g.epoch.id != self.current.id)
-                        .count() as u64;
-                }
-                if changes
-                    .iter()
-                    .any(|c| matches!(c, SceneChange::CameraMoved { .. }))
-                {
-                    self.pilots_since_camera = 0;
-                }
-                ChangeResponse::Updated
-            }
-        }
+        self.on_changes(world, changes)
     }
 
     /// First call with `warm_up` and no precompute: fills the pool. Then re-traces stale

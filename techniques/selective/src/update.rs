@@ -10,8 +10,13 @@
 //! * `InstanceAdded`: a rebuild — mesh elements are laid out once for the instances
 //!   present at construction.
 
+use crate::groups::Priority;
 use crate::retrace::Snapshot;
+use crate::state::Selective;
 use illume_scene::SceneChange;
+use illume_transport::flux::Quanta;
+use illume_transport::{ChangeResponse, World};
+use std::sync::Arc;
 
 /// What a list of changes asks of the technique.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,5 +75,64 @@ pub fn changed_light_fraction(old: &Snapshot, new: &Snapshot) -> f64 {
         (changed / total).min(1.0)
     } else {
         0.0
+    }
+}
+
+impl Selective {
+    /// What `changes` do to the solution (see the module docs).
+    pub(crate) fn on_changes(&mut self, world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        match classify(changes) {
+            Invalidation::None => ChangeResponse::Updated,
+            Invalidation::Rebuild(reason) => ChangeResponse::Rebuild { reason },
+            Invalidation::Camera => {
+                for g in &mut self.groups {
+                    g.priority.pilots_seen = 0;
+                    g.priority.pilots_visible = 0;
+                }
+                self.pilots_since_camera = 0;
+                ChangeResponse::Updated
+            }
+            Invalidation::Lighting => {
+                let next = Arc::new(Snapshot::of(
+                    world,
+                    self.next_snapshot,
+                    self.factors.exponent(2),
+                ));
+                self.next_snapshot += 1;
+                let fraction = changed_light_fraction(&self.current, &next);
+                self.current = next;
+                if fraction > self.settings.restart_fraction as f64 {
+                    self.restart();
+                } else {
+                    self.stale = self
+                        .groups
+                        .iter()
+                        .filter(|g| g.epoch.id != self.current.id)
+                        .count() as u64;
+                }
+                if changes
+                    .iter()
+                    .any(|c| matches!(c, SceneChange::CameraMoved { .. }))
+                {
+                    self.pilots_since_camera = 0;
+                }
+                ChangeResponse::Updated
+            }
+        }
+    }
+
+    /// Restarts the solution: accumulators cleared, every group current and empty.
+    pub(crate) fn restart(&mut self) {
+        for a in &mut self.accumulators {
+            *a = [Quanta::ZERO; 2];
+        }
+        for g in &mut self.groups {
+            g.epoch = Arc::clone(&self.current);
+            g.priority = Priority::default();
+        }
+        self.stale = 0;
+        self.filled = 0;
+        self.union = None;
+        self.counters.restarts += 1;
     }
 }

@@ -344,6 +344,91 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         },
     };
     let mut warnings = Vec::new();
+    let Elements {
+        positions,
+        normals,
+        uvs,
+        polygons,
+    } = read_elements(path, &header, &mut body)?;
+    if let Body::Ascii { text, pos, line } = &body
+        && text
+            .get(*pos..)
+            .is_some_and(|rest| rest.iter().any(|c| !c.is_ascii_whitespace()))
+    {
+        warnings.push(format!(
+            "{}: line {line}: data after the last element ignored",
+            path.display()
+        ));
+    }
+
+    let mut mesh = Mesh {
+        name: path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "ply".into()),
+        ..Default::default()
+    };
+    let skipped = triangulate(path, positions.len(), &polygons, &mut mesh.indices)?;
+    if skipped > 0 {
+        warnings.push(format!(
+            "{}: {skipped} faces with fewer than 3 corners skipped",
+            path.display()
+        ));
+    }
+    if normals
+        .iter()
+        .all(|v| v.length_squared() > 0.0 && v.is_finite())
+    {
+        mesh.normals = normals.into_iter().map(|v| v.normalize()).collect();
+    } else {
+        warnings.push(format!(
+            "{}: some vertex normals are zero or not finite; normals dropped",
+            path.display()
+        ));
+    }
+    mesh.positions = positions;
+    mesh.uvs = uvs;
+
+    let mut b = SceneBuilder::new();
+    for w in warnings {
+        b.warn(w);
+    }
+    let material = b.material(Material {
+        name: "ply_default".into(),
+        ..Material::default()
+    });
+    mesh.triangle_materials = vec![material; mesh.indices.len()];
+    let name = mesh.name.clone();
+    let mesh = b.mesh(mesh);
+    b.placed(&name, mesh, Trs::IDENTITY, false);
+    let mut scene = b.finish(&path.to_string_lossy());
+    default_camera_for_bounds(&mut scene);
+    Ok(scene)
+}
+
+/// The vertices and faces of a PLY body.
+struct Elements {
+    positions: Vec<Vec3>,
+    /// One per position when the vertex element has nx, ny, nz; else empty.
+    normals: Vec<Vec3>,
+    /// One per position when the vertex element has texture coordinates; else empty.
+    uvs: Vec<Vec2>,
+    /// Each face's (index, place, corner indices), kept until every vertex is known.
+    polygons: Vec<(usize, Mark, Vec<f64>)>,
+}
+
+/// Which properties of an element illume reads: the first `vertex` element's position,
+/// normal and texture coordinates, the first `face` element's index list.
+struct Layout {
+    xyz: Option<[usize; 3]>,
+    nxyz: Option<[usize; 3]>,
+    uv: Option<[usize; 2]>,
+    index_list: Option<usize>,
+}
+
+/// Reads every element of the body (checked: finite positions and texture
+/// coordinates); an error without a vertex element.
+fn read_elements(path: &Path, header: &Header, body: &mut Body<'_>) -> Result<Elements, LoadError> {
     let mut positions: Vec<Vec3> = Vec::new();
     let mut normals: Vec<Vec3> = Vec::new();
     let mut uvs: Vec<Vec2> = Vec::new();
@@ -352,57 +437,16 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
     let mut seen_vertex = false;
     let mut seen_face = false;
     for element in &header.elements {
-        let find = |names: &[&str]| {
-            element
-                .properties
-                .iter()
-                .position(|p| names.contains(&p.name.as_str()) && matches!(p.kind, Kind::Scalar(_)))
-        };
         let is_vertex = element.name == "vertex" && !seen_vertex;
         let is_face = element.name == "face" && !seen_face;
-        let (xyz, nxyz, uv) = if is_vertex {
-            seen_vertex = true;
-            let xyz = [find(&["x"]), find(&["y"]), find(&["z"])];
-            let [Some(x), Some(y), Some(z)] = xyz else {
-                return Err(LoadError::malformed(
-                    path,
-                    "header",
-                    "vertex element lacks x, y or z",
-                ));
-            };
-            let n = match [find(&["nx"]), find(&["ny"]), find(&["nz"])] {
-                [Some(a), Some(b), Some(c)] => Some([a, b, c]),
-                _ => None,
-            };
-            let uv = match [
-                find(&["u", "s", "texture_u", "texture_s"]),
-                find(&["v", "t", "texture_v", "texture_t"]),
-            ] {
-                [Some(a), Some(b)] => Some([a, b]),
-                _ => None,
-            };
-            (Some([x, y, z]), n, uv)
-        } else {
-            (None, None, None)
-        };
-        let index_list = if is_face {
-            seen_face = true;
-            let named = element.properties.iter().position(|p| {
-                matches!(p.kind, Kind::List { .. })
-                    && (p.name == "vertex_indices" || p.name == "vertex_index")
-            });
-            let list = named.or_else(|| {
-                element
-                    .properties
-                    .iter()
-                    .position(|p| matches!(p.kind, Kind::List { .. }))
-            });
-            Some(list.ok_or_else(|| {
-                LoadError::malformed(path, "header", "face element has no list property")
-            })?)
-        } else {
-            None
-        };
+        seen_vertex |= is_vertex;
+        seen_face |= is_face;
+        let Layout {
+            xyz,
+            nxyz,
+            uv,
+            index_list,
+        } = layout(path, element, is_vertex, is_face)?;
         if element.properties.is_empty() {
             continue; // nothing to read, whatever the count
         }
@@ -412,55 +456,8 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
         }
         let mut values = vec![0.0f64; element.properties.len()];
         for item in 0..element.count {
-            let at =
-                |body: &Body<'_>| format!("{} {item} ({})", excerpt(&element.name), body.place());
             let start = body.mark();
-            let mut list: Vec<f64> = Vec::new();
-            for (k, p) in element.properties.iter().enumerate() {
-                match p.kind {
-                    Kind::Scalar(ty) => {
-                        let place = at(&body);
-                        values[k] = body.read(ty).map_err(|m| {
-                            LoadError::malformed(
-                                path,
-                                place,
-                                format!("property '{}': {m}", excerpt(&p.name)),
-                            )
-                        })?;
-                    }
-                    Kind::List { count, item: ty } => {
-                        let place = at(&body);
-                        let n = body.read(count).map_err(|m| {
-                            LoadError::malformed(
-                                path,
-                                place.clone(),
-                                format!("list '{}' count: {m}", excerpt(&p.name)),
-                            )
-                        })?;
-                        if n < 0.0 {
-                            return Err(LoadError::malformed(
-                                path,
-                                place,
-                                format!("list '{}' has negative count {n}", excerpt(&p.name)),
-                            ));
-                        }
-                        let keep = Some(k) == index_list;
-                        for _ in 0..n as usize {
-                            let place = at(&body);
-                            let v = body.read(ty).map_err(|m| {
-                                LoadError::malformed(
-                                    path,
-                                    place,
-                                    format!("list '{}': {m}", excerpt(&p.name)),
-                                )
-                            })?;
-                            if keep {
-                                list.push(v);
-                            }
-                        }
-                    }
-                }
-            }
+            let list = read_item(path, element, item, index_list, body, &mut values)?;
             // Where this element is: its start (binary) or its line (ASCII).
             let mark = if matches!(start, Mark::Line(_)) {
                 body.mark()
@@ -504,27 +501,151 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
     if !seen_vertex {
         return Err(LoadError::malformed(path, "header", "no vertex element"));
     }
-    if let Body::Ascii { text, pos, line } = &body
-        && text
-            .get(*pos..)
-            .is_some_and(|rest| rest.iter().any(|c| !c.is_ascii_whitespace()))
-    {
-        warnings.push(format!(
-            "{}: line {line}: data after the last element ignored",
-            path.display()
-        ));
-    }
+    Ok(Elements {
+        positions,
+        normals,
+        uvs,
+        polygons,
+    })
+}
 
-    let mut mesh = Mesh {
-        name: path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "ply".into()),
-        ..Default::default()
+/// The properties illume reads of `element`: positions (required), normals and
+/// texture coordinates when it is the vertex element (`is_vertex`), the vertex index
+/// list (`vertex_indices`, `vertex_index`, else the first list) when it is the face
+/// element (`is_face`).
+fn layout(
+    path: &Path,
+    element: &Element,
+    is_vertex: bool,
+    is_face: bool,
+) -> Result<Layout, LoadError> {
+    let find = |names: &[&str]| {
+        element
+            .properties
+            .iter()
+            .position(|p| names.contains(&p.name.as_str()) && matches!(p.kind, Kind::Scalar(_)))
     };
-    let n = positions.len();
+    let (xyz, nxyz, uv) = if is_vertex {
+        let xyz = [find(&["x"]), find(&["y"]), find(&["z"])];
+        let [Some(x), Some(y), Some(z)] = xyz else {
+            return Err(LoadError::malformed(
+                path,
+                "header",
+                "vertex element lacks x, y or z",
+            ));
+        };
+        let n = match [find(&["nx"]), find(&["ny"]), find(&["nz"])] {
+            [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+            _ => None,
+        };
+        let uv = match [
+            find(&["u", "s", "texture_u", "texture_s"]),
+            find(&["v", "t", "texture_v", "texture_t"]),
+        ] {
+            [Some(a), Some(b)] => Some([a, b]),
+            _ => None,
+        };
+        (Some([x, y, z]), n, uv)
+    } else {
+        (None, None, None)
+    };
+    let index_list = if is_face {
+        let named = element.properties.iter().position(|p| {
+            matches!(p.kind, Kind::List { .. })
+                && (p.name == "vertex_indices" || p.name == "vertex_index")
+        });
+        let list = named.or_else(|| {
+            element
+                .properties
+                .iter()
+                .position(|p| matches!(p.kind, Kind::List { .. }))
+        });
+        Some(list.ok_or_else(|| {
+            LoadError::malformed(path, "header", "face element has no list property")
+        })?)
+    } else {
+        None
+    };
+    Ok(Layout {
+        xyz,
+        nxyz,
+        uv,
+        index_list,
+    })
+}
+
+/// Reads item `item` of `element` from `body`: its scalars into `values` (by property),
+/// and returns the list at property `index_list` (empty for other elements).
+fn read_item(
+    path: &Path,
+    element: &Element,
+    item: usize,
+    index_list: Option<usize>,
+    body: &mut Body<'_>,
+    values: &mut [f64],
+) -> Result<Vec<f64>, LoadError> {
+    let at = |body: &Body<'_>| format!("{} {item} ({})", excerpt(&element.name), body.place());
+    let mut list: Vec<f64> = Vec::new();
+    for (k, p) in element.properties.iter().enumerate() {
+        match p.kind {
+            Kind::Scalar(ty) => {
+                let place = at(body);
+                values[k] = body.read(ty).map_err(|m| {
+                    LoadError::malformed(
+                        path,
+                        place,
+                        format!("property '{}': {m}", excerpt(&p.name)),
+                    )
+                })?;
+            }
+            Kind::List { count, item: ty } => {
+                let place = at(body);
+                let n = body.read(count).map_err(|m| {
+                    LoadError::malformed(
+                        path,
+                        place.clone(),
+                        format!("list '{}' count: {m}", excerpt(&p.name)),
+                    )
+                })?;
+                if n < 0.0 {
+                    return Err(LoadError::malformed(
+                        path,
+                        place,
+                        format!("list '{}' has negative count {n}", excerpt(&p.name)),
+                    ));
+                }
+                let keep = Some(k) == index_list;
+                for _ in 0..n as usize {
+                    let place = at(body);
+                    let v = body.read(ty).map_err(|m| {
+                        LoadError::malformed(
+                            path,
+                            place,
+                            format!("list '{}': {m}", excerpt(&p.name)),
+                        )
+                    })?;
+                    if keep {
+                        list.push(v);
+                    }
+                }
+            }
+        }
+    }
+    Ok(list)
+}
+
+/// Fans the faces `polygons` into triangles appended to `indices`, each corner checked
+/// against the `vertex_count`; returns how many faces had fewer than 3 corners
+/// (skipped).
+fn triangulate(
+    path: &Path,
+    vertex_count: usize,
+    polygons: &[(usize, Mark, Vec<f64>)],
+    indices: &mut Vec<[u32; 3]>,
+) -> Result<usize, LoadError> {
+    let n = vertex_count;
     let mut skipped = 0usize;
-    for (face, mark, corners) in &polygons {
+    for (face, mark, corners) in polygons {
         let mut idx = Vec::with_capacity(corners.len());
         for &c in corners {
             if c < 0.0 || c.fract() != 0.0 || c >= n as f64 {
@@ -541,42 +662,8 @@ pub(super) fn load(path: &Path) -> Result<Scene, LoadError> {
             continue;
         }
         for k in 1..idx.len() - 1 {
-            mesh.indices.push([idx[0], idx[k], idx[k + 1]]);
+            indices.push([idx[0], idx[k], idx[k + 1]]);
         }
     }
-    if skipped > 0 {
-        warnings.push(format!(
-            "{}: {skipped} faces with fewer than 3 corners skipped",
-            path.display()
-        ));
-    }
-    if normals
-        .iter()
-        .all(|v| v.length_squared() > 0.0 && v.is_finite())
-    {
-        mesh.normals = normals.into_iter().map(|v| v.normalize()).collect();
-    } else {
-        warnings.push(format!(
-            "{}: some vertex normals are zero or not finite; normals dropped",
-            path.display()
-        ));
-    }
-    mesh.positions = positions;
-    mesh.uvs = uvs;
-
-    let mut b = SceneBuilder::new();
-    for w in warnings {
-        b.warn(w);
-    }
-    let material = b.material(Material {
-        name: "ply_default".into(),
-        ..Material::default()
-    });
-    mesh.triangle_materials = vec![material; mesh.indices.len()];
-    let name = mesh.name.clone();
-    let mesh = b.mesh(mesh);
-    b.placed(&name, mesh, Trs::IDENTITY, false);
-    let mut scene = b.finish(&path.to_string_lossy());
-    default_camera_for_bounds(&mut scene);
-    Ok(scene)
+    Ok(skipped)
 }
