@@ -4,6 +4,7 @@ use super::App;
 use crate::ViewError;
 use crate::renderer::Shown;
 use illume_core::image::ToneMap;
+use illume_engine::{FramesCsv, StepRecord};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, channel};
 
@@ -14,7 +15,7 @@ type ClipFrame = (u64, Vec<u8>, u32, u32);
 pub(super) struct Recorder {
     dir: PathBuf,
     frames: Sender<ClipFrame>,
-    csv: String,
+    csv: FramesCsv,
     index: u64,
     writer: Option<std::thread::JoinHandle<()>>,
 }
@@ -42,35 +43,26 @@ impl Recorder {
         Ok(Self {
             dir,
             frames: tx,
-            csv: String::new(),
+            csv: FramesCsv::default(),
             index: 0,
             writer: Some(writer),
         })
     }
 
     pub(super) fn push(&mut self, shown: &Shown, tone: &ToneMap, wall_s: f64) {
-        if self.csv.is_empty() {
-            self.csv = format!(
-                "frame,time_s,wall_s,precompute_ms,update_ms,advance_ms,gbuffer_ms,direct_ms,indirect_ms,render_ms{}\n",
-                shown
-                    .stats
-                    .iter()
-                    .map(|(n, _)| format!(",{n}"))
-                    .collect::<String>()
-            );
-        }
-        let row = if shown.csv_row.is_empty() {
-            // Reference mode: no technique frame; times and no counters.
-            format!(
-                "{:.6},0,{:.3},0,0,0,0,{:.3}",
-                shown.time_s, shown.times.update_ms, shown.times.total_ms
-            )
-        } else {
-            shown.csv_row.clone()
-        };
-        // `animate`'s columns: frame,time_s,wall_s then the rest of the row.
-        let (time, rest) = row.split_once(',').unwrap_or((&row, ""));
-        self.csv += &format!("{},{time},{wall_s:.6},{rest}\n", self.index);
+        // Reference mode: no technique frame; the update and the whole frame's times
+        // and no counters.
+        let record = shown.record.clone().unwrap_or_else(|| StepRecord {
+            time_s: shown.time_s,
+            update_ms: shown.times.update_ms,
+            render_ms: shown.times.total_ms,
+            ..Default::default()
+        });
+        self.csv.push(&StepRecord {
+            frame: self.index,
+            wall_s,
+            ..record
+        });
         let bytes = illume_core::image::to_srgb8(&shown.image, tone);
         let _ = self
             .frames
@@ -84,7 +76,7 @@ impl Recorder {
             let _ = w.join();
         }
         let path = self.dir.join("frames.csv");
-        std::fs::write(&path, &self.csv).map_err(|e| format!("{}: {e}", path.display()))?;
+        std::fs::write(&path, self.csv.text()).map_err(|e| format!("{}: {e}", path.display()))?;
         Ok(self.dir)
     }
 }
