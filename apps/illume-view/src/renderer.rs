@@ -356,7 +356,7 @@ impl State {
     }
 
     fn message(&mut self, m: String) {
-        eprintln!("illume view: {m}");
+        log::info!("illume view: {m}");
         self.messages.push(m);
         if self.messages.len() > 8 {
             self.messages.remove(0);

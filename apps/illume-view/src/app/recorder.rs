@@ -36,7 +36,7 @@ impl Recorder {
                     image::ColorType::Rgb8,
                     image::ImageFormat::Png,
                 ) {
-                    eprintln!("illume view: {}: {e}", path.display());
+                    log::warn!("illume view: {}: {e}", path.display());
                 }
             }
         });
