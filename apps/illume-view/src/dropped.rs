@@ -18,9 +18,9 @@ impl Messages {
     /// The most messages kept.
     const KEPT: usize = 6;
 
-    /// Adds a message (also printed on stderr).
+    /// Adds a message (also logged at info: the CLI prints it on stderr).
     pub fn push(&self, m: String) {
-        eprintln!("illume view: {m}");
+        log::info!("illume view: {m}");
         let mut v = self.0.lock().unwrap_or_else(|e| e.into_inner());
         v.push(m);
         if v.len() > Self::KEPT {

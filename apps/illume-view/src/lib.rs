@@ -12,12 +12,12 @@
 //!
 //! Controls are listed in `docs/viewer.md`.
 
+mod app;
 pub mod camera;
 pub mod dropped;
 pub mod gizmo;
 mod present;
 pub mod renderer;
-mod ui;
 
 use illume_engine::Config;
 use illume_scene::Scene;
@@ -84,7 +84,7 @@ pub struct ViewOptions {
 
 /// Opens the window and runs until it is closed (or the test mode exits).
 pub fn run(options: ViewOptions) -> Result<(), ViewError> {
-    ui::run(options)
+    app::run(options)
 }
 
 /// Milliseconds since the Unix epoch (the timestamps of `--log-input` lines).

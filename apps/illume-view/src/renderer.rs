@@ -8,7 +8,7 @@
 use glam::{Affine3A, Quat, Vec2, Vec3};
 use illume_core::image::{RgbImage, ToneMap, auto_exposure_ev};
 use illume_engine::settings_doc::Applies;
-use illume_engine::{Config, Engine, TechniqueKind, read_world};
+use illume_engine::{Config, Engine, StepRecord, TechniqueKind, read_world};
 use illume_reference::ReferenceRenderer;
 use illume_scene::timeline::ping_pong_time;
 use illume_scene::{Edit, LightKind, Scene};
@@ -177,8 +177,9 @@ pub struct Shown {
     pub camera: (Affine3A, f32),
     /// The technique's settings table as TOML text (for the settings panel).
     pub settings_toml: String,
-    /// The frame's counters and times as one CSV row (the columns of `animate`'s CSV).
-    pub csv_row: String,
+    /// The technique's frame as a `frames.csv` record (frame index and wall time left to
+    /// the recorder); None when the frame is the reference's alone.
+    pub record: Option<StepRecord>,
 }
 
 /// The newest finished frame: written by the render thread, read by the window.
@@ -355,7 +356,7 @@ impl State {
     }
 
     fn message(&mut self, m: String) {
-        eprintln!("illume view: {m}");
+        log::info!("illume view: {m}");
         self.messages.push(m);
         if self.messages.len() > 8 {
             self.messages.remove(0);
@@ -722,7 +723,7 @@ impl State {
         };
         let mut technique_image = None;
         let mut stats = Vec::new();
-        let mut csv_row = String::new();
+        let mut record = None;
         let mut time_changed = false;
         // The scene is evaluated at `t` only when the time moved: edits to animated
         // objects hold while the animation is paused.
@@ -743,20 +744,7 @@ impl State {
                     times.indirect_ms = ft.indirect_ms;
                     time_changed = !out.changes.is_empty();
                     stats = out.stats.iter().map(|(k, v)| (k.to_owned(), v)).collect();
-                    csv_row = format!(
-                        "{:.6},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
-                        t,
-                        out.precompute_ms,
-                        out.update_ms,
-                        out.advance_ms,
-                        ft.gbuffer_ms,
-                        ft.direct_ms,
-                        ft.indirect_ms,
-                        ft.total_ms
-                    );
-                    for (_, v) in out.stats.iter() {
-                        csv_row += &format!(",{v}");
-                    }
+                    record = Some(StepRecord::from_step(t, &out, 0.0));
                     if let Some(reason) = out.rebuilt {
                         self.message(format!("technique rebuilt: {reason}"));
                     }
@@ -866,7 +854,7 @@ impl State {
             scene_camera: self.scene_camera,
             camera: (scene.camera.world_from_camera, scene.camera.yfov_rad),
             settings_toml: settings_toml(&self.config),
-            csv_row,
+            record,
         };
         drop(world);
         self.time_s = t;

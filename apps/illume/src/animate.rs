@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 use illume_core::Shard;
 use illume_core::image::{ToneMap, auto_exposure_ev, to_srgb8};
-use illume_engine::{Config, Engine, FrameHistory, TechniqueKind};
+use illume_engine::{Config, Engine, FrameHistory, FramesCsv, StepRecord, TechniqueKind};
 use illume_scene::timeline::ping_pong_time;
 use illume_scene::{Scene, Timeline};
 use illume_transport::Pacing;
@@ -155,8 +155,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     } else {
         progress::bar(planned, "frames")
     };
-    let mut csv_header: Option<Vec<String>> = None;
-    let mut csv_rows: Vec<String> = Vec::new();
+    let mut csv = FramesCsv::default();
     let mut writer = FrameWriter::start(&a.output, w, h)?;
     let start = Instant::now();
     let mut render_s = 0.0;
@@ -173,20 +172,14 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         let t_frame = Instant::now();
         let out = engine.step(ping_pong_time(t, animation_s, a.ping_pong))?;
         render_s += t_frame.elapsed().as_secs_f64() - out.precompute_ms / 1e3;
-        let names: Vec<String> = out.stats.names().map(str::to_owned).collect();
-        if csv_header.is_none() {
-            csv_header = Some(names.clone());
-        }
         // Precompute is its own column: frame 0 carries the phase before the first
         // frame, any frame a rebuild's.
-        let frame_precompute_ms = out.precompute_ms + if index == 0 { precompute_ms } else { 0.0 };
-        csv_rows.push(csv_row(
-            index,
-            t,
-            start.elapsed().as_secs_f64(),
-            frame_precompute_ms,
-            &out,
-        ));
+        let earlier_ms = if index == 0 { precompute_ms } else { 0.0 };
+        csv.push(&StepRecord {
+            frame: index,
+            wall_s: start.elapsed().as_secs_f64(),
+            ..StepRecord::from_step(t, &out, earlier_ms)
+        });
         // Written on the writer thread while the next frames render (memory stays
         // bounded; before, real-time runs kept every frame until the end).
         writer.push(Frame {
@@ -217,13 +210,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     pb.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let csv_path = a.output.join("frames.csv");
-    use std::fmt::Write as _;
-    let mut csv = String::new();
-    writeln!(csv, "{}", csv_header_line(&csv_header.unwrap_or_default()))?;
-    for r in &csv_rows {
-        writeln!(csv, "{r}")?;
-    }
-    illume_core::atomic::write_file(&csv_path, csv)
+    illume_core::atomic::write_file(&csv_path, csv.text())
         .with_context(|| format!("{}: cannot write", csv_path.display()))?;
     let preview = writer.finish(if a.realtime {
         index as f64 / wall
@@ -294,34 +281,6 @@ pub fn demo(d: DemoArgs) -> Result<()> {
     })
 }
 
-/// The first line of frames.csv: the fixed columns, then the counters' `names`.
-fn csv_header_line(names: &[String]) -> String {
-    format!(
-        "frame,time_s,wall_s,precompute_ms,update_ms,advance_ms,gbuffer_ms,direct_ms,indirect_ms,render_ms{}",
-        names.iter().map(|n| format!(",{n}")).collect::<String>()
-    )
-}
-
-/// One frames.csv row: frame `index` at scene time `t` [s], `wall_s` after the start,
-/// with the precompute time charged to it.
-fn csv_row(
-    index: u64,
-    t: f64,
-    wall_s: f64,
-    precompute_ms: f64,
-    out: &illume_engine::StepOutput,
-) -> String {
-    let ft = out.frame.timings;
-    let mut row = format!(
-        "{index},{t:.6},{wall_s:.6},{precompute_ms:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
-        out.update_ms, out.advance_ms, ft.gbuffer_ms, ft.direct_ms, ft.indirect_ms, ft.total_ms
-    );
-    for (_, v) in out.stats.iter() {
-        row += &format!(",{v}");
-    }
-    row
-}
-
 /// Refuses `--shard` where a shard's frames would differ from the unsharded run's: a
 /// technique that carries state from frame to frame, or `reference` on a frame that
 /// shows no change from the one before (it would average the frames before it).
@@ -381,34 +340,24 @@ fn run_shard(
     let mine: Vec<usize> = (0..planned).filter(|&i| shard.owns(i)).collect();
     let pb = progress::bar(mine.len() as u64, "frames");
     let start = Instant::now();
-    let mut header = None;
-    let mut rows = Vec::with_capacity(mine.len());
+    let mut csv = FramesCsv::default();
     for (done, &i) in mine.iter().enumerate() {
         engine.technique_mut().reset();
         engine.set_frame_index(i as u64);
         let out = engine.step(times[i])?;
-        header.get_or_insert_with(|| out.stats.names().map(str::to_owned).collect::<Vec<_>>());
-        let charged = out.precompute_ms + if done == 0 { precompute_ms } else { 0.0 };
-        rows.push(csv_row(
-            i as u64,
-            times[i],
-            start.elapsed().as_secs_f64(),
-            charged,
-            &out,
-        ));
+        let earlier_ms = if done == 0 { precompute_ms } else { 0.0 };
+        csv.push(&StepRecord {
+            frame: i as u64,
+            wall_s: start.elapsed().as_secs_f64(),
+            ..StepRecord::from_step(times[i], &out, earlier_ms)
+        });
         let path = a.output.join(format!("frame_{i:05}.exr"));
         illume_core::image::write_exr(&out.frame.full, &path)?;
         pb.set_position(done as u64 + 1);
     }
     pb.finish_and_clear();
     let csv_path = a.output.join(crate::frames::shard_csv_name(shard));
-    let mut csv = csv_header_line(&header.unwrap_or_default());
-    for r in &rows {
-        csv.push('\n');
-        csv.push_str(r);
-    }
-    csv.push('\n');
-    illume_core::atomic::write_file(&csv_path, csv)
+    illume_core::atomic::write_file(&csv_path, csv.text())
         .with_context(|| format!("{}: cannot write", csv_path.display()))?;
     eprintln!(
         "shard {shard}: {} of {planned} frames of {w}×{h} with {} in {:.2} s into {} (gather them with --collect {})",

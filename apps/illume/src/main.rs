@@ -80,6 +80,7 @@ enum Command {
 
 fn main() {
     default_sigpipe();
+    progress::install_logger();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(a) => render::run(a),

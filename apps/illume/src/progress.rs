@@ -142,3 +142,32 @@ impl illume_core::Progress for Bars {
         }
     }
 }
+
+/// Installs the logger through which the libraries' warnings (`log::warn!`: a stale
+/// precomputed file, a thread that kept its priority, …) and the window's messages
+/// (`log::info!`) reach the user on stderr: `warning: …` and `error: …` prefixed, info
+/// as it is; debug and trace are dropped. Called once, first thing in `main`.
+pub fn install_logger() {
+    /// Writes records at info and above to stderr.
+    struct Stderr;
+    impl log::Log for Stderr {
+        fn enabled(&self, metadata: &log::Metadata) -> bool {
+            metadata.level() <= log::Level::Info
+        }
+        fn log(&self, record: &log::Record) {
+            if !self.enabled(record.metadata()) {
+                return;
+            }
+            match record.level() {
+                log::Level::Error => eprintln!("error: {}", record.args()),
+                log::Level::Warn => eprintln!("warning: {}", record.args()),
+                _ => eprintln!("{}", record.args()),
+            }
+        }
+        fn flush(&self) {}
+    }
+    static LOGGER: Stderr = Stderr;
+    if log::set_logger(&LOGGER).is_ok() {
+        log::set_max_level(log::LevelFilter::Info);
+    }
+}

@@ -86,11 +86,6 @@ impl<T> Image<T> {
         &mut self.data
     }
 
-    /// Consumes the image, returning its pixels.
-    pub fn into_vec(self) -> Vec<T> {
-        self.data
-    }
-
     /// Pixel at column `x`, row `y`.
     #[inline]
     pub fn get(&self, x: u32, y: u32) -> &T {

@@ -279,16 +279,6 @@ pub fn uniform_sphere(u: Vec2) -> Vec3 {
     Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
-/// Uniform direction in the cone around +Z with `cos_max` the cosine of its half-angle;
-/// pdf = 1/(2π(1 − cos_max)).
-#[inline]
-pub fn uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
-    let z = 1.0 - u.x * (1.0 - cos_max);
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
-
 /// Uniform barycentrics `(b1, b2)` on a triangle (Heitz 2019 low-distortion map); the
 /// point is `(1 − b1 − b2)·p0 + b1·p1 + b2·p2`.
 #[inline]

@@ -1015,11 +1015,6 @@ fn glossy_box() -> Scene {
     b.finish("builtin:glossy-box")
 }
 
-/// `world_from_object` of a node placed at `trs` with no parent.
-pub fn root_transform(trs: &Trs) -> Affine3A {
-    trs.to_affine()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,7 +2,7 @@
 //! instances, and the [`Scene`] that owns them.
 
 use crate::animation::{Animation, Trs};
-use illume_core::{Aabb, Affine3A, PI, Rgb, Vec2, Vec3, channel_mean};
+use illume_core::{Aabb, Affine3A, PI, Rgb, Vec2, Vec3};
 use std::sync::Arc;
 
 macro_rules! typed_id {
@@ -81,12 +81,6 @@ impl Mesh {
             self.positions[b as usize],
             self.positions[c as usize],
         ]
-    }
-
-    /// Object-space area of triangle `t`.
-    pub fn triangle_area(&self, t: usize) -> f32 {
-        let [a, b, c] = self.triangle(t);
-        0.5 * (b - a).cross(c - a).length()
     }
 
     /// Object-space bounds.
@@ -918,11 +912,6 @@ impl Scene {
             Some(sky) => sky.integral() * (PI * scene_radius * scene_radius),
             None => Rgb::ZERO,
         }
-    }
-
-    /// Mean-channel power of everything that emits, for choosing among lights.
-    pub fn total_power_mean(&self) -> f32 {
-        channel_mean(self.total_power())
     }
 
     /// Every instance's world bounds, every light's position and the camera's lie within

@@ -4,7 +4,7 @@
 //! shading normal, so the path weight f·cosθ/pdf is exactly ρ.
 
 use illume_core::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
-use illume_core::{Frame, INV_PI, Rgb, Vec2, Vec3};
+use illume_core::{Frame, Rgb, Vec2, Vec3};
 
 /// A sampled outgoing direction.
 #[derive(Clone, Copy, Debug)]
@@ -15,12 +15,6 @@ pub struct BsdfSample {
     pub weight: Rgb,
     /// Solid-angle pdf of `wi`.
     pub pdf: f32,
-}
-
-/// Lambertian reflection f = ρ/π (1/sr).
-#[inline]
-pub fn lambert_eval(albedo: Rgb) -> Rgb {
-    albedo * INV_PI
 }
 
 /// Cosine-weighted sample about `normal` (the side the light leaves to).

@@ -7,7 +7,7 @@ use crate::replay::Replay;
 use crate::scenario::Scenario;
 use illume_core::image::{RgbImage, ToneMap};
 use illume_core::{Progress, Shard};
-use illume_engine::{Config, Engine};
+use illume_engine::{Config, Engine, StepRecord};
 use illume_metrics::{Counters, Metric, compare_images, flicker, latency_after_event};
 use illume_reference::{ReferenceRenderer, ReferenceSettings};
 use illume_scene::{Scene, Timeline};
@@ -523,11 +523,8 @@ fn run_technique(
         let mut counters = out.stats.clone();
         // The precompute phase is timed apart from the frames: it is on frame 0's row
         // (plus any rebuild a frame's changes caused), not in its frame_ms.
-        let frame_precompute_ms = out.precompute_ms + if i == 0 { precompute_ms } else { 0.0 };
-        counters.set("engine.precompute_ms", frame_precompute_ms);
-        counters.set("engine.update_ms", out.update_ms);
-        counters.set("engine.advance_ms", out.advance_ms);
-        counters.set("engine.render_ms", out.frame.timings.total_ms);
+        let earlier_ms = if i == 0 { precompute_ms } else { 0.0 };
+        StepRecord::from_step(t, &out, earlier_ms).set_engine_counters(&mut counters);
         frames.push(TimedFrame {
             time_s: t,
             frame_ms,

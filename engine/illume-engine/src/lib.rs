@@ -21,10 +21,12 @@
 
 pub mod config;
 pub mod settings_doc;
+pub mod step_record;
 pub mod still;
 pub mod technique_kind;
 
 pub use config::{AnySettings, Config, ConfigError, ConfigLayers};
+pub use step_record::{FRAMES_CSV_COLUMNS, FramesCsv, StepRecord};
 pub use still::{Still, render_still};
 pub use technique_kind::{FrameHistory, TechniqueKind};
 

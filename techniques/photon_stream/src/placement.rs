@@ -422,34 +422,6 @@ impl VslSet {
         }
     }
 
-    /// A set from explicit VSLs (tests, tools); `instance_count` instances.
-    pub fn from_vsls(mut vsls: Vec<Vsl>, instance_count: usize) -> Self {
-        let bounds = Aabb::from_points(vsls.iter().map(|v| v.position_object));
-        vsls.sort_by_key(|v| v.instance);
-        let mut first = vec![0u32; instance_count + 1];
-        for v in &vsls {
-            first[v.instance.index() + 1] += 1;
-        }
-        for i in 0..instance_count {
-            first[i + 1] += first[i];
-        }
-        let trees = object_indices(&vsls, &first, |_| bounds);
-        let classes: Vec<u8> = vsls
-            .iter()
-            .map(|v| orientation_class(v.normal_object))
-            .collect();
-        let class_trees = class_indices(&vsls, &classes, &first, |_, _| bounds);
-        Self {
-            vsls,
-            first,
-            classes,
-            trees,
-            class_trees,
-            triangle_class: Vec::new(),
-            triangle_owner: Vec::new(),
-        }
-    }
-
     /// The VSLs, grouped by instance.
     pub fn vsls(&self) -> &[Vsl] {
         &self.vsls

@@ -374,7 +374,7 @@ fn lower_own_priority() {
     if let Err(e) =
         thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min)
     {
-        eprintln!("photon_stream: cannot lower the streaming thread's priority: {e:?}");
+        log::warn!("photon_stream: cannot lower the streaming thread's priority: {e:?}");
     }
 }
 

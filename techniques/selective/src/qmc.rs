@@ -21,7 +21,7 @@
 //!
 //! [`PhotonPathSettings::remap_roulette`]: illume_transport::photon::PhotonPathSettings
 
-use illume_core::sampling::{HaltonScramble, HaltonStream, ONE_MINUS_EPSILON, PRIMES};
+use illume_core::sampling::{HaltonScramble, HaltonStream, ONE_MINUS_EPSILON};
 use illume_core::{Rgb, Vec2};
 use illume_transport::lights::{Emitter, LightSet};
 use illume_transport::photon::PhotonPath;
@@ -371,9 +371,4 @@ pub fn emit(
     };
     let e = lights.emit_from(emitter as usize, pmf, u_pos, u_dir, s)?;
     Some((PhotonPath::emitted(e), unit))
-}
-
-/// The prime of Halton dimension `d`.
-pub fn base_of_dimension(d: usize) -> Option<u32> {
-    PRIMES.get(d).copied()
 }
