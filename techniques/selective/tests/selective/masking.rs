@@ -3,7 +3,7 @@
 //! contrast, frequencies finer than an element removed), the MIP level from distance and
 //! angle, and the pilot increment Δp/T_e a textured moved object gives its groups.
 
-mod common;
+use crate::common;
 
 use illume_core::{Affine3A, Quat, Ray, Rgb, Vec2, Vec3};
 use illume_scene::builtin::{SceneBuilder, quad};

@@ -23,14 +23,12 @@
 //! All failures are collected and reported in one assertion. A case listed in
 //! [`KNOWN_DEFECTS`] must still fail (so fixing it flips the test).
 
-mod corpus {
-    pub mod cli;
-    pub mod gltf;
-    pub mod obj;
-    pub mod ply;
-    pub mod settings;
-    pub mod texture;
-}
+pub mod cli;
+pub mod gltf;
+pub mod obj;
+pub mod ply;
+pub mod settings;
+pub mod texture;
 
 use std::collections::BTreeMap;
 use std::os::unix::process::ExitStatusExt;
@@ -200,12 +198,12 @@ impl Case {
 /// Every case of the corpus.
 fn corpus() -> Vec<Case> {
     let mut all = Vec::new();
-    all.extend(corpus::gltf::cases());
-    all.extend(corpus::obj::cases());
-    all.extend(corpus::ply::cases());
-    all.extend(corpus::texture::cases());
-    all.extend(corpus::settings::cases());
-    all.extend(corpus::cli::cases());
+    all.extend(self::gltf::cases());
+    all.extend(self::obj::cases());
+    all.extend(self::ply::cases());
+    all.extend(self::texture::cases());
+    all.extend(self::settings::cases());
+    all.extend(self::cli::cases());
     all
 }
 

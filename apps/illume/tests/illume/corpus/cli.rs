@@ -2,7 +2,7 @@
 //! environment maps, outputs.
 
 use crate::corpus::texture::png;
-use crate::{Case, Expect, RENDER_OUTPUT, error};
+use crate::corpus::{Case, Expect, RENDER_OUTPUT, error};
 
 /// `illume render builtin:furnace` (reference, 1 spp, 8×8 unless `args` say otherwise)
 /// with `args`, writing `{dir}/out/render.png` unless `args` give `-o`.

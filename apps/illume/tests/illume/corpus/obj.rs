@@ -1,6 +1,6 @@
 //! OBJ and MTL cases: a lit quad (its MTL gives an emitter) broken one way per case.
 
-use crate::{Case, Expect, error, warning};
+use crate::corpus::{Case, Expect, error, warning};
 
 /// A valid OBJ: a quad under an emissive quad, both from `x.mtl`.
 pub const OBJ: &str = "mtllib x.mtl\n\

@@ -1,7 +1,7 @@
 //! glTF and GLB cases: one valid document (a triangle, a camera, a point light, an
 //! animation; its data in `tri.bin`) broken one way per case.
 
-use crate::{Case, Expect, error, warning};
+use crate::corpus::{Case, Expect, error, warning};
 use serde_json::{Value, json};
 
 /// Byte layout of `tri.bin`: positions, indices, key times, key translations.

@@ -1,7 +1,7 @@
 //! TOML configuration files (`illume render --config`) and bench scenarios
 //! (`illume bench`): syntax, unknown keys, wrong types, NaN, out-of-range values.
 
-use crate::{Case, Expect, RENDER_OUTPUT, error};
+use crate::corpus::{Case, Expect, RENDER_OUTPUT, error};
 
 /// A `config` case running `illume render builtin:furnace FLAG VALUE` (`--config FILE`,
 /// `--set TABLE.KEY=VALUE`); `c` is changed first (the file added).

@@ -13,7 +13,7 @@ use illume_selective::{Selective, SelectiveSettings};
 use illume_transport::photon::PhotonPathStats;
 use illume_transport::{Technique, World};
 
-mod common;
+use crate::common;
 
 /// A floor, a grey box above it and a point light.
 fn box_scene() -> World {

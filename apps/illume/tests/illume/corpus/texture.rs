@@ -1,7 +1,7 @@
 //! Texture cases, each through an MTL `map_Kd` and a glTF image: a warning naming the
 //! file (the material keeps its factors), an error with `--strict`.
 
-use crate::Case;
+use crate::corpus::Case;
 use crate::corpus::{gltf, obj};
 use serde_json::json;
 
@@ -92,7 +92,7 @@ pub fn cases() -> Vec<Case> {
                 "newmtl floor\nmap_Kd t.png\n\nnewmtl lamp\nKe 1 1 1\n",
             )
             .file("t.png", valid.clone())
-            .scene_with("x.obj", &["--strict"], crate::Expect::Success),
+            .scene_with("x.obj", &["--strict"], crate::corpus::Expect::Success),
     ];
     c.extend(texture("missing", "t.png", None, &["No such file"]));
     c.extend(texture("zero_bytes", "t.png", Some(Ok(Vec::new())), &[]));

@@ -1,6 +1,6 @@
 //! PLY cases: ASCII and binary little-endian files with a triangle, broken one way each.
 
-use crate::{Case, Expect, error, warning};
+use crate::corpus::{Case, Expect, error, warning};
 
 /// The header of an ASCII PLY with `vertices` vertices (x y z floats) and `faces` faces.
 fn ascii_header(vertices: &str, faces: &str) -> String {
