@@ -4,10 +4,15 @@
 //! its value at the end of the warm-up, and the pool's books balance exactly at the end
 //! (every VSL's power equals the sum of its pooled impacts, K the pooled photons).
 //!
+//! It measures this process's resident memory and its watchdog exits the process, so it
+//! runs in a process of its own ([`in_own_process`]), not beside the other tests of this
+//! binary.
+//!
 //! CI runs 20 s. The long soak (one hour, not in CI):
-//! `ILLUME_SOAK_SECONDS=3600 cargo test --release -p illume-photon-stream --test soak -- --nocapture`
+//! `ILLUME_SOAK_SECONDS=3600 cargo test --release -p illume-photon-stream --test photon_stream -- soak --nocapture`
 //! (it prints the resident-memory curve, one line every 10 s).
 
+use crate::common::in_own_process;
 use illume_core::{Affine3A, Vec3};
 use illume_photon_stream::{PhotonStream, PhotonStreamSettings};
 use illume_render::{RenderSettings, Renderer};
@@ -31,6 +36,9 @@ fn resident_bytes() -> u64 {
 
 #[test]
 fn streaming_soak_keeps_memory_flat_and_books_exact_without_deadlock() {
+    if !in_own_process("soak::streaming_soak_keeps_memory_flat_and_books_exact_without_deadlock") {
+        return;
+    }
     let seconds: f64 = std::env::var("ILLUME_SOAK_SECONDS")
         .ok()
         .map(|s| {
