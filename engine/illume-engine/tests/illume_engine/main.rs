@@ -5,5 +5,4 @@
 
 mod image_identity;
 mod precomputed;
-mod reference_agreement;
 mod scene_changes;

@@ -3,6 +3,7 @@
 //! Each module is one mechanism; the tests of all modules run in parallel threads of
 //! one process (a test that needs the process to itself says so in its module).
 
+mod agreement;
 mod common;
 mod dynamic;
 mod emit;

@@ -3,5 +3,6 @@
 //! Each module is one mechanism; the tests of all modules run in parallel threads of
 //! one process (a test that needs the process to itself says so in its module).
 
+mod agreement;
 mod analytic;
 mod independent_renderer;
