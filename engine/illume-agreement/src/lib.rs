@@ -7,7 +7,7 @@
 //!
 //! A technique joins with one test in its own folder (`tests/NAME/agreement.rs`): an
 //! [`Agreement`] — the settings that make it converge, its tolerance and why — passed to
-//! [`assert_agrees`] once per [`Lighting`]:
+//! [`assert_agrees`] with the lightings to compare under:
 //!
 //! ```no_run
 //! use illume_agreement::{Agreement, Lighting, assert_agrees};
@@ -21,7 +21,7 @@
 //!     max_block_error: 0.06,
 //!     why: "another seed of the same estimator: only noise separates the two".into(),
 //! };
-//! assert_agrees(&agreement, Lighting::Spot, std::env::temp_dir());
+//! assert_agrees(&agreement, &Lighting::ALL, std::env::temp_dir());
 //! ```
 //!
 //! The input is a plain struct, so a technique's registration descriptor can carry it as
@@ -104,6 +104,9 @@ pub enum Lighting {
 }
 
 impl Lighting {
+    /// Both lightings, the spot alone first.
+    pub const ALL: [Lighting; 2] = [Lighting::Spot, Lighting::SpotAndSky];
+
     /// The suffix of the images written for this lighting (`""` or `"_sky"`).
     pub fn suffix(self) -> &'static str {
         match self {
@@ -247,20 +250,32 @@ pub fn output_dir(target_tmp_dir: impl AsRef<Path>) -> PathBuf {
     target_tmp_dir.as_ref().join("reference_agreement")
 }
 
-/// Renders the technique of `a` under `lighting`, compares it with [`reference`] and
-/// panics with the message of [`compare`] (which names `a.why` and the written images)
-/// when it does not agree; prints the summary when it does.
+/// Renders the technique of `a` under each of `lightings`, compares it with
+/// [`reference`] and panics with the messages of [`compare`] (which name the written
+/// images) and `a.why` when it does not agree under one or more; prints the summaries
+/// when it does.
 ///
 /// The images are named `<name>` ([`Agreement::name`]) plus the lighting's suffix and
 /// written under [`output_dir`]`(target_tmp_dir)`.
-pub fn assert_agrees(a: &Agreement, lighting: Lighting, target_tmp_dir: impl AsRef<Path>) {
-    let reference = reference(lighting);
-    let img = indirect(lighting, &a.config(), a.frames);
-    let name = format!("{}{}", a.name(), lighting.suffix());
-    match compare(&name, &img, reference, a, &output_dir(target_tmp_dir)) {
-        Ok(summary) => eprintln!("{summary}"),
-        Err(failure) => panic!("{failure}\n{name}'s tolerance: {}", a.why),
+pub fn assert_agrees(a: &Agreement, lightings: &[Lighting], target_tmp_dir: impl AsRef<Path>) {
+    let dir = output_dir(target_tmp_dir);
+    let mut failures = Vec::new();
+    for &lighting in lightings {
+        let reference = reference(lighting);
+        let img = indirect(lighting, &a.config(), a.frames);
+        let name = format!("{}{}", a.name(), lighting.suffix());
+        match compare(&name, &img, reference, a, &dir) {
+            Ok(summary) => eprintln!("{summary}"),
+            Err(failure) => failures.push(failure),
+        }
     }
+    assert!(
+        failures.is_empty(),
+        "{}\n{}'s tolerance: {}",
+        failures.join("\n"),
+        a.name(),
+        a.why
+    );
 }
 
 #[cfg(test)]

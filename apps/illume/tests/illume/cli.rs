@@ -2,23 +2,14 @@
 //! that add up, animations with one CSV row per frame, and bad input rejected with a
 //! message naming the file and the key.
 
+use crate::common::{self, illume};
 use illume_core::image::RgbImage;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn illume(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_illume"))
-        .args(args)
-        .output()
-        .expect("the illume binary runs")
-}
-
 /// A fresh empty folder for one test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("illume-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch("cli", name)
 }
 
 fn ok(out: &Output) {

@@ -3,21 +3,13 @@
 //! on the frames before are refused; the adaptive precompute run level by level in
 //! shards equals the unsharded file; `bench --shard` fills the reference cache.
 
+use crate::common::{self, illume};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn illume(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_illume"))
-        .args(args)
-        .output()
-        .expect("the illume binary runs")
-}
-
+/// A fresh empty folder for one test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("illume-shards-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::scratch("shards", name)
 }
 
 fn ok(out: &Output) -> String {

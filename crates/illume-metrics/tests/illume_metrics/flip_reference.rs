@@ -7,7 +7,7 @@
 //! ```text
 //! pip install flip-evaluator==1.7
 //! ILLUME_FLIP_FIXTURE_DIR=/tmp/flip-fixtures \
-//!   cargo test -p illume-metrics --test flip_reference -- --ignored write_flip_fixtures
+//!   cargo test -p illume-metrics --test illume_metrics -- --ignored write_flip_fixtures
 //! python3 crates/illume-metrics/tests/flip_reference.py /tmp/flip-fixtures
 //! ```
 //!

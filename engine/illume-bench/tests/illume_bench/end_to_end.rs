@@ -1,6 +1,7 @@
 //! A tiny scenario end to end: converged references (and their cache), the reference
 //! technique with its equal-time path tracer, report files, and the CSV read back.
 
+use crate::common::temp_dir;
 use illume_bench::{RunOptions, Scenario, Silent, run, write_report};
 use illume_core::image::RgbImage;
 use illume_metrics::report::{Cell, read_csv};
@@ -31,12 +32,6 @@ at_s = 0.5
 instance = "sphere"
 translation = [0.2, 0.3, 0.0]
 "#;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("illume-bench-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
 
 fn mtimes(dir: &Path) -> Vec<(PathBuf, SystemTime)> {
     let mut v: Vec<_> = std::fs::read_dir(dir)

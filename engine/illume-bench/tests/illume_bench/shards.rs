@@ -2,9 +2,10 @@
 //! images (bit for bit) the unsharded run renders, and the plain run after them renders
 //! nothing.
 
+use crate::common::temp_dir;
 use illume_bench::{RunOptions, Scenario, Silent, references_shard, run};
 use illume_core::Shard;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// 16×12 pixels, 5 frames, the light moving (5 distinct states) and one edit.
 const TINY: &str = r#"
@@ -28,12 +29,6 @@ at_s = 0.5
 instance = "sphere"
 translation = [0.2, 0.3, 0.0]
 "#;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("illume-bench-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
 
 /// Every file of the cache folder, by name, with its bytes.
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {

@@ -25,17 +25,8 @@ fn agreement() -> Agreement {
 }
 
 #[test]
-fn converged_light_agrees_with_the_reference_indirect_light() {
-    assert_agrees(&agreement(), Lighting::Spot, env!("CARGO_TARGET_TMPDIR"));
-}
-
-#[test]
-fn converged_light_agrees_with_the_reference_under_a_sky() {
-    assert_agrees(
-        &agreement(),
-        Lighting::SpotAndSky,
-        env!("CARGO_TARGET_TMPDIR"),
-    );
+fn converged_light_agrees_with_the_reference_with_and_without_a_sky() {
+    assert_agrees(&agreement(), &Lighting::ALL, env!("CARGO_TARGET_TMPDIR"));
 }
 
 /// photon_stream's `still` preset (`illume render`'s default: the whole indirect light
@@ -59,7 +50,5 @@ fn still_preset_agrees_within_the_tightened_tolerance() {
               measured +0.8 % and 0.028, sky +0.6 % and 0.019"
             .into(),
     };
-    for lighting in [Lighting::Spot, Lighting::SpotAndSky] {
-        assert_agrees(&still, lighting, env!("CARGO_TARGET_TMPDIR"));
-    }
+    assert_agrees(&still, &Lighting::ALL, env!("CARGO_TARGET_TMPDIR"));
 }

@@ -6,21 +6,16 @@
 //! The atlas adds its own error: texels of 1/6 m filter the light bilinearly, and texels
 //! along contact edges take their neighbours' values; the block tolerance is wider for it.
 
+use crate::common::{SIZE, blocks, reference_with_sky_direct, world};
 use illume_core::Rgb;
 use illume_core::image::RgbImage;
 use illume_precomputed::Precomputed;
 use illume_precomputed::precompute::precompute;
 use illume_precomputed::settings::{Domain, PrecomputedSettings, ScheduleKind};
-use illume_reference::{ReferenceRenderer, ReferenceSettings};
 use illume_scene::Scene;
 use illume_transport::{GBuffer, Technique, World};
 
-const SIZE: (u32, u32) = (32, 24);
 const HOURS: f64 = 11.5;
-
-fn world() -> World {
-    World::new(illume_scene::builtin::load("sun-room").unwrap())
-}
 
 fn settings(domain: Domain) -> PrecomputedSettings {
     PrecomputedSettings {
@@ -58,33 +53,7 @@ fn posed(scene: &Scene, yaw_deg: f32, shift: illume_core::Vec3, mask_dynamic: bo
 /// What the technique's indirect image should be: the reference's light reflected ≥ 2
 /// times (sun and sky) plus the sky's direct light (the technique supplies it).
 fn reference(world: &World, scene: Scene) -> RgbImage {
-    let w = world.with_scene(scene.clone());
-    let mut r = ReferenceRenderer::new(
-        ReferenceSettings {
-            spp: 192,
-            seed: 7,
-            ..Default::default()
-        },
-        SIZE.0,
-        SIZE.1,
-    );
-    r.add_samples(&w, 192);
-    let mut sky_only = scene;
-    let sun_light = sky_only.sun.take().unwrap().light;
-    sky_only.lights[sun_light.index()].kind = illume_scene::LightKind::Directional {
-        irradiance: Rgb::ZERO,
-    };
-    let mut rs = ReferenceRenderer::new(
-        ReferenceSettings {
-            spp: 192,
-            seed: 8,
-            ..Default::default()
-        },
-        SIZE.0,
-        SIZE.1,
-    );
-    rs.add_samples(&world.with_scene(sky_only), 192);
-    r.images().indirect.add(&rs.images().direct)
+    reference_with_sky_direct(world, scene, 192, (7, 8))
 }
 
 /// The technique's indirect image of `scene`, and `expected` with the pixels that see
@@ -115,24 +84,7 @@ fn mean(v: &[Rgb]) -> f32 {
 
 /// RMS of the 8×8 block means' differences, relative to the reference's mean.
 fn block_rms(a: &RgbImage, b: &RgbImage) -> f32 {
-    let blocks = |img: &RgbImage| {
-        let (w, h) = (SIZE.0 as usize, SIZE.1 as usize);
-        let mut out = Vec::new();
-        for by in 0..h / 8 {
-            for bx in 0..w / 8 {
-                let mut s = 0.0;
-                for y in 0..8 {
-                    for x in 0..8 {
-                        let p = img.pixels()[(by * 8 + y) * w + bx * 8 + x];
-                        s += (p.x + p.y + p.z) / 3.0;
-                    }
-                }
-                out.push(s / 64.0);
-            }
-        }
-        out
-    };
-    let (ba, bb) = (blocks(a), blocks(b));
+    let (ba, bb) = (blocks(a.pixels()), blocks(b.pixels()));
     let rms = (ba
         .iter()
         .zip(&bb)

@@ -1,20 +1,14 @@
 //! `precomputed` on `builtin:sun-room`: keys from the reference path tracer, PCA, and the
 //! run-time reconstruction at a time between keys against the reference's indirect light.
 
+use crate::common::{SIZE, blocks, reference_with_sky_direct, world};
 use illume_core::Rgb;
 use illume_core::image::RgbImage;
 use illume_precomputed::Precomputed;
 use illume_precomputed::precompute::{differs_visibly, precompute, render_key};
 use illume_precomputed::schedule::KeyTime;
 use illume_precomputed::settings::{PrecomputedSettings, ScheduleKind};
-use illume_reference::{ReferenceRenderer, ReferenceSettings};
 use illume_transport::World;
-
-const SIZE: (u32, u32) = (32, 24);
-
-fn world() -> World {
-    World::new(illume_scene::builtin::load("sun-room").unwrap())
-}
 
 fn settings() -> PrecomputedSettings {
     PrecomputedSettings {
@@ -29,25 +23,6 @@ fn settings() -> PrecomputedSettings {
         exposure: 64.0,
         ..Default::default()
     }
-}
-
-/// Mean of 8×8 blocks (noise of 64 samples per pixel averaged further).
-fn blocks(img: &[Rgb]) -> Vec<f32> {
-    let (w, h) = (SIZE.0 as usize, SIZE.1 as usize);
-    let mut out = Vec::new();
-    for by in 0..h / 8 {
-        for bx in 0..w / 8 {
-            let mut s = 0.0;
-            for y in 0..8 {
-                for x in 0..8 {
-                    let p = img[(by * 8 + y) * w + bx * 8 + x];
-                    s += (p.x + p.y + p.z) / 3.0;
-                }
-            }
-            out.push(s / 64.0);
-        }
-    }
-    out
 }
 
 #[test]
@@ -74,35 +49,10 @@ fn indirect_between_keys_matches_the_reference() {
     let elevation = illume_scene::sun::solar_position(&sun, hours)
         .unwrap()
         .elevation_deg;
-    let reference_world = world.with_scene(scene);
-    let mut r = ReferenceRenderer::new(
-        ReferenceSettings {
-            spp: 256,
-            seed: 99,
-            ..Default::default()
-        },
-        SIZE.0,
-        SIZE.1,
-    );
-    r.add_samples(&reference_world, 256);
-    // Ours holds the sky's direct light too (the renderer skips it): add the reference's
-    // direct light of the sky alone at that time.
-    let mut sky_only = reference_world.scene.clone();
-    let sun_light = sky_only.sun.take().unwrap().light;
-    sky_only.lights[sun_light.index()].kind = illume_scene::LightKind::Directional {
-        irradiance: Rgb::ZERO,
-    };
-    let mut rs = ReferenceRenderer::new(
-        ReferenceSettings {
-            spp: 256,
-            seed: 98,
-            ..Default::default()
-        },
-        SIZE.0,
-        SIZE.1,
-    );
-    rs.add_samples(&world.with_scene(sky_only), 256);
-    let reference = r.images().indirect.add(&rs.images().direct);
+    // Ours holds the sky's direct light too (the renderer skips it): the reference adds
+    // the direct light of the sky alone at that time.
+    let reference_world = world.with_scene(scene.clone());
+    let reference = reference_with_sky_direct(&world, scene, 256, (99, 98));
     let ours = technique.reconstruct(hours, illume_scene::sun::sky_scale(elevation));
     // A frame blends the two key images around the time (Eq. 2): the same image as the
     // reconstruction from blended coefficients, up to rounding and the clamp at 0.

@@ -24,15 +24,6 @@ fn agreement() -> Agreement {
 }
 
 #[test]
-fn converged_light_agrees_with_the_reference_indirect_light() {
-    assert_agrees(&agreement(), Lighting::Spot, env!("CARGO_TARGET_TMPDIR"));
-}
-
-#[test]
-fn converged_light_agrees_with_the_reference_under_a_sky() {
-    assert_agrees(
-        &agreement(),
-        Lighting::SpotAndSky,
-        env!("CARGO_TARGET_TMPDIR"),
-    );
+fn converged_light_agrees_with_the_reference_with_and_without_a_sky() {
+    assert_agrees(&agreement(), &Lighting::ALL, env!("CARGO_TARGET_TMPDIR"));
 }

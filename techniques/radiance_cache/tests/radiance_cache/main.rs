@@ -1,4 +1,5 @@
-//! The integration tests of illume-radiance-cache, one binary: one module per mechanism of temporal radiance caching.
+//! The integration tests of illume-radiance-cache, one binary: one module per mechanism of
+//! temporal radiance caching.
 //!
 //! Each module is one mechanism; the tests of all modules run in parallel threads of
 //! one process (a test that needs the process to itself says so in its module).

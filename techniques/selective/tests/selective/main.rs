@@ -1,4 +1,5 @@
-//! The integration tests of illume-selective, one binary: one module per mechanism of selective photon tracing.
+//! The integration tests of illume-selective, one binary: one module per mechanism of
+//! selective photon tracing.
 //!
 //! Each module is one mechanism; the tests of all modules run in parallel threads of
 //! one process (a test that needs the process to itself says so in its module).
