@@ -3,20 +3,11 @@
 //! neighbours' light; the backlog clears over the next frames; replacements past the
 //! budget wait a frame.
 
-use illume_core::Vec2;
+use crate::common::{H, W, cornell, on_threads};
 use illume_core::image::RgbImage;
 use illume_radiance_cache::{RadianceCache, RadianceCacheSettings, TemporalMode};
 use illume_scene::Timeline;
-use illume_transport::{Budget, GBuffer, Pacing, Technique, TechniqueSettings, World};
-
-const W: u32 = 64;
-const H: u32 = 48;
-
-fn cornell() -> (World, GBuffer) {
-    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap());
-    let g = GBuffer::render(&world, W, H, Vec2::splat(0.5));
-    (world, g)
-}
+use illume_transport::{Budget, Pacing, Technique, TechniqueSettings, World};
 
 fn cache(world: &World, temporal: TemporalMode) -> RadianceCache {
     let timeline = Timeline::single(world.scene.clone(), 0.0, W, H);
@@ -195,11 +186,7 @@ fn the_budget_comes_from_work_per_frame_and_records_per_frame_max() {
 fn a_budgeted_frame_does_not_depend_on_the_thread_count() {
     let (world, g) = cornell();
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let mut rc = cache(&world, TemporalMode::PerFrame);
             rc.advance(&world, &budget(40));
             let img = rc.indirect(&world, &g);

@@ -6,6 +6,7 @@
 
 mod agreement;
 mod budget;
+mod common;
 mod glossy_animation;
 mod gradients;
 mod hsh;

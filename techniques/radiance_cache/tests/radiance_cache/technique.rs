@@ -1,13 +1,11 @@
 //! The technique on G-buffers: the furnace's closed form, `reuse` against `per_frame`
 //! on a static scene, placement independent of the thread count, refused settings.
 
+use crate::common::{H, W, cornell, on_threads};
 use illume_core::{Rgb, Vec2};
 use illume_radiance_cache::{RadianceCache, RadianceCacheSettings, TemporalMode};
 use illume_scene::Timeline;
 use illume_transport::{GBuffer, Technique, World};
-
-const W: u32 = 64;
-const H: u32 = 48;
 
 fn cache(world: &World, settings: RadianceCacheSettings) -> RadianceCache {
     let timeline = Timeline::single(world.scene.clone(), 0.0, W, H);
@@ -22,12 +20,6 @@ fn quick(temporal: TemporalMode) -> RadianceCacheSettings {
         temporal,
         ..RadianceCacheSettings::paper()
     }
-}
-
-fn cornell() -> (World, GBuffer) {
-    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap());
-    let g = GBuffer::render(&world, W, H, Vec2::splat(0.5));
-    (world, g)
 }
 
 #[test]
@@ -169,11 +161,7 @@ fn a_surprise_move_expires_the_records_on_the_instance_and_those_that_see_it() {
 fn placement_does_not_depend_on_the_thread_count() {
     let (world, g) = cornell();
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let mut rc = cache(&world, quick(TemporalMode::PerFrame));
             let img = rc.indirect(&world, &g);
             let records: Vec<_> = rc.records().map(|r| r.position).collect();
