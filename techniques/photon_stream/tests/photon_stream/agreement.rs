@@ -1,0 +1,54 @@
+//! photon_stream's converged indirect light against the reference's through the engine
+//! (`illume_agreement`) on `builtin:cornell-spot`, with and without a sky.
+
+use illume_agreement::{Agreement, Lighting, assert_agrees};
+
+/// The paper's settings, converged: a million pooled photons.
+fn agreement() -> Agreement {
+    Agreement {
+        technique: illume_photon_stream::NAME.into(),
+        preset: None,
+        sets: vec![
+            "photon_stream.mode=deterministic".into(),
+            "photon_stream.pool_size=1000000".into(),
+            "photon_stream.photons_per_frame=400000".into(),
+            "photon_stream.warm_up=false".into(),
+        ],
+        frames: 1,
+        max_energy_error: 0.15,
+        max_block_error: 0.32,
+        why: "the paper's approximations are biased (100 VSLs for 27 m² of surface, one \
+              normal per VSL, no VSL visibility: over-illumination behind occluders); \
+              measured +6 % energy and 0.25 block error (docs/techniques/photon_stream.md)"
+            .into(),
+    }
+}
+
+#[test]
+fn converged_light_agrees_with_the_reference_with_and_without_a_sky() {
+    assert_agrees(&agreement(), &Lighting::ALL, env!("CARGO_TARGET_TMPDIR"));
+}
+
+/// photon_stream's `still` preset (`illume render`'s default: the whole indirect light
+/// gathered over 3200 VSL cells, issue 15) under the tightened tolerance, with and
+/// without the sky. What is left is the cells' averaging (each gather hit reads its
+/// cell's mean exitance), the gather noise of 576 rays per shaded pixel spread by
+/// stride-3 interpolation, and the reference's own noise (block ≈ 0.02). Bounds:
+/// energy ±3 % (the issue's target for stills), block L1 < 0.06 (measured +0.8 % and
+/// 0.028, sky +0.6 % and 0.019).
+#[test]
+fn still_preset_agrees_within_the_tightened_tolerance() {
+    let still = Agreement {
+        technique: illume_photon_stream::NAME.into(),
+        preset: Some("still".into()),
+        sets: Vec::new(),
+        frames: 1,
+        max_energy_error: 0.03,
+        max_block_error: 0.06,
+        why: "the cells' averaging, the gather noise of 576 rays per shaded pixel spread by \
+              stride-3 interpolation, and the reference's own noise (block ≈ 0.02); \
+              measured +0.8 % and 0.028, sky +0.6 % and 0.019"
+            .into(),
+    };
+    assert_agrees(&still, &Lighting::ALL, env!("CARGO_TARGET_TMPDIR"));
+}

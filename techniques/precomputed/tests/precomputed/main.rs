@@ -1,0 +1,12 @@
+//! The integration tests of illume-precomputed, one binary: one module per mechanism of
+//! precomputed indirect light.
+//!
+//! Each module is one mechanism; the tests of all modules run in parallel threads of
+//! one process (a test that needs the process to itself says so in its module).
+
+mod common;
+mod domains;
+mod file;
+mod pca_paper_size;
+mod shards;
+mod sun_room;
