@@ -8,7 +8,7 @@
 //!
 //! ```ignore
 //! #[derive(Settings, serde::Serialize, serde::Deserialize)]
-//! pub struct ReferenceSettings {
+//! pub struct TracerSettings {
 //!     /// Samples per pixel of a still. Noise falls as 1/√spp.
 //!     #[setting(default = 256, range = "≥ 1")]
 //!     pub spp: u32,

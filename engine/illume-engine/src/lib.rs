@@ -3,7 +3,8 @@
 //! stats ([`Engine::step`]).
 //!
 //! Techniques are a closed set selected by [`TechniqueKind`] (the CLI's `--technique`
-//! value and the TOML table name). Configuration is one TOML file ([`Config`]) with a
+//! value and the TOML table name), generated from one list below: each line names a
+//! technique's registration (`illume_transport::Registration`, in its own crate). Configuration is one TOML file ([`Config`]) with a
 //! table per technique; unknown keys are rejected with the file and key named.
 //!
 //! ```

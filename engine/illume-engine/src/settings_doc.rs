@@ -26,10 +26,10 @@ pub struct SettingDoc {
     pub key: String,
     /// The field's documentation, as plain text (links and escapes removed).
     pub doc: String,
-    /// The unit (`pixels`, `ms`, `W/(m²·sr)`), when the doc or the name gives one.
+    /// The unit (`pixels`, `ms`, `W/(m²·sr)`), declared or carried by the name's suffix.
     pub unit: Option<String>,
-    /// The accepted values as the doc states them (`in (0, 1]`, `1–8`), or an enum's
-    /// values (`streaming | deterministic`).
+    /// The accepted values as declared (`(0, 1]`, `1–8`), or an enum's values
+    /// (`streaming | deterministic`).
     pub range: Option<String>,
     /// The default value (None for an optional field that is unset by default).
     pub default: Option<toml::Value>,
