@@ -19,7 +19,8 @@ fn technique_parser() -> impl TypedValueParser<Value = TechniqueKind> {
 pub fn techniques_help() -> String {
     let mut s = String::from("Techniques (--technique NAME), their work unit and presets:\n");
     for &kind in TechniqueKind::ALL {
-        s += &format!("  {kind} (work unit: {})\n", kind.work_unit());
+        s += &format!("  {kind}: {}\n", kind.summary());
+        s += &format!("      (work unit: {})\n", kind.work_unit());
         for (name, what) in kind.presets() {
             s += &format!("      --preset {name:<14} {what}\n");
         }
@@ -255,14 +256,23 @@ impl SetupArgs {
             sets: &self.sets,
         })?;
         if let Some(file) = &self.data {
-            if config.technique != TechniqueKind::Precomputed {
+            let kind = config.technique;
+            let Some(key) = kind.data_key() else {
+                let readers: Vec<&str> = TechniqueKind::ALL
+                    .iter()
+                    .filter(|k| k.data_key().is_some())
+                    .map(|k| k.name())
+                    .collect();
                 anyhow::bail!(
-                    "--data {}: a data file is read by --technique precomputed, not {}",
+                    "--data {}: a data file is read by --technique {}, not {kind}",
                     file.display(),
-                    config.technique.name()
+                    readers.join(" or ")
                 );
-            }
-            config.precomputed.data = file.to_string_lossy().into_owned();
+            };
+            let argument = format!("--data {}", file.display());
+            let path = [kind.name().to_owned(), key.to_owned()];
+            let value = toml::Value::String(file.to_string_lossy().into_owned());
+            config = config.with_value(&argument, &path, value)?;
         }
         if let Some(w) = self.width {
             config.render.width = w;

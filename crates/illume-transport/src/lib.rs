@@ -44,5 +44,9 @@ pub use gbuffer::{GBuffer, GBufferPixel, TextureFilter};
 pub use lights::{EmissionSample, LightSample, LightSet};
 pub use raster::VisibilityBuffer;
 pub use surface::SurfaceHit;
-pub use technique::{Budget, ChangeResponse, Pacing, Technique, TechniqueError, TechniqueSettings};
+pub use technique::{
+    Agreement, AgreementSpec, Applies, Budget, ChangeResponse, FrameHistory, Pacing, Registration,
+    SettingField, SettingValues, SettingsTable, StillFn, StillImages, Technique, TechniqueError,
+    TechniqueSettings,
+};
 pub use world::{SharedWorld, World};

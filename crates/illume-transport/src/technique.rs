@@ -18,10 +18,10 @@
 //! Interactive techniques must not look at future scene states.
 
 use crate::gbuffer::GBuffer;
-use crate::world::World;
+use crate::world::{SharedWorld, World};
 use illume_core::image::RgbImage;
 use illume_core::{Counters, Progress};
-use illume_scene::SceneChange;
+use illume_scene::{Scene, SceneChange, Timeline};
 
 /// How much work [`Technique::advance`] may do in one frame. Unset fields are
 /// unlimited. The work unit is the technique's own ([`TechniqueSettings::WORK_UNIT`]:
@@ -141,6 +141,7 @@ pub trait Technique: Send {
 pub trait TechniqueSettings:
     Clone
     + Default
+    + SettingsTable
     + PartialEq
     + std::fmt::Debug
     + serde::Serialize
@@ -166,6 +167,10 @@ pub trait TechniqueSettings:
     /// The per-frame budget these settings give when the caller sets none.
     fn default_budget(&self) -> Budget;
 
+    /// Checks every value against its stated range (and the checks across fields); the
+    /// error names the table and the field (`photon_stream.pool_size: …`).
+    fn check(&self) -> Result<(), TechniqueError>;
+
     /// Sets the technique's random seed (`--seed`).
     fn set_seed(&mut self, seed: u64);
 
@@ -183,4 +188,170 @@ pub trait TechniqueSettings:
     fn adapt_to_interactive(&mut self) -> Option<String> {
         None
     }
+}
+
+/// How a technique's frame depends on the frames before it in one run
+/// ([`Registration::FRAME_HISTORY`]): whether `illume animate --shard K/N` (frames apart,
+/// on other machines) gives the frames of the unsharded run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameHistory {
+    /// Samples accumulate while nothing changes and start afresh at any scene change: a
+    /// frame that follows a change (and the first) depends on no earlier frame.
+    RestartsOnChange,
+    /// State carried from frame to frame (why): a frame depends on all before it.
+    Carried(&'static str),
+}
+
+/// What "agrees with the reference" means for one technique on `builtin:cornell-spot`
+/// (96×72, spot light, with and without a sky): the engine's shared agreement harness
+/// renders the technique's indirect light with `sets` and compares it with the reference
+/// path tracer's. Plain data, so that any harness can read it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AgreementSpec {
+    /// Settings (`--set TABLE.KEY=VALUE` form) that make the technique converge.
+    pub sets: &'static [&'static str],
+    /// Frames stepped at t = 0 before the indirect image is taken.
+    pub frames: u32,
+    /// |mean(test) / mean(reference) − 1| must stay below this (energy).
+    pub max_energy_error: f64,
+    /// Relative L1 error of 8×8-pixel block means must stay below this (shape).
+    pub max_block_error: f64,
+    /// Why these bounds: the technique's known bias and noise, with measured values.
+    pub why: &'static str,
+}
+
+/// Where a technique is checked against the reference ([`Registration::AGREEMENT`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Agreement {
+    /// By the shared harness on `builtin:cornell-spot`, within these bounds.
+    CornellSpot(AgreementSpec),
+    /// Elsewhere (the scene lacks what the technique needs): where, and why.
+    Elsewhere(&'static str),
+}
+
+/// A still image split as the reference splits light ([`Registration::still`]).
+pub struct StillImages {
+    /// direct + indirect.
+    pub full: RgbImage,
+    /// Emission seen directly plus light reflected once.
+    pub direct: RgbImage,
+    /// Light reflected two or more times.
+    pub indirect: RgbImage,
+}
+
+/// A technique's registration: everything the shared layers (engine, CLI, window, bench,
+/// agreement harness) know about it, in its own crate. The engine's list of techniques
+/// names each registration once (`illume_engine::techniques!`); nothing else outside the
+/// technique's folder names its types.
+pub trait Registration: 'static {
+    /// The settings table (its [`TechniqueSettings::NAME`] is the technique's name).
+    type Settings: TechniqueSettings;
+
+    /// One line saying what the technique is (paper, use), for help texts.
+    const SUMMARY: &'static str;
+
+    /// How a frame depends on the frames before it.
+    const FRAME_HISTORY: FrameHistory;
+
+    /// True for techniques that need the future: they are built with the [`Timeline`] of
+    /// the sequence. Interactive techniques never receive it.
+    const NEEDS_TIMELINE: bool;
+
+    /// Where and within what bounds the technique agrees with the reference.
+    const AGREEMENT: Agreement;
+
+    /// Builds the technique for `world` with `settings`; `timeline` is the sequence's
+    /// (a one-frame timeline for techniques that do not [`Registration::NEEDS_TIMELINE`]:
+    /// they must not look at it).
+    fn build(
+        world: &SharedWorld,
+        settings: &Self::Settings,
+        timeline: &Timeline,
+    ) -> Result<Box<dyn Technique>, TechniqueError>;
+
+    /// What the technique needs of the scene before its world is built (e.g. a sun taken
+    /// from a data file). Default: nothing.
+    fn prepare_scene(scene: &mut Scene, settings: &Self::Settings) -> Result<(), TechniqueError> {
+        let _ = (scene, settings);
+        Ok(())
+    }
+
+    /// The setting that the CLI's `--data FILE` sets (the technique's data file, e.g.
+    /// precomputed's `.illumepc`), when it reads one. Default: none (`--data` refused).
+    const DATA_KEY: Option<&'static str> = None;
+
+    /// How the technique renders a still by its own route, when it has one (the
+    /// reference renders the whole image by path tracing); None: the engine runs the
+    /// technique's precompute and one frame.
+    const STILL: Option<StillFn<Self::Settings>> = None;
+}
+
+/// A technique's own route to a still ([`Registration::STILL`]): the image of `scene`
+/// (already validated, at its current time) at `(width, height)` pixels with
+/// `settings` (already checked), reporting to `progress`.
+pub type StillFn<S> =
+    fn(Scene, &S, (u32, u32), &mut dyn Progress) -> Result<StillImages, TechniqueError>;
+
+/// How a change of one setting reaches a running engine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Applies {
+    /// Read through the frame budget ([`TechniqueSettings::default_budget`]): the running
+    /// technique takes the new value at its next frame, its state kept.
+    PerFrame,
+    /// Read when the technique is built: a change rebuilds it, and its state (photon
+    /// pool, VSLs, caches, precomputed data) starts again.
+    Rebuild,
+}
+
+/// One field of a settings table as declared (`#[derive(Settings)]`, crate
+/// `illume-settings-derive`): what tools show of it and what a change does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SettingField {
+    /// The key in the table (`--set TABLE.KEY=VALUE`).
+    pub key: &'static str,
+    /// The field's `///` documentation as plain text (links and escapes removed).
+    pub doc: &'static str,
+    /// The unit (`pixels`, `ms`, `W/(m²·sr)`), declared or carried by the name's suffix.
+    pub unit: Option<&'static str>,
+    /// The accepted values as declared (`(0, 1]`, `1–8`, `≥ 2`), or an enum's values
+    /// (`streaming | deterministic`).
+    pub range: Option<&'static str>,
+    /// Whether a change applies at the next frame or rebuilds the technique.
+    pub applies: Applies,
+}
+
+/// A settings struct's declared fields, in the struct's order (generated by
+/// `#[derive(Settings)]`; fields that are no setting, `#[serde(skip)]`, left out).
+pub trait SettingsTable {
+    /// Every setting of the table.
+    const FIELDS: &'static [SettingField];
+}
+
+/// The values a setting of this type takes, shown as its range when none is declared:
+/// an enum's values as the table spells them (`#[derive(SettingValues)]`), None for
+/// numbers, flags and text.
+pub trait SettingValues {
+    /// The values, joined with ` | ` (None: not an enumeration).
+    const VALUES: Option<&'static str>;
+}
+
+macro_rules! no_values {
+    ($($t:ty),* $(,)?) => {
+        $(impl SettingValues for $t {
+            const VALUES: Option<&'static str> = None;
+        })*
+    };
+}
+no_values!(bool, u8, u16, u32, u64, usize, i32, i64, f32, f64, String);
+
+impl<T> SettingValues for Option<T> {
+    const VALUES: Option<&'static str> = None;
+}
+
+impl<T> SettingValues for Vec<T> {
+    const VALUES: Option<&'static str> = None;
+}
+
+impl<T, const N: usize> SettingValues for [T; N] {
+    const VALUES: Option<&'static str> = None;
 }

@@ -18,35 +18,10 @@
 //! default (`photon_stream`). No layer knows a technique's fields: presets and `--set`
 //! go through the TOML tables, typed by the technique's own settings struct.
 
+pub use crate::Config;
 use crate::TechniqueKind;
-use illume_photon_stream::PhotonStreamSettings;
-use illume_precomputed::PrecomputedSettings;
-use illume_radiance_cache::RadianceCacheSettings;
-use illume_reference::ReferenceSettings;
-use illume_render::RenderSettings;
-use illume_selective::SelectiveSettings;
-use illume_transport::{Budget, Pacing, TechniqueSettings};
+use illume_transport::{Budget, Pacing, TechniqueError, TechniqueSettings};
 use std::path::{Path, PathBuf};
-
-/// A whole run's configuration.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Config {
-    /// The technique supplying indirect light. Default `photon_stream`.
-    pub technique: TechniqueKind,
-    /// The renderer (`[render]`).
-    pub render: RenderSettings,
-    /// The reference path tracer (`[reference]`).
-    pub reference: ReferenceSettings,
-    /// Photon streaming with VSLs (`[photon_stream]`).
-    pub photon_stream: PhotonStreamSettings,
-    /// Selective photon tracing (`[selective]`).
-    pub selective: SelectiveSettings,
-    /// Temporal radiance caching (`[radiance_cache]`).
-    pub radiance_cache: RadianceCacheSettings,
-    /// Precomputed indirect light for a day of sun (`[precomputed]`).
-    pub precomputed: PrecomputedSettings,
-}
 
 /// Why a configuration was rejected.
 #[derive(Debug, thiserror::Error)]
@@ -104,6 +79,10 @@ pub struct ConfigLayers<'a> {
 /// The operations the shared layers need on any technique's settings; every
 /// [`TechniqueSettings`] has them.
 pub trait AnySettings {
+    /// See [`TechniqueSettings::check`].
+    fn check(&self) -> Result<(), TechniqueError>;
+    /// The settings as [`std::any::Any`], for the technique's registration to downcast.
+    fn as_any(&self) -> &dyn std::any::Any;
     /// See [`TechniqueSettings::pace`].
     fn pace(&mut self, pacing: Pacing);
     /// See [`TechniqueSettings::default_budget`].
@@ -117,6 +96,12 @@ pub trait AnySettings {
 }
 
 impl<T: TechniqueSettings> AnySettings for T {
+    fn check(&self) -> Result<(), TechniqueError> {
+        TechniqueSettings::check(self)
+    }
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
     fn pace(&mut self, pacing: Pacing) {
         TechniqueSettings::pace(self, pacing);
     }
@@ -192,23 +177,39 @@ impl Config {
             table.insert(technique.name().into(), toml::Value::Table(merged));
         }
         for argument in layers.sets {
-            let (path, value) = parse_set(argument)?;
-            // Checked alone first, so an unknown key or a wrong type names this argument.
-            let mut alone = toml::Table::new();
-            insert_path(&mut alone, &path, value.clone());
-            if path[0] != "technique" {
-                alone.insert("technique".into(), technique.name().into());
-            }
-            from_table::<Self>(alone).map_err(|message| ConfigError::Set {
-                argument: argument.clone(),
-                message,
-            })?;
-            insert_path(&mut table, &path, value);
+            apply_set(&mut table, technique, argument)?;
         }
         let config: Self = from_table(table).map_err(|message| ConfigError::Set {
             argument: layers.sets.join(" "),
             message,
         })?;
+        config.validate("--set")
+    }
+
+    /// This configuration with one more `--set TABLE.KEY=VALUE` layer over it (a
+    /// setting edited in a window): typed by the table's settings, unknown keys refused,
+    /// the whole checked as [`Config::layered`] checks it. Fields that are no setting
+    /// (`#[serde(skip)]`, e.g. what pacing set) are taken from the defaults.
+    pub fn with_set(&self, argument: &str) -> Result<Config, ConfigError> {
+        let (path, value) = parse_set(argument)?;
+        self.with_value(argument, &path, value)
+    }
+
+    /// This configuration with `value` at the key `path` (`["precomputed", "data"]`),
+    /// as [`Config::with_set`] sets it; `argument` names the change in errors.
+    pub fn with_value(
+        &self,
+        argument: &str,
+        path: &[String],
+        value: toml::Value,
+    ) -> Result<Config, ConfigError> {
+        let error = |message: String| ConfigError::Set {
+            argument: argument.to_owned(),
+            message,
+        };
+        let mut table = toml::Table::try_from(self).map_err(|e| error(e.to_string()))?;
+        insert_checked(&mut table, self.technique, argument, path, value)?;
+        let config: Self = from_table(table).map_err(error)?;
         config.validate("--set")
     }
 
@@ -222,11 +223,10 @@ impl Config {
             .map_err(|e| format!("[render] {e}"))?;
         illume_render::check_image_size(self.render.width, self.render.height)
             .map_err(|m| format!("[render] width/height: {m}"))?;
-        self.reference.validate().map_err(|e| e.to_string())?;
-        self.photon_stream.validate().map_err(|e| e.to_string())?;
-        self.selective.validate().map_err(|e| e.to_string())?;
-        self.radiance_cache.validate().map_err(|e| e.to_string())?;
-        self.precomputed.validate().map_err(|e| e.to_string())
+        for &kind in TechniqueKind::ALL {
+            self.settings_of(kind).check().map_err(|e| e.to_string())?;
+        }
+        Ok(())
     }
 
     /// [`Config::check`], the error naming `source` (the file, or `--set`).
@@ -240,24 +240,12 @@ impl Config {
 
     /// The chosen technique's settings.
     pub fn technique_settings(&self) -> &dyn AnySettings {
-        match self.technique {
-            TechniqueKind::Reference => &self.reference,
-            TechniqueKind::PhotonStream => &self.photon_stream,
-            TechniqueKind::Selective => &self.selective,
-            TechniqueKind::RadianceCache => &self.radiance_cache,
-            TechniqueKind::Precomputed => &self.precomputed,
-        }
+        self.settings_of(self.technique)
     }
 
     /// The chosen technique's settings, to change.
     pub fn technique_settings_mut(&mut self) -> &mut dyn AnySettings {
-        match self.technique {
-            TechniqueKind::Reference => &mut self.reference,
-            TechniqueKind::PhotonStream => &mut self.photon_stream,
-            TechniqueKind::Selective => &mut self.selective,
-            TechniqueKind::RadianceCache => &mut self.radiance_cache,
-            TechniqueKind::Precomputed => &mut self.precomputed,
-        }
+        self.settings_of_mut(self.technique)
     }
 
     /// The per-frame budget the chosen technique's settings give.
@@ -287,6 +275,38 @@ fn from_table<T: serde::de::DeserializeOwned>(table: toml::Table) -> Result<T, S
     toml::Value::Table(table)
         .try_into()
         .map_err(|e: toml::de::Error| e.message().to_owned())
+}
+
+/// Sets `TABLE.KEY=VALUE` (`argument`) in `table`, a configuration of `technique`;
+/// checked alone first, so that an unknown key or a wrong type names this argument.
+fn apply_set(
+    table: &mut toml::Table,
+    technique: TechniqueKind,
+    argument: &str,
+) -> Result<(), ConfigError> {
+    let (path, value) = parse_set(argument)?;
+    insert_checked(table, technique, argument, &path, value)
+}
+
+/// Sets `value` at `path` in `table` (see [`apply_set`]).
+fn insert_checked(
+    table: &mut toml::Table,
+    technique: TechniqueKind,
+    argument: &str,
+    path: &[String],
+    value: toml::Value,
+) -> Result<(), ConfigError> {
+    let mut alone = toml::Table::new();
+    insert_path(&mut alone, path, value.clone());
+    if path[0] != "technique" {
+        alone.insert("technique".into(), technique.name().into());
+    }
+    from_table::<Config>(alone).map_err(|message| ConfigError::Set {
+        argument: argument.to_owned(),
+        message,
+    })?;
+    insert_path(table, path, value);
+    Ok(())
 }
 
 /// `TABLE.KEY=VALUE` → the key path and the value: TOML when it parses as a TOML value
@@ -345,6 +365,7 @@ pub fn merge(base: &mut toml::Table, over: toml::Table) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use illume_photon_stream::PhotonStreamSettings;
 
     #[test]
     fn parses_tables_and_rejects_unknown_keys() {
@@ -507,6 +528,32 @@ mod tests {
         .to_string();
         assert!(e.contains("fastest") && e.contains("quality"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn with_set_layers_one_setting_over_a_configuration() {
+        let mut base = Config::default();
+        base.photon_stream.pool_size = 1234;
+        base.render.width = 40;
+        let c = base.with_set("photon_stream.vsl_count=7").unwrap();
+        assert_eq!(
+            (
+                c.photon_stream.vsl_count,
+                c.photon_stream.pool_size,
+                c.render.width
+            ),
+            (7, 1234, 40)
+        );
+        let e = base
+            .with_set("photon_stream.vsl_cuont=7")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("vsl_cuont"), "{e}");
+        let e = base
+            .with_set("photon_stream.triangle_scale=2")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("photon_stream.triangle_scale"), "{e}");
     }
 
     #[test]

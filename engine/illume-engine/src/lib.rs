@@ -3,7 +3,8 @@
 //! stats ([`Engine::step`]).
 //!
 //! Techniques are a closed set selected by [`TechniqueKind`] (the CLI's `--technique`
-//! value and the TOML table name). Configuration is one TOML file ([`Config`]) with a
+//! value and the TOML table name), generated from one list below: each line names a
+//! technique's registration (`illume_transport::Registration`, in its own crate). Configuration is one TOML file ([`Config`]) with a
 //! table per technique; unknown keys are rejected with the file and key named.
 //!
 //! ```
@@ -23,12 +24,25 @@ pub mod config;
 pub mod settings_doc;
 pub mod step_record;
 pub mod still;
+#[macro_use]
 pub mod technique_kind;
 
-pub use config::{AnySettings, Config, ConfigError, ConfigLayers};
+pub use config::{AnySettings, ConfigError, ConfigLayers};
+pub use illume_transport::{Agreement, AgreementSpec, FrameHistory};
 pub use step_record::{FRAMES_CSV_COLUMNS, FramesCsv, StepRecord};
 pub use still::{Still, render_still};
-pub use technique_kind::{FrameHistory, TechniqueKind};
+
+// The one list of techniques: `Variant(table): registration`. Everything the engine, the
+// CLI and the window know of a technique comes from its registration, in its own crate.
+techniques! {
+    Reference(reference): illume_reference::Descriptor,
+    PhotonStream(photon_stream): illume_photon_stream::Descriptor,
+    Selective(selective): illume_selective::Descriptor,
+    RadianceCache(radiance_cache): illume_radiance_cache::Descriptor,
+    Precomputed(precomputed): illume_precomputed::Descriptor,
+    #[cfg(test)]
+    Ambient(ambient): illume_ambient::Descriptor,
+}
 
 use illume_core::{Counters, Progress, Silent};
 use illume_render::{Frame, Renderer};
@@ -82,14 +96,29 @@ pub enum EngineError {
     /// An interactive edit was refused (the world is unchanged).
     #[error("edit refused: {0}")]
     Edit(#[from] illume_scene::change::EditError),
-    /// The technique could not be constructed or failed in its precompute.
-    #[error("{technique}: {source}")]
+    /// The technique could not be constructed or failed in its precompute. Shown as
+    /// the technique's own message, prefixed with its name unless the message already
+    /// starts with it (`photon_stream.vsl_count: …`).
+    #[error("{}", prefixed(technique, source))]
     Technique {
         /// Which technique.
         technique: &'static str,
         /// The technique's own error.
         source: TechniqueError,
     },
+}
+
+/// `source`'s message under `technique`'s name, once.
+fn prefixed(technique: &str, source: &TechniqueError) -> String {
+    let message = source.to_string();
+    let named = message
+        .strip_prefix(technique)
+        .is_some_and(|rest| rest.starts_with(['.', ':']));
+    if named {
+        message
+    } else {
+        format!("{technique}: {message}")
+    }
 }
 
 impl Engine {
@@ -177,10 +206,7 @@ impl Engine {
         let world = read_world(&self.world);
         self.technique
             .precompute(&world, progress)
-            .map_err(|source| EngineError::Technique {
-                technique: self.kind.name(),
-                source,
-            })?;
+            .map_err(|source| self.kind.error(source))?;
         self.precomputed = true;
         Ok(start.elapsed().as_secs_f64() * 1e3)
     }
@@ -304,4 +330,64 @@ pub fn read_world(world: &SharedWorld) -> std::sync::RwLockReadGuard<'_, World> 
 /// Write access to a shared world (see [`read_world`]).
 pub fn write_world(world: &SharedWorld) -> std::sync::RwLockWriteGuard<'_, World> {
     world.write().unwrap_or_else(|e| e.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The test technique `ambient` joined through its folder and one line of the list
+    /// alone: by name, with its table, built and stepped by the engine. Inside the furnace
+    /// (albedo 0.5, emission 1) the light arriving after a bounce is 1 everywhere, so the
+    /// ambient term with radiance 1 is the exact indirect light, ρ²·L_e/(1 − ρ) = 0.5.
+    #[test]
+    fn a_technique_joins_through_its_registration_alone() {
+        let kind: TechniqueKind = "ambient".parse().unwrap();
+        assert_eq!(kind, TechniqueKind::Ambient);
+        let config = Config::layered(&ConfigLayers {
+            technique: Some(kind),
+            sets: &["ambient.radiance=1.0".to_owned()],
+            ..Default::default()
+        })
+        .unwrap();
+        let mut config = config;
+        config.render.width = 8;
+        config.render.height = 6;
+        let scene = illume_scene::builtin::load("furnace").unwrap();
+        let mut engine = Engine::new(scene, &config).unwrap();
+        let out = engine.step(0.0).unwrap();
+        for p in out.frame.indirect.pixels() {
+            for c in p.to_array() {
+                assert!((c - 0.5).abs() < 1e-5, "indirect {p:?}, expected 0.5");
+            }
+        }
+        assert_eq!(out.stats.get("ambient.radiance"), Some(1.0));
+        let e = Config::layered(&ConfigLayers {
+            technique: Some(kind),
+            sets: &["ambient.radiance=-1".to_owned()],
+            ..Default::default()
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("ambient.radiance"), "{e}");
+    }
+
+    /// A technique's error is shown under its name once (`photon_stream.…`, not
+    /// `photon_stream: photon_stream.…`); an error that does not name the technique gets
+    /// its name.
+    #[test]
+    fn technique_errors_are_prefixed_once() {
+        let mut config = Config::default();
+        config.photon_stream.triangle_scale = 2.0;
+        let scene = illume_scene::builtin::load("cornell-spot").unwrap();
+        let e = match Engine::new(scene, &config) {
+            Ok(_) => panic!("triangle_scale 2 accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.starts_with("photon_stream.triangle_scale: "), "{e}");
+        let e = TechniqueKind::Selective
+            .error("no light".into())
+            .to_string();
+        assert_eq!(e, "selective: no light");
+    }
 }

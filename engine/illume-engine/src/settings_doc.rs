@@ -2,12 +2,11 @@
 //! settings (the viewer's panel): its documentation, unit, range, default, and whether a
 //! change needs the technique rebuilt.
 //!
-//! The text is the settings struct's own field docs — each technique's `settings.rs`
-//! exposes its source as `settings::SOURCE` — so a field documented in the tuning guide
-//! is documented in every tool, and no tool holds a technique's fields. The unit is the
-//! doc's bracketed unit (`\[pixels\]`, `[W/(m²·sr)]`) or the name's suffix (`_ms`,
-//! `_deg`, STYLE.md's naming convention); the range is the doc's stated range (`in (0,
-//! 1]`, `1–8`, `≥ 2`) or, for an enum, its values.
+//! Each field is declared once, in the technique's settings struct (`#[derive(Settings)]`,
+//! crate `illume-settings-derive`): its `///` doc, unit, range, default and whether it
+//! applies per frame. This module reads the table that declaration generates
+//! ([`SettingsTable`](illume_transport::SettingsTable)), so a field documented in the
+//! tuning guide is documented in every tool, and no tool holds a technique's fields.
 //!
 //! ```
 //! use illume_engine::{TechniqueKind, settings_doc::Applies};
@@ -18,18 +17,7 @@
 //! ```
 
 use crate::{Config, TechniqueKind};
-
-/// How a change of one setting reaches a running engine.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Applies {
-    /// Read through the frame budget (`TechniqueSettings::default_budget`,
-    /// [`Engine::set_budget`](crate::Engine::set_budget)): the running technique takes
-    /// the new value at its next frame, its state kept.
-    PerFrame,
-    /// Read when the technique is built: a change rebuilds it, and its state (photon
-    /// pool, VSLs, caches, precomputed data) starts again.
-    Rebuild,
-}
+pub use illume_transport::Applies;
 
 /// One field of a technique's settings table.
 #[derive(Clone, Debug, PartialEq)]
@@ -38,10 +26,10 @@ pub struct SettingDoc {
     pub key: String,
     /// The field's documentation, as plain text (links and escapes removed).
     pub doc: String,
-    /// The unit (`pixels`, `ms`, `W/(m²·sr)`), when the doc or the name gives one.
+    /// The unit (`pixels`, `ms`, `W/(m²·sr)`), declared or carried by the name's suffix.
     pub unit: Option<String>,
-    /// The accepted values as the doc states them (`in (0, 1]`, `1–8`), or an enum's
-    /// values (`streaming | deterministic`).
+    /// The accepted values as declared (`(0, 1]`, `1–8`), or an enum's values
+    /// (`streaming | deterministic`).
     pub range: Option<String>,
     /// The default value (None for an optional field that is unset by default).
     pub default: Option<toml::Value>,
@@ -83,264 +71,21 @@ impl TechniqueKind {
     /// The documentation of every field of the technique's settings table, in the
     /// struct's order.
     pub fn settings_docs(self) -> Vec<SettingDoc> {
-        use illume_photon_stream::settings as ps;
-        use illume_precomputed::settings as pc;
-        use illume_radiance_cache::settings as rc;
-        use illume_reference::settings as rf;
-        use illume_selective::settings as se;
-        let (source, name, per_frame): (&str, &str, &[&str]) = match self {
-            TechniqueKind::Reference => (rf::SOURCE, "ReferenceSettings", rf::PER_FRAME_FIELDS),
-            TechniqueKind::PhotonStream => {
-                (ps::SOURCE, "PhotonStreamSettings", ps::PER_FRAME_FIELDS)
-            }
-            TechniqueKind::Selective => (se::SOURCE, "SelectiveSettings", se::PER_FRAME_FIELDS),
-            TechniqueKind::RadianceCache => {
-                (rc::SOURCE, "RadianceCacheSettings", rc::PER_FRAME_FIELDS)
-            }
-            TechniqueKind::Precomputed => (pc::SOURCE, "PrecomputedSettings", pc::PER_FRAME_FIELDS),
-        };
         let defaults = toml::Value::try_from(Config::default())
             .ok()
             .and_then(|v| v.get(self.name()).cloned());
-        parse_fields(source, name)
-            .into_iter()
-            .map(|f| {
-                let range = enum_values(source, &f.ty).or_else(|| stated_range(&f.doc));
-                SettingDoc {
-                    unit: stated_unit(&f.doc).or_else(|| suffix_unit(&f.key)),
-                    range,
-                    default: defaults.as_ref().and_then(|d| d.get(&f.key).cloned()),
-                    applies: if per_frame.contains(&f.key.as_str()) {
-                        Applies::PerFrame
-                    } else {
-                        Applies::Rebuild
-                    },
-                    doc: plain(&f.doc),
-                    key: f.key,
-                }
+        self.setting_fields()
+            .iter()
+            .map(|f| SettingDoc {
+                key: f.key.to_owned(),
+                doc: f.doc.to_owned(),
+                unit: f.unit.map(str::to_owned),
+                range: f.range.map(str::to_owned),
+                default: defaults.as_ref().and_then(|d| d.get(f.key).cloned()),
+                applies: f.applies,
             })
             .collect()
     }
-}
-
-/// A field of a struct as written in the source.
-struct Field {
-    key: String,
-    ty: String,
-    doc: String,
-}
-
-/// The `pub` fields of `pub struct NAME { … }` in `source`, with their `///` docs.
-/// Fields marked `#[serde(skip)]` are left out (they are not in the table).
-fn parse_fields(source: &str, name: &str) -> Vec<Field> {
-    let mut fields = Vec::new();
-    let mut lines = source
-        .lines()
-        .skip_while(|l| !l.trim_start().starts_with(&format!("pub struct {name} {{")));
-    lines.next();
-    let (mut doc, mut skip) = (String::new(), false);
-    for line in lines {
-        let l = line.trim();
-        if l == "}" {
-            break;
-        }
-        if let Some(d) = l.strip_prefix("///") {
-            doc.push_str(d.trim());
-            doc.push(' ');
-        } else if l.starts_with("#[") {
-            skip |= l.contains("serde(skip");
-        } else if let Some(rest) = l.strip_prefix("pub ")
-            && let Some((key, ty)) = rest.split_once(':')
-        {
-            if !skip {
-                fields.push(Field {
-                    key: key.trim().to_owned(),
-                    ty: ty.trim().trim_end_matches(',').trim().to_owned(),
-                    doc: doc.trim().to_owned(),
-                });
-            }
-            doc.clear();
-            skip = false;
-        }
-    }
-    fields
-}
-
-/// The values of `pub enum TY` in `source` as the table spells them (its serde
-/// `rename_all`), joined with ` | `; None when `ty` is no enum of the file.
-fn enum_values(source: &str, ty: &str) -> Option<String> {
-    let lines: Vec<&str> = source.lines().collect();
-    let start = lines
-        .iter()
-        .position(|l| l.trim_start().starts_with(&format!("pub enum {ty} {{")))?;
-    let rename = lines[..start]
-        .iter()
-        .rev()
-        .take_while(|l| l.trim_start().starts_with('#'))
-        .find_map(|l| l.split_once("rename_all = \"").map(|(_, r)| r))
-        .and_then(|r| r.split('"').next())
-        .unwrap_or("");
-    let values: Vec<String> = lines[start + 1..]
-        .iter()
-        .map(|l| l.trim())
-        .take_while(|l| *l != "}")
-        .filter(|l| !l.starts_with("//") && !l.starts_with('#'))
-        .filter_map(|l| {
-            let v = l.trim_end_matches(',');
-            (!v.is_empty() && v.chars().all(|c| c.is_ascii_alphanumeric()))
-                .then(|| spell(v, rename))
-        })
-        .collect();
-    (!values.is_empty()).then(|| values.join(" | "))
-}
-
-/// A variant name as serde's `rename_all` spells it.
-fn spell(variant: &str, rename: &str) -> String {
-    let sep = match rename {
-        "snake_case" => "_",
-        "kebab-case" => "-",
-        "lowercase" => "",
-        _ => return variant.to_owned(),
-    };
-    let mut out = String::new();
-    for (i, c) in variant.chars().enumerate() {
-        if c.is_uppercase() && i > 0 {
-            out.push_str(sep);
-        }
-        out.extend(c.to_lowercase());
-    }
-    out
-}
-
-/// The first bracketed unit of a doc: `\[pixels\]` or `[W/(m²·sr)]` (not a link, not a
-/// range such as `[0, 1]`).
-fn stated_unit(doc: &str) -> Option<String> {
-    let text = doc.replace("\\[", "[").replace("\\]", "]");
-    let mut rest = text.as_str();
-    while let Some(open) = rest.find('[') {
-        let after = &rest[open + 1..];
-        let close = matching_bracket(after)?;
-        let inside = &after[..close];
-        let link = after[close + 1..].starts_with('(') || inside.contains('`');
-        let range = inside.contains(',') || inside.starts_with(|c: char| c.is_ascii_digit());
-        if !link && !range && !inside.is_empty() {
-            return Some(inside.to_owned());
-        }
-        rest = &after[close + 1..];
-    }
-    None
-}
-
-/// The index of the `]` closing a bracket opened just before `s` (nested pairs skipped).
-fn matching_bracket(s: &str) -> Option<usize> {
-    let mut depth = 0;
-    for (i, c) in s.char_indices() {
-        match c {
-            '[' => depth += 1,
-            ']' if depth == 0 => return Some(i),
-            ']' => depth -= 1,
-            _ => {}
-        }
-    }
-    None
-}
-
-/// The unit a field's name carries (STYLE.md: `budget_ms`, `radius_m`).
-fn suffix_unit(key: &str) -> Option<String> {
-    let units = [
-        ("_ms", "ms"),
-        ("_s", "s"),
-        ("_m", "m"),
-        ("_deg", "degrees"),
-        ("_rad", "radians"),
-        ("_min", "minutes"),
-        ("_h", "hours"),
-        ("_frames", "frames"),
-        ("_fraction", "fraction"),
-    ];
-    units
-        .iter()
-        .find(|(s, _)| key.ends_with(s))
-        .map(|(_, u)| (*u).to_owned())
-}
-
-/// The range a doc states: `in (0, 1]`, `in [0, 10]`, `1–8`, `≥ 2`, `at least 1`.
-fn stated_range(doc: &str) -> Option<String> {
-    let text = plain(doc);
-    for opener in ["in (", "in [", "In (", "In ["] {
-        if let Some(i) = text.find(opener) {
-            let s = &text[i + 3..];
-            if let Some(end) = s.find([']', ')']) {
-                let r = &s[..=end];
-                if r.contains(',') {
-                    return Some(r.to_owned());
-                }
-            }
-        }
-    }
-    // `a–b` with digits on both sides (spaces inside numbers allowed: `1–100 000`).
-    let chars: Vec<char> = text.chars().collect();
-    for (i, &c) in chars.iter().enumerate() {
-        if c == '–'
-            && i > 0
-            && chars[i - 1].is_ascii_digit()
-            && chars.get(i + 1).is_some_and(|c| c.is_ascii_digit())
-        {
-            let start = chars[..i]
-                .iter()
-                .rposition(|c| !(c.is_ascii_digit() || *c == '.'))
-                .map_or(0, |p| p + 1);
-            let mut end = i + 1;
-            while end < chars.len()
-                && (chars[end].is_ascii_digit()
-                    || chars[end] == '.'
-                    || (chars[end] == ' '
-                        && chars.get(end + 1).is_some_and(|c| c.is_ascii_digit())
-                        && chars.get(end + 4).is_none_or(|c| !c.is_ascii_digit())))
-            {
-                end += 1;
-            }
-            return Some(chars[start..end].iter().collect());
-        }
-    }
-    for lead in ["≥ ", "at least "] {
-        if let Some(i) = text.find(lead) {
-            let n: String = text[i + lead.len()..]
-                .chars()
-                .take_while(|c| c.is_ascii_digit() || *c == '.')
-                .collect();
-            if !n.is_empty() {
-                return Some(format!("≥ {n}"));
-            }
-        }
-    }
-    None
-}
-
-/// A doc comment as plain text: intra-doc links by their text, backticks and escapes
-/// removed.
-fn plain(doc: &str) -> String {
-    let mut out = String::with_capacity(doc.len());
-    let mut rest = doc;
-    while let Some(i) = rest.find("[`") {
-        out.push_str(&rest[..i]);
-        let after = &rest[i + 2..];
-        let Some(end) = after.find("`]") else {
-            out.push_str(&rest[i..]);
-            rest = "";
-            break;
-        };
-        out.push_str(&after[..end]);
-        rest = &after[end + 2..];
-        // `[text](path)`: drop the path.
-        if rest.starts_with('(')
-            && let Some(close) = rest.find(')')
-        {
-            rest = &rest[close + 1..];
-        }
-    }
-    out.push_str(rest);
-    out.replace("\\[", "[").replace("\\]", "]").replace('`', "")
 }
 
 #[cfg(test)]
@@ -374,7 +119,7 @@ mod tests {
     }
 
     #[test]
-    fn units_ranges_and_rebuilds_are_read_from_the_docs() {
+    fn units_ranges_and_rebuilds_are_declared_with_the_fields() {
         let docs = TechniqueKind::PhotonStream.settings_docs();
         let get = |k: &str| docs.iter().find(|d| d.key == k).unwrap().clone();
         assert_eq!(get("vsl_count").applies, Applies::Rebuild);

@@ -1,11 +1,9 @@
 //! One still image with any technique: what `illume render` does.
 
-use crate::{Config, Engine, EngineError, TechniqueKind};
+use crate::{Config, Engine, EngineError};
 use illume_core::Progress;
 use illume_core::image::RgbImage;
-use illume_reference::ReferenceRenderer;
 use illume_scene::Scene;
-use illume_transport::World;
 
 /// A rendered still, split as the reference splits light.
 pub struct Still {
@@ -15,45 +13,30 @@ pub struct Still {
     pub direct: RgbImage,
     /// Light reflected two or more times.
     pub indirect: RgbImage,
-    /// Time in the technique's precompute phase \[ms\] (0 for the reference).
+    /// Time in the technique's precompute phase \[ms\] (0 for a technique's own route).
     pub precompute_ms: f64,
 }
 
 /// Renders `scene` at its current time with `config`'s technique at the configured
-/// size. The reference renders the whole image by path tracing
-/// ([`ReferenceRenderer`], `[reference] spp` samples per pixel, progress per chunk of
-/// samples; its settings are validated first: `spp` 0 is an error, not one sample);
-/// any other technique runs its precompute (with progress) and one frame.
+/// size. A technique with its own route to a still ([`TechniqueKind::has_own_still`](crate::TechniqueKind::has_own_still):
+/// the reference renders the whole image by path tracing, `[reference] spp` samples per
+/// pixel) takes it, its settings checked first (`spp` 0 is an error, not one sample); any
+/// other technique runs its precompute (with progress) and one frame.
 pub fn render_still(
     scene: Scene,
     config: &Config,
     progress: &mut dyn Progress,
 ) -> Result<Still, EngineError> {
-    let (w, h) = (config.render.width, config.render.height);
-    if config.technique == TechniqueKind::Reference {
+    let kind = config.technique;
+    if kind.has_own_still() {
         config
-            .reference
-            .validate()
-            .map_err(|e| EngineError::Technique {
-                technique: illume_reference::NAME,
-                source: Box::new(e),
-            })?;
+            .technique_settings()
+            .check()
+            .map_err(|source| kind.error(source))?;
         scene
             .validate()
             .map_err(|e| EngineError::InvalidScene(format!("{}: {e}", scene.source)))?;
-        let world = World::new(scene);
-        let mut r = ReferenceRenderer::new(config.reference.clone(), w, h);
-        let spp = config.reference.spp;
-        progress.begin("path tracing", spp as u64);
-        // Chunks of samples keep the bar moving and the work parallel over pixels; the
-        // image does not depend on the chunking.
-        let chunk = (spp / 32).max(1);
-        while r.samples() < spp {
-            r.add_samples(&world, chunk.min(spp - r.samples()));
-            progress.set(r.samples() as u64);
-        }
-        progress.end();
-        let i = r.images();
+        let i = kind.own_still(scene, config, progress)?;
         return Ok(Still {
             full: i.full,
             direct: i.direct,

@@ -4,7 +4,17 @@ use illume_transport::{Budget, Pacing, TechniqueSettings};
 use serde::{Deserialize, Serialize};
 
 /// How photons are shot.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    Default,
+    illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum StreamMode {
     /// §0.7.2: a long-lived simulation thread shoots photons continuously while frames
@@ -19,7 +29,17 @@ pub enum StreamMode {
 }
 
 /// The streaming thread's share of the CPU when frames are rendered on the same cores.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    Default,
+    illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum StreamPriority {
     /// The thread competes with the renderer's threads as an equal (on 2 cores with 2
@@ -36,7 +56,17 @@ pub enum StreamPriority {
 }
 
 /// What a scene change does to the photon pool (§0.5 and §0.9.1).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    Default,
+    illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum ChangePolicy {
     /// The paper's default: new photons see the new scene at once and old photons age
@@ -50,7 +80,17 @@ pub enum ChangePolicy {
 
 /// Whether VSL shading traces shadow rays (beyond the paper, which has none: §0.6,
 /// Figure 7's over-illumination).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    Default,
+    illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum VisibilityMode {
     /// The paper: no VSL shadows. Fast; over-illuminates points that a VSL cannot see.
@@ -66,33 +106,39 @@ pub enum VisibilityMode {
 }
 
 /// Photon streaming settings. Defaults follow the paper where it gives a value.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, illume_settings_derive::Settings)]
 #[serde(deny_unknown_fields, default)]
 pub struct PhotonStreamSettings {
     /// N_v, the number of virtual surface lights (§0.4.2, a user parameter). Higher:
     /// smoother, more detailed indirect light, at a shading cost linear in the count
     /// (pixels × VSLs). Never fewer than one per object. Default 100 (Tables 2–3 use
     /// 10–200).
+    #[setting(default = 100, range = "1–1 000 000")]
     pub vsl_count: u32,
     /// Extra candidates placed before Algorithm 1 removes the closest ones, as a
     /// fraction of `vsl_count` (§0.4.2: "an increase of 10 % provides interesting
     /// results"). Higher: more even spacing, at a placement cost growing with the
     /// candidates. Default 0.10.
+    #[setting(default = 0.10, range = "[0, 10]")]
     pub oversampling: f32,
     /// Scale applied to each triangle about its centroid before a VSL is placed on it
     /// (§0.4.2, Figure 4a), in (0, 1]. Lower: VSLs further from edges and corners (fewer
     /// light spots), at the cost of leaving triangle borders uncovered. Default 0.8.
+    #[setting(default = 0.8, range = "(0, 1]")]
     pub triangle_scale: f32,
     /// Photon impacts the FIFO pool holds (§0.3, §0.5). Higher: less noise in VSL powers,
     /// at the cost of latency after a change (latency = pool size / impact rate) and
     /// 32 bytes per impact. Default 100 000.
+    #[setting(default = 100_000)]
     pub pool_size: u32,
     /// Streaming or reproducible shooting. Default [`StreamMode::Streaming`].
+    #[setting(default = StreamMode::Streaming)]
     pub mode: StreamMode,
     /// OS priority of the streaming thread: `low` (default: frames first, photons in the
     /// time left) or `normal` (more photons, lower latency, slower frames; `BENCHMARKS.md`
     /// has the trade-off). Where the OS refuses, the thread keeps normal priority and
     /// says so once on stderr.
+    #[setting(default = StreamPriority::Low)]
     pub stream_priority: StreamPriority,
     /// With `stream_priority = "low"`: the share of a core the streaming thread keeps
     /// while render threads want both cores, in [0, 1] (a fraction of one core); 1 sets
@@ -104,6 +150,7 @@ pub struct PhotonStreamSettings {
     /// moving camera: 29–31 fps and 2.6–3.0 M impacts/s at 1, 35–36 fps and 2.2 M at
     /// 0.25, 52–53 fps and 0.1–0.3 M at 0). Default 1: the frame rate is not bought with
     /// the light's latency (`BENCHMARKS.md`, photon_stream, has the sweep).
+    #[setting(default = 1.0, range = "[0, 1]")]
     pub stream_share: f32,
     /// Streaming mode: let the streaming thread rest once the pool has turned over since
     /// the last change that affects lighting (every pooled photon traced in the current
@@ -114,23 +161,29 @@ pub struct PhotonStreamSettings {
     /// frames both cores while only the camera moves (the paper notes that streaming may
     /// pause then, §0.9.1). False: stream without end, as the paper does (for measuring
     /// photon rates). Default true.
+    #[setting(default = true)]
     pub rest_when_settled: bool,
     /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
     /// cost linear in the count. Default 20 000.
+    #[setting(default = 20_000, per_frame)]
     pub photons_per_frame: u64,
     /// Photons the streaming thread traces per batch (one pool update under the pool's
     /// mutex, about a millisecond of work). Higher: less locking overhead, at the cost
     /// of coarser pool updates; a batch ends early when the scene changes. Default 256.
+    #[setting(default = 256)]
     pub batch_photons: u32,
     /// What a scene change does to the pool. Default [`ChangePolicy::AgeOut`].
+    #[setting(default = ChangePolicy::AgeOut)]
     pub on_change: ChangePolicy,
     /// ε of §0.7.3 [W/(m²·sr)]: a VSL is ignored where its unoccluded contribution bound
     /// Φ_s·R/(π r²) falls below ε, i.e. beyond r_ε = sqrt(Φ_s·R/(π ε)). Higher: more
     /// culling (faster), at the cost of cutting off faint light. Default 1e-6 (paper).
+    #[setting(default = 1e-6, unit = "W/(m²·sr)")]
     pub epsilon: f32,
     /// Side of the square screen tiles VSLs are culled against \[pixels\]. Smaller:
     /// tighter culling, at a per-tile overhead. Default 16.
+    #[setting(default = 16, unit = "pixels")]
     pub tile_size: u32,
     /// Shade one pixel in `shading_stride²` (a grid `shading_stride` pixels apart) and
     /// interpolate the pixels between from the shaded ones on the same surface (normals
@@ -141,11 +194,14 @@ pub struct PhotonStreamSettings {
     /// (the paper's deferred shading). Higher strides blur small indirect features
     /// (contact shadows under the visibility mode, the bright spot next to a strong VSL).
     /// 1–8, default 2.
+    #[setting(default = 2, range = "1–8")]
     pub shading_stride: u32,
     /// VSL shadow rays (beyond the paper). Default [`VisibilityMode::Off`].
+    #[setting(default = VisibilityMode::Off)]
     pub visibility: VisibilityMode,
     /// Shadow rays per pixel in [`VisibilityMode::Stochastic`]. Higher: less noise, at a
     /// cost linear in the count. Default 8.
+    #[setting(default = 8)]
     pub visibility_rays: u32,
     /// Gather rays per shaded pixel for the near field (beyond the paper; 0 = off, the
     /// paper's estimator). A VSL stands for its whole Voronoi cell at one point, which is
@@ -160,6 +216,7 @@ pub struct PhotonStreamSettings {
     /// Higher: less gather noise, at one closest-hit ray each per shaded pixel (pixels
     /// between shaded ones are interpolated, `shading_stride`, so 576 rays at stride 3
     /// cost 64 a pixel). Default 0; the `quality` and `still` presets use 576.
+    #[setting(default = 0)]
     pub near_field_rays: u32,
     /// Radius of the near field in cell sizes √A_s of the VSL involved (the VSL whose
     /// weight is taken, or the gather hit's nearest VSL), at least 0.5. Larger: the
@@ -168,9 +225,11 @@ pub struct PhotonStreamSettings {
     /// over the VSL cells' exitance, in which the VSLs light nothing directly, need no
     /// visibility, and their count only sets the cells' size (the `quality` and `still`
     /// presets: 3200 cells). Default 3.
+    #[setting(default = 3.0, range = "≥ 0.5 (or inf)")]
     pub near_field_scale: f32,
     /// Longest photon path in bounces, a safety net behind Russian roulette (§0.7.1).
     /// Default 32.
+    #[setting(default = 32)]
     pub max_bounces: u32,
     /// Photons read base-colour textures through copies box-filtered to at most
     /// [`PHOTON_TEXTURE_SIDE`](illume_transport::hit_tables::PHOTON_TEXTURE_SIDE) (128)
@@ -179,47 +238,21 @@ pub struct PhotonStreamSettings {
     /// are unchanged in expectation (tested on Sponza); large textures stop costing a
     /// cache miss per impact (Sponza: 1.3× the impacts/s). False: full-resolution
     /// albedo for photons too. Default true. Rendering always uses full resolution.
+    #[setting(default = true)]
     pub filtered_textures: bool,
     /// Fill the pool synchronously (on the calling thread and rayon) before the first
     /// frame, so the first frame is already converged (the paper renders at once and
     /// lets the stream fill in). False: frames start dark and brighten as the pool
     /// fills. Default true.
+    #[setting(default = true)]
     pub warm_up: bool,
     /// Start with the simulation thread paused ([`StreamMode::Streaming`]). Default false.
+    #[setting(default = false)]
     pub start_paused: bool,
     /// Seed of VSL placement and photon paths: the same seed gives the same VSLs and,
     /// in deterministic mode, the same frames. Default 0.
+    #[setting(default = 0)]
     pub seed: u64,
-}
-
-impl Default for PhotonStreamSettings {
-    fn default() -> Self {
-        Self {
-            vsl_count: 100,
-            oversampling: 0.10,
-            triangle_scale: 0.8,
-            pool_size: 100_000,
-            mode: StreamMode::Streaming,
-            stream_priority: StreamPriority::Low,
-            stream_share: 1.0,
-            rest_when_settled: true,
-            photons_per_frame: 20_000,
-            batch_photons: 256,
-            on_change: ChangePolicy::AgeOut,
-            epsilon: 1e-6,
-            tile_size: 16,
-            shading_stride: 2,
-            visibility: VisibilityMode::Off,
-            visibility_rays: 8,
-            near_field_rays: 0,
-            near_field_scale: 3.0,
-            max_bounces: 32,
-            filtered_textures: true,
-            warm_up: true,
-            start_paused: false,
-            seed: 0,
-        }
-    }
 }
 
 /// Most VSLs accepted (`vsl_count`): placement is O(n log n) in memory and shading
@@ -392,6 +425,10 @@ impl TechniqueSettings for PhotonStreamSettings {
     const NAME: &'static str = crate::NAME;
     const WORK_UNIT: &'static str = "photons";
 
+    fn check(&self) -> Result<(), illume_transport::TechniqueError> {
+        Ok(self.validate()?)
+    }
+
     fn presets() -> &'static [(&'static str, &'static str)] {
         &[
             (
@@ -458,12 +495,3 @@ impl TechniqueSettings for PhotonStreamSettings {
         self.seed = seed;
     }
 }
-
-/// This file's text: the field docs of [`PhotonStreamSettings`] are the settings' documentation in
-/// tools that show them (`illume_engine::settings_doc`, the viewer's tooltips).
-pub const SOURCE: &str = include_str!("settings.rs");
-
-/// Fields read through the frame budget ([`TechniqueSettings::default_budget`]), not
-/// when the technique is built: a change applies to a running technique without a
-/// rebuild. Every other field rebuilds it.
-pub const PER_FRAME_FIELDS: &[&str] = &["photons_per_frame"];

@@ -53,3 +53,48 @@ pub use state::Precomputed;
 
 /// The technique's one name.
 pub const NAME: &str = "precomputed";
+
+/// Precomputed indirect light's registration: how the engine, the CLI and the window
+/// know it.
+pub struct Descriptor;
+
+impl illume_transport::Registration for Descriptor {
+    type Settings = PrecomputedSettings;
+    const SUMMARY: &'static str = "precomputed indirect light for a day of sun, PCA-compressed \
+        (Bahnsen et al. 2012): needs a scene with a [sun] and a .illumepc file (--data)";
+    const FRAME_HISTORY: illume_transport::FrameHistory = illume_transport::FrameHistory::Carried(
+        "it is interactive: the renderer picks shadow maps or rays per frame from costs \
+         measured on the frames before",
+    );
+    const NEEDS_TIMELINE: bool = true;
+    const AGREEMENT: illume_transport::Agreement = illume_transport::Agreement::Elsewhere(
+        "needs a scene with a sun path and a precomputed day, which cornell-spot has not: \
+         techniques/precomputed/tests/sun_room.rs",
+    );
+
+    const DATA_KEY: Option<&'static str> = Some("data");
+
+    fn build(
+        world: &illume_transport::SharedWorld,
+        settings: &PrecomputedSettings,
+        timeline: &illume_scene::Timeline,
+    ) -> Result<Box<dyn illume_transport::Technique>, illume_transport::TechniqueError> {
+        let world = world.read().unwrap_or_else(|e| e.into_inner());
+        Ok(Box::new(Precomputed::new(
+            &world,
+            settings.clone(),
+            timeline.width(),
+            timeline.height(),
+        )?))
+    }
+
+    /// With a file: a scene without a `[sun]` gets the file's sun (the direct light must
+    /// follow the sun the keys were rendered with).
+    fn prepare_scene(
+        scene: &mut illume_scene::Scene,
+        settings: &PrecomputedSettings,
+    ) -> Result<(), illume_transport::TechniqueError> {
+        state::attach_file_sun(scene, settings)?;
+        Ok(())
+    }
+}

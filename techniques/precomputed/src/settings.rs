@@ -4,7 +4,9 @@ use illume_transport::{Budget, Pacing, TechniqueSettings};
 use serde::{Deserialize, Serialize};
 
 /// Where key images live (Bahnsen et al. §3.1, Fig. 4).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Domain {
     /// One image from the fixed camera (the paper's implementation). Default.
@@ -17,7 +19,9 @@ pub enum Domain {
 }
 
 /// Key times (§3.2).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum ScheduleKind {
     /// A key every `step_min` (Eq. 1: 288 a day at 5 min).
@@ -27,7 +31,9 @@ pub enum ScheduleKind {
 }
 
 /// How the k temporal coefficients are interpolated between keys (§4.2).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Interpolation {
     /// `(1 − α)·L_N + α·L_{N+1}` (Eq. 2; the paper's). Default.
@@ -38,7 +44,9 @@ pub enum Interpolation {
 }
 
 /// How colour channels share the PCA (§3.2 leaves it unstated).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum Colour {
     /// One PCA per channel: k components each. Default.
@@ -48,85 +56,78 @@ pub enum Colour {
 }
 
 /// The `[precomputed]` table. Defaults are the paper's where it has one.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, illume_settings_derive::Settings)]
 #[serde(deny_unknown_fields, default)]
 pub struct PrecomputedSettings {
     /// The `.illumepc` file to load at construction (`--data FILE`). Empty: precompute
     /// in memory at the first frame (slow; for tests and tiny scenes).
+    #[setting(default = String::new())]
     pub data: String,
     /// Where key images live. Default `screen` (§3.1, the paper's implementation):
     /// `screen` is exact per pixel but fixes the camera; `cube` lets it turn in place
     /// (six faces to render and store); `atlas` frees it, at the lightmap's resolution
     /// (`atlas_density`), with probes for dynamic objects.
+    #[setting(default = Domain::Screen)]
     pub domain: Domain,
     /// `cube`: pixels along a face's side. 0 (default): the side that matches the image's
     /// pixel density at its centre (height / tan(yfov/2): 857 for 600 pixels at 70°).
     /// Six faces of that side cost 6·side²/(width·height) times a screen key (9× at
     /// 800×600).
+    #[setting(default = 0)]
     pub cube_face: u32,
     /// `atlas`: lightmap texels per metre of surface. Higher: sharper indirect light and
     /// sky shadows, more texels to render and store (∝ density²). Default 16 (6 cm
     /// texels: indirect light varies slowly; the sun's own shadows are the renderer's).
+    #[setting(default = 16.0)]
     pub atlas_density: f32,
     /// `atlas`: distance between the probes that light dynamic objects \[m\]. Lower:
     /// finer variation on moving objects, more probes (∝ 1/spacing³, 6 values each).
     /// Default 0.5.
+    #[setting(default = 0.5, unit = "m")]
     pub probe_spacing: f32,
     /// Key times. Default `adaptive` (§3.2).
+    #[setting(default = ScheduleKind::Adaptive)]
     pub schedule: ScheduleKind,
     /// Key interval of `uniform` and the smallest interval of `adaptive` \[minutes\].
     /// Lower: more keys, finer in time, longer precompute and larger file. Default 5 (§3.1).
+    #[setting(default = 5.0, unit = "minutes")]
     pub step_min: f64,
     /// First clock hour of the precomputed span \[hours\]. Default 0.
+    #[setting(default = 0.0, unit = "hours")]
     pub from_h: f64,
     /// Last clock hour \[hours\]. Default 24.
+    #[setting(default = 24.0, unit = "hours")]
     pub to_h: f64,
     /// Beyond the paper: adaptive splits compare the interpolation with a rendered middle
     /// (more renders, catches non-linear changes the ends' test misses). Default false.
+    #[setting(default = false)]
     pub verify_midpoint: bool,
     /// Samples per pixel of each key (and the sky image). Noise falls as 1/√spp; PCA
     /// removes some of it. Default 256.
+    #[setting(default = 256)]
     pub spp: u32,
     /// Kept PCA components k. Higher: more variance kept (98.6 % at 10, 99.83 % at 20 in
     /// the paper), larger file and O(k) run time per texel. Default 10 (§3.2).
+    #[setting(default = 10)]
     pub components: usize,
     /// If set (0–1), the fewest components (≤ `components`) capturing this fraction of
     /// the variance. Default none.
+    #[setting(default = None, range = "0–1")]
     pub variance_target: Option<f64>,
     /// PCA colour handling. Default `per-channel`.
+    #[setting(default = Colour::PerChannel)]
     pub colour: Colour,
     /// Interpolation of coefficients. Default `linear` (§3.1, §4.2).
+    #[setting(default = Interpolation::Linear)]
     pub interpolation: Interpolation,
     /// Exposure the Yee metric sees key images at (`to_srgb8` of radiance × exposure);
     /// stored in the file. Default 1.
+    #[setting(default = 1.0)]
     pub exposure: f32,
     /// Seed; key t's samples are seeded from (seed, time), reproducible on any machine.
     /// Default 0.
+    #[setting(default = 0)]
     pub seed: u64,
-}
-
-impl Default for PrecomputedSettings {
-    fn default() -> Self {
-        Self {
-            data: String::new(),
-            domain: Domain::Screen,
-            cube_face: 0,
-            atlas_density: 16.0,
-            probe_spacing: 0.5,
-            schedule: ScheduleKind::Adaptive,
-            step_min: 5.0,
-            from_h: 0.0,
-            to_h: 24.0,
-            verify_midpoint: false,
-            spp: 256,
-            components: 10,
-            variance_target: None,
-            colour: Colour::PerChannel,
-            interpolation: Interpolation::Linear,
-            exposure: 1.0,
-            seed: 0,
-        }
-    }
 }
 
 impl PrecomputedSettings {
@@ -175,6 +176,10 @@ impl TechniqueSettings for PrecomputedSettings {
     const NAME: &'static str = crate::NAME;
     const WORK_UNIT: &'static str = "frames (run time does no work per frame)";
 
+    fn check(&self) -> Result<(), illume_transport::TechniqueError> {
+        Ok(self.validate()?)
+    }
+
     fn presets() -> &'static [(&'static str, &'static str)] {
         &[
             (
@@ -214,12 +219,3 @@ impl TechniqueSettings for PrecomputedSettings {
         true
     }
 }
-
-/// This file's text: the field docs of [`PrecomputedSettings`] are the settings' documentation in
-/// tools that show them (`illume_engine::settings_doc`, the viewer's tooltips).
-pub const SOURCE: &str = include_str!("settings.rs");
-
-/// Fields read through the frame budget ([`TechniqueSettings::default_budget`]), not
-/// when the technique is built: a change applies to a running technique without a
-/// rebuild. Every other field rebuilds it.
-pub const PER_FRAME_FIELDS: &[&str] = &[];

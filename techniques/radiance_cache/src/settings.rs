@@ -13,7 +13,17 @@ use illume_transport::{Budget, Pacing, TechniqueSettings};
 use serde::{Deserialize, Serialize};
 
 /// How records follow time (§4.2–4.4).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    Default,
+    illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum TemporalMode {
     /// The paper's baseline ("per-frame computation", §6): a new cache for every frame,
@@ -48,7 +58,7 @@ impl TemporalMode {
 }
 
 /// Temporal radiance caching settings.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, illume_settings_derive::Settings)]
 #[serde(deny_unknown_fields, default)]
 pub struct RadianceCacheSettings {
     /// a, the spatial accuracy of Ward's weight (§3, Eq. 2–3): a record is used at a
@@ -59,6 +69,7 @@ pub struct RadianceCacheSettings {
     /// of irradiance between the record and the point (WRC88), so a = 0.2 admits points
     /// where that first-order change is at most 20 %, which the gradients of Eq. 4 then
     /// correct to first order; normals up to 11.5° apart; spheres of influence of R_k/5.
+    #[setting(default = 0.2, range = "(0, 1]")]
     pub accuracy: f32,
     /// Smallest R_k (harmonic mean distance, §3), as a fraction of the scene's
     /// bounding-box diagonal. Near corners and contacts R_k tends to zero and Ward's
@@ -67,6 +78,7 @@ pub struct RadianceCacheSettings {
     /// gradient. Lower: finer indirect detail in corners, at the cost of more records
     /// there. In (0, 1], at most `r_max_fraction`; default 0.01 (3.5 cm in the 2 m
     /// cube-in-box).
+    #[setting(default = 0.01, range = "(0, 1]")]
     pub r_min_fraction: f32,
     /// Largest R_k, as a fraction of the scene's bounding-box diagonal. Where most
     /// gather rays escape (open scenes) R_k is unbounded and one record would serve a
@@ -75,25 +87,30 @@ pub struct RadianceCacheSettings {
     /// default 0.5: the harmonic mean distance inside a closed room is of the order of
     /// its smaller dimensions, below half its diagonal (tested at the floor centre of
     /// the cube-in-box), so the clamp binds mostly where rays escape.
+    #[setting(default = 0.5, range = "(0, 10]")]
     pub r_max_fraction: f32,
     /// Also clamp R_k to E/|∇_p E| (the smallest over channels; Křivánek et al. 2006,
     /// beyond the paper): the translation term of Eq. 4 then changes a record's value by
     /// at most the fraction a within its sphere, so extrapolation stays positive where
     /// indirect light changes fast (indirect shadow edges) although the geometry is far.
     /// True costs more records along such edges. Default true.
+    #[setting(default = true)]
     pub gradient_limit: bool,
     /// Strata of the hemisphere grid in θ (cosine-weighted: each stratum has the same
     /// projected solid angle), §6: 64. Rays per record = `theta_strata × phi_strata`.
     /// Higher: less noise per record and finer gradients, at a cost linear in the rays.
     /// 2–1024, default 64.
+    #[setting(default = 64, range = "2–1024")]
     pub theta_strata: u32,
     /// Strata of the hemisphere grid in φ, §6: 64. 3–1024, default 64.
+    #[setting(default = 64, range = "3–1024")]
     pub phi_strata: u32,
     /// a^t, the temporal accuracy (§4.2, Eq. 10): a record made at t₀ stays valid while
     /// |τ − 1|·(t − t₀) ≤ a^t, τ = E₁/E₀ its irradiance's change over one frame. Its
     /// lifespan is 1 + min(⌊a^t/|τ − 1|⌋, δt_max − 1) frames. Unitless, in (0, 1].
     /// Lower: shorter lifespans (more records computed), less lag behind changing light.
     /// Default 0.05 (§6).
+    #[setting(default = 0.05, range = "(0, 1]")]
     pub temporal_accuracy: f32,
     /// δt_max, the longest lifespan in frames (§4.2, Eq. 12), even for records whose
     /// irradiance does not change: a change that a record's rays do not yet see (an
@@ -103,6 +120,7 @@ pub struct RadianceCacheSettings {
     /// world last changed (camera moves aside) do not age, so a still world stops
     /// computing records and settles; records made before a change still expire within
     /// δt_max frames of it.
+    #[setting(default = 20, range = "1–100 000")]
     pub max_age_frames: u32,
     /// How records follow time. Default [`TemporalMode::Interpolated`] (the paper's
     /// choice). `extrapolated` and `interpolated` need the frames known in advance (a
@@ -110,6 +128,7 @@ pub struct RadianceCacheSettings {
     /// they come; `per_frame` and `reuse` run anywhere (in real time every change is a
     /// surprise, so `reuse` then lives on δt_max, surprise expiry and the ageless records
     /// of a still world, [`max_age_frames`](Self::max_age_frames)).
+    #[setting(default = TemporalMode::Interpolated)]
     pub temporal: TemporalMode,
     /// Surfaces that are not exactly Lambertian and whose perceptual roughness is at or
     /// below this are glossy: their specular lobe is shaded from radiance records
@@ -121,12 +140,14 @@ pub struct RadianceCacheSettings {
     /// small part of what they reflect) but not for metals at any roughness
     /// (`BENCHMARKS.md`, radiance_cache). In [0, 1], at least `traced_roughness_max`;
     /// default 1: every non-Lambertian surface keeps its lobe.
+    #[setting(default = 1.0, range = "[0, 1]")]
     pub glossy_roughness_max: f32,
     /// Order n of the hemispherical harmonics of radiance records (bands 0..n, n²
     /// coefficients per colour channel). The paper gives none. Higher: sharper lobes
     /// served by records (see `traced_roughness_max`), at the cost of memory (n² RGB
     /// coefficients and their gradients per record) and shading time (n² per record
     /// and pixel). 1–16, default 8.
+    #[setting(default = 8, range = "1–16")]
     pub hsh_order: u32,
     /// Glossy lobes of surfaces smoother than this are too sharp for `hsh_order`: their
     /// specular part is traced per pixel (with `continue_path`) instead of read from
@@ -134,30 +155,36 @@ pub struct RadianceCacheSettings {
     /// roughness (in steps of 0.05) whose BRDF×cos lobe order 8 represents within 10 %
     /// (relative L²) for views up to 45° off the normal, for a white metal (the
     /// sharpest lobe at a roughness; tested in `tests/hsh.rs`).
+    #[setting(default = 0.5, range = "[0, glossy_roughness_max]")]
     pub traced_roughness_max: f32,
     /// Rays per pixel for the specular part of glossy surfaces smoother than
     /// `traced_roughness_max` (drawn from the BRDF, each bringing back `continue_path`'s
     /// reflected light; the same random numbers for a pixel in every frame, so a still
     /// scene does not flicker). Higher: less noise in sharp glossy reflections, at a cost
     /// linear in it (one path per ray). 1–4096, default 16.
+    #[setting(default = 16, range = "1–4096")]
     pub traced_rays: u32,
     /// Largest number of 3×3 averaging passes that fill the holes of a reprojected
     /// next-frame grid (§4.3, Fig. 8); cells still empty after them take the grid's mean.
     /// Higher: holes filled from nearer cells only, at a cost per pass. 1–4096,
     /// default 64 (the grid's side).
+    #[setting(default = 64, range = "1–4096")]
     pub hole_fill_max_passes: u32,
     /// Beyond the paper: an expired record is replaced only where a surface facing its
     /// normal still lies at its position (else it is deleted), so records on objects
     /// that moved away do not float in the air. Default true.
+    #[setting(default = true)]
     pub replace_only_on_surface: bool,
     /// Beyond the paper: a replacement traces its predecessor's directions with its
     /// random numbers, so E_l − E_k (Eq. 21) measures change, not noise. Default true.
+    #[setting(default = true)]
     pub reuse_directions: bool,
     /// Beyond the paper: a change not on the timeline (an edit, a frame off the
     /// timeline) expires the records on the changed instance and those whose rays hit
     /// it (a moved, added or removed instance), or every record (a light, sky or
     /// material change). False: such records live out their lifespan (ghosts). Default
     /// true. Changes on the timeline expire nothing: τ and the lifespans handle them.
+    #[setting(default = true)]
     pub expire_on_surprise: bool,
     /// §7's future work, beyond the paper: a new record (or replacement) whose lifespan
     /// is shorter than `max_age_frames` ends the lives of the records usable at its
@@ -165,10 +192,12 @@ pub struct RadianceCacheSettings {
     /// ages its neighbours too. True: fewer ghosts next to changes a record's own rays
     /// did not see, at the cost of more replacements. Default false (the paper's
     /// behaviour).
+    #[setting(default = false)]
     pub neighbour_aging: bool,
     /// §5, Fig. 9: an expired record that no pixel of its last frame used is deleted
     /// instead of replaced (the paper reports −25–30 % storage, −20–30 % time). False:
     /// every expired record is replaced. Default true.
+    #[setting(default = true)]
     pub deletion: bool,
     /// Most records a frame computes (new records and replacements; pass 1 of
     /// `interpolated` and the planned records pass 2 admits are not counted), the
@@ -181,31 +210,31 @@ pub struct RadianceCacheSettings {
     /// irradiance of neighbouring pixels on the same surface (image-space fill). Lower:
     /// bounded frame times, at the cost of coarser indirect light for as many frames as
     /// the backlog takes to clear. Records per frame.
+    #[setting(default = 0, per_frame)]
     pub records_per_frame_max: u64,
     /// A diagnostic view, not a tuning setting (the paper's Fig. 1c): the indirect image
     /// also shows each live record the camera sees as one pixel at its position,
     /// coloured by its lifespan from red (1 frame) to green (`max_age_frames`), at 8 ×
     /// the image's mean luminance. `--set radiance_cache.show_records=true`. Default
     /// false.
+    #[setting(default = false)]
     pub show_records: bool,
     /// Reflections after which Russian roulette may end a gather ray's path
     /// (`continue_path`). Lower: faster, noisier records (still unbiased). Default 3.
+    #[setting(default = 3)]
     pub rr_start_depth: u32,
     /// Hard limit on a gather ray's reflections, a safety net behind Russian roulette.
     /// At least 1; default 1024.
+    #[setting(default = 1024)]
     pub max_depth: u32,
     /// Seed of the gather rays' jitter and paths: the same seed gives the same records,
     /// whatever the thread count. Default 0.
+    #[setting(default = 0)]
     pub seed: u64,
     /// Set by `--realtime` pacing ([`TechniqueSettings::pace`]), not a setting.
     #[serde(skip)]
+    #[setting(default = false)]
     pub paced_real_time: bool,
-}
-
-impl Default for RadianceCacheSettings {
-    fn default() -> Self {
-        Self::paper()
-    }
 }
 
 /// The largest grid side accepted (`theta_strata`, `phi_strata`): 1024² rays per record.
@@ -216,6 +245,10 @@ impl TechniqueSettings for RadianceCacheSettings {
     /// Records computed in a frame (new records and replacements); [`Budget::work`]
     /// caps them (see [`RadianceCacheSettings::records_per_frame_max`]).
     const WORK_UNIT: &'static str = "records";
+
+    fn check(&self) -> Result<(), illume_transport::TechniqueError> {
+        Ok(self.validate()?)
+    }
 
     fn presets() -> &'static [(&'static str, &'static str)] {
         RadianceCacheSettings::presets()
@@ -274,33 +307,7 @@ impl RadianceCacheSettings {
     /// The paper's values (§6) and the reasoned choices where it gives none: the
     /// default.
     pub fn paper() -> Self {
-        Self {
-            accuracy: 0.2,
-            r_min_fraction: 0.01,
-            r_max_fraction: 0.5,
-            gradient_limit: true,
-            theta_strata: 64,
-            phi_strata: 64,
-            temporal_accuracy: 0.05,
-            max_age_frames: 20,
-            temporal: TemporalMode::Interpolated,
-            glossy_roughness_max: 1.0,
-            hsh_order: 8,
-            traced_roughness_max: 0.5,
-            traced_rays: 16,
-            hole_fill_max_passes: 64,
-            replace_only_on_surface: true,
-            reuse_directions: true,
-            expire_on_surprise: true,
-            neighbour_aging: false,
-            deletion: true,
-            records_per_frame_max: 0,
-            show_records: false,
-            rr_start_depth: 3,
-            max_depth: 1024,
-            seed: 0,
-            paced_real_time: false,
-        }
+        Self::default()
     }
 
     /// The preset for `render`'s stills: the defaults in `per_frame` mode (one frame: the
@@ -496,12 +503,3 @@ impl RadianceCacheSettings {
         Ok(())
     }
 }
-
-/// This file's text: the field docs of [`RadianceCacheSettings`] are the settings' documentation in
-/// tools that show them (`illume_engine::settings_doc`, the viewer's tooltips).
-pub const SOURCE: &str = include_str!("settings.rs");
-
-/// Fields read through the frame budget ([`TechniqueSettings::default_budget`]), not
-/// when the technique is built: a change applies to a running technique without a
-/// rebuild. Every other field rebuilds it.
-pub const PER_FRAME_FIELDS: &[&str] = &["records_per_frame_max"];

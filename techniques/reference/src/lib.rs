@@ -51,3 +51,62 @@ pub use state::ReferenceTechnique;
 
 /// The technique's one name: CLI value, settings table, counter and error prefix.
 pub const NAME: &str = "reference";
+
+/// The reference's registration: how the engine, the CLI and the window know it.
+pub struct Descriptor;
+
+impl illume_transport::Registration for Descriptor {
+    type Settings = ReferenceSettings;
+    const SUMMARY: &'static str = "the reference path tracer (NEE + MIS): ground truth";
+    const FRAME_HISTORY: illume_transport::FrameHistory =
+        illume_transport::FrameHistory::RestartsOnChange;
+    const NEEDS_TIMELINE: bool = false;
+    // Another seed of the same estimator, 512 spp: only noise separates the two.
+    const AGREEMENT: illume_transport::Agreement =
+        illume_transport::Agreement::CornellSpot(illume_transport::AgreementSpec {
+            sets: &["reference.spp_per_frame=256", "reference.seed=77"],
+            frames: 2,
+            max_energy_error: 0.02,
+            max_block_error: 0.06,
+            why: "another seed of the same estimator, 512 spp: only noise separates the two; \
+                  the reference's own block noise at 512 spp is ≈ 0.02 (two independent \
+                  halves, photon_stream/tests/reference.rs), its energy noise well below 1 %",
+        });
+    const STILL: Option<illume_transport::StillFn<ReferenceSettings>> = Some(still);
+
+    fn build(
+        _world: &illume_transport::SharedWorld,
+        settings: &ReferenceSettings,
+        _timeline: &illume_scene::Timeline,
+    ) -> Result<Box<dyn illume_transport::Technique>, illume_transport::TechniqueError> {
+        Ok(Box::new(ReferenceTechnique::new(settings.clone())?))
+    }
+}
+
+/// The whole image by path tracing ([`ReferenceRenderer`], `spp` samples per pixel,
+/// progress per chunk of samples).
+fn still(
+    scene: illume_scene::Scene,
+    settings: &ReferenceSettings,
+    (width, height): (u32, u32),
+    progress: &mut dyn illume_core::Progress,
+) -> Result<illume_transport::StillImages, illume_transport::TechniqueError> {
+    let world = illume_transport::World::new(scene);
+    let mut r = ReferenceRenderer::new(settings.clone(), width, height);
+    let spp = settings.spp;
+    progress.begin("path tracing", spp as u64);
+    // Chunks of samples keep the bar moving and the work parallel over pixels; the
+    // image does not depend on the chunking.
+    let chunk = (spp / 32).max(1);
+    while r.samples() < spp {
+        r.add_samples(&world, chunk.min(spp - r.samples()));
+        progress.set(r.samples() as u64);
+    }
+    progress.end();
+    let i = r.images();
+    Ok(illume_transport::StillImages {
+        full: i.full,
+        direct: i.direct,
+        indirect: i.indirect,
+    })
+}

@@ -4,38 +4,33 @@ use illume_transport::{Budget, Pacing, TechniqueSettings};
 
 /// Reference path tracer settings (`[reference]` table). The image size is the
 /// renderer's (`[render]`), not the technique's.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize, illume_settings_derive::Settings,
+)]
 #[serde(deny_unknown_fields, default)]
 pub struct ReferenceSettings {
     /// Samples per pixel of a full-image render ([`ReferenceRenderer`](crate::ReferenceRenderer),
     /// `illume render --technique reference`). Noise falls as 1/√spp, time grows
     /// linearly. Default 256.
+    #[setting(default = 256)]
     pub spp: u32,
     /// Samples per pixel a [`ReferenceTechnique`](crate::ReferenceTechnique) adds each
     /// frame when the frame loop's budget does not say (indirect-only, progressive while
     /// the scene is static). Higher: faster convergence per frame, slower frames.
     /// Default 4.
+    #[setting(default = 4, per_frame)]
     pub spp_per_frame: u32,
     /// Bounces before Russian roulette may end a path. Lower: faster, noisier deep
     /// paths (still unbiased). Default 3.
+    #[setting(default = 3)]
     pub rr_start_depth: u32,
     /// Hard limit on bounces, a safety net (Russian roulette ends paths long before in
     /// any scene with albedo < 1). Default 1024.
+    #[setting(default = 1024)]
     pub max_depth: u32,
     /// Seed; the same seed gives the same image, bit for bit. Default 0.
+    #[setting(default = 0)]
     pub seed: u64,
-}
-
-impl Default for ReferenceSettings {
-    fn default() -> Self {
-        Self {
-            spp: 256,
-            spp_per_frame: 4,
-            rr_start_depth: 3,
-            max_depth: 1024,
-            seed: 0,
-        }
-    }
 }
 
 impl ReferenceSettings {
@@ -63,6 +58,10 @@ impl ReferenceSettings {
 impl TechniqueSettings for ReferenceSettings {
     const NAME: &'static str = crate::NAME;
     const WORK_UNIT: &'static str = "samples per pixel";
+
+    fn check(&self) -> Result<(), illume_transport::TechniqueError> {
+        Ok(self.validate()?)
+    }
 
     fn presets() -> &'static [(&'static str, &'static str)] {
         &[
@@ -132,12 +131,3 @@ impl ReferenceSettings {
         }
     }
 }
-
-/// This file's text: the field docs of [`ReferenceSettings`] are the settings' documentation in
-/// tools that show them (`illume_engine::settings_doc`, the viewer's tooltips).
-pub const SOURCE: &str = include_str!("settings.rs");
-
-/// Fields read through the frame budget ([`TechniqueSettings::default_budget`]), not
-/// when the technique is built: a change applies to a running technique without a
-/// rebuild. Every other field rebuilds it.
-pub const PER_FRAME_FIELDS: &[&str] = &["spp_per_frame"];

@@ -6,7 +6,17 @@ use illume_transport::{Budget, Pacing, TechniqueSettings};
 use serde::{Deserialize, Serialize};
 
 /// The order in which stale photon groups are re-traced.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    Default,
+    illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum GroupOrder {
     /// §5.3: the stale group with the highest V·P (pilot hits on changed objects, times
@@ -20,7 +30,17 @@ pub enum GroupOrder {
 }
 
 /// How the simulation is paced.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Serialize,
+    Deserialize,
+    Default,
+    illume_settings_derive::SettingValues,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum SelectiveMode {
     /// The paper's parallel thread (§6: "both parts run in parallel"): one long-lived
@@ -41,7 +61,7 @@ pub enum SelectiveMode {
 }
 
 /// Selective photon tracing settings.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, illume_settings_derive::Settings)]
 #[serde(deny_unknown_fields, default)]
 pub struct SelectiveSettings {
     /// N_g as `[base, exponent]` pairs, N_g = Π base^exponent (§4.2 Eq. 5): corrective
@@ -54,34 +74,42 @@ pub struct SelectiveSettings {
     /// until every photon is current). Empty (default): 2^(3+⌈log₂ L⌉)·3² for L lights,
     /// an emissive object counting as one (§7: 4 lights → 288, 2 → 144). `[[2, 5], [3,
     /// 2], [5, 1], [7, 1]]` (10 080) also keeps the first bounce coherent (Fig. 5).
+    #[setting(default = Vec::new())]
     pub group_factors: Vec<[u32; 2]>,
     /// N_p, pilot photons per group (§5.1). Pilots sample the whole photon space and
     /// find the groups a change concerns; higher: a more reliable priority, at the cost
     /// of photons shot in no particular order. ≥ 2, default 250 (§7, ROOM).
+    #[setting(default = 250, range = "≥ 2")]
     pub pilots_per_group: u32,
     /// R, photons per group over pilots per group (§5.1): pool size N = N_g·N_p·R,
     /// 1/R of it pilots. The paper finds 16 (6.25 % pilots) near optimal and 32 not
     /// robust (Fig. 7). ≥ 2, default 16.
+    #[setting(default = 16, range = "≥ 2")]
     pub ratio: u32,
     /// Mesh elements to bucket photons in, about (§1, §3): each triangle is split into
     /// a k×k barycentric grid of equal sub-triangles, k chosen by its area, at least one
     /// element per triangle. Higher: sharper indirect light, at the cost of more noise
     /// per element (photons are shared among more buckets) and memory (48 B per
     /// element side pair). Default 12 400 (§7, ROOM).
+    #[setting(default = 12_400)]
     pub element_count: u32,
     /// Element-grid vertices of one object within this angle of each other's face
     /// normal \[degrees\] are one display vertex (Gouraud smoothing across triangles,
     /// §6). Higher: smoother across creases, at the cost of light bleeding around
     /// corners. 0–180, default 45.
+    #[setting(default = 45.0, unit = "degrees", range = "0–180")]
     pub smoothing_angle_deg: f32,
     /// Order of re-tracing stale groups (§5.3). Default [`GroupOrder::Priority`].
+    #[setting(default = GroupOrder::Priority)]
     pub order: GroupOrder,
     /// Pilot photons shot since the last camera move before the view-frustum factor V
     /// counts (§5.3, "sufficient for its robust estimate"); until then V = 1. Higher:
     /// a steadier V, at the cost of a longer time blind to the view. Default 2000.
+    #[setting(default = 2000)]
     pub visibility_min_pilots: u32,
     /// Priority given to the view frustum (§5.3): a stale group's V is 1 + this ×
     /// (its pilot hits in the frustum) / (its pilots shot). 0 ignores the view. Default 4.
+    #[setting(default = 4.0)]
     pub visibility_weight: f32,
     /// Fraction of the scene's power carried by changed lights above which a light
     /// change restarts the solution (photons in index order, shown normalised by the
@@ -89,10 +117,12 @@ pub struct SelectiveSettings {
     /// and positive energy, which costs twice a fresh trace (beyond the paper, which
     /// supports no light changes). In [0, 1]; 0 restarts on any light change, 1 never
     /// restarts. Default 0.5: moving the only light restarts.
+    #[setting(default = 0.5, range = "[0, 1]")]
     pub restart_fraction: f32,
     /// Pacing: a background thread, a wall-clock budget per frame, or photons per
     /// frame. Default [`SelectiveMode::Streaming`] (`animate --realtime` also picks it;
     /// `--work-per-frame` picks [`SelectiveMode::Deterministic`]).
+    #[setting(default = SelectiveMode::Streaming)]
     pub mode: SelectiveMode,
     /// Wall-clock budget for re-tracing between two frames in [`SelectiveMode::Timed`]
     /// (and in [`SelectiveMode::Streaming`] when no thread runs the solution, e.g.
@@ -100,10 +130,12 @@ pub struct SelectiveSettings {
     /// none \[ms\]. Higher: faster recovery after a change, at
     /// the cost of frame rate. Groups are atomic, so a frame may overrun by one group.
     /// Default 25.
+    #[setting(default = 25.0, unit = "ms", per_frame)]
     pub frame_budget_ms: f64,
     /// Photons traced between two frames in [`SelectiveMode::Deterministic`] when the
     /// frame loop's budget does not say (whole groups, so a frame may overrun by one
     /// group). Default 100 000.
+    #[setting(default = 100_000, per_frame)]
     pub photons_per_frame: u64,
     /// Beyond the paper: while nothing is stale (a static scene), the pool grows by
     /// rounds of N_p correctives per group (R + 1 each round, so groups keep their
@@ -112,16 +144,20 @@ pub struct SelectiveSettings {
     /// the cost of a longer update after the next change (every group holds more
     /// photons to re-trace) and a slower restart. 0 (default) or at most N_g·N_p·R:
     /// the pool stays at N_g·N_p·R, as in the paper.
+    #[setting(default = 0)]
     pub max_photons: u64,
     /// Trace the whole pool before the first frame. False: frames start dark and
     /// brighten as photons are traced in index order (shown normalised by the photons
     /// traced). Default true.
+    #[setting(default = true)]
     pub warm_up: bool,
     /// Longest photon path in bounces, a safety net behind Russian roulette. Default 32.
+    #[setting(default = 32)]
     pub max_bounces: u32,
     /// Photons read base-colour textures through box-filtered copies (see
     /// `photon_stream.filtered_textures`): element buckets are far larger than a
     /// filtered texel. Default true.
+    #[setting(default = true)]
     pub filtered_textures: bool,
     /// Visual masking of lighting patterns by textures (§5.3): a pilot hit on a textured
     /// surface raises its group's P by Δp/T_e instead of Δp = 1, T_e ≥ 1 the threshold
@@ -132,6 +168,7 @@ pub struct SelectiveSettings {
     /// passes over each base-colour texture's texels) and a table lookup per pilot hit.
     /// False: every pilot hit counts Δp = 1. Only the order of re-tracing depends on
     /// it, never the converged solution. Default true.
+    #[setting(default = true)]
     pub texture_masking: bool,
     /// Luminance contrast of a lighting artefact just visible on an untextured surface
     /// (the inverse of contrast sensitivity), for `texture_masking` (§5.3): texture
@@ -140,35 +177,11 @@ pub struct SelectiveSettings {
     /// observer against whom textures mask more, so changes on textured surfaces wait
     /// longer behind those on plain ones; higher: less masking. Unitless, in (0, 1];
     /// default 0.01 (1 %, about the Weber fraction of photopic vision).
+    #[setting(default = 0.01, range = "(0, 1]")]
     pub masking_contrast_threshold: f32,
     /// Seed of the Halton digit scrambling (scrambling keeps Eq. 3). Default 0.
+    #[setting(default = 0)]
     pub seed: u64,
-}
-
-impl Default for SelectiveSettings {
-    fn default() -> Self {
-        Self {
-            group_factors: Vec::new(),
-            pilots_per_group: 250,
-            ratio: 16,
-            element_count: 12_400,
-            smoothing_angle_deg: 45.0,
-            order: GroupOrder::Priority,
-            visibility_min_pilots: 2000,
-            visibility_weight: 4.0,
-            restart_fraction: 0.5,
-            mode: SelectiveMode::Streaming,
-            frame_budget_ms: 25.0,
-            photons_per_frame: 100_000,
-            max_photons: 0,
-            warm_up: true,
-            max_bounces: 32,
-            filtered_textures: true,
-            texture_masking: true,
-            masking_contrast_threshold: 0.01,
-            seed: 0,
-        }
-    }
 }
 
 /// Largest N_g accepted (2²⁰): group bookkeeping is per group, and larger N_g leave
@@ -318,6 +331,10 @@ impl TechniqueSettings for SelectiveSettings {
     const NAME: &'static str = crate::NAME;
     const WORK_UNIT: &'static str = "photons";
 
+    fn check(&self) -> Result<(), illume_transport::TechniqueError> {
+        Ok(self.validate()?)
+    }
+
     fn presets() -> &'static [(&'static str, &'static str)] {
         &[
             (
@@ -376,15 +393,6 @@ impl TechniqueSettings for SelectiveSettings {
         self.seed = seed;
     }
 }
-
-/// This file's text: the field docs of [`SelectiveSettings`] are the settings' documentation in
-/// tools that show them (`illume_engine::settings_doc`, the viewer's tooltips).
-pub const SOURCE: &str = include_str!("settings.rs");
-
-/// Fields read through the frame budget ([`TechniqueSettings::default_budget`]), not
-/// when the technique is built: a change applies to a running technique without a
-/// rebuild. Every other field rebuilds it.
-pub const PER_FRAME_FIELDS: &[&str] = &["frame_budget_ms", "photons_per_frame"];
 
 #[cfg(test)]
 mod tests {
