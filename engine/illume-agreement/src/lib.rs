@@ -5,9 +5,11 @@
 //! On failure the test, reference and difference images are written as EXR and named in
 //! the message.
 //!
-//! A technique joins with one test in its own folder (`tests/NAME/agreement.rs`): an
-//! [`Agreement`] — the settings that make it converge, its tolerance and why — passed to
-//! [`assert_agrees`] with the lightings to compare under:
+//! A technique states the settings that make it converge, its tolerance and why once, in
+//! its registration ([`Registration::AGREEMENT`], its `lib.rs`), and joins with one test
+//! in its own folder (`tests/NAME/agreement.rs`) that passes
+//! [`Agreement::registered`] to [`assert_agrees`] with the lightings to compare under.
+//! A variant (another preset, a tighter bound) is an [`Agreement`] built by hand:
 //!
 //! ```no_run
 //! use illume_agreement::{Agreement, Lighting, assert_agrees};
@@ -23,13 +25,11 @@
 //! };
 //! assert_agrees(&agreement, &Lighting::ALL, std::env::temp_dir());
 //! ```
-//!
-//! The input is a plain struct, so a technique's registration descriptor can carry it as
-//! well as a test can write it.
 
 use illume_core::Silent;
 use illume_core::image::{RgbImage, write_exr};
 use illume_engine::{Config, ConfigLayers, Engine, TechniqueKind};
+use illume_transport::{Agreement as RegisteredAgreement, Registration, TechniqueSettings};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
@@ -63,6 +63,27 @@ pub struct Agreement {
 }
 
 impl Agreement {
+    /// The agreement a technique registers ([`Registration::AGREEMENT`]): the tolerance
+    /// and its reason live once, in the technique's own `lib.rs`. Panics, naming the
+    /// technique, when it registers its check as made elsewhere.
+    pub fn registered<R: Registration>() -> Self {
+        let name = <R::Settings as TechniqueSettings>::NAME;
+        match R::AGREEMENT {
+            RegisteredAgreement::CornellSpot(spec) => Self {
+                technique: name.into(),
+                preset: None,
+                sets: spec.sets.iter().map(|s| (*s).to_owned()).collect(),
+                frames: spec.frames,
+                max_energy_error: spec.max_energy_error,
+                max_block_error: spec.max_block_error,
+                why: spec.why.into(),
+            },
+            RegisteredAgreement::Elsewhere(why) => {
+                panic!("{name} registers its agreement as checked elsewhere: {why}")
+            }
+        }
+    }
+
     /// The name the images of this comparison are written under (before the lighting's
     /// suffix): the technique, and the preset when there is one.
     pub fn name(&self) -> String {

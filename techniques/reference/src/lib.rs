@@ -70,7 +70,7 @@ impl illume_transport::Registration for Descriptor {
             max_block_error: 0.06,
             why: "another seed of the same estimator, 512 spp: only noise separates the two; \
                   the reference's own block noise at 512 spp is ≈ 0.02 (two independent \
-                  halves, photon_stream/tests/reference.rs), its energy noise well below 1 %",
+                  halves, photon_stream's tests/photon_stream/reference.rs), its energy noise well below 1 %",
         });
     const STILL: Option<illume_transport::StillFn<ReferenceSettings>> = Some(still);
 

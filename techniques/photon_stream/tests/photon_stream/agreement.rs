@@ -1,32 +1,16 @@
 //! photon_stream's converged indirect light against the reference's through the engine
-//! (`illume_agreement`) on `builtin:cornell-spot`, with and without a sky.
+//! (`illume_agreement`) on `builtin:cornell-spot`, with and without a sky, within the
+//! tolerance its registration states (`src/lib.rs`).
 
 use illume_agreement::{Agreement, Lighting, assert_agrees};
 
-/// The paper's settings, converged: a million pooled photons.
-fn agreement() -> Agreement {
-    Agreement {
-        technique: illume_photon_stream::NAME.into(),
-        preset: None,
-        sets: vec![
-            "photon_stream.mode=deterministic".into(),
-            "photon_stream.pool_size=1000000".into(),
-            "photon_stream.photons_per_frame=400000".into(),
-            "photon_stream.warm_up=false".into(),
-        ],
-        frames: 1,
-        max_energy_error: 0.15,
-        max_block_error: 0.32,
-        why: "the paper's approximations are biased (100 VSLs for 27 m² of surface, one \
-              normal per VSL, no VSL visibility: over-illumination behind occluders); \
-              measured +6 % energy and 0.25 block error (docs/techniques/photon_stream.md)"
-            .into(),
-    }
-}
-
 #[test]
 fn converged_light_agrees_with_the_reference_with_and_without_a_sky() {
-    assert_agrees(&agreement(), &Lighting::ALL, env!("CARGO_TARGET_TMPDIR"));
+    assert_agrees(
+        &Agreement::registered::<illume_photon_stream::Descriptor>(),
+        &Lighting::ALL,
+        env!("CARGO_TARGET_TMPDIR"),
+    );
 }
 
 /// photon_stream's `still` preset (`illume render`'s default: the whole indirect light
