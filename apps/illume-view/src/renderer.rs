@@ -506,17 +506,14 @@ impl State {
         true
     }
 
-    /// `TABLE.KEY=VALUE` through the configuration's own layering (typed, unknown keys
-    /// refused), then a rebuild.
+    /// `TABLE.KEY=VALUE` over the current configuration (typed, unknown keys refused, the
+    /// same checks as `--set`), then a rebuild. The renderer's table stays the window's.
     fn set(&mut self, kv: &str) {
-        let layers = illume_engine::ConfigLayers {
-            technique: Some(self.config.technique),
-            file: None,
-            preset: None,
-            sets: &[kv.to_owned()],
-        };
-        // Re-layer the one setting over the current configuration, through its TOML.
-        match config_with_set(&self.config, &layers) {
+        let with_set = self.config.with_set(kv).map(|mut c| {
+            c.render = self.config.render.clone();
+            c
+        });
+        match with_set {
             Ok(c) => {
                 let applies = setting_applies(self.config.technique, kv);
                 self.config = c;
@@ -903,27 +900,6 @@ fn settings_toml(config: &Config) -> String {
         .get(config.technique.name())
         .and_then(|t| toml::to_string_pretty(t).ok())
         .unwrap_or_default()
-}
-
-/// `config` with one more `--set` layer.
-fn config_with_set(
-    config: &Config,
-    layers: &illume_engine::ConfigLayers<'_>,
-) -> Result<Config, String> {
-    let text = toml::to_string(config).map_err(|e| e.to_string())?;
-    let dir = std::env::temp_dir().join(format!("illume-view-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
-    let path = dir.join("current.toml");
-    std::fs::write(&path, text).map_err(|e| e.to_string())?;
-    let c = Config::layered(&illume_engine::ConfigLayers {
-        file: Some(&path),
-        ..*layers
-    })
-    .map_err(|e| e.to_string());
-    let _ = std::fs::remove_dir_all(&dir);
-    let mut c = c?;
-    c.render = config.render.clone();
-    Ok(c)
 }
 
 /// Technique left of `split` (fraction of the width), reference right of it.

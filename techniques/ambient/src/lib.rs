@@ -15,10 +15,12 @@
 //! |---|---|
 //! | the constant term ([`Technique`](illume_transport::Technique)) | [`state`] |
 //! | settings | [`settings`] |
+//! | scene changes (nothing to invalidate) | [`update`] |
 
 pub mod error;
 pub mod settings;
 pub mod state;
+pub mod update;
 
 pub use error::AmbientError;
 pub use settings::AmbientSettings;

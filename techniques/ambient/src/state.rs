@@ -27,8 +27,8 @@ impl Technique for Ambient {
         crate::NAME
     }
 
-    fn scene_changed(&mut self, _world: &World, _changes: &[SceneChange]) -> ChangeResponse {
-        ChangeResponse::Updated
+    fn scene_changed(&mut self, _world: &World, changes: &[SceneChange]) -> ChangeResponse {
+        crate::update::respond(changes)
     }
 
     fn advance(&mut self, _world: &World, _budget: &Budget) {}
