@@ -3,7 +3,7 @@
 //! with this app as its [`OfflineHost`]. No technique is named here.
 
 use illume_engine::{Config, ConfigLayers, TechniqueKind};
-use illume_transport::{OfflineError, OfflineHost, OfflineProgress};
+use illume_transport::{OfflineError, OfflineHost, OfflineProgress, OfflineSettings};
 
 /// `cli` with every registered technique's offline command mounted, after the app's own
 /// commands in `--help`.
@@ -33,17 +33,17 @@ struct Host {
 }
 
 impl OfflineHost for Host {
-    fn settings(
-        &self,
-        sets: &[String],
-    ) -> Result<(Box<dyn std::any::Any>, (u32, u32)), OfflineError> {
+    fn settings(&self, sets: &[String]) -> Result<OfflineSettings, OfflineError> {
         let config = Config::layered(&ConfigLayers {
             technique: Some(self.kind),
             sets,
             ..Default::default()
         })?;
-        let size = (config.render.width, config.render.height);
-        Ok((config.into_settings(self.kind), size))
+        let image_size = (config.render.width, config.render.height);
+        Ok(OfflineSettings {
+            settings: config.into_settings(self.kind),
+            image_size,
+        })
     }
 
     fn load_scene(&self, path: &std::path::Path) -> Result<illume_scene::Scene, OfflineError> {

@@ -46,7 +46,8 @@ pub use raster::VisibilityBuffer;
 pub use surface::SurfaceHit;
 pub use technique::{
     Agreement, AgreementSpec, Applies, Budget, ChangeResponse, FrameHistory, OfflineCommand,
-    OfflineError, OfflineHost, OfflineProgress, Pacing, Registration, SettingField, SettingValues,
-    SettingsTable, StillFn, StillImages, Technique, TechniqueError, TechniqueSettings,
+    OfflineError, OfflineHost, OfflineProgress, OfflineSettings, Pacing, Registration,
+    SettingField, SettingValues, SettingsTable, StillFn, StillImages, Technique, TechniqueError,
+    TechniqueSettings,
 };
 pub use world::{SharedWorld, World};

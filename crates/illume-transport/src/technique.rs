@@ -311,12 +311,8 @@ pub struct OfflineCommand {
 /// What an offline command needs of the app that mounts it.
 pub trait OfflineHost {
     /// The technique's settings after the configuration layers (defaults, then each
-    /// `--set TABLE.KEY=VALUE` of `sets`), as `Box<Registration::Settings>`, and the
-    /// `[render]` table's image size `(width, height)` [pixels].
-    fn settings(
-        &self,
-        sets: &[String],
-    ) -> Result<(Box<dyn std::any::Any>, (u32, u32)), OfflineError>;
+    /// `--set TABLE.KEY=VALUE` of `sets`) and the `[render]` table's image size.
+    fn settings(&self, sets: &[String]) -> Result<OfflineSettings, OfflineError>;
 
     /// The scene at `path` (a file or `builtin:NAME`) at time 0, loaded as the CLI loads
     /// scenes (its warnings and a slow load reported on stderr).
@@ -325,6 +321,14 @@ pub trait OfflineHost {
     /// Progress reports for long work: a spinner labelled `what` between phases, a bar
     /// per phase; [`OfflineProgress::finish`] clears them.
     fn progress(&self, what: &str) -> Box<dyn OfflineProgress>;
+}
+
+/// What [`OfflineHost::settings`] hands over.
+pub struct OfflineSettings {
+    /// The technique's settings: a `Box` of its registration's settings type.
+    pub settings: Box<dyn std::any::Any>,
+    /// The `[render]` table's image size `(width, height)` [pixels].
+    pub image_size: (u32, u32),
 }
 
 /// Progress reports that are cleared at the end ([`OfflineHost::progress`]).

@@ -220,8 +220,10 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
         .output
         .clone()
         .ok_or("illume precompute: give --output FILE")?;
-    let (settings, (render_width, render_height)) = host.settings(&a.sets)?;
-    let mut s: PrecomputedSettings = *settings
+    let configured = host.settings(&a.sets)?;
+    let (render_width, render_height) = configured.image_size;
+    let mut s: PrecomputedSettings = *configured
+        .settings
         .downcast()
         .expect("the host hands over this technique's settings");
     let width = a.width.unwrap_or(render_width);
