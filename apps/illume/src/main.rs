@@ -28,14 +28,14 @@ mod bench;
 mod compare;
 mod frames;
 mod info;
-mod precompute;
+mod offline;
 mod progress;
 mod render;
 mod setup;
 #[cfg(feature = "view")]
 mod view;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Frames allocate several images of megabytes each; the system allocator hands such
 /// blocks back to the kernel on free, and touching them again next frame costs a page
@@ -69,33 +69,43 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Run a benchmark scenario: techniques vs the converged reference, report and plots.
     Bench(bench::BenchArgs),
-    /// Precompute a day of indirect light for the technique `precomputed` (or one shard
-    /// of it with --shard K/N); `merge` shards; `info` describes a .illumepc file.
-    Precompute(precompute::PrecomputeArgs),
+    // The techniques' offline commands (`illume precompute`, …) come next: `main` mounts
+    // them from their registrations (`offline::mount`).
     /// Open a window on a scene: the engine's frames as they render, camera and scene
     /// edits, techniques and the reference one toggle away (docs/viewer.md).
     #[cfg(feature = "view")]
+    #[command(display_order = 900)]
     View(view::ViewArgs),
 }
 
 fn main() {
     default_sigpipe();
     progress::install_logger();
-    let cli = Cli::parse();
-    let result = match cli.command {
+    let matches = offline::mount(Cli::command()).get_matches();
+    let result = match matches
+        .subcommand()
+        .and_then(|(name, sub)| offline::run(name, sub))
+    {
+        Some(result) => result,
+        None => run(Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {}", error_message(&e));
+        std::process::exit(1);
+    }
+}
+
+/// Runs one of the app's own commands.
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
         Command::Render(a) => render::run(a),
         Command::Info(a) => info::run(a),
         Command::Compare(a) => compare::run(a),
         Command::Animate(a) => animate::run(a),
         Command::Demo(a) => animate::demo(a),
         Command::Bench(a) => bench::run_bench(a),
-        Command::Precompute(a) => precompute::run(a),
         #[cfg(feature = "view")]
         Command::View(a) => view::run(a),
-    };
-    if let Err(e) = result {
-        eprintln!("error: {}", error_message(&e));
-        std::process::exit(1);
     }
 }
 

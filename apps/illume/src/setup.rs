@@ -6,6 +6,7 @@ use anyhow::Result;
 use clap::Args;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use illume_core::Vec3;
+pub(crate) use illume_core::{parse_point, parse_radiance};
 use illume_engine::{Config, ConfigLayers, TechniqueKind};
 use std::path::PathBuf;
 
@@ -112,16 +113,6 @@ pub struct SetupArgs {
     pub envmap_rotation: f32,
 }
 
-/// `R,G,B` as a radiance: three finite numbers ≥ 0.
-pub(crate) fn parse_radiance(s: &str) -> Result<Vec3, String> {
-    let v =
-        parse_point(s).map_err(|_| format!("'{s}': expected three finite numbers R,G,B ≥ 0"))?;
-    if v.min_element() < 0.0 {
-        return Err(format!("'{s}': radiance must be ≥ 0"));
-    }
-    Ok(v)
-}
-
 /// How a glTF file's light intensities are read (`--units`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Units {
@@ -192,19 +183,6 @@ pub fn finite_f64(s: &str) -> Result<f64, String> {
         Ok(v) if v.is_finite() => Ok(v),
         Ok(v) => Err(format!("'{s}': {v} is not a finite number")),
         Err(e) => Err(format!("'{s}': {e}")),
-    }
-}
-
-/// `X,Y,Z` as a point.
-pub(crate) fn parse_point(s: &str) -> Result<Vec3, String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|c| c.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("'{s}': {e} (expected X,Y,Z)"))?;
-    match v[..] {
-        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(Vec3::new(x, y, z)),
-        _ => Err(format!("'{s}': expected three finite numbers X,Y,Z")),
     }
 }
 

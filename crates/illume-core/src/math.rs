@@ -277,6 +277,31 @@ pub fn transform_normal(world_from_object: &Affine3A, n: Vec3) -> Vec3 {
     Vec3::from(v).normalize_or_zero()
 }
 
+/// `X,Y,Z` as a point (a command-line value): three finite numbers, else a message
+/// quoting `s`.
+pub fn parse_point(s: &str) -> Result<Vec3, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|c| c.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("'{s}': {e} (expected X,Y,Z)"))?;
+    match v[..] {
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(Vec3::new(x, y, z)),
+        _ => Err(format!("'{s}': expected three finite numbers X,Y,Z")),
+    }
+}
+
+/// `R,G,B` as a radiance [W/(m²·sr)] (a command-line value): three finite numbers ≥ 0,
+/// else a message quoting `s`.
+pub fn parse_radiance(s: &str) -> Result<Vec3, String> {
+    let v =
+        parse_point(s).map_err(|_| format!("'{s}': expected three finite numbers R,G,B ≥ 0"))?;
+    if v.min_element() < 0.0 {
+        return Err(format!("'{s}': radiance must be ≥ 0"));
+    }
+    Ok(v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -45,7 +45,8 @@ pub use lights::{EmissionSample, LightSample, LightSet};
 pub use raster::VisibilityBuffer;
 pub use surface::SurfaceHit;
 pub use technique::{
-    Agreement, AgreementSpec, Applies, Budget, ChangeResponse, FrameHistory, Pacing, Registration,
+    Agreement, AgreementSpec, Applies, Budget, ChangeResponse, FrameHistory, OfflineCommand,
+    OfflineError, OfflineHost, OfflineProgress, OfflineSettings, Pacing, Registration,
     SettingField, SettingValues, SettingsTable, StillFn, StillImages, Technique, TechniqueError,
     TechniqueSettings,
 };

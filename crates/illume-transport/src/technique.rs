@@ -284,6 +284,57 @@ pub trait Registration: 'static {
     /// reference renders the whole image by path tracing); None: the engine runs the
     /// technique's precompute and one frame.
     const STILL: Option<StillFn<Self::Settings>> = None;
+
+    /// The technique's offline command, which the CLI mounts as `illume NAME …`
+    /// (precomputed's `illume precompute`). Default: none.
+    const OFFLINE: Option<OfflineCommand> = None;
+}
+
+/// An error of an offline command, shown to the user with its causes.
+pub type OfflineError = Box<dyn std::error::Error + Send + Sync>;
+
+/// A technique's command-line subcommand for offline work ([`Registration::OFFLINE`]).
+/// The CLI mounts [`OfflineCommand::command`] under its own command and, when the user
+/// chose it, calls [`OfflineCommand::run`] with its matches; what the command needs of
+/// the app comes through the [`OfflineHost`].
+#[derive(Clone, Copy)]
+pub struct OfflineCommand {
+    /// The subcommand's name, as typed (`precompute`).
+    pub name: &'static str,
+    /// The subcommand: its arguments, help texts and nested subcommands.
+    pub command: fn() -> clap::Command,
+    /// Runs the subcommand given the matches of [`OfflineCommand::command`]. An error
+    /// ends the process with status 1 after its message and causes.
+    pub run: fn(&clap::ArgMatches, &dyn OfflineHost) -> Result<(), OfflineError>,
+}
+
+/// What an offline command needs of the app that mounts it.
+pub trait OfflineHost {
+    /// The technique's settings after the configuration layers (defaults, then each
+    /// `--set TABLE.KEY=VALUE` of `sets`) and the `[render]` table's image size.
+    fn settings(&self, sets: &[String]) -> Result<OfflineSettings, OfflineError>;
+
+    /// The scene at `path` (a file or `builtin:NAME`) at time 0, loaded as the CLI loads
+    /// scenes (its warnings and a slow load reported on stderr).
+    fn load_scene(&self, path: &std::path::Path) -> Result<Scene, OfflineError>;
+
+    /// Progress reports for long work: a spinner labelled `what` between phases, a bar
+    /// per phase; [`OfflineProgress::finish`] clears them.
+    fn progress(&self, what: &str) -> Box<dyn OfflineProgress>;
+}
+
+/// What [`OfflineHost::settings`] hands over.
+pub struct OfflineSettings {
+    /// The technique's settings: a `Box` of its registration's settings type.
+    pub settings: Box<dyn std::any::Any>,
+    /// The `[render]` table's image size `(width, height)` [pixels].
+    pub image_size: (u32, u32),
+}
+
+/// Progress reports that are cleared at the end ([`OfflineHost::progress`]).
+pub trait OfflineProgress: illume_core::Progress {
+    /// Clears whatever is shown.
+    fn finish(&mut self);
 }
 
 /// A technique's own route to a still ([`Registration::STILL`]): the image of `scene`

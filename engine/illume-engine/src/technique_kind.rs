@@ -84,6 +84,15 @@ macro_rules! techniques {
                     $( $(#[cfg($cfg)])? TechniqueKind::$variant => &mut self.$field, )+
                 }
             }
+
+            /// The settings of technique `kind`, taken out of the configuration (a
+            /// `Box` of its registration's settings type, as an
+            /// [`illume_transport::OfflineHost`] hands them over).
+            pub fn into_settings(self, kind: TechniqueKind) -> Box<dyn std::any::Any> {
+                match kind {
+                    $( $(#[cfg($cfg)])? TechniqueKind::$variant => Box::new(self.$field), )+
+                }
+            }
         }
     };
 }
@@ -120,6 +129,7 @@ pub trait Registered: Sync {
     fn has_still(&self) -> bool;
     fn setting_fields(&self) -> &'static [illume_transport::SettingField];
     fn data_key(&self) -> Option<&'static str>;
+    fn offline(&self) -> Option<illume_transport::OfflineCommand>;
     fn still(
         &self,
         scene: Scene,
@@ -186,6 +196,9 @@ impl<R: Registration> Registered for Entry<R> {
     }
     fn data_key(&self) -> Option<&'static str> {
         R::DATA_KEY
+    }
+    fn offline(&self) -> Option<illume_transport::OfflineCommand> {
+        R::OFFLINE
     }
     fn still(
         &self,
@@ -276,6 +289,12 @@ impl TechniqueKind {
     /// (see [`TechniqueKind::settings_docs`] for the defaults beside them).
     pub fn setting_fields(self) -> &'static [illume_transport::SettingField] {
         self.registration().setting_fields()
+    }
+
+    /// The technique's offline command, mounted by the CLI as `illume NAME …`
+    /// ([`Registration::OFFLINE`]).
+    pub fn offline(self) -> Option<illume_transport::OfflineCommand> {
+        self.registration().offline()
     }
 
     /// True when the technique renders a still by its own route

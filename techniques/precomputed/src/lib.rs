@@ -19,6 +19,8 @@
 //!   (`--level L`), and the merge; bit for bit the unsharded file;
 //! - [`domain`]: where keys live (`screen`, `cube`, `atlas`) and how each renders them;
 //! - [`atlas`]: the `atlas` domain's lightmap coordinates and probe grid.
+//! - [`cli`]: `illume precompute` (render keys, `merge`, `info`), the registration's
+//!   offline command that the CLI mounts;
 //!
 //! and the run time (the [`Technique`](illume_transport::Technique), [`state`]):
 //!
@@ -33,6 +35,7 @@
 //! block it nor bleed colour).
 
 pub mod atlas;
+pub mod cli;
 pub mod domain;
 pub mod error;
 pub mod file;
@@ -73,6 +76,7 @@ impl illume_transport::Registration for Descriptor {
     );
 
     const DATA_KEY: Option<&'static str> = Some("data");
+    const OFFLINE: Option<illume_transport::OfflineCommand> = Some(cli::OFFLINE);
 
     fn build(
         world: &illume_transport::SharedWorld,

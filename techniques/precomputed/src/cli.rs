@@ -1,14 +1,67 @@
 //! `illume precompute`: the offline part of `precomputed` (Bahnsen et al. 2012) — render
 //! a day's indirect-light keys (or one shard of them, or of one adaptive level), merge
-//! shards, describe a file.
+//! shards, describe a file. The registration's offline command
+//! ([`illume_transport::Registration::OFFLINE`]): the CLI mounts it, and what it needs of
+//! the app (configuration layers, scene loading, progress bars) comes through the
+//! [`OfflineHost`].
 
-use anyhow::{Context, Result};
-use clap::{Args, Subcommand};
-use illume_precomputed::file::PcFile;
-use illume_precomputed::settings::{Colour, PrecomputedSettings, ScheduleKind};
-use illume_precomputed::shard::{Shard, merge_level, precompute_level, precompute_shard};
+use crate::file::PcFile;
+use crate::settings::{Colour, PrecomputedSettings, ScheduleKind};
+use crate::shard::{Shard, merge_level, precompute_level, precompute_shard};
+use clap::{Args, FromArgMatches, Subcommand};
+use illume_transport::{OfflineCommand, OfflineError, OfflineHost};
 use std::path::PathBuf;
 use std::time::Instant;
+
+type Result<T> = std::result::Result<T, OfflineError>;
+
+/// `illume precompute`, as the registration hands it to the CLI.
+pub const OFFLINE: OfflineCommand = OfflineCommand {
+    name: "precompute",
+    command,
+    run: run_matches,
+};
+
+/// The command as the CLI shows it, its `about` included.
+#[derive(Subcommand)]
+enum Mounted {
+    /// Precompute a day of indirect light for the technique `precomputed` (or one shard
+    /// of it with --shard K/N); `merge` shards; `info` describes a .illumepc file.
+    Precompute(PrecomputeArgs),
+}
+
+/// The `precompute` subcommand.
+fn command() -> clap::Command {
+    let holder = Mounted::augment_subcommands(clap::Command::new("illume"));
+    holder
+        .find_subcommand("precompute")
+        .cloned()
+        .expect("Mounted declares `precompute`")
+}
+
+/// Runs the `precompute` subcommand given its matches.
+fn run_matches(matches: &clap::ArgMatches, host: &dyn OfflineHost) -> Result<()> {
+    run(PrecomputeArgs::from_arg_matches(matches)?, host)
+}
+
+/// An error with what was being done.
+#[derive(Debug, thiserror::Error)]
+#[error("{what}")]
+struct Doing {
+    what: String,
+    #[source]
+    source: std::io::Error,
+}
+
+/// `std::fs::create_dir_all(dir)`, its error saying which directory.
+fn create_dir(dir: &std::path::Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|source| {
+        Box::new(Doing {
+            what: format!("creating {}", dir.display()),
+            source,
+        }) as OfflineError
+    })
+}
 
 /// `illume precompute SCENE … --output FILE`, or `merge` / `info`.
 #[derive(Args)]
@@ -26,7 +79,7 @@ use std::time::Instant;
             (`illume precompute info FILE` says `kind pca`). The result equals the
             unsharded run bit for bit."
 )]
-pub struct PrecomputeArgs {
+struct PrecomputeArgs {
     #[command(subcommand)]
     action: Option<Action>,
     #[command(flatten)]
@@ -95,14 +148,14 @@ struct RunArgs {
     shard: Option<Shard>,
     /// Camera position X,Y,Z [m] (with --look-at), as in render: a `screen` or `cube`
     /// file holds this camera's view.
-    #[arg(long, value_parser = crate::setup::parse_point, requires = "look_at", allow_hyphen_values = true)]
+    #[arg(long, value_parser = illume_core::parse_point, requires = "look_at", allow_hyphen_values = true)]
     look_from: Option<illume_core::Vec3>,
     /// Point the camera looks at, X,Y,Z [m] (with --look-from).
-    #[arg(long, value_parser = crate::setup::parse_point, requires = "look_from", allow_hyphen_values = true)]
+    #[arg(long, value_parser = illume_core::parse_point, requires = "look_from", allow_hyphen_values = true)]
     look_at: Option<illume_core::Vec3>,
     /// A uniform sky of radiance R,G,B [W/(m²·sr)] at sky scale 1, replacing the
     /// scene's (render with the same --sky: the file's scene fingerprint holds it).
-    #[arg(long, value_parser = crate::setup::parse_radiance, value_name = "R,G,B", allow_hyphen_values = true)]
+    #[arg(long, value_parser = illume_core::parse_radiance, value_name = "R,G,B", allow_hyphen_values = true)]
     sky: Option<illume_core::Vec3>,
     /// Adaptive schedule: render only level L's keys (0: the three first keys; L ≥ 1:
     /// the middles of the intervals the levels before split, found from --previous),
@@ -150,34 +203,32 @@ struct InfoArgs {
 }
 
 /// Runs `illume precompute`.
-pub fn run(a: PrecomputeArgs) -> Result<()> {
+fn run(a: PrecomputeArgs, host: &dyn OfflineHost) -> Result<()> {
     match a.action {
-        Some(Action::Merge(m)) => run_merge(m),
+        Some(Action::Merge(m)) => run_merge(m, host),
         Some(Action::Info(i)) => run_info(i),
-        None => run_precompute(a.run),
+        None => run_precompute(a.run, host),
     }
 }
 
-fn run_precompute(a: RunArgs) -> Result<()> {
+fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
     let scene_path = a
         .scene
         .clone()
-        .context("illume precompute: give a SCENE (or the subcommand merge / info)")?;
+        .ok_or("illume precompute: give a SCENE (or the subcommand merge / info)")?;
     let output = a
         .output
         .clone()
-        .context("illume precompute: give --output FILE")?;
-    let sets = a.sets.clone();
-    let config = illume_engine::Config::layered(&illume_engine::ConfigLayers {
-        technique: Some(illume_engine::TechniqueKind::Precomputed),
-        sets: &sets,
-        ..Default::default()
-    })?;
-    let mut s: PrecomputedSettings = config.precomputed.clone();
-    let width = a.width.unwrap_or(config.render.width);
-    let height = a.height.unwrap_or(config.render.height);
-    illume_render::check_image_size(width, height)
-        .map_err(|m| anyhow::anyhow!("--width/--height: {m}"))?;
+        .ok_or("illume precompute: give --output FILE")?;
+    let configured = host.settings(&a.sets)?;
+    let (render_width, render_height) = configured.image_size;
+    let mut s: PrecomputedSettings = *configured
+        .settings
+        .downcast()
+        .expect("the host hands over this technique's settings");
+    let width = a.width.unwrap_or(render_width);
+    let height = a.height.unwrap_or(render_height);
+    illume_render::check_image_size(width, height).map_err(|m| format!("--width/--height: {m}"))?;
     if let Some(v) = a.from {
         s.from_h = v;
     }
@@ -196,25 +247,24 @@ fn run_precompute(a: RunArgs) -> Result<()> {
     if let Some(d) = &a.domain {
         s.domain = toml::Value::String(d.clone())
             .try_into()
-            .map_err(|_| anyhow::anyhow!("--domain {d}: expected screen, cube or atlas"))?;
+            .map_err(|_| format!("--domain {d}: expected screen, cube or atlas"))?;
     }
     if let Some(v) = &a.schedule {
         s.schedule = match v.as_str() {
             "uniform" => ScheduleKind::Uniform,
             "adaptive" => ScheduleKind::Adaptive,
-            _ => anyhow::bail!("--schedule {v}: expected adaptive or uniform"),
+            _ => return Err(format!("--schedule {v}: expected adaptive or uniform").into()),
         };
     }
     if let Some(v) = &a.colour {
         s.colour = match v.as_str() {
             "per-channel" => Colour::PerChannel,
             "joint" => Colour::Joint,
-            _ => anyhow::bail!("--colour {v}: expected per-channel or joint"),
+            _ => return Err(format!("--colour {v}: expected per-channel or joint").into()),
         };
     }
     s.validate()?;
-    let mut scene =
-        crate::render::load_scene_with(&scene_path, None, 0.0, false, &Default::default())?;
+    let mut scene = host.load_scene(&scene_path)?;
     // The sun: the scene's [sun] with the flags on top (or the defaults).
     let mut sun = scene
         .sun
@@ -235,7 +285,7 @@ fn run_precompute(a: RunArgs) -> Result<()> {
     }
     if let (Some(eye), Some(target)) = (a.look_from, a.look_at) {
         illume_scene::builtin::look_from(&mut scene, eye, target)
-            .map_err(|m| anyhow::anyhow!("--look-from/--look-at: {m}"))?;
+            .map_err(|m| format!("--look-from/--look-at: {m}"))?;
     }
     if let Some(radiance) = a.sky {
         scene.sky = Some(illume_scene::Sky::Uniform { radiance });
@@ -247,17 +297,23 @@ fn run_precompute(a: RunArgs) -> Result<()> {
         None => None,
     };
     let start = Instant::now();
-    let mut bars = crate::progress::Bars::with_spinner("precomputed PCA");
+    let mut bars = host.progress("precomputed PCA");
     let size = (width, height);
     let file = match (s.schedule, a.level, a.shard) {
-        (ScheduleKind::Uniform, Some(_), _) => anyhow::bail!(
-            "--level is for the adaptive schedule; uniform keys shard with --shard K/N alone"
-        ),
-        (ScheduleKind::Adaptive, None, Some(_)) => anyhow::bail!(
-            "--shard with the adaptive schedule needs --level L: level L's keys depend on the \
-             images of the levels before, so it shards one level at a time (--level 0, merge, \
-             --level 1 --previous MERGED, … see `illume precompute --help`)"
-        ),
+        (ScheduleKind::Uniform, Some(_), _) => {
+            return Err(
+                "--level is for the adaptive schedule; uniform keys shard with --shard K/N alone"
+                    .into(),
+            );
+        }
+        (ScheduleKind::Adaptive, None, Some(_)) => {
+            return Err(
+                "--shard with the adaptive schedule needs --level L: level L's keys depend on \
+                 the images of the levels before, so it shards one level at a time (--level 0, \
+                 merge, --level 1 --previous MERGED, … see `illume precompute --help`)"
+                    .into(),
+            );
+        }
         (_, Some(level), shard) => precompute_level(
             &world,
             &s,
@@ -265,10 +321,10 @@ fn run_precompute(a: RunArgs) -> Result<()> {
             level,
             previous.as_ref().map(|(p, f)| (p.as_path(), f)),
             shard.unwrap_or_default(),
-            &mut bars,
+            &mut *bars,
         )?,
-        (_, None, Some(shard)) => precompute_shard(&world, &s, size, shard, &mut bars)?,
-        (_, None, None) => illume_precomputed::precompute::precompute(&world, &s, size, &mut bars)?,
+        (_, None, Some(shard)) => precompute_shard(&world, &s, size, shard, &mut *bars)?,
+        (_, None, None) => crate::precompute::precompute(&world, &s, size, &mut *bars)?,
     };
     bars.finish();
     file.write(&output)?;
@@ -289,7 +345,7 @@ fn run_precompute(a: RunArgs) -> Result<()> {
     Ok(())
 }
 
-fn run_merge(m: MergeArgs) -> Result<()> {
+fn run_merge(m: MergeArgs, host: &dyn OfflineHost) -> Result<()> {
     let parts = m
         .parts
         .iter()
@@ -300,9 +356,9 @@ fn run_merge(m: MergeArgs) -> Result<()> {
         None => None,
     };
     let start = Instant::now();
-    let spinner = crate::progress::spinner("precomputed PCA");
+    let mut spinner = host.progress("precomputed PCA");
     let file = merge_level(&parts, previous.as_ref().map(|(p, f)| (p.as_path(), f)))?;
-    spinner.finish_and_clear();
+    spinner.finish();
     file.write(&m.output)?;
     if file.header.kind == "levels" {
         let level = file.header.keys.iter().map(|k| k.level).max().unwrap_or(0);
@@ -392,7 +448,7 @@ fn run_info(i: InfoArgs) -> Result<()> {
             .map(|&k| {
                 format!(
                     "k={k}: {:.2} %",
-                    100.0 * illume_precomputed::pca::variance_captured(eig, k)
+                    100.0 * crate::pca::variance_captured(eig, k)
                 )
             })
             .collect();
@@ -416,7 +472,7 @@ fn run_info(i: InfoArgs) -> Result<()> {
         dump(&file, dir)?;
     }
     if let Some(dir) = &i.plot {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        create_dir(dir)?;
         let names = ["r", "g", "b"];
         let series: Vec<illume_metrics::report::Series> = h
             .eigenvalues
@@ -429,12 +485,7 @@ fn run_info(i: InfoArgs) -> Result<()> {
                     names.get(g).copied().unwrap_or("?").into()
                 },
                 points: (1..=eig.len().min(40))
-                    .map(|k| {
-                        (
-                            k as f64,
-                            100.0 * illume_precomputed::pca::variance_captured(eig, k),
-                        )
-                    })
+                    .map(|k| (k as f64, 100.0 * crate::pca::variance_captured(eig, k)))
                     .collect(),
             })
             .collect();
@@ -469,7 +520,7 @@ fn run_info(i: InfoArgs) -> Result<()> {
 fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
     use illume_core::Rgb;
     use illume_core::image::RgbImage;
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    create_dir(dir)?;
     let h = &file.header;
     let pixels = h.width as usize * h.height as usize;
     let keys = h.keys.len();
@@ -479,7 +530,7 @@ fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
     let section = |name: &str| {
         file.section(name)
             .map(|s| s.values.as_slice())
-            .with_context(|| format!("section {name} missing"))
+            .ok_or_else(|| format!("section {name} missing"))
     };
     for t in 0..keys {
         let mut px = vec![Rgb::ZERO; pixels];
@@ -497,7 +548,7 @@ fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
                 px[p][ch] = v.max(0.0);
             }
         }
-        let img = RgbImage::from_vec(h.width, h.height, px).context("image size")?;
+        let img = RgbImage::from_vec(h.width, h.height, px).ok_or("image size")?;
         let path = dir.join(format!("key_{t:03}_{:05.2}h.exr", h.keys[t].hours));
         img.write(&path, &Default::default())?;
     }
@@ -506,7 +557,7 @@ fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
             .chunks_exact(3)
             .map(|c| Rgb::new(c[0], c[1], c[2]))
             .collect();
-        let img = RgbImage::from_vec(h.width, h.height, px).context("image size")?;
+        let img = RgbImage::from_vec(h.width, h.height, px).ok_or("image size")?;
         img.write(&dir.join("sky.exr"), &Default::default())?;
     }
     eprintln!("wrote {} keys and the sky into {}", keys, dir.display());
