@@ -113,7 +113,7 @@ pub struct PhotonStreamSettings {
     /// smoother, more detailed indirect light, at a shading cost linear in the count
     /// (pixels × VSLs). Never fewer than one per object. Default 100 (Tables 2–3 use
     /// 10–200).
-    #[setting(default = 100, range = "1–1 000 000")]
+    #[setting(default = 100, range = "1–1 000 000", max = MAX_VSLS)]
     pub vsl_count: u32,
     /// Extra candidates placed before Algorithm 1 removes the closest ones, as a
     /// fraction of `vsl_count` (§0.4.2: "an increase of 10 % provides interesting
@@ -129,7 +129,7 @@ pub struct PhotonStreamSettings {
     /// Photon impacts the FIFO pool holds (§0.3, §0.5). Higher: less noise in VSL powers,
     /// at the cost of latency after a change (latency = pool size / impact rate) and
     /// 32 bytes per impact. Default 100 000.
-    #[setting(default = 100_000)]
+    #[setting(default = 100_000, range = "1–100 000 000", max = MAX_POOL_IMPACTS)]
     pub pool_size: u32,
     /// Streaming or reproducible shooting. Default [`StreamMode::Streaming`].
     #[setting(default = StreamMode::Streaming)]
@@ -171,7 +171,7 @@ pub struct PhotonStreamSettings {
     /// Photons the streaming thread traces per batch (one pool update under the pool's
     /// mutex, about a millisecond of work). Higher: less locking overhead, at the cost
     /// of coarser pool updates; a batch ends early when the scene changes. Default 256.
-    #[setting(default = 256)]
+    #[setting(default = 256, range = "≥ 1")]
     pub batch_photons: u32,
     /// What a scene change does to the pool. Default [`ChangePolicy::AgeOut`].
     #[setting(default = ChangePolicy::AgeOut)]
@@ -179,11 +179,11 @@ pub struct PhotonStreamSettings {
     /// ε of §0.7.3 [W/(m²·sr)]: a VSL is ignored where its unoccluded contribution bound
     /// Φ_s·R/(π r²) falls below ε, i.e. beyond r_ε = sqrt(Φ_s·R/(π ε)). Higher: more
     /// culling (faster), at the cost of cutting off faint light. Default 1e-6 (paper).
-    #[setting(default = 1e-6, unit = "W/(m²·sr)")]
+    #[setting(default = 1e-6, unit = "W/(m²·sr)", range = "[0, inf)")]
     pub epsilon: f32,
     /// Side of the square screen tiles VSLs are culled against \[pixels\]. Smaller:
     /// tighter culling, at a per-tile overhead. Default 16.
-    #[setting(default = 16, unit = "pixels")]
+    #[setting(default = 16, unit = "pixels", range = "≥ 1")]
     pub tile_size: u32,
     /// Shade one pixel in `shading_stride²` (a grid `shading_stride` pixels apart) and
     /// interpolate the pixels between from the shaded ones on the same surface (normals
@@ -216,7 +216,7 @@ pub struct PhotonStreamSettings {
     /// Higher: less gather noise, at one closest-hit ray each per shaded pixel (pixels
     /// between shaded ones are interpolated, `shading_stride`, so 576 rays at stride 3
     /// cost 64 a pixel). Default 0; the `quality` and `still` presets use 576.
-    #[setting(default = 0)]
+    #[setting(default = 0, range = "≤ 4096")]
     pub near_field_rays: u32,
     /// Radius of the near field in cell sizes √A_s of the VSL involved (the VSL whose
     /// weight is taken, or the gather hit's nearest VSL), at least 0.5. Larger: the
@@ -331,34 +331,14 @@ impl PhotonStreamSettings {
         }
     }
 
-    /// Checks every value; the error names the field.
+    /// Checks every value against its declared range, then the checks across fields;
+    /// the error names the field.
     pub fn validate(&self) -> Result<(), crate::PhotonStreamError> {
         let bad = |field: &'static str, reason: String| {
             Err(crate::PhotonStreamError::InvalidSetting { field, reason })
         };
-        if self.vsl_count == 0 || self.vsl_count > MAX_VSLS {
-            return bad(
-                "vsl_count",
-                format!("{} is not in 1..={MAX_VSLS}", self.vsl_count),
-            );
-        }
-        if self.pool_size > MAX_POOL_IMPACTS {
-            return bad(
-                "pool_size",
-                format!("{} is more than {MAX_POOL_IMPACTS} impacts", self.pool_size),
-            );
-        }
-        if !(self.oversampling >= 0.0 && self.oversampling <= 10.0) {
-            return bad(
-                "oversampling",
-                format!("{} is not in [0, 10]", self.oversampling),
-            );
-        }
-        if !(self.triangle_scale > 0.0 && self.triangle_scale <= 1.0) {
-            return bad(
-                "triangle_scale",
-                format!("{} is not in (0, 1]", self.triangle_scale),
-            );
+        if let Err((field, reason)) = self.validate_ranges() {
+            return bad(field, reason);
         }
         if (self.pool_size as u64) < self.max_bounces as u64 + 1 {
             return bad(
@@ -366,48 +346,6 @@ impl PhotonStreamSettings {
                 format!(
                     "{} cannot hold one photon path of max_bounces + 1 impacts",
                     self.pool_size
-                ),
-            );
-        }
-        if !(0.0..=1.0).contains(&self.stream_share) {
-            return bad(
-                "stream_share",
-                format!(
-                    "{} is not a fraction of a core in [0, 1]",
-                    self.stream_share
-                ),
-            );
-        }
-        if self.batch_photons == 0 {
-            return bad("batch_photons", "must be at least 1".into());
-        }
-        if !(self.epsilon >= 0.0 && self.epsilon.is_finite()) {
-            return bad(
-                "epsilon",
-                format!("{} is not a finite non-negative radiance", self.epsilon),
-            );
-        }
-        if self.tile_size == 0 {
-            return bad("tile_size", "must be at least 1".into());
-        }
-        if !(1..=8).contains(&self.shading_stride) {
-            return bad(
-                "shading_stride",
-                format!("{} is not in 1..=8", self.shading_stride),
-            );
-        }
-        if self.near_field_rays > 4096 {
-            return bad(
-                "near_field_rays",
-                format!("{} is more than 4096", self.near_field_rays),
-            );
-        }
-        if self.near_field_scale.is_nan() || self.near_field_scale < 0.5 {
-            return bad(
-                "near_field_scale",
-                format!(
-                    "{} is not a number of cell sizes ≥ 0.5 (or inf)",
-                    self.near_field_scale
                 ),
             );
         }

@@ -100,10 +100,10 @@ pub struct RadianceCacheSettings {
     /// projected solid angle), §6: 64. Rays per record = `theta_strata × phi_strata`.
     /// Higher: less noise per record and finer gradients, at a cost linear in the rays.
     /// 2–1024, default 64.
-    #[setting(default = 64, range = "2–1024")]
+    #[setting(default = 64, range = "2–1024", max = MAX_STRATA)]
     pub theta_strata: u32,
     /// Strata of the hemisphere grid in φ, §6: 64. 3–1024, default 64.
-    #[setting(default = 64, range = "3–1024")]
+    #[setting(default = 64, range = "3–1024", max = MAX_STRATA)]
     pub phi_strata: u32,
     /// a^t, the temporal accuracy (§4.2, Eq. 10): a record made at t₀ stays valid while
     /// |τ − 1|·(t − t₀) ≤ a^t, τ = E₁/E₀ its irradiance's change over one frame. Its
@@ -147,7 +147,7 @@ pub struct RadianceCacheSettings {
     /// served by records (see `traced_roughness_max`), at the cost of memory (n² RGB
     /// coefficients and their gradients per record) and shading time (n² per record
     /// and pixel). 1–16, default 8.
-    #[setting(default = 8, range = "1–16")]
+    #[setting(default = 8, range = "1–16", max = crate::hsh::MAX_ORDER)]
     pub hsh_order: u32,
     /// Glossy lobes of surfaces smoother than this are too sharp for `hsh_order`: their
     /// specular part is traced per pixel (with `continue_path`) instead of read from
@@ -225,7 +225,7 @@ pub struct RadianceCacheSettings {
     pub rr_start_depth: u32,
     /// Hard limit on a gather ray's reflections, a safety net behind Russian roulette.
     /// At least 1; default 1024.
-    #[setting(default = 1024)]
+    #[setting(default = 1024, range = "≥ 1")]
     pub max_depth: u32,
     /// Seed of the gather rays' jitter and paths: the same seed gives the same records,
     /// whatever the thread count. Default 0.
@@ -390,21 +390,8 @@ impl RadianceCacheSettings {
         let bad = |field: &'static str, reason: String| {
             Err(RadianceCacheError::InvalidSetting { field, reason })
         };
-        // Written as `!(in range)` so that NaN fails every check.
-        if !(self.accuracy > 0.0 && self.accuracy <= 1.0) {
-            return bad("accuracy", format!("{} is not in (0, 1]", self.accuracy));
-        }
-        if !(self.r_min_fraction > 0.0 && self.r_min_fraction <= 1.0) {
-            return bad(
-                "r_min_fraction",
-                format!("{} is not in (0, 1]", self.r_min_fraction),
-            );
-        }
-        if !(self.r_max_fraction > 0.0 && self.r_max_fraction <= 10.0) {
-            return bad(
-                "r_max_fraction",
-                format!("{} is not in (0, 10]", self.r_max_fraction),
-            );
+        if let Err((field, reason)) = self.validate_ranges() {
+            return bad(field, reason);
         }
         if self.r_min_fraction > self.r_max_fraction {
             return bad(
@@ -414,69 +401,6 @@ impl RadianceCacheSettings {
                     self.r_min_fraction, self.r_max_fraction
                 ),
             );
-        }
-        if !(2..=MAX_STRATA).contains(&self.theta_strata) {
-            return bad(
-                "theta_strata",
-                format!("{} is not in 2..={MAX_STRATA}", self.theta_strata),
-            );
-        }
-        if !(3..=MAX_STRATA).contains(&self.phi_strata) {
-            return bad(
-                "phi_strata",
-                format!("{} is not in 3..={MAX_STRATA}", self.phi_strata),
-            );
-        }
-        if !(self.temporal_accuracy > 0.0 && self.temporal_accuracy <= 1.0) {
-            return bad(
-                "temporal_accuracy",
-                format!("{} is not in (0, 1]", self.temporal_accuracy),
-            );
-        }
-        if !(1..=100_000).contains(&self.max_age_frames) {
-            return bad(
-                "max_age_frames",
-                format!("{} is not in 1..=100000", self.max_age_frames),
-            );
-        }
-        if !(0.0..=1.0).contains(&self.glossy_roughness_max) {
-            return bad(
-                "glossy_roughness_max",
-                format!("{} is not in [0, 1]", self.glossy_roughness_max),
-            );
-        }
-        let max_order = crate::hsh::MAX_ORDER as u32;
-        if !(1..=max_order).contains(&self.hsh_order) {
-            return bad(
-                "hsh_order",
-                format!("{} is not in 1..={max_order}", self.hsh_order),
-            );
-        }
-        if !(self.traced_roughness_max >= 0.0
-            && self.traced_roughness_max <= self.glossy_roughness_max)
-        {
-            return bad(
-                "traced_roughness_max",
-                format!(
-                    "{} is not in [0, glossy_roughness_max = {}]",
-                    self.traced_roughness_max, self.glossy_roughness_max
-                ),
-            );
-        }
-        if !(1..=4096).contains(&self.traced_rays) {
-            return bad(
-                "traced_rays",
-                format!("{} is not in 1..=4096", self.traced_rays),
-            );
-        }
-        if !(1..=4096).contains(&self.hole_fill_max_passes) {
-            return bad(
-                "hole_fill_max_passes",
-                format!("{} is not in 1..=4096", self.hole_fill_max_passes),
-            );
-        }
-        if self.max_depth == 0 {
-            return bad("max_depth", "must be at least 1".into());
         }
         if self.paced_real_time
             && matches!(

@@ -62,8 +62,8 @@ impl illume_transport::Registration for Descriptor {
         illume_transport::FrameHistory::RestartsOnChange;
     const NEEDS_TIMELINE: bool = false;
     // Another seed of the same estimator, 512 spp: only noise separates the two.
-    const AGREEMENT: illume_transport::Agreement =
-        illume_transport::Agreement::CornellSpot(illume_transport::AgreementSpec {
+    const AGREEMENT: illume_transport::Agreement = illume_transport::Agreement::CornellSpot(
+        illume_transport::AgreementSpec {
             sets: &["reference.spp_per_frame=256", "reference.seed=77"],
             frames: 2,
             max_energy_error: 0.02,
@@ -71,7 +71,8 @@ impl illume_transport::Registration for Descriptor {
             why: "another seed of the same estimator, 512 spp: only noise separates the two; \
                   the reference's own block noise at 512 spp is ≈ 0.02 (two independent \
                   halves, photon_stream's tests/photon_stream/reference.rs), its energy noise well below 1 %",
-        });
+        },
+    );
     const STILL: Option<illume_transport::StillFn<ReferenceSettings>> = Some(still);
 
     fn build(
