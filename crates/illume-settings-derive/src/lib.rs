@@ -93,6 +93,7 @@ fn settings(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
             None => quote! { #ident: ::core::default::Default::default() },
         }
     });
+    let names: Vec<String> = fields.iter().map(|f| f.ident.to_string()).collect();
     let docs = fields.iter().filter(|f| !f.skip).map(|f| {
         let key = f.ident.to_string();
         let doc = &f.doc;
@@ -105,6 +106,10 @@ fn settings(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
             Some(r) => quote! { ::core::option::Option::Some(#r) },
             None => quote! { <#ty as ::illume_transport::SettingValues>::VALUES },
         };
+        let bounds = match f.range.as_deref().map(range::parse) {
+            Some(Ok(r)) => r.bounds(is_float(option_inner(&f.ty).unwrap_or(&f.ty)), &names),
+            _ => quote! { ::core::option::Option::None },
+        };
         let applies = if f.per_frame {
             quote! { ::illume_transport::Applies::PerFrame }
         } else {
@@ -116,11 +121,11 @@ fn settings(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
                 doc: #doc,
                 unit: #unit,
                 range: #range,
+                bounds: #bounds,
                 applies: #applies,
             }
         }
     });
-    let names: Vec<String> = fields.iter().map(|f| f.ident.to_string()).collect();
     let checks = fields
         .iter()
         .filter(|f| !f.skip)

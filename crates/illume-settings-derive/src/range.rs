@@ -163,6 +163,47 @@ impl Range {
         }
     }
 
+    /// The range as `illume_transport::SettingBounds` (the table's view of the check).
+    pub fn bounds(&self, float: bool, fields: &[String]) -> TokenStream {
+        let side = |b: &Option<(Bound, bool)>, sign: f64| match b {
+            None => quote! { ::core::option::Option::None },
+            Some((b, closed)) => {
+                let value = match b {
+                    Bound::Inf => {
+                        let inf = if sign < 0.0 {
+                            quote! { ::core::f64::NEG_INFINITY }
+                        } else {
+                            quote! { ::core::f64::INFINITY }
+                        };
+                        quote! { ::illume_transport::SettingBound::Value(#inf) }
+                    }
+                    Bound::Number(n) => {
+                        let lit = Literal::f64_unsuffixed(n.parse().expect("checked by parse"));
+                        quote! { ::illume_transport::SettingBound::Value(#lit) }
+                    }
+                    Bound::Name(name) if fields.contains(name) => {
+                        quote! { ::illume_transport::SettingBound::Field(#name) }
+                    }
+                    Bound::Name(name) => {
+                        let path: syn::Path = syn::parse_str(name).expect("checked by parse");
+                        quote! { ::illume_transport::SettingBound::Value(#path as f64) }
+                    }
+                };
+                quote! { ::core::option::Option::Some((#value, #closed)) }
+            }
+        };
+        let low = side(&self.low, -1.0);
+        let high = side(&self.high, 1.0);
+        let integer = !float;
+        quote! {
+            ::core::option::Option::Some(::illume_transport::SettingBounds {
+                low: #low,
+                high: #high,
+                integer: #integer,
+            })
+        }
+    }
+
     /// A bound as an expression (None for `inf`) and as the message shows it
     /// (`{}` placeholders take `args`, pushed here).
     fn bound_expr(

@@ -46,7 +46,7 @@ pub use raster::VisibilityBuffer;
 pub use surface::SurfaceHit;
 pub use technique::{
     Agreement, AgreementSpec, Applies, Budget, ChangeResponse, FrameHistory, Pacing, Registration,
-    SettingField, SettingValues, SettingsTable, StillFn, StillImages, Technique, TechniqueError,
-    TechniqueSettings,
+    SettingBound, SettingBounds, SettingField, SettingValues, SettingsTable, StillFn, StillImages,
+    Technique, TechniqueError, TechniqueSettings,
 };
 pub use world::{SharedWorld, World};
