@@ -118,20 +118,20 @@ pub struct PhotonStreamSettings {
     /// Extra candidates placed before Algorithm 1 removes the closest ones, as a
     /// fraction of `vsl_count` (§0.4.2: "an increase of 10 % provides interesting
     /// results"). Higher: more even spacing, at a placement cost growing with the
-    /// candidates. Default 0.10.
+    /// candidates.
     #[setting(default = 0.10, range = "[0, 10]")]
     pub oversampling: f32,
     /// Scale applied to each triangle about its centroid before a VSL is placed on it
     /// (§0.4.2, Figure 4a), in (0, 1]. Lower: VSLs further from edges and corners (fewer
-    /// light spots), at the cost of leaving triangle borders uncovered. Default 0.8.
+    /// light spots), at the cost of leaving triangle borders uncovered.
     #[setting(default = 0.8, range = "(0, 1]")]
     pub triangle_scale: f32,
     /// Photon impacts the FIFO pool holds (§0.3, §0.5). Higher: less noise in VSL powers,
     /// at the cost of latency after a change (latency = pool size / impact rate) and
-    /// 32 bytes per impact. Default 100 000.
+    /// 32 bytes per impact.
     #[setting(default = 100_000, range = "1–100 000 000", max = MAX_POOL_IMPACTS)]
     pub pool_size: u32,
-    /// Streaming or reproducible shooting. Default [`StreamMode::Streaming`].
+    /// Streaming or reproducible shooting.
     #[setting(default = StreamMode::Streaming)]
     pub mode: StreamMode,
     /// OS priority of the streaming thread: `low` (default: frames first, photons in the
@@ -160,20 +160,20 @@ pub struct PhotonStreamSettings {
     /// it stops the indirect light's frame-to-frame flicker in a still world and gives the
     /// frames both cores while only the camera moves (the paper notes that streaming may
     /// pause then, §0.9.1). False: stream without end, as the paper does (for measuring
-    /// photon rates). Default true.
+    /// photon rates).
     #[setting(default = true)]
     pub rest_when_settled: bool,
     /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
-    /// cost linear in the count. Default 20 000.
+    /// cost linear in the count.
     #[setting(default = 20_000, per_frame)]
     pub photons_per_frame: u64,
     /// Photons the streaming thread traces per batch (one pool update under the pool's
     /// mutex, about a millisecond of work). Higher: less locking overhead, at the cost
-    /// of coarser pool updates; a batch ends early when the scene changes. Default 256.
+    /// of coarser pool updates; a batch ends early when the scene changes.
     #[setting(default = 256, range = "≥ 1")]
     pub batch_photons: u32,
-    /// What a scene change does to the pool. Default [`ChangePolicy::AgeOut`].
+    /// What a scene change does to the pool.
     #[setting(default = ChangePolicy::AgeOut)]
     pub on_change: ChangePolicy,
     /// ε of §0.7.3 [W/(m²·sr)]: a VSL is ignored where its unoccluded contribution bound
@@ -182,7 +182,7 @@ pub struct PhotonStreamSettings {
     #[setting(default = 1e-6, unit = "W/(m²·sr)", range = "[0, inf)")]
     pub epsilon: f32,
     /// Side of the square screen tiles VSLs are culled against \[pixels\]. Smaller:
-    /// tighter culling, at a per-tile overhead. Default 16.
+    /// tighter culling, at a per-tile overhead.
     #[setting(default = 16, unit = "pixels", range = "≥ 1")]
     pub tile_size: u32,
     /// Shade one pixel in `shading_stride²` (a grid `shading_stride` pixels apart) and
@@ -196,11 +196,11 @@ pub struct PhotonStreamSettings {
     /// 1–8, default 2.
     #[setting(default = 2, range = "1–8")]
     pub shading_stride: u32,
-    /// VSL shadow rays (beyond the paper). Default [`VisibilityMode::Off`].
+    /// VSL shadow rays (beyond the paper).
     #[setting(default = VisibilityMode::Off)]
     pub visibility: VisibilityMode,
     /// Shadow rays per pixel in [`VisibilityMode::Stochastic`]. Higher: less noise, at a
-    /// cost linear in the count. Default 8.
+    /// cost linear in the count.
     #[setting(default = 8)]
     pub visibility_rays: u32,
     /// Gather rays per shaded pixel for the near field (beyond the paper; 0 = off, the
@@ -224,11 +224,10 @@ pub struct PhotonStreamSettings {
     /// inside it, more gather noise). `inf`: everything is gathered — a final gather
     /// over the VSL cells' exitance, in which the VSLs light nothing directly, need no
     /// visibility, and their count only sets the cells' size (the `quality` and `still`
-    /// presets: 3200 cells). Default 3.
+    /// presets: 3200 cells).
     #[setting(default = 3.0, range = "≥ 0.5 (or inf)")]
     pub near_field_scale: f32,
     /// Longest photon path in bounces, a safety net behind Russian roulette (§0.7.1).
-    /// Default 32.
     #[setting(default = 32)]
     pub max_bounces: u32,
     /// Photons read base-colour textures through copies box-filtered to at most
@@ -237,20 +236,20 @@ pub struct PhotonStreamSettings {
     /// filtered texel and the filter keeps every region's mean albedo, so VSL powers
     /// are unchanged in expectation (tested on Sponza); large textures stop costing a
     /// cache miss per impact (Sponza: 1.3× the impacts/s). False: full-resolution
-    /// albedo for photons too. Default true. Rendering always uses full resolution.
+    /// albedo for photons too. Rendering always uses full resolution.
     #[setting(default = true)]
     pub filtered_textures: bool,
     /// Fill the pool synchronously (on the calling thread and rayon) before the first
     /// frame, so the first frame is already converged (the paper renders at once and
     /// lets the stream fill in). False: frames start dark and brighten as the pool
-    /// fills. Default true.
+    /// fills.
     #[setting(default = true)]
     pub warm_up: bool,
-    /// Start with the simulation thread paused ([`StreamMode::Streaming`]). Default false.
+    /// Start with the simulation thread paused ([`StreamMode::Streaming`]).
     #[setting(default = false)]
     pub start_paused: bool,
     /// Seed of VSL placement and photon paths: the same seed gives the same VSLs and,
-    /// in deterministic mode, the same frames. Default 0.
+    /// in deterministic mode, the same frames.
     #[setting(default = 0)]
     pub seed: u64,
 }

@@ -82,7 +82,6 @@ pub struct PrecomputedSettings {
     pub atlas_density: f32,
     /// `atlas`: distance between the probes that light dynamic objects \[m\]. Lower:
     /// finer variation on moving objects, more probes (∝ 1/spacing³, 6 values each).
-    /// Default 0.5.
     #[setting(default = 0.5, unit = "m", range = "(0, inf)")]
     pub probe_spacing: f32,
     /// Key times. Default `adaptive` (§3.2).
@@ -92,18 +91,18 @@ pub struct PrecomputedSettings {
     /// Lower: more keys, finer in time, longer precompute and larger file. Default 5 (§3.1).
     #[setting(default = 5.0, unit = "minutes", range = "(0, inf)")]
     pub step_min: f64,
-    /// First clock hour of the precomputed span \[hours\]. Default 0.
+    /// First clock hour of the precomputed span \[hours\].
     #[setting(default = 0.0, unit = "hours")]
     pub from_h: f64,
-    /// Last clock hour \[hours\]. Default 24.
+    /// Last clock hour \[hours\].
     #[setting(default = 24.0, unit = "hours")]
     pub to_h: f64,
     /// Beyond the paper: adaptive splits compare the interpolation with a rendered middle
-    /// (more renders, catches non-linear changes the ends' test misses). Default false.
+    /// (more renders, catches non-linear changes the ends' test misses).
     #[setting(default = false)]
     pub verify_midpoint: bool,
     /// Samples per pixel of each key (and the sky image). Noise falls as 1/√spp; PCA
-    /// removes some of it. Default 256.
+    /// removes some of it.
     #[setting(default = 256, range = "≥ 1")]
     pub spp: u32,
     /// Kept PCA components k. Higher: more variance kept (98.6 % at 10, 99.83 % at 20 in
@@ -111,21 +110,20 @@ pub struct PrecomputedSettings {
     #[setting(default = 10, range = "≥ 1")]
     pub components: usize,
     /// If set (0–1), the fewest components (≤ `components`) capturing this fraction of
-    /// the variance. Default none.
+    /// the variance.
     #[setting(default = None, range = "(0, 1]")]
     pub variance_target: Option<f64>,
-    /// PCA colour handling. Default `per-channel`.
+    /// PCA colour handling.
     #[setting(default = Colour::PerChannel)]
     pub colour: Colour,
     /// Interpolation of coefficients. Default `linear` (§3.1, §4.2).
     #[setting(default = Interpolation::Linear)]
     pub interpolation: Interpolation,
     /// Exposure the Yee metric sees key images at (`to_srgb8` of radiance × exposure);
-    /// stored in the file. Default 1.
+    /// stored in the file.
     #[setting(default = 1.0, range = "(0, inf)")]
     pub exposure: f32,
     /// Seed; key t's samples are seeded from (seed, time), reproducible on any machine.
-    /// Default 0.
     #[setting(default = 0)]
     pub seed: u64,
 }

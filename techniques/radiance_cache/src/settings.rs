@@ -93,7 +93,7 @@ pub struct RadianceCacheSettings {
     /// beyond the paper): the translation term of Eq. 4 then changes a record's value by
     /// at most the fraction a within its sphere, so extrapolation stays positive where
     /// indirect light changes fast (indirect shadow edges) although the geometry is far.
-    /// True costs more records along such edges. Default true.
+    /// True costs more records along such edges.
     #[setting(default = true)]
     pub gradient_limit: bool,
     /// Strata of the hemisphere grid in θ (cosine-weighted: each stratum has the same
@@ -172,11 +172,11 @@ pub struct RadianceCacheSettings {
     pub hole_fill_max_passes: u32,
     /// Beyond the paper: an expired record is replaced only where a surface facing its
     /// normal still lies at its position (else it is deleted), so records on objects
-    /// that moved away do not float in the air. Default true.
+    /// that moved away do not float in the air.
     #[setting(default = true)]
     pub replace_only_on_surface: bool,
     /// Beyond the paper: a replacement traces its predecessor's directions with its
-    /// random numbers, so E_l − E_k (Eq. 21) measures change, not noise. Default true.
+    /// random numbers, so E_l − E_k (Eq. 21) measures change, not noise.
     #[setting(default = true)]
     pub reuse_directions: bool,
     /// Beyond the paper: a change not on the timeline (an edit, a frame off the
@@ -196,7 +196,7 @@ pub struct RadianceCacheSettings {
     pub neighbour_aging: bool,
     /// §5, Fig. 9: an expired record that no pixel of its last frame used is deleted
     /// instead of replaced (the paper reports −25–30 % storage, −20–30 % time). False:
-    /// every expired record is replaced. Default true.
+    /// every expired record is replaced.
     #[setting(default = true)]
     pub deletion: bool,
     /// Most records a frame computes (new records and replacements; pass 1 of
@@ -220,7 +220,7 @@ pub struct RadianceCacheSettings {
     #[setting(default = false)]
     pub show_records: bool,
     /// Reflections after which Russian roulette may end a gather ray's path
-    /// (`continue_path`). Lower: faster, noisier records (still unbiased). Default 3.
+    /// (`continue_path`). Lower: faster, noisier records (still unbiased).
     #[setting(default = 3)]
     pub rr_start_depth: u32,
     /// Hard limit on a gather ray's reflections, a safety net behind Russian roulette.
@@ -228,7 +228,7 @@ pub struct RadianceCacheSettings {
     #[setting(default = 1024, range = "≥ 1")]
     pub max_depth: u32,
     /// Seed of the gather rays' jitter and paths: the same seed gives the same records,
-    /// whatever the thread count. Default 0.
+    /// whatever the thread count.
     #[setting(default = 0)]
     pub seed: u64,
     /// Set by `--realtime` pacing ([`TechniqueSettings::pace`]), not a setting.

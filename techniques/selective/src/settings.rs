@@ -99,16 +99,16 @@ pub struct SelectiveSettings {
     /// corners. 0–180, default 45.
     #[setting(default = 45.0, unit = "degrees", range = "[0, 180]")]
     pub smoothing_angle_deg: f32,
-    /// Order of re-tracing stale groups (§5.3). Default [`GroupOrder::Priority`].
+    /// Order of re-tracing stale groups (§5.3).
     #[setting(default = GroupOrder::Priority)]
     pub order: GroupOrder,
     /// Pilot photons shot since the last camera move before the view-frustum factor V
     /// counts (§5.3, "sufficient for its robust estimate"); until then V = 1. Higher:
-    /// a steadier V, at the cost of a longer time blind to the view. Default 2000.
+    /// a steadier V, at the cost of a longer time blind to the view.
     #[setting(default = 2000)]
     pub visibility_min_pilots: u32,
     /// Priority given to the view frustum (§5.3): a stale group's V is 1 + this ×
-    /// (its pilot hits in the frustum) / (its pilots shot). 0 ignores the view. Default 4.
+    /// (its pilot hits in the frustum) / (its pilots shot). 0 ignores the view.
     #[setting(default = 4.0, range = "[0, inf)")]
     pub visibility_weight: f32,
     /// Fraction of the scene's power carried by changed lights above which a light
@@ -129,12 +129,11 @@ pub struct SelectiveSettings {
     /// [`Selective::for_world`](crate::Selective::for_world)) when the frame loop gives
     /// none \[ms\]. Higher: faster recovery after a change, at
     /// the cost of frame rate. Groups are atomic, so a frame may overrun by one group.
-    /// Default 25.
     #[setting(default = 25.0, unit = "ms", range = "(0, 3 600 000]", per_frame)]
     pub frame_budget_ms: f64,
     /// Photons traced between two frames in [`SelectiveMode::Deterministic`] when the
     /// frame loop's budget does not say (whole groups, so a frame may overrun by one
-    /// group). Default 100 000.
+    /// group).
     #[setting(default = 100_000, range = "≥ 1", per_frame)]
     pub photons_per_frame: u64,
     /// Beyond the paper: while nothing is stale (a static scene), the pool grows by
@@ -148,15 +147,15 @@ pub struct SelectiveSettings {
     pub max_photons: u64,
     /// Trace the whole pool before the first frame. False: frames start dark and
     /// brighten as photons are traced in index order (shown normalised by the photons
-    /// traced). Default true.
+    /// traced).
     #[setting(default = true)]
     pub warm_up: bool,
-    /// Longest photon path in bounces, a safety net behind Russian roulette. Default 32.
+    /// Longest photon path in bounces, a safety net behind Russian roulette.
     #[setting(default = 32)]
     pub max_bounces: u32,
     /// Photons read base-colour textures through box-filtered copies (see
     /// `photon_stream.filtered_textures`): element buckets are far larger than a
-    /// filtered texel. Default true.
+    /// filtered texel.
     #[setting(default = true)]
     pub filtered_textures: bool,
     /// Visual masking of lighting patterns by textures (§5.3): a pilot hit on a textured
@@ -167,7 +166,7 @@ pub struct SelectiveSettings {
     /// surfaces, at the cost of a masking table per texture built at construction (a few
     /// passes over each base-colour texture's texels) and a table lookup per pilot hit.
     /// False: every pilot hit counts Δp = 1. Only the order of re-tracing depends on
-    /// it, never the converged solution. Default true.
+    /// it, never the converged solution.
     #[setting(default = true)]
     pub texture_masking: bool,
     /// Luminance contrast of a lighting artefact just visible on an untextured surface
@@ -179,7 +178,7 @@ pub struct SelectiveSettings {
     /// default 0.01 (1 %, about the Weber fraction of photopic vision).
     #[setting(default = 0.01, range = "(0, 1]")]
     pub masking_contrast_threshold: f32,
-    /// Seed of the Halton digit scrambling (scrambling keeps Eq. 3). Default 0.
+    /// Seed of the Halton digit scrambling (scrambling keeps Eq. 3).
     #[setting(default = 0)]
     pub seed: u64,
 }
