@@ -48,7 +48,7 @@ fn bound_value(defaults: &toml::Table, table: &str, bound: SettingBound) -> f64 
 fn value(v: f64, integer: bool) -> Option<toml::Value> {
     if integer {
         (v >= i64::MIN as f64 && v <= i64::MAX as f64 && v.fract() == 0.0)
-            .then(|| toml::Value::Integer(v as i64))
+            .then_some(toml::Value::Integer(v as i64))
     } else {
         Some(toml::Value::Float(v))
     }
