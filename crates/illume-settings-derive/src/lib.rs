@@ -21,9 +21,15 @@
 //! Field attributes: `default = EXPR` (absent: the type's `Default`), `unit = "…"`
 //! (absent: the unit the name's suffix carries, `_ms`, `_deg`…, STYLE.md's naming
 //! convention), `range = "…"` (the accepted values as people read them: `(0, 1]`,
-//! `1–8`, `≥ 2`; absent: an enum's values), `per_frame` (read through the frame budget:
+//! `1–8`, `≥ 2`; absent: an enum's values — and the check: the derive writes
+//! `validate_ranges()`, which refuses a value outside the declared range, NaN included;
+//! the forms are in the `range` module), `min = CONST` / `max = CONST` (an integer
+//! constant the code also uses that a bound of the range shows: a mismatch fails to
+//! compile, so the text stays readable, `1–1 000 000`, and true), `per_frame` (read through the frame budget:
 //! a change reaches a running technique without a rebuild). Fields marked
 //! `#[serde(skip)]` are not settings and stay out of the table.
+
+mod range;
 
 use proc_macro::TokenStream;
 use quote::quote;
@@ -55,6 +61,9 @@ struct Field {
     default: Option<Expr>,
     unit: Option<String>,
     range: Option<String>,
+    /// Constants the range's lower and upper bound stand for (`min = …`, `max = …`).
+    min: Option<Expr>,
+    max: Option<Expr>,
     per_frame: bool,
     skip: bool,
     doc: String,
@@ -84,6 +93,7 @@ fn settings(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
             None => quote! { #ident: ::core::default::Default::default() },
         }
     });
+    let names: Vec<String> = fields.iter().map(|f| f.ident.to_string()).collect();
     let docs = fields.iter().filter(|f| !f.skip).map(|f| {
         let key = f.ident.to_string();
         let doc = &f.doc;
@@ -96,6 +106,10 @@ fn settings(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
             Some(r) => quote! { ::core::option::Option::Some(#r) },
             None => quote! { <#ty as ::illume_transport::SettingValues>::VALUES },
         };
+        let bounds = match f.range.as_deref().map(range::parse) {
+            Some(Ok(r)) => r.bounds(is_float(option_inner(&f.ty).unwrap_or(&f.ty)), &names),
+            _ => quote! { ::core::option::Option::None },
+        };
         let applies = if f.per_frame {
             quote! { ::illume_transport::Applies::PerFrame }
         } else {
@@ -107,11 +121,72 @@ fn settings(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
                 doc: #doc,
                 unit: #unit,
                 range: #range,
+                bounds: #bounds,
                 applies: #applies,
             }
         }
     });
+    let checks = fields
+        .iter()
+        .filter(|f| !f.skip)
+        .filter_map(|f| f.range.as_ref().map(|r| (f, r)))
+        .map(|(f, text)| {
+            let parsed = range::parse(text).map_err(|e| syn::Error::new_spanned(&f.ident, e))?;
+            let ident = &f.ident;
+            let key = ident.to_string();
+            let pins = [(&f.min, &parsed.low), (&f.max, &parsed.high)]
+                .into_iter()
+                .filter_map(|(c, b)| c.as_ref().map(|c| (c, b)))
+                .map(|(constant, bound)| match bound {
+                    Some((range::Bound::Number(n), _)) => {
+                        let lit: proc_macro2::Literal = n.parse().map_err(|_| {
+                            syn::Error::new_spanned(constant, "bound is not a literal")
+                        })?;
+                        let why = format!(
+                            "{key}: the declared range {text:?} does not show {}",
+                            quote!(#constant)
+                        );
+                        Ok(quote! {
+                            const _: () = ::core::assert!((#constant) as i128 == #lit, #why);
+                        })
+                    }
+                    _ => Err(syn::Error::new_spanned(
+                        constant,
+                        "min/max pin a numeric bound of the declared range",
+                    )),
+                })
+                .collect::<syn::Result<Vec<_>>>()?;
+            let check = match option_inner(&f.ty) {
+                Some(inner) => {
+                    let check = parsed.check(&key, &quote! { value }, is_float(inner), &names);
+                    quote! {
+                        if let ::core::option::Option::Some(value) = self.#ident {
+                            #check
+                        }
+                    }
+                }
+                None => parsed.check(&key, &quote! { self.#ident }, is_float(&f.ty), &names),
+            };
+            Ok(quote! { #(#pins)* #check })
+        })
+        .collect::<syn::Result<Vec<_>>>()?;
     Ok(quote! {
+        impl #name {
+            /// Checks every field that declares a range against it (NaN is in no range),
+            /// in the struct's order: the first field outside, and why.
+            #[allow(
+                unused_comparisons,
+                clippy::absurd_extreme_comparisons,
+                reason = "a declared bound may be the type's own limit"
+            )]
+            pub fn validate_ranges(
+                &self,
+            ) -> ::core::result::Result<(), (&'static str, ::std::string::String)> {
+                #(#checks)*
+                ::core::result::Result::Ok(())
+            }
+        }
+
         impl ::core::default::Default for #name {
             fn default() -> Self {
                 Self { #(#defaults,)* }
@@ -131,6 +206,8 @@ fn field(f: &syn::Field) -> syn::Result<Field> {
         default: None,
         unit: None,
         range: None,
+        min: None,
+        max: None,
         per_frame: false,
         skip: false,
         doc: String::new(),
@@ -165,10 +242,14 @@ fn field(f: &syn::Field) -> syn::Result<Field> {
                     out.unit = Some(m.value()?.parse::<LitStr>()?.value());
                 } else if m.path.is_ident("range") {
                     out.range = Some(m.value()?.parse::<LitStr>()?.value());
+                } else if m.path.is_ident("min") {
+                    out.min = Some(m.value()?.parse()?);
+                } else if m.path.is_ident("max") {
+                    out.max = Some(m.value()?.parse()?);
                 } else if m.path.is_ident("per_frame") {
                     out.per_frame = true;
                 } else {
-                    return Err(m.error("expected default, unit, range or per_frame"));
+                    return Err(m.error("expected default, unit, range, min, max or per_frame"));
                 }
                 Ok(())
             })?;
@@ -230,6 +311,27 @@ fn spell(variant: &str, rename: &str) -> String {
         out.extend(c.to_lowercase());
     }
     out
+}
+
+/// `T` of an `Option<T>` field.
+fn option_inner(ty: &syn::Type) -> Option<&syn::Type> {
+    let syn::Type::Path(p) = ty else { return None };
+    let last = p.path.segments.last()?;
+    if last.ident != "Option" {
+        return None;
+    }
+    let syn::PathArguments::AngleBracketed(args) = &last.arguments else {
+        return None;
+    };
+    match args.args.first()? {
+        syn::GenericArgument::Type(t) => Some(t),
+        _ => None,
+    }
+}
+
+/// Whether a field is a floating-point number (its bounds are then written as floats).
+fn is_float(ty: &syn::Type) -> bool {
+    matches!(ty, syn::Type::Path(p) if p.path.is_ident("f32") || p.path.is_ident("f64"))
 }
 
 /// The unit a field's name carries (STYLE.md: `budget_ms`, `radius_m`).

@@ -47,7 +47,7 @@ pub use surface::SurfaceHit;
 pub use technique::{
     Agreement, AgreementSpec, Applies, Budget, ChangeResponse, FrameHistory, OfflineCommand,
     OfflineError, OfflineHost, OfflineProgress, OfflineSettings, Pacing, Registration,
-    SettingField, SettingValues, SettingsTable, StillFn, StillImages, Technique, TechniqueError,
-    TechniqueSettings,
+    SettingBound, SettingBounds, SettingField, SettingValues, SettingsTable, StillFn, StillImages,
+    Technique, TechniqueError, TechniqueSettings,
 };
 pub use world::{SharedWorld, World};

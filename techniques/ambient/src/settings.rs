@@ -10,20 +10,15 @@ use illume_transport::{Budget, Pacing, TechniqueSettings};
 pub struct AmbientSettings {
     /// Radiance arriving at every surface point after at least one bounce, the same from
     /// every direction [W/(m²·sr)], at least 0. Default 1 (exact in the furnace).
-    #[setting(default = 1.0, unit = "W/(m²·sr)")]
+    #[setting(default = 1.0, unit = "W/(m²·sr)", range = "[0, inf)")]
     pub radiance: f32,
 }
 
 impl AmbientSettings {
     /// Checks every value; the error names the field.
     pub fn validate(&self) -> Result<(), crate::AmbientError> {
-        if !(self.radiance >= 0.0 && self.radiance.is_finite()) {
-            return Err(crate::AmbientError::InvalidSetting {
-                field: "radiance",
-                reason: format!("{} is not a finite radiance ≥ 0", self.radiance),
-            });
-        }
-        Ok(())
+        self.validate_ranges()
+            .map_err(|(field, reason)| crate::AmbientError::InvalidSetting { field, reason })
     }
 }
 

@@ -113,25 +113,25 @@ pub struct PhotonStreamSettings {
     /// smoother, more detailed indirect light, at a shading cost linear in the count
     /// (pixels × VSLs). Never fewer than one per object. Default 100 (Tables 2–3 use
     /// 10–200).
-    #[setting(default = 100, range = "1–1 000 000")]
+    #[setting(default = 100, range = "1–1 000 000", max = MAX_VSLS)]
     pub vsl_count: u32,
     /// Extra candidates placed before Algorithm 1 removes the closest ones, as a
     /// fraction of `vsl_count` (§0.4.2: "an increase of 10 % provides interesting
     /// results"). Higher: more even spacing, at a placement cost growing with the
-    /// candidates. Default 0.10.
+    /// candidates.
     #[setting(default = 0.10, range = "[0, 10]")]
     pub oversampling: f32,
     /// Scale applied to each triangle about its centroid before a VSL is placed on it
     /// (§0.4.2, Figure 4a), in (0, 1]. Lower: VSLs further from edges and corners (fewer
-    /// light spots), at the cost of leaving triangle borders uncovered. Default 0.8.
+    /// light spots), at the cost of leaving triangle borders uncovered.
     #[setting(default = 0.8, range = "(0, 1]")]
     pub triangle_scale: f32,
     /// Photon impacts the FIFO pool holds (§0.3, §0.5). Higher: less noise in VSL powers,
     /// at the cost of latency after a change (latency = pool size / impact rate) and
-    /// 32 bytes per impact. Default 100 000.
-    #[setting(default = 100_000)]
+    /// 32 bytes per impact.
+    #[setting(default = 100_000, range = "1–100 000 000", max = MAX_POOL_IMPACTS)]
     pub pool_size: u32,
-    /// Streaming or reproducible shooting. Default [`StreamMode::Streaming`].
+    /// Streaming or reproducible shooting.
     #[setting(default = StreamMode::Streaming)]
     pub mode: StreamMode,
     /// OS priority of the streaming thread: `low` (default: frames first, photons in the
@@ -160,30 +160,30 @@ pub struct PhotonStreamSettings {
     /// it stops the indirect light's frame-to-frame flicker in a still world and gives the
     /// frames both cores while only the camera moves (the paper notes that streaming may
     /// pause then, §0.9.1). False: stream without end, as the paper does (for measuring
-    /// photon rates). Default true.
+    /// photon rates).
     #[setting(default = true)]
     pub rest_when_settled: bool,
     /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
-    /// cost linear in the count. Default 20 000.
+    /// cost linear in the count.
     #[setting(default = 20_000, per_frame)]
     pub photons_per_frame: u64,
     /// Photons the streaming thread traces per batch (one pool update under the pool's
     /// mutex, about a millisecond of work). Higher: less locking overhead, at the cost
-    /// of coarser pool updates; a batch ends early when the scene changes. Default 256.
-    #[setting(default = 256)]
+    /// of coarser pool updates; a batch ends early when the scene changes.
+    #[setting(default = 256, range = "≥ 1")]
     pub batch_photons: u32,
-    /// What a scene change does to the pool. Default [`ChangePolicy::AgeOut`].
+    /// What a scene change does to the pool.
     #[setting(default = ChangePolicy::AgeOut)]
     pub on_change: ChangePolicy,
     /// ε of §0.7.3 [W/(m²·sr)]: a VSL is ignored where its unoccluded contribution bound
     /// Φ_s·R/(π r²) falls below ε, i.e. beyond r_ε = sqrt(Φ_s·R/(π ε)). Higher: more
     /// culling (faster), at the cost of cutting off faint light. Default 1e-6 (paper).
-    #[setting(default = 1e-6, unit = "W/(m²·sr)")]
+    #[setting(default = 1e-6, unit = "W/(m²·sr)", range = "[0, inf)")]
     pub epsilon: f32,
     /// Side of the square screen tiles VSLs are culled against \[pixels\]. Smaller:
-    /// tighter culling, at a per-tile overhead. Default 16.
-    #[setting(default = 16, unit = "pixels")]
+    /// tighter culling, at a per-tile overhead.
+    #[setting(default = 16, unit = "pixels", range = "≥ 1")]
     pub tile_size: u32,
     /// Shade one pixel in `shading_stride²` (a grid `shading_stride` pixels apart) and
     /// interpolate the pixels between from the shaded ones on the same surface (normals
@@ -196,11 +196,11 @@ pub struct PhotonStreamSettings {
     /// 1–8, default 2.
     #[setting(default = 2, range = "1–8")]
     pub shading_stride: u32,
-    /// VSL shadow rays (beyond the paper). Default [`VisibilityMode::Off`].
+    /// VSL shadow rays (beyond the paper).
     #[setting(default = VisibilityMode::Off)]
     pub visibility: VisibilityMode,
     /// Shadow rays per pixel in [`VisibilityMode::Stochastic`]. Higher: less noise, at a
-    /// cost linear in the count. Default 8.
+    /// cost linear in the count.
     #[setting(default = 8)]
     pub visibility_rays: u32,
     /// Gather rays per shaded pixel for the near field (beyond the paper; 0 = off, the
@@ -216,7 +216,7 @@ pub struct PhotonStreamSettings {
     /// Higher: less gather noise, at one closest-hit ray each per shaded pixel (pixels
     /// between shaded ones are interpolated, `shading_stride`, so 576 rays at stride 3
     /// cost 64 a pixel). Default 0; the `quality` and `still` presets use 576.
-    #[setting(default = 0)]
+    #[setting(default = 0, range = "≤ 4096")]
     pub near_field_rays: u32,
     /// Radius of the near field in cell sizes √A_s of the VSL involved (the VSL whose
     /// weight is taken, or the gather hit's nearest VSL), at least 0.5. Larger: the
@@ -224,11 +224,10 @@ pub struct PhotonStreamSettings {
     /// inside it, more gather noise). `inf`: everything is gathered — a final gather
     /// over the VSL cells' exitance, in which the VSLs light nothing directly, need no
     /// visibility, and their count only sets the cells' size (the `quality` and `still`
-    /// presets: 3200 cells). Default 3.
+    /// presets: 3200 cells).
     #[setting(default = 3.0, range = "≥ 0.5 (or inf)")]
     pub near_field_scale: f32,
     /// Longest photon path in bounces, a safety net behind Russian roulette (§0.7.1).
-    /// Default 32.
     #[setting(default = 32)]
     pub max_bounces: u32,
     /// Photons read base-colour textures through copies box-filtered to at most
@@ -237,20 +236,20 @@ pub struct PhotonStreamSettings {
     /// filtered texel and the filter keeps every region's mean albedo, so VSL powers
     /// are unchanged in expectation (tested on Sponza); large textures stop costing a
     /// cache miss per impact (Sponza: 1.3× the impacts/s). False: full-resolution
-    /// albedo for photons too. Default true. Rendering always uses full resolution.
+    /// albedo for photons too. Rendering always uses full resolution.
     #[setting(default = true)]
     pub filtered_textures: bool,
     /// Fill the pool synchronously (on the calling thread and rayon) before the first
     /// frame, so the first frame is already converged (the paper renders at once and
     /// lets the stream fill in). False: frames start dark and brighten as the pool
-    /// fills. Default true.
+    /// fills.
     #[setting(default = true)]
     pub warm_up: bool,
-    /// Start with the simulation thread paused ([`StreamMode::Streaming`]). Default false.
+    /// Start with the simulation thread paused ([`StreamMode::Streaming`]).
     #[setting(default = false)]
     pub start_paused: bool,
     /// Seed of VSL placement and photon paths: the same seed gives the same VSLs and,
-    /// in deterministic mode, the same frames. Default 0.
+    /// in deterministic mode, the same frames.
     #[setting(default = 0)]
     pub seed: u64,
 }
@@ -331,34 +330,14 @@ impl PhotonStreamSettings {
         }
     }
 
-    /// Checks every value; the error names the field.
+    /// Checks every value against its declared range, then the checks across fields;
+    /// the error names the field.
     pub fn validate(&self) -> Result<(), crate::PhotonStreamError> {
         let bad = |field: &'static str, reason: String| {
             Err(crate::PhotonStreamError::InvalidSetting { field, reason })
         };
-        if self.vsl_count == 0 || self.vsl_count > MAX_VSLS {
-            return bad(
-                "vsl_count",
-                format!("{} is not in 1..={MAX_VSLS}", self.vsl_count),
-            );
-        }
-        if self.pool_size > MAX_POOL_IMPACTS {
-            return bad(
-                "pool_size",
-                format!("{} is more than {MAX_POOL_IMPACTS} impacts", self.pool_size),
-            );
-        }
-        if !(self.oversampling >= 0.0 && self.oversampling <= 10.0) {
-            return bad(
-                "oversampling",
-                format!("{} is not in [0, 10]", self.oversampling),
-            );
-        }
-        if !(self.triangle_scale > 0.0 && self.triangle_scale <= 1.0) {
-            return bad(
-                "triangle_scale",
-                format!("{} is not in (0, 1]", self.triangle_scale),
-            );
+        if let Err((field, reason)) = self.validate_ranges() {
+            return bad(field, reason);
         }
         if (self.pool_size as u64) < self.max_bounces as u64 + 1 {
             return bad(
@@ -366,48 +345,6 @@ impl PhotonStreamSettings {
                 format!(
                     "{} cannot hold one photon path of max_bounces + 1 impacts",
                     self.pool_size
-                ),
-            );
-        }
-        if !(0.0..=1.0).contains(&self.stream_share) {
-            return bad(
-                "stream_share",
-                format!(
-                    "{} is not a fraction of a core in [0, 1]",
-                    self.stream_share
-                ),
-            );
-        }
-        if self.batch_photons == 0 {
-            return bad("batch_photons", "must be at least 1".into());
-        }
-        if !(self.epsilon >= 0.0 && self.epsilon.is_finite()) {
-            return bad(
-                "epsilon",
-                format!("{} is not a finite non-negative radiance", self.epsilon),
-            );
-        }
-        if self.tile_size == 0 {
-            return bad("tile_size", "must be at least 1".into());
-        }
-        if !(1..=8).contains(&self.shading_stride) {
-            return bad(
-                "shading_stride",
-                format!("{} is not in 1..=8", self.shading_stride),
-            );
-        }
-        if self.near_field_rays > 4096 {
-            return bad(
-                "near_field_rays",
-                format!("{} is more than 4096", self.near_field_rays),
-            );
-        }
-        if self.near_field_scale.is_nan() || self.near_field_scale < 0.5 {
-            return bad(
-                "near_field_scale",
-                format!(
-                    "{} is not a number of cell sizes ≥ 0.5 (or inf)",
-                    self.near_field_scale
                 ),
             );
         }

@@ -73,59 +73,57 @@ pub struct PrecomputedSettings {
     /// pixel density at its centre (height / tan(yfov/2): 857 for 600 pixels at 70°).
     /// Six faces of that side cost 6·side²/(width·height) times a screen key (9× at
     /// 800×600).
-    #[setting(default = 0)]
+    #[setting(default = 0, unit = "pixels", range = "≤ 16 384")]
     pub cube_face: u32,
     /// `atlas`: lightmap texels per metre of surface. Higher: sharper indirect light and
     /// sky shadows, more texels to render and store (∝ density²). Default 16 (6 cm
     /// texels: indirect light varies slowly; the sun's own shadows are the renderer's).
-    #[setting(default = 16.0)]
+    #[setting(default = 16.0, unit = "texels/m", range = "(0, inf)")]
     pub atlas_density: f32,
     /// `atlas`: distance between the probes that light dynamic objects \[m\]. Lower:
     /// finer variation on moving objects, more probes (∝ 1/spacing³, 6 values each).
-    /// Default 0.5.
-    #[setting(default = 0.5, unit = "m")]
+    #[setting(default = 0.5, unit = "m", range = "(0, inf)")]
     pub probe_spacing: f32,
     /// Key times. Default `adaptive` (§3.2).
     #[setting(default = ScheduleKind::Adaptive)]
     pub schedule: ScheduleKind,
     /// Key interval of `uniform` and the smallest interval of `adaptive` \[minutes\].
     /// Lower: more keys, finer in time, longer precompute and larger file. Default 5 (§3.1).
-    #[setting(default = 5.0, unit = "minutes")]
+    #[setting(default = 5.0, unit = "minutes", range = "(0, inf)")]
     pub step_min: f64,
-    /// First clock hour of the precomputed span \[hours\]. Default 0.
+    /// First clock hour of the precomputed span \[hours\].
     #[setting(default = 0.0, unit = "hours")]
     pub from_h: f64,
-    /// Last clock hour \[hours\]. Default 24.
+    /// Last clock hour \[hours\].
     #[setting(default = 24.0, unit = "hours")]
     pub to_h: f64,
     /// Beyond the paper: adaptive splits compare the interpolation with a rendered middle
-    /// (more renders, catches non-linear changes the ends' test misses). Default false.
+    /// (more renders, catches non-linear changes the ends' test misses).
     #[setting(default = false)]
     pub verify_midpoint: bool,
     /// Samples per pixel of each key (and the sky image). Noise falls as 1/√spp; PCA
-    /// removes some of it. Default 256.
-    #[setting(default = 256)]
+    /// removes some of it.
+    #[setting(default = 256, range = "≥ 1")]
     pub spp: u32,
     /// Kept PCA components k. Higher: more variance kept (98.6 % at 10, 99.83 % at 20 in
     /// the paper), larger file and O(k) run time per texel. Default 10 (§3.2).
-    #[setting(default = 10)]
+    #[setting(default = 10, range = "≥ 1")]
     pub components: usize,
     /// If set (0–1), the fewest components (≤ `components`) capturing this fraction of
-    /// the variance. Default none.
-    #[setting(default = None, range = "0–1")]
+    /// the variance.
+    #[setting(default = None, range = "(0, 1]")]
     pub variance_target: Option<f64>,
-    /// PCA colour handling. Default `per-channel`.
+    /// PCA colour handling.
     #[setting(default = Colour::PerChannel)]
     pub colour: Colour,
     /// Interpolation of coefficients. Default `linear` (§3.1, §4.2).
     #[setting(default = Interpolation::Linear)]
     pub interpolation: Interpolation,
     /// Exposure the Yee metric sees key images at (`to_srgb8` of radiance × exposure);
-    /// stored in the file. Default 1.
-    #[setting(default = 1.0)]
+    /// stored in the file.
+    #[setting(default = 1.0, range = "(0, inf)")]
     pub exposure: f32,
     /// Seed; key t's samples are seeded from (seed, time), reproducible on any machine.
-    /// Default 0.
     #[setting(default = 0)]
     pub seed: u64,
 }
@@ -133,40 +131,14 @@ pub struct PrecomputedSettings {
 impl PrecomputedSettings {
     /// Checks every value; the error names the field.
     pub fn validate(&self) -> Result<(), crate::PrecomputedError> {
-        let bad = |field: &'static str, reason: &str| {
-            Err(crate::PrecomputedError::InvalidSetting {
-                field,
-                reason: reason.to_owned(),
-            })
+        let bad = |field: &'static str, reason: String| {
+            Err(crate::PrecomputedError::InvalidSetting { field, reason })
         };
-        if !(self.step_min.is_finite() && self.step_min > 0.0) {
-            return bad("step_min", "must be > 0 minutes");
+        if let Err((field, reason)) = self.validate_ranges() {
+            return bad(field, reason);
         }
         if !(self.from_h.is_finite() && self.to_h.is_finite() && self.to_h > self.from_h) {
-            return bad("to_h", "must be finite and after from_h");
-        }
-        if self.spp == 0 {
-            return bad("spp", "must be at least 1");
-        }
-        if self.components == 0 {
-            return bad("components", "must be at least 1");
-        }
-        if let Some(v) = self.variance_target
-            && !(v > 0.0 && v <= 1.0)
-        {
-            return bad("variance_target", "must be in (0, 1]");
-        }
-        if !(self.exposure.is_finite() && self.exposure > 0.0) {
-            return bad("exposure", "must be > 0");
-        }
-        if !(self.atlas_density.is_finite() && self.atlas_density > 0.0) {
-            return bad("atlas_density", "must be > 0 texels per metre");
-        }
-        if !(self.probe_spacing.is_finite() && self.probe_spacing > 0.0) {
-            return bad("probe_spacing", "must be > 0 metres");
-        }
-        if self.cube_face > 16384 {
-            return bad("cube_face", "must be at most 16384 pixels");
+            return bad("to_h", "must be finite and after from_h".to_owned());
         }
         Ok(())
     }

@@ -93,17 +93,17 @@ pub struct RadianceCacheSettings {
     /// beyond the paper): the translation term of Eq. 4 then changes a record's value by
     /// at most the fraction a within its sphere, so extrapolation stays positive where
     /// indirect light changes fast (indirect shadow edges) although the geometry is far.
-    /// True costs more records along such edges. Default true.
+    /// True costs more records along such edges.
     #[setting(default = true)]
     pub gradient_limit: bool,
     /// Strata of the hemisphere grid in θ (cosine-weighted: each stratum has the same
     /// projected solid angle), §6: 64. Rays per record = `theta_strata × phi_strata`.
     /// Higher: less noise per record and finer gradients, at a cost linear in the rays.
     /// 2–1024, default 64.
-    #[setting(default = 64, range = "2–1024")]
+    #[setting(default = 64, range = "2–1024", max = MAX_STRATA)]
     pub theta_strata: u32,
     /// Strata of the hemisphere grid in φ, §6: 64. 3–1024, default 64.
-    #[setting(default = 64, range = "3–1024")]
+    #[setting(default = 64, range = "3–1024", max = MAX_STRATA)]
     pub phi_strata: u32,
     /// a^t, the temporal accuracy (§4.2, Eq. 10): a record made at t₀ stays valid while
     /// |τ − 1|·(t − t₀) ≤ a^t, τ = E₁/E₀ its irradiance's change over one frame. Its
@@ -147,7 +147,7 @@ pub struct RadianceCacheSettings {
     /// served by records (see `traced_roughness_max`), at the cost of memory (n² RGB
     /// coefficients and their gradients per record) and shading time (n² per record
     /// and pixel). 1–16, default 8.
-    #[setting(default = 8, range = "1–16")]
+    #[setting(default = 8, range = "1–16", max = crate::hsh::MAX_ORDER)]
     pub hsh_order: u32,
     /// Glossy lobes of surfaces smoother than this are too sharp for `hsh_order`: their
     /// specular part is traced per pixel (with `continue_path`) instead of read from
@@ -172,11 +172,11 @@ pub struct RadianceCacheSettings {
     pub hole_fill_max_passes: u32,
     /// Beyond the paper: an expired record is replaced only where a surface facing its
     /// normal still lies at its position (else it is deleted), so records on objects
-    /// that moved away do not float in the air. Default true.
+    /// that moved away do not float in the air.
     #[setting(default = true)]
     pub replace_only_on_surface: bool,
     /// Beyond the paper: a replacement traces its predecessor's directions with its
-    /// random numbers, so E_l − E_k (Eq. 21) measures change, not noise. Default true.
+    /// random numbers, so E_l − E_k (Eq. 21) measures change, not noise.
     #[setting(default = true)]
     pub reuse_directions: bool,
     /// Beyond the paper: a change not on the timeline (an edit, a frame off the
@@ -196,7 +196,7 @@ pub struct RadianceCacheSettings {
     pub neighbour_aging: bool,
     /// §5, Fig. 9: an expired record that no pixel of its last frame used is deleted
     /// instead of replaced (the paper reports −25–30 % storage, −20–30 % time). False:
-    /// every expired record is replaced. Default true.
+    /// every expired record is replaced.
     #[setting(default = true)]
     pub deletion: bool,
     /// Most records a frame computes (new records and replacements; pass 1 of
@@ -220,15 +220,15 @@ pub struct RadianceCacheSettings {
     #[setting(default = false)]
     pub show_records: bool,
     /// Reflections after which Russian roulette may end a gather ray's path
-    /// (`continue_path`). Lower: faster, noisier records (still unbiased). Default 3.
+    /// (`continue_path`). Lower: faster, noisier records (still unbiased).
     #[setting(default = 3)]
     pub rr_start_depth: u32,
     /// Hard limit on a gather ray's reflections, a safety net behind Russian roulette.
     /// At least 1; default 1024.
-    #[setting(default = 1024)]
+    #[setting(default = 1024, range = "≥ 1")]
     pub max_depth: u32,
     /// Seed of the gather rays' jitter and paths: the same seed gives the same records,
-    /// whatever the thread count. Default 0.
+    /// whatever the thread count.
     #[setting(default = 0)]
     pub seed: u64,
     /// Set by `--realtime` pacing ([`TechniqueSettings::pace`]), not a setting.
@@ -390,21 +390,8 @@ impl RadianceCacheSettings {
         let bad = |field: &'static str, reason: String| {
             Err(RadianceCacheError::InvalidSetting { field, reason })
         };
-        // Written as `!(in range)` so that NaN fails every check.
-        if !(self.accuracy > 0.0 && self.accuracy <= 1.0) {
-            return bad("accuracy", format!("{} is not in (0, 1]", self.accuracy));
-        }
-        if !(self.r_min_fraction > 0.0 && self.r_min_fraction <= 1.0) {
-            return bad(
-                "r_min_fraction",
-                format!("{} is not in (0, 1]", self.r_min_fraction),
-            );
-        }
-        if !(self.r_max_fraction > 0.0 && self.r_max_fraction <= 10.0) {
-            return bad(
-                "r_max_fraction",
-                format!("{} is not in (0, 10]", self.r_max_fraction),
-            );
+        if let Err((field, reason)) = self.validate_ranges() {
+            return bad(field, reason);
         }
         if self.r_min_fraction > self.r_max_fraction {
             return bad(
@@ -414,69 +401,6 @@ impl RadianceCacheSettings {
                     self.r_min_fraction, self.r_max_fraction
                 ),
             );
-        }
-        if !(2..=MAX_STRATA).contains(&self.theta_strata) {
-            return bad(
-                "theta_strata",
-                format!("{} is not in 2..={MAX_STRATA}", self.theta_strata),
-            );
-        }
-        if !(3..=MAX_STRATA).contains(&self.phi_strata) {
-            return bad(
-                "phi_strata",
-                format!("{} is not in 3..={MAX_STRATA}", self.phi_strata),
-            );
-        }
-        if !(self.temporal_accuracy > 0.0 && self.temporal_accuracy <= 1.0) {
-            return bad(
-                "temporal_accuracy",
-                format!("{} is not in (0, 1]", self.temporal_accuracy),
-            );
-        }
-        if !(1..=100_000).contains(&self.max_age_frames) {
-            return bad(
-                "max_age_frames",
-                format!("{} is not in 1..=100000", self.max_age_frames),
-            );
-        }
-        if !(0.0..=1.0).contains(&self.glossy_roughness_max) {
-            return bad(
-                "glossy_roughness_max",
-                format!("{} is not in [0, 1]", self.glossy_roughness_max),
-            );
-        }
-        let max_order = crate::hsh::MAX_ORDER as u32;
-        if !(1..=max_order).contains(&self.hsh_order) {
-            return bad(
-                "hsh_order",
-                format!("{} is not in 1..={max_order}", self.hsh_order),
-            );
-        }
-        if !(self.traced_roughness_max >= 0.0
-            && self.traced_roughness_max <= self.glossy_roughness_max)
-        {
-            return bad(
-                "traced_roughness_max",
-                format!(
-                    "{} is not in [0, glossy_roughness_max = {}]",
-                    self.traced_roughness_max, self.glossy_roughness_max
-                ),
-            );
-        }
-        if !(1..=4096).contains(&self.traced_rays) {
-            return bad(
-                "traced_rays",
-                format!("{} is not in 1..=4096", self.traced_rays),
-            );
-        }
-        if !(1..=4096).contains(&self.hole_fill_max_passes) {
-            return bad(
-                "hole_fill_max_passes",
-                format!("{} is not in 1..=4096", self.hole_fill_max_passes),
-            );
-        }
-        if self.max_depth == 0 {
-            return bad("max_depth", "must be at least 1".into());
         }
         if self.paced_real_time
             && matches!(

@@ -11,24 +11,23 @@ use illume_transport::{Budget, Pacing, TechniqueSettings};
 pub struct ReferenceSettings {
     /// Samples per pixel of a full-image render ([`ReferenceRenderer`](crate::ReferenceRenderer),
     /// `illume render --technique reference`). Noise falls as 1/√spp, time grows
-    /// linearly. Default 256.
-    #[setting(default = 256)]
+    /// linearly.
+    #[setting(default = 256, range = "≥ 1")]
     pub spp: u32,
     /// Samples per pixel a [`ReferenceTechnique`](crate::ReferenceTechnique) adds each
     /// frame when the frame loop's budget does not say (indirect-only, progressive while
     /// the scene is static). Higher: faster convergence per frame, slower frames.
-    /// Default 4.
-    #[setting(default = 4, per_frame)]
+    #[setting(default = 4, range = "≥ 1", per_frame)]
     pub spp_per_frame: u32,
     /// Bounces before Russian roulette may end a path. Lower: faster, noisier deep
-    /// paths (still unbiased). Default 3.
+    /// paths (still unbiased).
     #[setting(default = 3)]
     pub rr_start_depth: u32,
     /// Hard limit on bounces, a safety net (Russian roulette ends paths long before in
-    /// any scene with albedo < 1). Default 1024.
-    #[setting(default = 1024)]
+    /// any scene with albedo < 1).
+    #[setting(default = 1024, range = "≥ 1")]
     pub max_depth: u32,
-    /// Seed; the same seed gives the same image, bit for bit. Default 0.
+    /// Seed; the same seed gives the same image, bit for bit.
     #[setting(default = 0)]
     pub seed: u64,
 }
@@ -36,22 +35,8 @@ pub struct ReferenceSettings {
 impl ReferenceSettings {
     /// Checks every value; the error names the field.
     pub fn validate(&self) -> Result<(), crate::ReferenceError> {
-        let bad = |field: &'static str, reason: &str| {
-            Err(crate::ReferenceError::InvalidSetting {
-                field,
-                reason: reason.to_owned(),
-            })
-        };
-        if self.spp == 0 {
-            return bad("spp", "must be at least 1");
-        }
-        if self.spp_per_frame == 0 {
-            return bad("spp_per_frame", "must be at least 1");
-        }
-        if self.max_depth == 0 {
-            return bad("max_depth", "must be at least 1");
-        }
-        Ok(())
+        self.validate_ranges()
+            .map_err(|(field, reason)| crate::ReferenceError::InvalidSetting { field, reason })
     }
 }
 

@@ -91,25 +91,25 @@ pub struct SelectiveSettings {
     /// element per triangle. Higher: sharper indirect light, at the cost of more noise
     /// per element (photons are shared among more buckets) and memory (48 B per
     /// element side pair). Default 12 400 (§7, ROOM).
-    #[setting(default = 12_400)]
+    #[setting(default = 12_400, range = "1–50 000 000", max = MAX_ELEMENTS)]
     pub element_count: u32,
     /// Element-grid vertices of one object within this angle of each other's face
     /// normal \[degrees\] are one display vertex (Gouraud smoothing across triangles,
     /// §6). Higher: smoother across creases, at the cost of light bleeding around
     /// corners. 0–180, default 45.
-    #[setting(default = 45.0, unit = "degrees", range = "0–180")]
+    #[setting(default = 45.0, unit = "degrees", range = "[0, 180]")]
     pub smoothing_angle_deg: f32,
-    /// Order of re-tracing stale groups (§5.3). Default [`GroupOrder::Priority`].
+    /// Order of re-tracing stale groups (§5.3).
     #[setting(default = GroupOrder::Priority)]
     pub order: GroupOrder,
     /// Pilot photons shot since the last camera move before the view-frustum factor V
     /// counts (§5.3, "sufficient for its robust estimate"); until then V = 1. Higher:
-    /// a steadier V, at the cost of a longer time blind to the view. Default 2000.
+    /// a steadier V, at the cost of a longer time blind to the view.
     #[setting(default = 2000)]
     pub visibility_min_pilots: u32,
     /// Priority given to the view frustum (§5.3): a stale group's V is 1 + this ×
-    /// (its pilot hits in the frustum) / (its pilots shot). 0 ignores the view. Default 4.
-    #[setting(default = 4.0)]
+    /// (its pilot hits in the frustum) / (its pilots shot). 0 ignores the view.
+    #[setting(default = 4.0, range = "[0, inf)")]
     pub visibility_weight: f32,
     /// Fraction of the scene's power carried by changed lights above which a light
     /// change restarts the solution (photons in index order, shown normalised by the
@@ -129,13 +129,12 @@ pub struct SelectiveSettings {
     /// [`Selective::for_world`](crate::Selective::for_world)) when the frame loop gives
     /// none \[ms\]. Higher: faster recovery after a change, at
     /// the cost of frame rate. Groups are atomic, so a frame may overrun by one group.
-    /// Default 25.
-    #[setting(default = 25.0, unit = "ms", per_frame)]
+    #[setting(default = 25.0, unit = "ms", range = "(0, 3 600 000]", per_frame)]
     pub frame_budget_ms: f64,
     /// Photons traced between two frames in [`SelectiveMode::Deterministic`] when the
     /// frame loop's budget does not say (whole groups, so a frame may overrun by one
-    /// group). Default 100 000.
-    #[setting(default = 100_000, per_frame)]
+    /// group).
+    #[setting(default = 100_000, range = "≥ 1", per_frame)]
     pub photons_per_frame: u64,
     /// Beyond the paper: while nothing is stale (a static scene), the pool grows by
     /// rounds of N_p correctives per group (R + 1 each round, so groups keep their
@@ -144,19 +143,19 @@ pub struct SelectiveSettings {
     /// the cost of a longer update after the next change (every group holds more
     /// photons to re-trace) and a slower restart. 0 (default) or at most N_g·N_p·R:
     /// the pool stays at N_g·N_p·R, as in the paper.
-    #[setting(default = 0)]
+    #[setting(default = 0, range = "≤ 4 294 967 296", max = MAX_POOL)]
     pub max_photons: u64,
     /// Trace the whole pool before the first frame. False: frames start dark and
     /// brighten as photons are traced in index order (shown normalised by the photons
-    /// traced). Default true.
+    /// traced).
     #[setting(default = true)]
     pub warm_up: bool,
-    /// Longest photon path in bounces, a safety net behind Russian roulette. Default 32.
+    /// Longest photon path in bounces, a safety net behind Russian roulette.
     #[setting(default = 32)]
     pub max_bounces: u32,
     /// Photons read base-colour textures through box-filtered copies (see
     /// `photon_stream.filtered_textures`): element buckets are far larger than a
-    /// filtered texel. Default true.
+    /// filtered texel.
     #[setting(default = true)]
     pub filtered_textures: bool,
     /// Visual masking of lighting patterns by textures (§5.3): a pilot hit on a textured
@@ -167,7 +166,7 @@ pub struct SelectiveSettings {
     /// surfaces, at the cost of a masking table per texture built at construction (a few
     /// passes over each base-colour texture's texels) and a table lookup per pilot hit.
     /// False: every pilot hit counts Δp = 1. Only the order of re-tracing depends on
-    /// it, never the converged solution. Default true.
+    /// it, never the converged solution.
     #[setting(default = true)]
     pub texture_masking: bool,
     /// Luminance contrast of a lighting artefact just visible on an untextured surface
@@ -179,7 +178,7 @@ pub struct SelectiveSettings {
     /// default 0.01 (1 %, about the Weber fraction of photopic vision).
     #[setting(default = 0.01, range = "(0, 1]")]
     pub masking_contrast_threshold: f32,
-    /// Seed of the Halton digit scrambling (scrambling keeps Eq. 3). Default 0.
+    /// Seed of the Halton digit scrambling (scrambling keeps Eq. 3).
     #[setting(default = 0)]
     pub seed: u64,
 }
@@ -230,14 +229,8 @@ impl SelectiveSettings {
         let bad = |field: &'static str, reason: String| {
             Err(crate::SelectiveError::InvalidSetting { field, reason })
         };
-        if self.pilots_per_group < 2 {
-            return bad(
-                "pilots_per_group",
-                format!("{} is less than 2", self.pilots_per_group),
-            );
-        }
-        if self.ratio < 2 {
-            return bad("ratio", format!("{} is less than 2", self.ratio));
+        if let Err((field, reason)) = self.validate_ranges() {
+            return bad(field, reason);
         }
         let mut n_g: u64 = 1;
         for &[base, exponent] in &self.group_factors {
@@ -276,51 +269,6 @@ impl SelectiveSettings {
             return bad(
                 "pilots_per_group",
                 format!("N_g·N_p·R = {pool} photons exceeds {MAX_POOL}"),
-            );
-        }
-        if self.element_count == 0 || self.element_count > MAX_ELEMENTS {
-            return bad(
-                "element_count",
-                format!("{} is not in 1..={MAX_ELEMENTS}", self.element_count),
-            );
-        }
-        if !(0.0..=180.0).contains(&self.smoothing_angle_deg) {
-            return bad(
-                "smoothing_angle_deg",
-                format!("{} is not in [0, 180]", self.smoothing_angle_deg),
-            );
-        }
-        if !(self.visibility_weight >= 0.0 && self.visibility_weight.is_finite()) {
-            return bad(
-                "visibility_weight",
-                format!("{} is not a finite number ≥ 0", self.visibility_weight),
-            );
-        }
-        if !(0.0..=1.0).contains(&self.restart_fraction) {
-            return bad(
-                "restart_fraction",
-                format!("{} is not in [0, 1]", self.restart_fraction),
-            );
-        }
-        if !(self.frame_budget_ms > 0.0 && self.frame_budget_ms <= 3.6e6) {
-            return bad(
-                "frame_budget_ms",
-                format!("{} is not in (0, 3 600 000]", self.frame_budget_ms),
-            );
-        }
-        if self.max_photons > MAX_POOL {
-            return bad(
-                "max_photons",
-                format!("{} exceeds {MAX_POOL}", self.max_photons),
-            );
-        }
-        if self.photons_per_frame == 0 {
-            return bad("photons_per_frame", "must be at least 1".into());
-        }
-        if !(self.masking_contrast_threshold > 0.0 && self.masking_contrast_threshold <= 1.0) {
-            return bad(
-                "masking_contrast_threshold",
-                format!("{} is not in (0, 1]", self.masking_contrast_threshold),
             );
         }
         Ok(())

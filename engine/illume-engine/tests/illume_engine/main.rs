@@ -1,5 +1,5 @@
 //! The integration tests of illume-engine, one binary: the frame recipe end to end: image
-//! identity, scene changes, the precomputed day.
+//! identity, scene changes, the precomputed day, the settings' declared ranges.
 //!
 //! Each module is one mechanism; the tests of all modules run in parallel threads of
 //! one process (a test that needs the process to itself says so in its module).
@@ -7,4 +7,5 @@
 mod image_identity;
 mod precomputed;
 mod scene_changes;
+mod setting_ranges;
 mod technique_folders;
