@@ -131,7 +131,9 @@ pub struct PhotonStreamSettings {
     /// 32 bytes per impact.
     #[setting(default = 100_000, range = "1–100 000 000", max = MAX_POOL_IMPACTS)]
     pub pool_size: u32,
-    /// Streaming or reproducible shooting.
+    /// Streaming ([`StreamMode::Streaming`]: a thread shoots photons while frames render)
+    /// or reproducible shooting ([`StreamMode::Deterministic`]: a fixed number between
+    /// frames).
     #[setting(default = StreamMode::Streaming)]
     pub mode: StreamMode,
     /// OS priority of the streaming thread: `low` (default: frames first, photons in the

@@ -113,7 +113,8 @@ pub struct PrecomputedSettings {
     /// the variance.
     #[setting(default = None, range = "(0, 1]")]
     pub variance_target: Option<f64>,
-    /// PCA colour handling.
+    /// PCA colour handling: one PCA per channel ([`Colour::PerChannel`], k components
+    /// each) or one over all three channels ([`Colour::Joint`], shared eigenvectors).
     #[setting(default = Colour::PerChannel)]
     pub colour: Colour,
     /// Interpolation of coefficients. Default `linear` (§3.1, §4.2).
