@@ -57,8 +57,8 @@ pub struct ViewOptions {
     pub play: bool,
     /// Exposure added to the automatic one \[stops\].
     pub exposure_ev: f32,
-    /// Start with the stats overlay on the image hidden (O shows it).
-    pub hide_stats: bool,
+    /// Start with the stats overlay on the image shown (O toggles it).
+    pub stats: bool,
     /// Test mode: write this screenshot (PNG, tone-mapped as `render` writes it; an EXR
     /// beside it) once [`ViewOptions::exit_after_frames`] frames were displayed and the
     /// reference has its samples, then exit.

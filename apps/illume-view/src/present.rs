@@ -88,26 +88,45 @@ const PARALLEL_PIXELS: usize = 1 << 16;
 
 impl Gpu {
     /// Creates the surface of `window` on the first adapter that can present to it
-    /// (Vulkan, then GL; `WGPU_BACKEND` overrides).
+    /// (Vulkan, then GL; `WGPU_BACKEND` overrides). The backends are tried one at a
+    /// time: probing GL when Vulkan works starts EGL, whose drivers print errors
+    /// ("DRI2: failed to load driver", "XDG_RUNTIME_DIR is invalid") on a normal start.
     pub fn new(window: Arc<Window>) -> Result<Self, ViewError> {
-        let backends =
-            wgpu::Backends::from_env().unwrap_or(wgpu::Backends::VULKAN | wgpu::Backends::GL);
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
-            backends,
-            ..wgpu::InstanceDescriptor::new_without_display_handle()
-        });
-        let surface = instance
-            .create_surface(window.clone())
-            .map_err(|e| ViewError::Gpu(format!("cannot create a surface: {e}")))?;
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::default(),
-            force_fallback_adapter: false,
-            compatible_surface: Some(&surface),
-            apply_limit_buckets: false,
-        }))
-        .map_err(|e| {
+        let tries = match wgpu::Backends::from_env() {
+            Some(b) => vec![b],
+            None => vec![wgpu::Backends::VULKAN, wgpu::Backends::GL],
+        };
+        let mut errors = Vec::new();
+        let mut found = None;
+        for backends in tries {
+            let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+                backends,
+                ..wgpu::InstanceDescriptor::new_without_display_handle()
+            });
+            let surface = match instance.create_surface(window.clone()) {
+                Ok(s) => s,
+                Err(e) => {
+                    errors.push(format!("{backends:?}: cannot create a surface: {e}"));
+                    continue;
+                }
+            };
+            match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::default(),
+                force_fallback_adapter: false,
+                compatible_surface: Some(&surface),
+                apply_limit_buckets: false,
+            })) {
+                Ok(adapter) => {
+                    found = Some((surface, adapter));
+                    break;
+                }
+                Err(e) => errors.push(format!("{backends:?}: {e}")),
+            }
+        }
+        let (surface, adapter) = found.ok_or_else(|| {
             ViewError::Gpu(format!(
-                "no Vulkan or GL adapter can present to the window ({e}); on Debian install mesa-vulkan-drivers and libvulkan1 (scripts/ci/install-viewer-deps.sh)"
+                "no Vulkan or GL adapter can present to the window ({}); on Debian install mesa-vulkan-drivers and libvulkan1 (scripts/ci/install-viewer-deps.sh)",
+                errors.join("; ")
             ))
         })?;
         let info = adapter.get_info();

@@ -132,6 +132,9 @@ pub struct Shown {
     pub auto_exposure_ev: f32,
     /// The technique running.
     pub technique: TechniqueKind,
+    /// Techniques that could not be built on this scene, with the reason: the
+    /// technique that ran before keeps running, and T and the drop-down skip these.
+    pub unavailable: Vec<(TechniqueKind, String)>,
     /// Reference samples per pixel in the image (reference mode or split view).
     pub reference_spp: Option<u32>,
     /// The reference's target samples per pixel (it stops there).
@@ -313,6 +316,8 @@ struct State {
     min_frame: Option<Duration>,
     /// When the last frame started.
     frame_started: Option<Instant>,
+    /// Techniques that failed to build on this scene, with the error ([`Shown::unavailable`]).
+    unavailable: Vec<(TechniqueKind, String)>,
 }
 
 impl State {
@@ -350,8 +355,14 @@ impl State {
             min_frame: (setup.max_fps > 0.0 && setup.max_fps.is_finite())
                 .then(|| Duration::from_secs_f64(1.0 / setup.max_fps)),
             frame_started: None,
+            unavailable: Vec::new(),
         };
-        s.rebuild();
+        // A technique that cannot run on this scene leaves the window to the reference,
+        // which runs on every scene, rather than to an empty window.
+        if !s.rebuild() && s.config.technique != TechniqueKind::Reference {
+            s.config.technique = TechniqueKind::Reference;
+            s.rebuild();
+        }
         s
     }
 
@@ -371,24 +382,42 @@ impl State {
         }
     }
 
-    /// Builds the engine anew from the current scene and configuration.
-    fn rebuild(&mut self) {
-        let scene = self.current_scene();
+    /// Builds the engine anew from the current scene and configuration; see
+    /// [`State::rebuild_with`].
+    fn rebuild(&mut self) -> bool {
+        self.rebuild_with(self.current_scene())
+    }
+
+    /// Builds the engine anew from `scene` and the configuration. False when it cannot
+    /// be built: the engine that ran keeps running (the caller restores what it changed),
+    /// the technique is listed as unavailable with the error, and a message says why.
+    /// Nothing the user does leaves the window without an engine.
+    fn rebuild_with(&mut self, scene: Scene) -> bool {
         let mut config = self.config.clone();
         config.render.width = (config.render.width / self.scale).max(1);
         config.render.height = (config.render.height / self.scale).max(1);
-        self.engine = None;
         // Frames come as the user acts: settings that need them known in advance take
         // their nearest interactive setting (a window with no image helps nobody).
         if let Some(changed) = self.config.technique_settings_mut().adapt_to_interactive() {
             config.technique_settings_mut().adapt_to_interactive();
             self.message(changed);
         }
+        let technique = config.technique;
+        self.unavailable.retain(|(k, _)| *k != technique);
         match Engine::new(scene.clone(), &config) {
             Ok(e) => self.engine = Some(e),
             Err(e) => {
-                self.scene = scene;
-                self.message(format!("cannot build {}: {e}", config.technique));
+                if self.engine.is_none() {
+                    self.scene = scene;
+                }
+                let kept = match &self.engine {
+                    Some(e) => format!("; {} keeps running", e.kind()),
+                    None => String::new(),
+                };
+                self.message(format!("cannot build {technique}: {e}{kept}"));
+                self.unavailable.push((technique, e.to_string()));
+                self.dirty = true;
+                return false;
             }
         }
         self.reference = Some(ReferenceRenderer::new(
@@ -398,6 +427,7 @@ impl State {
         ));
         self.flip = None;
         self.dirty = true;
+        true
     }
 
     fn shows_reference(&self) -> bool {
@@ -462,9 +492,12 @@ impl State {
             Command::MoveSelected { translate, rotate } => self.move_selected(translate, rotate),
             Command::Technique(kind) => {
                 if kind != self.config.technique {
+                    let previous = self.config.clone();
                     self.config.technique = kind;
                     self.config.technique_settings_mut().pace(Pacing::RealTime);
-                    self.rebuild();
+                    if !self.rebuild() {
+                        self.config = previous;
+                    }
                 }
             }
             Command::Set(kv) => self.set(&kv),
@@ -479,8 +512,10 @@ impl State {
             Command::Scale(n) => {
                 let n = n.clamp(1, 8);
                 if n != self.scale {
-                    self.scale = n;
-                    self.rebuild();
+                    let previous = std::mem::replace(&mut self.scale, n);
+                    if !self.rebuild() {
+                        self.scale = previous;
+                    }
                 }
             }
             Command::Animation(a) => match a {
@@ -493,14 +528,18 @@ impl State {
                 AnimationCommand::PingPong(p) => self.ping_pong = p,
             },
             Command::Scene(scene) => {
-                self.scene_camera = scene.camera.world_from_camera;
-                self.clock_s = scene.time;
-                self.time_s = scene.time;
-                self.selection = None;
-                self.pick = None;
-                self.engine = None;
-                self.scene = *scene;
-                self.rebuild();
+                // What failed on the last scene may run on this one.
+                let unavailable = std::mem::take(&mut self.unavailable);
+                let (camera, time) = (scene.camera.world_from_camera, scene.time);
+                if self.rebuild_with(*scene) {
+                    self.scene_camera = camera;
+                    self.clock_s = time;
+                    self.time_s = time;
+                    self.selection = None;
+                    self.pick = None;
+                } else {
+                    self.unavailable = unavailable;
+                }
             }
         }
         true
@@ -516,7 +555,7 @@ impl State {
         match with_set {
             Ok(c) => {
                 let applies = setting_applies(self.config.technique, kv);
-                self.config = c;
+                let previous = std::mem::replace(&mut self.config, c);
                 self.config.technique_settings_mut().pace(Pacing::RealTime);
                 match (applies, &mut self.engine) {
                     (Applies::PerFrame, Some(engine)) => {
@@ -525,8 +564,11 @@ impl State {
                         self.message(format!("{kv}: applied at the next frame"));
                     }
                     _ => {
-                        self.message(format!("{kv}: {} rebuilt", self.config.technique));
-                        self.rebuild();
+                        if self.rebuild() {
+                            self.message(format!("{kv}: {} rebuilt", self.config.technique));
+                        } else {
+                            self.config = previous;
+                        }
                     }
                 }
             }
@@ -822,6 +864,7 @@ impl State {
             auto_exposure_ev: auto_exposure_ev(&image).unwrap_or(0.0),
             image,
             technique: self.config.technique,
+            unavailable: self.unavailable.clone(),
             reference_spp,
             reference_target: target,
             flip: self.flip.filter(|_| self.split.is_some()),
@@ -985,5 +1028,44 @@ pub(crate) mod tests {
             shown.image.mean().length() > 0.0,
             "the window shows a black image"
         );
+    }
+
+    /// A technique that cannot run on the scene (precomputed needs a sun path, which
+    /// `cornell-spot` has not) never leaves the window without an engine (issue 38: T
+    /// from radiance_cache to precomputed left it rendering nothing for any input). The
+    /// technique that ran keeps running and answers later commands, the failure is
+    /// listed, and a technique that can run is still reached.
+    #[test]
+    fn a_technique_that_cannot_be_built_keeps_the_previous_one_running() {
+        let render = small_render_thread(TechniqueKind::RadianceCache);
+        wait_for(&render, "a radiance_cache frame", &|s| {
+            s.technique == TechniqueKind::RadianceCache
+        });
+        render.send(Command::Technique(TechniqueKind::Precomputed));
+        let shown = wait_for(&render, "precomputed listed as unavailable", &|s| {
+            !s.unavailable.is_empty()
+        });
+        assert_eq!(shown.technique, TechniqueKind::RadianceCache);
+        assert_eq!(shown.unavailable.len(), 1);
+        assert_eq!(shown.unavailable[0].0, TechniqueKind::Precomputed);
+        assert!(
+            shown
+                .messages
+                .iter()
+                .any(|m| m.contains("cannot build precomputed") && m.contains("keeps running")),
+            "{:?}",
+            shown.messages
+        );
+        // The window still answers: a new frame after a command, then another technique.
+        let index = shown.index;
+        render.send(Command::Scale(2));
+        let after = wait_for(&render, "a frame after the failed build", &|s| {
+            s.index > index && s.scale == 2
+        });
+        assert!(after.image.mean().length() > 0.0);
+        render.send(Command::Technique(TechniqueKind::PhotonStream));
+        wait_for(&render, "a photon_stream frame", &|s| {
+            s.technique == TechniqueKind::PhotonStream
+        });
     }
 }

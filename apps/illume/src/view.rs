@@ -32,8 +32,12 @@ pub struct ViewArgs {
     /// Exposure [stops] added to the automatic one, within ±64.
     #[arg(long, default_value_t = 0.0, value_parser = crate::setup::exposure_stops, allow_hyphen_values = true)]
     pub exposure: f32,
-    /// Start with the stats overlay on the image hidden (O shows it).
+    /// Start with the stats overlay on the image shown (O toggles it; off by default: at
+    /// 640×480 it covers half the image).
     #[arg(long)]
+    pub stats: bool,
+    /// The overlay is hidden by default now; kept so older command lines still run.
+    #[arg(long, hide = true)]
     pub hide_stats: bool,
     /// Random seed of the renderer and the technique.
     #[arg(long)]
@@ -97,7 +101,7 @@ pub fn run(a: ViewArgs) -> Result<()> {
         reference: a.reference,
         play: a.play,
         exposure_ev: a.exposure,
-        hide_stats: a.hide_stats,
+        stats: a.stats && !a.hide_stats,
         screenshot: a.screenshot,
         exit_after_frames: a.exit_after_frames,
         linger_ms: a.linger_ms,

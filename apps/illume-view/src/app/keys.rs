@@ -31,11 +31,17 @@ impl App {
             let mut handled = true;
             match key {
                 Key::T => {
+                    // The next technique that can run on this scene (a technique that
+                    // failed to build is skipped; its reason is in the panel).
                     let all = TechniqueKind::ALL;
                     let i = all.iter().position(|k| *k == shown.technique).unwrap_or(0);
                     let n = all.len();
-                    let next = if shift { (i + n - 1) % n } else { (i + 1) % n };
-                    actions.commands.push(Command::Technique(all[next]));
+                    let next = (1..n)
+                        .map(|d| all[if shift { (i + n - d) % n } else { (i + d) % n }])
+                        .find(|k| !shown.unavailable.iter().any(|(u, _)| u == k));
+                    if let Some(next) = next {
+                        actions.commands.push(Command::Technique(next));
+                    }
                 }
                 Key::R => {
                     let on = !(shown.reference_spp.is_some() && shown.split.is_none());

@@ -27,6 +27,15 @@ use std::time::{Duration, Instant};
 use winit::event_loop::{ActiveEventLoop, EventLoop, EventLoopProxy};
 use winit::window::Window;
 
+/// winit's OS errors read "os error at /…/winit-0.30/src/…/mod.rs:765: MESSAGE": the
+/// user gets MESSAGE, not a path into cargo's registry.
+fn without_source_location(e: &str) -> &str {
+    match e.find(".rs:") {
+        Some(i) => e[i..].split_once(": ").map_or(e, |(_, m)| m),
+        None => e,
+    }
+}
+
 /// Width of the side panel \[points\].
 const PANEL_WIDTH: f32 = 260.0;
 /// The window redraws at least this often (input is handled at every redraw).
@@ -35,7 +44,8 @@ const REFRESH: Duration = Duration::from_millis(16);
 pub fn run(options: ViewOptions) -> Result<(), ViewError> {
     let event_loop = EventLoop::<()>::with_user_event().build().map_err(|e| {
         ViewError::Window(format!(
-            "{e} (is DISPLAY set and an X or Wayland server running?)"
+            "{} (is DISPLAY set and an X or Wayland server running?)",
+            without_source_location(&e.to_string())
         ))
     })?;
     let proxy = event_loop.create_proxy();
@@ -127,7 +137,7 @@ struct App {
 impl App {
     fn new(options: ViewOptions, proxy: EventLoopProxy<()>) -> Self {
         let exposure_ev = options.exposure_ev;
-        let overlay = !options.hide_stats;
+        let overlay = options.stats;
         Self {
             options,
             proxy,
@@ -351,4 +361,18 @@ struct Actions {
     record: bool,
     reset_camera: bool,
     material: Option<(usize, Vec3)>,
+}
+
+#[cfg(test)]
+mod tests {
+    /// The no-display error names the cause, not winit's source file (issue 38).
+    #[test]
+    fn os_errors_lose_their_source_location() {
+        let e = "os error at /root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/winit-0.30.13/src/platform_impl/linux/mod.rs:765: neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set.";
+        assert_eq!(
+            super::without_source_location(e),
+            "neither WAYLAND_DISPLAY nor WAYLAND_SOCKET nor DISPLAY is set."
+        );
+        assert_eq!(super::without_source_location("plain"), "plain");
+    }
 }

@@ -20,7 +20,17 @@ impl App {
             .selected_text(kind.name())
             .show_ui(ui, |ui| {
                 for &k in TechniqueKind::ALL {
-                    ui.selectable_value(&mut kind, k, k.name());
+                    match shown.unavailable.iter().find(|(u, _)| *u == k) {
+                        Some((_, why)) => {
+                            ui.add_enabled_ui(false, |ui| {
+                                ui.selectable_value(&mut kind, k, k.name())
+                                    .on_disabled_hover_text(format!("cannot run here: {why}"));
+                            });
+                        }
+                        None => {
+                            ui.selectable_value(&mut kind, k, k.name());
+                        }
+                    }
                 }
             })
             .response
