@@ -30,6 +30,12 @@ use illume_scene::{Mesh, Scene};
 use illume_transport::flux::Quanta;
 use std::collections::HashMap;
 
+/// Quantized object-space position.
+type PosKey = [i64; 3];
+
+/// The triangles and local edge numbers on each edge (its end points' keys, ordered).
+type EdgeSides = HashMap<(PosKey, PosKey), Vec<(usize, usize)>>;
+
 /// Largest grid side k per triangle (k² elements).
 pub const MAX_K: u32 = 256;
 
@@ -108,7 +114,7 @@ fn element_corners(k: u32, e: u32) -> [(u32, u32); 3] {
 /// The power-of-two grid side for a triangle of area `area` and a target element area
 /// `target`: the power of two nearest (in log scale) to √(area/target), 1 … [`MAX_K`].
 pub fn grid_side(area: f64, target: f64) -> u32 {
-    if !(target > 0.0 && area > target) {
+    if target.is_nan() || target <= 0.0 || area.is_nan() || area <= target {
         return 1;
     }
     let log2_k = (0.5 * (area / target).log2()).round();
@@ -214,7 +220,7 @@ impl MeshGrid {
         cos_smooth: f32,
     ) -> Vec<(u32, u32, u32, f32)> {
         let key = |p: Vec3| [p.x, p.y, p.z].map(|c| (c as f64 / cell).round() as i64);
-        let mut edges: HashMap<([i64; 3], [i64; 3]), Vec<(usize, usize)>> = HashMap::new();
+        let mut edges: EdgeSides = HashMap::new();
         let mut normals = Vec::with_capacity(mesh.indices.len());
         if self.k.iter().all(|&k| k == self.k[0]) {
             return Vec::new();
@@ -465,7 +471,7 @@ impl Elements {
 /// number of elements closest to `element_count` (in ratio) over `scene`'s instances:
 /// rounding k to powers of two would otherwise miss the count by up to 2×.
 fn calibrated_target(scene: &Scene, first_guess: f64, element_count: u32) -> f64 {
-    if !(first_guess > 0.0) {
+    if first_guess.is_nan() || first_guess <= 0.0 {
         return first_guess;
     }
     let areas: Vec<Vec<f64>> = scene
@@ -492,7 +498,9 @@ fn calibrated_target(scene: &Scene, first_guess: f64, element_count: u32) -> f64
         return first_guess * lo.exp2();
     }
     if count(first_guess * hi.exp2()) > want {
-        return first_guess * hi.exp2();
+        // More triangles than elements asked for: the count cannot be met (one
+        // element per triangle at least); keep the scene's area over the count.
+        return first_guess;
     }
     for _ in 0..40 {
         let mid = 0.5 * (lo + hi);
