@@ -10,7 +10,8 @@
 //! * `costs` — pool fill, full update after the move, restart vs re-trace after a light
 //!   move, memory per element;
 //! * `elements` — the element mesh on Dabrovic Sponza (66 k triangles) and
-//!   `builtin:cornell-spot` for `element_max_side` off, 1/64 (default) and 1/128: elements,
+//!   `builtin:cornell-spot` for `element_max_side` off (default), 1/32, 1/64 and 1/128, with
+//!   `min_photons_per_element` 16: elements,
 //!   grid sides, hanging vertices, the scaled pool, memory and the display's cost per
 //!   element (issue 34).
 //!
@@ -335,7 +336,7 @@ fn main() {
 
 fn elements() {
     println!(
-        "\n## elements: the element mesh by `element_max_side` (element_count 12 400, min 20 photons per element)"
+        "\n## elements: the element mesh by `element_max_side` (element_count 12 400, min_photons_per_element 16)"
     );
     println!(
         "| scene | max side | triangles | elements | split triangles | largest k | hanging vertices | pool (N_p) | photons / element | memory [MB] | build [s] | display [ms] | display per element [ns] |"
@@ -355,9 +356,10 @@ fn elements() {
     for (name, mut scene) in scenes {
         scene.set_time(0.0);
         let world = World::new(scene);
-        for max_side in [0.0f32, 1.0 / 64.0, 1.0 / 128.0] {
+        for max_side in [0.0f32, 1.0 / 32.0, 1.0 / 64.0, 1.0 / 128.0] {
             let settings = SelectiveSettings {
                 element_max_side: max_side,
+                min_photons_per_element: 16,
                 ..SelectiveSettings::deterministic()
             };
             let t = Instant::now();

@@ -3,9 +3,9 @@
 //!
 //! Every triangle is split into a k×k barycentric grid of k² equal sub-triangles. k is
 //! a power of two chosen from the triangle's object-space area and a target element
-//! area (see [`Elements::new`]: from `element_count` over the scene's area, and no
-//! larger than a fixed fraction of the scene's size, so large triangles are split even
-//! on a model of many triangles). A grid cell `(i, j)` (i along b₁, j along b₂, i + j <
+//! area ([`grid_sides`]; the target from `element_count` over the scene's area, and no
+//! larger than a fixed fraction of the scene's size, see [`Elements::with_max_side`], so
+//! large triangles are split even on a model of many triangles). A grid cell `(i, j)` (i along b₁, j along b₂, i + j <
 //! k) holds a lower sub-triangle and, when i + j < k − 1, an upper one; element `e =
 //! j(2k − j) + 2i + upper` within the triangle. Instances of one mesh share its grid but
 //! each has its own accumulators (elements live in object space and move with their
@@ -111,18 +111,44 @@ fn element_corners(k: u32, e: u32) -> [(u32, u32); 3] {
     corners.map(|(a, b, _)| (a, b))
 }
 
-/// The power-of-two grid side for a triangle of area `area` and a target element area
-/// `target`: the power of two nearest (in log scale) to √(area/target), 1 … [`MAX_K`].
-pub fn grid_side(area: f64, target: f64) -> u32 {
-    if target.is_nan() || target <= 0.0 || area.is_nan() || area <= target {
-        return 1;
-    }
-    let log2_k = (0.5 * (area / target).log2()).round();
-    if log2_k <= 0.0 {
-        1
-    } else {
-        (1u32 << (log2_k as u32).min(MAX_K.trailing_zeros())).min(MAX_K)
-    }
+/// Power-of-two grid sides for triangles of areas `areas` and a target element area
+/// `target`: each triangle gets one of the two powers of two around √(area/target)
+/// (1 … [`MAX_K`]), the one that keeps the running count of elements closest to the
+/// running Σ area/target (error diffusion in triangle order), so a mesh holds about
+/// area/target elements although sides are powers of two. Triangles smaller than the
+/// target get k = 1 and carry no error forward.
+pub fn grid_sides(areas: &[f64], target: f64) -> Vec<u32> {
+    let mut debt = 0.0f64;
+    areas
+        .iter()
+        .map(|&a| {
+            let want = if target > 0.0 && a > 0.0 {
+                a / target
+            } else {
+                0.0
+            };
+            if want.is_nan() || want <= 1.0 {
+                return 1;
+            }
+            let max = (MAX_K as f64).powi(2);
+            if want >= max {
+                return MAX_K;
+            }
+            let lo = 1u32 << ((want.log2() * 0.5).floor() as u32).min(MAX_K.trailing_zeros());
+            let hi = (lo * 2).min(MAX_K);
+            let (r_lo, r_hi) = (
+                debt + want - (lo as f64).powi(2),
+                debt + want - (hi as f64).powi(2),
+            );
+            let (k, r) = if r_lo.abs() <= r_hi.abs() {
+                (lo, r_lo)
+            } else {
+                (hi, r_hi)
+            };
+            debt = r;
+            k
+        })
+        .collect()
 }
 
 /// The grid vertex `(a, b)` at step `m` (0 … k) along edge `edge` of a k-grid: edge 0
@@ -151,9 +177,8 @@ impl MeshGrid {
         let mut first_element = Vec::with_capacity(n + 1);
         let mut first_grid_vertex = Vec::with_capacity(n + 1);
         let (mut elements, mut grid) = (0u32, 0u32);
-        for t in 0..n {
-            let a = object_area(mesh, t) as f64;
-            let side = grid_side(a, target);
+        let areas: Vec<f64> = (0..n).map(|t| object_area(mesh, t) as f64).collect();
+        for side in grid_sides(&areas, target) {
             k.push(side);
             first_element.push(elements);
             first_grid_vertex.push(grid);
@@ -314,8 +339,7 @@ impl Elements {
             .iter()
             .map(|i| mesh_area[i.mesh.index()])
             .sum();
-        let mut target =
-            calibrated_target(scene, total / element_count.max(1) as f64, element_count);
+        let mut target = total / element_count.max(1) as f64;
         if max_side > 0.0 {
             let side = max_side as f64 * scene_diagonal(scene);
             if side > 0.0 {
@@ -464,58 +488,6 @@ impl Elements {
         corners.iter().fold(Rgb::ZERO, |acc, &(a, bb, w)| {
             acc + display.irradiance[v0 + g.vertex(t, a, bb) as usize][side] * w
         })
-    }
-}
-
-/// The target element area, near `first_guess`, whose power-of-two grids give the
-/// number of elements closest to `element_count` (in ratio) over `scene`'s instances:
-/// rounding k to powers of two would otherwise miss the count by up to 2×.
-fn calibrated_target(scene: &Scene, first_guess: f64, element_count: u32) -> f64 {
-    if first_guess.is_nan() || first_guess <= 0.0 {
-        return first_guess;
-    }
-    let areas: Vec<Vec<f64>> = scene
-        .meshes
-        .iter()
-        .map(|m| {
-            (0..m.indices.len())
-                .map(|t| object_area(m, t) as f64)
-                .collect()
-        })
-        .collect();
-    let count = |target: f64| -> f64 {
-        scene
-            .instances
-            .iter()
-            .flat_map(|i| &areas[i.mesh.index()])
-            .map(|&a| (grid_side(a, target) as f64).powi(2))
-            .sum()
-    };
-    let want = element_count.max(1) as f64;
-    // Bisection in log₂ of the target: more elements below, fewer above.
-    let (mut lo, mut hi) = (-4.0f64, 4.0f64);
-    if count(first_guess * lo.exp2()) <= want {
-        return first_guess * lo.exp2();
-    }
-    if count(first_guess * hi.exp2()) > want {
-        // More triangles than elements asked for: the count cannot be met (one
-        // element per triangle at least); keep the scene's area over the count.
-        return first_guess;
-    }
-    for _ in 0..40 {
-        let mid = 0.5 * (lo + hi);
-        if count(first_guess * mid.exp2()) > want {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    let (t_lo, t_hi) = (first_guess * lo.exp2(), first_guess * hi.exp2());
-    let (c_lo, c_hi) = (count(t_lo), count(t_hi));
-    if (c_lo / want).ln().abs() < (want / c_hi.max(1.0)).ln().abs() {
-        t_lo
-    } else {
-        t_hi
     }
 }
 
