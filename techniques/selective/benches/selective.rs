@@ -8,9 +8,14 @@
 //! * `fig7` — the same for R = 8, 16, 32, 64 at an equal pool;
 //! * `pool` — recovery against pool size (N_p = 125 … 2000 at N_g = 72, R = 16);
 //! * `costs` — pool fill, full update after the move, restart vs re-trace after a light
-//!   move, memory per element.
+//!   move, memory per element;
+//! * `elements` — the element mesh on Dabrovic Sponza (66 k triangles) and
+//!   `builtin:cornell-spot` for `element_max_side` off (default), 1/32, 1/64 and 1/128, with
+//!   `min_photons_per_element` 16: elements,
+//!   grid sides, hanging vertices, the scaled pool, memory and the display's cost per
+//!   element (issue 34).
 //!
-//! `cargo bench -p illume-selective [-- fig5|fig7|pool|costs]`
+//! `cargo bench -p illume-selective [-- fig5|fig7|pool|costs|elements]`
 
 use illume_core::{Affine3A, Vec3};
 use illume_scene::{Edit, InstanceId, LightId};
@@ -145,7 +150,8 @@ fn fig5() {
     ];
     for (lit, from, to) in cases {
         let mut series = Vec::new();
-        // Equal pools: 1.15 M photons (N_g · N_p · 16).
+        // Pools of N_g · N_p · 16 photons: 1 152 000 for N_g = 72 and 288; 1 290 240 for
+        // N_g = 10 080 (N_p = 8 is the nearest whole number, 12 % more photons).
         for (name, factors, pilots) in [
             ("72 (2^3·3^2)", vec![[2, 3], [3, 2]], 1000),
             ("288 (2^5·3^2)", vec![[2, 5], [3, 2]], 250),
@@ -322,5 +328,81 @@ fn main() {
     }
     if want("costs") {
         costs();
+    }
+    if want("elements") {
+        elements();
+    }
+}
+
+fn elements() {
+    println!(
+        "\n## elements: the element mesh by `element_max_side` (element_count 12 400, min_photons_per_element 16)"
+    );
+    println!(
+        "| scene | max side | triangles | elements | split triangles | largest k | hanging vertices | pool (N_p) | photons / element | memory [MB] | build [s] | display [ms] | display per element [ns] |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let sponza = illume_scene::shared_scenes_dir().join("dabrovic_sponza/sponza.obj");
+    let scenes = [
+        (
+            "cornell-spot",
+            illume_scene::builtin::load("cornell-spot").unwrap(),
+        ),
+        (
+            "Dabrovic Sponza",
+            illume_scene::load::load_scene(&sponza).unwrap(),
+        ),
+    ];
+    for (name, mut scene) in scenes {
+        scene.set_time(0.0);
+        let world = World::new(scene);
+        for max_side in [0.0f32, 1.0 / 32.0, 1.0 / 64.0, 1.0 / 128.0] {
+            let settings = SelectiveSettings {
+                element_max_side: max_side,
+                min_photons_per_element: 16,
+                ..SelectiveSettings::deterministic()
+            };
+            let t = Instant::now();
+            let sel = Selective::for_world(&world, settings).unwrap();
+            let build = t.elapsed().as_secs_f64();
+            let el = sel.elements();
+            let triangles: usize = el.grids.iter().map(|g| g.k.len()).sum();
+            let split: usize = el
+                .grids
+                .iter()
+                .map(|g| g.k.iter().filter(|&&k| k > 1).count())
+                .sum();
+            let kmax = el
+                .grids
+                .iter()
+                .flat_map(|g| g.k.iter().copied())
+                .max()
+                .unwrap_or(1);
+            let hanging: usize = el.grids.iter().map(|g| g.hanging.len()).sum();
+            let vertices: usize = el.grids.iter().map(|g| g.vertex_count as usize).sum();
+            let memory = el.len() * 2 * std::mem::size_of::<illume_transport::flux::Quanta>()
+                + vertices * (2 * std::mem::size_of::<illume_core::Rgb>() + 4);
+            let reps = 5;
+            let t = Instant::now();
+            for _ in 0..reps {
+                std::hint::black_box(sel.display(&world));
+            }
+            let display = t.elapsed().as_secs_f64() / reps as f64;
+            println!(
+                "| {name} | {} | {triangles} | {} | {split} | {kmax} | {hanging} | {} ({}) | {:.0} | {:.1} | {build:.2} | {:.1} | {:.0} |",
+                if max_side > 0.0 {
+                    format!("1/{:.0}", 1.0 / max_side)
+                } else {
+                    "off".into()
+                },
+                el.len(),
+                sel.layout().pool(),
+                sel.layout().pilots,
+                sel.layout().pool() as f64 / el.len() as f64,
+                memory as f64 / 1e6,
+                display * 1e3,
+                display * 1e9 / el.len() as f64,
+            );
+        }
     }
 }

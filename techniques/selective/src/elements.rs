@@ -1,10 +1,12 @@
 //! Mesh elements: the buckets photons are counted in (§1, §3) and the Gouraud display
 //! of their irradiance (§6).
 //!
-//! Every triangle is split into a k×k barycentric grid of k² equal sub-triangles (k
-//! from its object-space area, so the scene holds about `element_count` elements, at
-//! least one per triangle). A grid cell `(i, j)` (i along b₁, j along b₂, i + j < k)
-//! holds a lower sub-triangle and, when i + j < k − 1, an upper one; element `e =
+//! Every triangle is split into a k×k barycentric grid of k² equal sub-triangles. k is
+//! a power of two chosen from the triangle's object-space area and a target element
+//! area ([`grid_sides`]; the target from `element_count` over the scene's area, and no
+//! larger than a fixed fraction of the scene's size, see [`Elements::with_max_side`], so
+//! large triangles are split even on a model of many triangles). A grid cell `(i, j)` (i along b₁, j along b₂, i + j <
+//! k) holds a lower sub-triangle and, when i + j < k − 1, an upper one; element `e =
 //! j(2k − j) + 2i + upper` within the triangle. Instances of one mesh share its grid but
 //! each has its own accumulators (elements live in object space and move with their
 //! object).
@@ -14,11 +16,25 @@
 //! vertex; its irradiance is the area-weighted mean of the elements around it,
 //! Σ Φ / (N·Σ A), and a pixel interpolates its element's three corners (the paper's
 //! Gouraud shading of the mesh).
+//!
+//! **No T-junction seams.** Two triangles that share an edge may have different k.
+//! Because every k is a power of two, the coarser side's grid vertices along the edge
+//! are also the finer side's; the finer side's other edge vertices ("hanging"
+//! vertices) are displayed as the linear interpolation of the two coarse vertices
+//! around them. Both sides then show the same piecewise-linear irradiance along the
+//! edge: the displayed indirect light is continuous across every shared edge of a
+//! smoothing group (tested), as on a conforming mesh.
 
 use illume_core::{Affine3A, Rgb, Vec2, Vec3};
 use illume_scene::{Mesh, Scene};
 use illume_transport::flux::Quanta;
 use std::collections::HashMap;
+
+/// Quantized object-space position.
+type PosKey = [i64; 3];
+
+/// The triangles and local edge numbers on each edge (its end points' keys, ordered).
+type EdgeSides = HashMap<(PosKey, PosKey), Vec<(usize, usize)>>;
 
 /// Largest grid side k per triangle (k² elements).
 pub const MAX_K: u32 = 256;
@@ -36,6 +52,8 @@ pub struct MeshGrid {
     vertex_ids: Vec<u32>,
     /// Display vertices.
     pub vertex_count: u32,
+    /// Hanging display vertices: `(vertex, a, b, w)`, shown as `(1 − w)·a + w·b`.
+    pub hanging: Vec<(u32, u32, u32, f32)>,
 }
 
 /// Index of grid vertex `(a, b)` (a along b₁, b along b₂, a + b ≤ k) in its triangle.
@@ -93,6 +111,58 @@ fn element_corners(k: u32, e: u32) -> [(u32, u32); 3] {
     corners.map(|(a, b, _)| (a, b))
 }
 
+/// Power-of-two grid sides for triangles of areas `areas` and a target element area
+/// `target`: each triangle gets one of the two powers of two around √(area/target)
+/// (1 … [`MAX_K`]), the one that keeps the running count of elements closest to the
+/// running Σ area/target (error diffusion in triangle order), so a mesh holds about
+/// area/target elements although sides are powers of two. Triangles smaller than the
+/// target get k = 1 and carry no error forward.
+pub fn grid_sides(areas: &[f64], target: f64) -> Vec<u32> {
+    let mut debt = 0.0f64;
+    areas
+        .iter()
+        .map(|&a| {
+            let want = if target > 0.0 && a > 0.0 {
+                a / target
+            } else {
+                0.0
+            };
+            if want.is_nan() || want <= 1.0 {
+                return 1;
+            }
+            let max = (MAX_K as f64).powi(2);
+            if want >= max {
+                return MAX_K;
+            }
+            let lo = 1u32 << ((want.log2() * 0.5).floor() as u32).min(MAX_K.trailing_zeros());
+            let hi = (lo * 2).min(MAX_K);
+            let (r_lo, r_hi) = (
+                debt + want - (lo as f64).powi(2),
+                debt + want - (hi as f64).powi(2),
+            );
+            let (k, r) = if r_lo.abs() <= r_hi.abs() {
+                (lo, r_lo)
+            } else {
+                (hi, r_hi)
+            };
+            debt = r;
+            k
+        })
+        .collect()
+}
+
+/// The grid vertex `(a, b)` at step `m` (0 … k) along edge `edge` of a k-grid: edge 0
+/// runs from corner 0 to corner 1, edge 1 from corner 1 to corner 2, edge 2 from corner 2
+/// to corner 0.
+#[inline]
+fn edge_vertex(k: u32, edge: usize, m: u32) -> (u32, u32) {
+    match edge {
+        0 => (m, 0),
+        1 => (k - m, m),
+        _ => (0, k - m),
+    }
+}
+
 fn object_area(mesh: &Mesh, t: usize) -> f32 {
     let [a, b, c] = mesh.indices[t].map(|i| mesh.positions[i as usize]);
     0.5 * (b - a).cross(c - a).length()
@@ -107,13 +177,8 @@ impl MeshGrid {
         let mut first_element = Vec::with_capacity(n + 1);
         let mut first_grid_vertex = Vec::with_capacity(n + 1);
         let (mut elements, mut grid) = (0u32, 0u32);
-        for t in 0..n {
-            let a = object_area(mesh, t) as f64;
-            let side = if target > 0.0 && a > 0.0 {
-                ((a / target).sqrt().round() as u32).clamp(1, MAX_K)
-            } else {
-                1
-            };
+        let areas: Vec<f64> = (0..n).map(|t| object_area(mesh, t) as f64).collect();
+        for side in grid_sides(&areas, target) {
             k.push(side);
             first_element.push(elements);
             first_grid_vertex.push(grid);
@@ -158,13 +223,71 @@ impl MeshGrid {
                 }
             }
         }
-        Self {
+        let mut grid = Self {
             k,
             first_element,
             first_grid_vertex,
             vertex_ids,
             vertex_count,
+            hanging: Vec::new(),
+        };
+        grid.hanging = grid.hanging_vertices(mesh, cell, cos_smooth);
+        grid
+    }
+
+    /// The constraints that make the display continuous across edges shared by
+    /// triangles of different k (see the module docs): every grid vertex of the finer
+    /// side that the coarsest side within `cos_smooth` does not have.
+    fn hanging_vertices(
+        &self,
+        mesh: &Mesh,
+        cell: f64,
+        cos_smooth: f32,
+    ) -> Vec<(u32, u32, u32, f32)> {
+        let key = |p: Vec3| [p.x, p.y, p.z].map(|c| (c as f64 / cell).round() as i64);
+        let mut edges: EdgeSides = HashMap::new();
+        let mut normals = Vec::with_capacity(mesh.indices.len());
+        if self.k.iter().all(|&k| k == self.k[0]) {
+            return Vec::new();
         }
+        for (t, tri) in mesh.indices.iter().enumerate() {
+            let p = tri.map(|i| mesh.positions[i as usize]);
+            normals.push((p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero());
+            for e in 0..3 {
+                let (a, b) = (key(p[e]), key(p[(e + 1) % 3]));
+                edges
+                    .entry(if a <= b { (a, b) } else { (b, a) })
+                    .or_default()
+                    .push((t, e));
+            }
+        }
+        let mut out = Vec::new();
+        for sides in edges.values().filter(|s| s.len() > 1) {
+            for &(t, e) in sides {
+                let kf = self.k[t];
+                let kc = sides
+                    .iter()
+                    .filter(|&&(u, _)| normals[u].dot(normals[t]) >= cos_smooth)
+                    .map(|&(u, _)| self.k[u])
+                    .min()
+                    .unwrap_or(kf);
+                if kc >= kf {
+                    continue;
+                }
+                let r = kf / kc;
+                let id = |m: u32| {
+                    let (a, b) = edge_vertex(kf, e, m);
+                    self.vertex(t, a, b)
+                };
+                for m in (1..kf).filter(|m| m % r != 0) {
+                    let m0 = m - m % r;
+                    out.push((id(m), id(m0), id(m0 + r), (m % r) as f32 / r as f32));
+                }
+            }
+        }
+        out.sort_unstable_by_key(|h| h.0);
+        out.dedup_by_key(|h| h.0);
+        out
     }
 
     /// Elements of the mesh.
@@ -194,6 +317,18 @@ impl Elements {
     /// Grids for about `element_count` elements over the scene's instances (by object
     /// space area), display vertices welded within `smoothing_angle_deg`.
     pub fn new(scene: &Scene, element_count: u32, smoothing_angle_deg: f32) -> Self {
+        Self::with_max_side(scene, element_count, smoothing_angle_deg, 0.0)
+    }
+
+    /// [`Elements::new`], with elements no wider than `max_side` times the diagonal of
+    /// the scene's world-space bounding box (0: no bound): the target element area is
+    /// the smaller of the scene's area over `element_count` and that side squared.
+    pub fn with_max_side(
+        scene: &Scene,
+        element_count: u32,
+        smoothing_angle_deg: f32,
+        max_side: f32,
+    ) -> Self {
         let mesh_area: Vec<f64> = scene
             .meshes
             .iter()
@@ -204,7 +339,13 @@ impl Elements {
             .iter()
             .map(|i| mesh_area[i.mesh.index()])
             .sum();
-        let target = total / element_count.max(1) as f64;
+        let mut target = total / element_count.max(1) as f64;
+        if max_side > 0.0 {
+            let side = max_side as f64 * scene_diagonal(scene);
+            if side > 0.0 {
+                target = target.min(side * side);
+            }
+        }
         let cos_smooth = smoothing_angle_deg.to_radians().cos() - 1e-6;
         let grids: Vec<MeshGrid> = scene
             .meshes
@@ -297,7 +438,7 @@ impl Elements {
                 }
             }
         }
-        let irradiance = flux
+        let mut irradiance: Vec<[Rgb; 2]> = flux
             .iter()
             .zip(&area)
             .map(|(f, &a)| {
@@ -315,6 +456,13 @@ impl Elements {
                 [e(0), e(1)]
             })
             .collect();
+        for (ii, inst) in scene.instances.iter().enumerate().take(self.instances()) {
+            let v0 = self.instance_first_vertex[ii] as usize;
+            for &(v, a, b, w) in &self.grids[inst.mesh.index()].hanging {
+                let (ea, eb) = (irradiance[v0 + a as usize], irradiance[v0 + b as usize]);
+                irradiance[v0 + v as usize] = [0, 1].map(|s| ea[s] * (1.0 - w) + eb[s] * w);
+            }
+        }
         Display { irradiance }
     }
 
@@ -340,6 +488,23 @@ impl Elements {
         corners.iter().fold(Rgb::ZERO, |acc, &(a, bb, w)| {
             acc + display.irradiance[v0 + g.vertex(t, a, bb) as usize][side] * w
         })
+    }
+}
+
+/// The diagonal of the world-space bounding box of `scene`'s instances \[m\].
+pub fn scene_diagonal(scene: &Scene) -> f64 {
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for inst in &scene.instances {
+        for p in &scene.meshes[inst.mesh.index()].positions {
+            let w = inst.world_from_object.transform_point3(*p);
+            lo = lo.min(w);
+            hi = hi.max(w);
+        }
+    }
+    if lo.x <= hi.x {
+        (hi - lo).length() as f64
+    } else {
+        0.0
     }
 }
 

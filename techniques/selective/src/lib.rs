@@ -30,7 +30,8 @@
 //! **Failure modes.** (1) Element-scale blur and leaks at contacts: irradiance is
 //! constant per element and Gouraud-interpolated, so detail smaller than an element
 //! is lost and light bleeds between touching objects (the paper's "most severe
-//! limitation"). (2) Detection is not conservative: a change no pilot meets is found
+//! limitation"); elements are noisy (the pool holds `min_photons_per_element` photons
+//! per element on average). (2) Detection is not conservative: a change no pilot meets is found
 //! only when its groups come up in order (N_g groups after the change at worst).
 //! (3) Coherence fades with bounces: with N_g = 288 only the light choice and the
 //! emission direction are coherent within a group, so objects lit only indirectly are

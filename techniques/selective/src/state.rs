@@ -45,6 +45,16 @@ pub struct SelectiveCounters {
     pub trace_s: f64,
 }
 
+/// N_p: `pilots_per_group`, raised until the pool N_g·N_p·R holds
+/// `min_photons_per_element` photons per element (within [`crate::settings::MAX_POOL`]).
+pub fn scaled_pilots(settings: &SelectiveSettings, groups: u64, elements: u64) -> u64 {
+    let asked = settings.pilots_per_group as u64;
+    let per_pilot = groups * settings.ratio as u64;
+    let need = (settings.min_photons_per_element as u64 * elements).div_ceil(per_pilot.max(1));
+    let cap = crate::settings::MAX_POOL / per_pilot.max(1);
+    asked.max(need.min(cap))
+}
+
 /// Selective photon tracing (technique name `selective`).
 pub struct Selective {
     pub(crate) settings: SelectiveSettings,
@@ -82,10 +92,11 @@ impl Selective {
     /// [`Selective::new`] for an unshared world.
     pub fn for_world(world: &World, settings: SelectiveSettings) -> Result<Self, SelectiveError> {
         settings.validate()?;
-        let elements = Elements::new(
+        let elements = Elements::with_max_side(
             &world.scene,
             settings.element_count,
             settings.smoothing_angle_deg,
+            settings.element_max_side,
         );
         if elements.is_empty() {
             return Err(SelectiveError::NoSurfaces {
@@ -102,7 +113,7 @@ impl Selective {
         };
         let layout = GroupLayout {
             groups: factors.groups(),
-            pilots: settings.pilots_per_group as u64,
+            pilots: scaled_pilots(&settings, factors.groups(), elements.len() as u64),
             ratio: settings.ratio as u64,
         };
         let current = Arc::new(Snapshot::of(world, 0, factors.exponent(2)));

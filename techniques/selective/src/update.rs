@@ -85,11 +85,7 @@ impl Selective {
             Invalidation::None => ChangeResponse::Updated,
             Invalidation::Rebuild(reason) => ChangeResponse::Rebuild { reason },
             Invalidation::Camera => {
-                for g in &mut self.groups {
-                    g.priority.pilots_seen = 0;
-                    g.priority.pilots_visible = 0;
-                }
-                self.pilots_since_camera = 0;
+                self.reset_view();
                 ChangeResponse::Updated
             }
             Invalidation::Lighting => {
@@ -114,11 +110,21 @@ impl Selective {
                     .iter()
                     .any(|c| matches!(c, SceneChange::CameraMoved { .. }))
                 {
-                    self.pilots_since_camera = 0;
+                    self.reset_view();
                 }
                 ChangeResponse::Updated
             }
         }
+    }
+
+    /// The camera moved: every group's view-frustum counters (§5.3's V) and the count of
+    /// pilots shot since the move start again, whatever else the change list holds.
+    pub(crate) fn reset_view(&mut self) {
+        for g in &mut self.groups {
+            g.priority.pilots_seen = 0;
+            g.priority.pilots_visible = 0;
+        }
+        self.pilots_since_camera = 0;
     }
 
     /// Restarts the solution: accumulators cleared, every group current and empty.

@@ -117,6 +117,8 @@ fn phantoms_follow_m1_m2_m3_and_pilots_raise_the_groups_that_hold_them() {
         element_count: 500,
         warm_up: false,
         visibility_weight: 0.0,
+        // The pool as written (N_p not raised for the elements).
+        min_photons_per_element: 0,
         ..SelectiveSettings::deterministic()
     };
     let mut sel = Selective::for_world(&world, settings).unwrap();
@@ -207,4 +209,51 @@ fn priority_is_v_times_p_with_v_counted_after_enough_pilots() {
         .score(true, 4.0),
         0.0
     );
+}
+
+/// Issue 34 goal 5: a change list that holds a camera move beside a change photons see
+/// (a light change, an object move) resets every group's view counters (§5.3's V)
+/// exactly as a camera move alone does.
+#[test]
+fn a_camera_move_beside_a_light_change_resets_the_view_counters() {
+    use illume_scene::{Edit, LightId, LightKind};
+    let mut world = box_scene();
+    let settings = SelectiveSettings {
+        pilots_per_group: 4,
+        ratio: 4,
+        element_count: 500,
+        warm_up: false,
+        // A light change never restarts (a restart clears the priorities anyway).
+        restart_fraction: 1.0,
+        ..SelectiveSettings::deterministic()
+    };
+    let mut sel = Selective::for_world(&world, settings).unwrap();
+    sel.converge(&world);
+    let seen = |sel: &Selective| {
+        (0..sel.layout().groups)
+            .map(|g| sel.priority(g).pilots_seen + sel.priority(g).pilots_visible)
+            .sum::<u64>()
+    };
+    assert!(seen(&sel) > 0, "the fill counted no pilots");
+    let cam = world.scene.camera.world_from_camera;
+    let mut changes = world
+        .apply_edit(&Edit::SetCameraTransform {
+            world_from_camera: Affine3A::from_translation(Vec3::new(0.5, 0.0, 0.0)) * cam,
+        })
+        .unwrap();
+    changes.extend(
+        world
+            .apply_edit(&Edit::SetLightKind {
+                light: LightId(0),
+                kind: LightKind::Point {
+                    intensity: Rgb::splat(12.0),
+                },
+            })
+            .unwrap(),
+    );
+    assert_eq!(changes.len(), 2, "{changes:?}");
+    sel.scene_changed(&world, &changes);
+    assert_eq!(sel.counters().restarts, 0);
+    assert_eq!(sel.stale_groups(), sel.layout().groups);
+    assert_eq!(seen(&sel), 0, "V counters kept across a camera move");
 }

@@ -16,6 +16,9 @@ fn small(order: GroupOrder, restart_fraction: f32) -> SelectiveSettings {
         warm_up: false,
         order,
         restart_fraction,
+        // The pool as written (N_p not raised for the elements): a grown pool is then
+        // a fresh pool of the larger R.
+        min_photons_per_element: 0,
         ..SelectiveSettings::deterministic()
     }
 }
