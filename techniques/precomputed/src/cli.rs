@@ -220,6 +220,8 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
         .output
         .clone()
         .ok_or("illume precompute: give --output FILE")?;
+    // Before hours of rendering: the output must be new or an earlier .illumepc.
+    crate::file::check_overwritable(&output)?;
     let configured = host.settings(&a.sets)?;
     let (render_width, render_height) = configured.image_size;
     let mut s: PrecomputedSettings = *configured
@@ -291,6 +293,15 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
         scene.sky = Some(illume_scene::Sky::Uniform { radiance });
     }
     scene.attach_sun(sun)?;
+    // The loader checked the scene; --sky and the sun changed it: the same checks as
+    // `render` makes (a sky of 3e38 is a total power beyond any scene's).
+    scene.validate().map_err(|m| {
+        format!(
+            "{}{}: {m}",
+            scene.source,
+            if a.sky.is_some() { " with --sky" } else { "" }
+        )
+    })?;
     let world = illume_transport::World::new(scene);
     let previous = match &a.previous {
         Some(p) => Some((p.clone(), PcFile::read(p)?)),
@@ -346,6 +357,7 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
 }
 
 fn run_merge(m: MergeArgs, host: &dyn OfflineHost) -> Result<()> {
+    crate::file::check_overwritable(&m.output)?;
     let parts = m
         .parts
         .iter()
