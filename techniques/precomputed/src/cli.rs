@@ -292,9 +292,9 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
     if let Some(radiance) = a.sky {
         scene.sky = Some(illume_scene::Sky::Uniform { radiance });
     }
-    scene.attach_sun(sun)?;
-    // The loader checked the scene; --sky and the sun changed it: the same checks as
-    // `render` makes (a sky of 3e38 is a total power beyond any scene's).
+    // The loader checked the scene; --sky changed it: the same checks as `render` makes,
+    // on the sky at scale 1 (before the sun scales it: at night it would pass as 0). A
+    // sky of 3e38 is a total power beyond any scene's.
     scene.validate().map_err(|m| {
         format!(
             "{}{}: {m}",
@@ -302,6 +302,7 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
             if a.sky.is_some() { " with --sky" } else { "" }
         )
     })?;
+    scene.attach_sun(sun)?;
     let world = illume_transport::World::new(scene);
     let previous = match &a.previous {
         Some(p) => Some((p.clone(), PcFile::read(p)?)),

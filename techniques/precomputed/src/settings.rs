@@ -144,7 +144,7 @@ impl PrecomputedSettings {
         // Every key is rendered and held in memory for the PCA: refuse a step that asks
         // for more than a file may hold before anything is allocated.
         let keys = (self.to_h - self.from_h) * 60.0 / self.step_min;
-        if !(keys < crate::file::MAX_KEYS as f64) {
+        if keys.is_nan() || keys >= crate::file::MAX_KEYS as f64 {
             return bad(
                 "step_min",
                 format!(

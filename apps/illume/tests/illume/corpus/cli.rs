@@ -183,11 +183,11 @@ fn illumepc(hours: &[&str], values: &[f32]) -> Vec<u8> {
     out
 }
 
-/// A 2×2 linear EXR whose pixel (0, 0) is `value` in every channel (the rest 0.5).
+/// A 16×16 linear EXR whose pixel (0, 0) is `value` in every channel (the rest 0.5).
 fn exr_with(value: f32) -> Vec<u8> {
     use illume_core::Rgb;
     use illume_core::image::{RgbImage, ToneMap};
-    let mut image = RgbImage::filled(2, 2, Rgb::splat(0.5));
+    let mut image = RgbImage::filled(16, 16, Rgb::splat(0.5));
     image.pixels_mut()[0] = Rgb::splat(value);
     let path = std::env::temp_dir().join(format!(
         "illume-corpus-{}-{}.exr",
@@ -563,7 +563,7 @@ pub fn cases() -> Vec<Case> {
                 error(&["b.exr", "pixel (0, 0)", "NaN"]),
             ),
         Case::new("cli", "compare_png_with_exr")
-            .file("a.png", png(2, 2))
+            .file("a.png", png(16, 16))
             .file("b.exr", exr_with(1.0))
             .run(
                 &["compare", "{dir}/a.png", "{dir}/b.exr"],

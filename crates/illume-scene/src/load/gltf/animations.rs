@@ -161,16 +161,15 @@ fn check_index_widths(
                     ));
                 }
                 // Attribute maps (`attributes`, morph `targets`) hold indices by any name.
-                if key == "attributes" || key == "targets" {
-                    if let Some((name, v)) =
+                if (key == "attributes" || key == "targets")
+                    && let Some((name, v)) =
                         v.as_object().and_then(|m| m.iter().find(|(_, x)| wide(x)))
-                    {
-                        return Err(LoadError::malformed(
-                            path,
-                            format!("{at}.{name}"),
-                            format!("index {v} is beyond 4294967295 (2³² − 1)"),
-                        ));
-                    }
+                {
+                    return Err(LoadError::malformed(
+                        path,
+                        format!("{at}.{name}"),
+                        format!("index {v} is beyond 4294967295 (2³² − 1)"),
+                    ));
                 }
                 check_index_widths(path, v, at)?;
                 at.truncate(len);
