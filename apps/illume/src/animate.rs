@@ -100,13 +100,15 @@ pub struct DemoArgs {
 /// Runs `illume animate`.
 pub fn run(a: AnimateArgs) -> Result<()> {
     let mut config = a.setup.config(None)?;
-    config.technique_settings_mut().pace(if a.realtime {
-        Pacing::RealTime
-    } else {
-        Pacing::FixedWork {
-            work_per_frame: a.work_per_frame,
-        }
-    });
+    config
+        .pace(if a.realtime {
+            Pacing::RealTime
+        } else {
+            Pacing::FixedWork {
+                work_per_frame: a.work_per_frame,
+            }
+        })
+        .map_err(anyhow::Error::msg)?;
     if !(a.fps > 0.0 && a.fps.is_finite()) {
         bail!("--fps must be positive, got {}", a.fps);
     }
@@ -137,7 +139,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     if let Some(shard) = a.shard {
         return run_shard(&a, &config, scene, times, shard);
     }
-    crate::frames::prepare_output(&a.output)?;
+    let out_dir = crate::frames::prepare_output(&a.output)?;
     // Fixed: known now. Auto: from the first frame with light, then kept for the sequence.
     let mut exposure_ev = match a.exposure_mode {
         ExposureMode::Fixed => Some(a.exposure),
@@ -156,7 +158,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         progress::bar(planned, "frames")
     };
     let mut csv = FramesCsv::default();
-    let mut writer = FrameWriter::start(&a.output, w, h)?;
+    let mut writer = FrameWriter::start(&out_dir, w, h)?;
     let start = Instant::now();
     let mut render_s = 0.0;
     let mut index = 0u64;
@@ -210,8 +212,7 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     pb.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     let csv_path = a.output.join("frames.csv");
-    illume_core::atomic::write_file(&csv_path, csv.text())
-        .with_context(|| format!("{}: cannot write", csv_path.display()))?;
+    out_dir.write_file("frames.csv", csv.text())?;
     let preview = writer.finish(if a.realtime {
         index as f64 / wall
     } else {
@@ -329,7 +330,7 @@ fn run_shard(
     shard: Shard,
 ) -> Result<()> {
     check_shardable(config.technique, &scene, &times, shard)?;
-    crate::frames::prepare_shard_output(&a.output, shard)?;
+    let out_dir = crate::frames::prepare_shard_output(&a.output, shard)?;
     let (w, h) = (config.render.width, config.render.height);
     let planned = times.len();
     let timeline = Timeline::new(scene.clone(), times.clone(), w, h)?;
@@ -351,14 +352,11 @@ fn run_shard(
             wall_s: start.elapsed().as_secs_f64(),
             ..StepRecord::from_step(times[i], &out, earlier_ms)
         });
-        let path = a.output.join(format!("frame_{i:05}.exr"));
-        illume_core::image::write_exr(&out.frame.full, &path)?;
+        crate::frames::write_exr_recorded(&out_dir, &format!("frame_{i:05}.exr"), &out.frame.full)?;
         pb.set_position(done as u64 + 1);
     }
     pb.finish_and_clear();
-    let csv_path = a.output.join(crate::frames::shard_csv_name(shard));
-    illume_core::atomic::write_file(&csv_path, csv.text())
-        .with_context(|| format!("{}: cannot write", csv_path.display()))?;
+    out_dir.write_file(&crate::frames::shard_csv_name(shard), csv.text())?;
     eprintln!(
         "shard {shard}: {} of {planned} frames of {w}×{h} with {} in {:.2} s into {} (gather them with --collect {})",
         mine.len(),
@@ -380,6 +378,17 @@ fn collect(a: &AnimateArgs, n: u32, planned: u64, w: u32, h: u32) -> Result<()> 
         bail!("--collect 0: give the number of shards N (≥ 1)");
     }
     let dir = &a.output;
+    // Nothing is removed or overwritten unless every file in the folder is illume's.
+    let out_dir = crate::frames::OutputDir::create(dir)?;
+    let foreign: Vec<String> = out_dir
+        .survey()?
+        .into_iter()
+        .filter_map(|e| match e {
+            crate::frames::Entry::Proven(_) => None,
+            crate::frames::Entry::Pending(n) | crate::frames::Entry::Foreign(n) => Some(n),
+        })
+        .collect();
+    out_dir.refuse_foreign(foreign)?;
     // Every frame first: a missing one names its shard before anything is written.
     let exr = |i: u64| dir.join(format!("frame_{i:05}.exr"));
     for i in 0..planned {
@@ -393,7 +402,6 @@ fn collect(a: &AnimateArgs, n: u32, planned: u64, w: u32, h: u32) -> Result<()> 
     }
     let mut header: Option<(String, std::path::PathBuf)> = None;
     let mut rows: Vec<(u64, String)> = Vec::new();
-    let mut shard_csvs = Vec::new();
     for k in 0..n {
         let path = dir.join(crate::frames::shard_csv_name(Shard { index: k, count: n }));
         let text = std::fs::read_to_string(&path).with_context(|| {
@@ -421,7 +429,6 @@ fn collect(a: &AnimateArgs, n: u32, planned: u64, w: u32, h: u32) -> Result<()> 
                 .with_context(|| format!("{}: bad row {line:?}", path.display()))?;
             rows.push((index, line.to_owned()));
         }
-        shard_csvs.push(path);
     }
     rows.sort_by_key(|r| r.0);
     let indices: Vec<u64> = rows.iter().map(|r| r.0).collect();
@@ -440,15 +447,14 @@ fn collect(a: &AnimateArgs, n: u32, planned: u64, w: u32, h: u32) -> Result<()> 
         let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
         let name = entry.file_name().to_string_lossy().into_owned();
         if crate::frames::frame_number(&name).is_some_and(|i| i >= planned) {
-            std::fs::remove_file(entry.path())
-                .with_context(|| format!("{}: cannot remove", entry.path().display()))?;
+            out_dir.remove(&name)?;
         }
     }
     let mut exposure_ev = match a.exposure_mode {
         ExposureMode::Fixed => Some(a.exposure),
         ExposureMode::Auto => None,
     };
-    let mut writer = FrameWriter::start(dir, w, h)?;
+    let mut writer = FrameWriter::start(&out_dir, w, h)?;
     let pb = progress::bar(planned, "frames");
     for i in 0..planned {
         let frame = illume_core::image::RgbImage::read(&exr(i))?;
@@ -484,16 +490,13 @@ fn collect(a: &AnimateArgs, n: u32, planned: u64, w: u32, h: u32) -> Result<()> 
         csv.push_str(r);
     }
     csv.push('\n');
-    illume_core::atomic::write_file(&csv_path, csv)
-        .with_context(|| format!("{}: cannot write", csv_path.display()))?;
-    for path in shard_csvs {
-        std::fs::remove_file(&path)
-            .with_context(|| format!("{}: cannot remove", path.display()))?;
+    out_dir.write_file("frames.csv", csv)?;
+    for k in 0..n {
+        out_dir.remove(&crate::frames::shard_csv_name(Shard { index: k, count: n }))?;
     }
     if !a.exr {
         for i in 0..planned {
-            std::fs::remove_file(exr(i))
-                .with_context(|| format!("{}: cannot remove", exr(i).display()))?;
+            out_dir.remove(&format!("frame_{i:05}.exr"))?;
         }
     }
     eprintln!(

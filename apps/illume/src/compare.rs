@@ -24,6 +24,23 @@ pub struct CompareArgs {
 /// Runs `illume compare`.
 pub fn run(a: CompareArgs) -> Result<()> {
     let metrics = illume_metrics::compare::parse_metric_list(&a.metric)?;
+    if metrics.is_empty() {
+        bail!(
+            "--metric {:?}: give at least one of rmse, relmse, psnr, ssim, flip, hdr-flip",
+            a.metric
+        );
+    }
+    if let Some(path) = &a.error_map {
+        let png = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        if path.is_dir() || !png {
+            bail!(
+                "--error-map {}: the error map is written as a PNG file: give a name ending in .png",
+                path.display()
+            );
+        }
+    }
     let settings = CompareSettings::default();
     match (a.reference.is_dir(), a.test.is_dir()) {
         (true, true) => {
@@ -45,6 +62,14 @@ pub fn run(a: CompareArgs) -> Result<()> {
                     println!("mean {:<9} {}", m.name(), fmt_value(m, v));
                 }
             }
+            if let Some(means) = cmp.means()
+                && let Some((m, _)) = means.iter().find(|(_, v)| v.is_nan())
+            {
+                eprintln!(
+                    "warning: mean {} is NaN: some frames have non-finite pixels or metrics",
+                    m.name()
+                );
+            }
             for n in &cmp.only_in_reference {
                 eprintln!("warning: {n} only in {}", a.reference.display());
             }
@@ -53,11 +78,37 @@ pub fn run(a: CompareArgs) -> Result<()> {
             }
         }
         (false, false) => {
-            for (m, v) in compare_files(&a.reference, &a.test, &metrics, &settings)? {
-                println!("{:<9} {}", m.name(), fmt_value(m, v));
-            }
             let r = RgbImage::read(&a.reference)?;
             let t = RgbImage::read(&a.test)?;
+            // A NaN or infinite pixel makes every metric NaN (or FLIP's exposure fail):
+            // refused, naming the pixel.
+            for (path, image) in [(&a.reference, &r), (&a.test, &t)] {
+                if let Some((x, y, v)) = image.first_non_finite() {
+                    bail!(
+                        "{}: pixel ({x}, {y}) = {v} is not finite: the metrics would be NaN",
+                        path.display()
+                    );
+                }
+            }
+            let linear = |p: &std::path::Path| {
+                p.extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("exr") || e.eq_ignore_ascii_case("hdr"))
+            };
+            if linear(&a.reference) != linear(&a.test) {
+                eprintln!(
+                    "warning: {} and {}: one is linear radiance (EXR/HDR), the other tone-mapped \
+                     8-bit (PNG): the metrics compare different quantities (convert the EXR with \
+                     `illume convert` first, or compare two EXRs)",
+                    a.reference.display(),
+                    a.test.display()
+                );
+            }
+            for (m, v) in compare_files(&a.reference, &a.test, &metrics, &settings)? {
+                if v.is_nan() {
+                    eprintln!("warning: {} is NaN for these images", m.name());
+                }
+                println!("{:<9} {}", m.name(), fmt_value(m, v));
+            }
             print!("{}", channel_means(&r, &t));
             if let Some(path) = &a.error_map {
                 let is_hdr = a

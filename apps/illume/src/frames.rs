@@ -15,133 +15,57 @@ use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 
-/// True for the names `animate` writes into its output folder: `frame_NNNNN.png` /
-/// `.exr`, `frames.csv`, a shard's `frames_K_of_N.csv`, `preview.gif` / `.mp4`, and the
-/// temporary files they are written through (`.NAME.PID.tmp`, `.preview.gif.partial`).
-pub fn is_animate_output(name: &str) -> bool {
-    let frame = name
-        .strip_prefix("frame_")
-        .and_then(|r| r.strip_suffix(".png").or_else(|| r.strip_suffix(".exr")))
-        .is_some_and(|n| n.len() >= 5 && n.bytes().all(|b| b.is_ascii_digit()));
-    let temporary = name.starts_with('.')
-        && (name.ends_with(".tmp") || name == ".preview.gif.partial")
-        && is_animate_output(
-            name.trim_start_matches('.')
-                .split('.')
-                .take(2)
-                .collect::<Vec<_>>()
-                .join(".")
-                .as_str(),
-        );
-    frame
-        || temporary
-        || is_shard_csv(name)
-        || matches!(name, "frames.csv" | "preview.gif" | "preview.mp4")
-        || name == ".preview.gif.partial"
-}
+pub use illume_core::outputs::{Entry, OutputDir, temporary_target};
 
 /// The per-frame CSV of `animate --shard K/N`: `frames_K_of_N.csv`.
 pub fn shard_csv_name(shard: illume_core::Shard) -> String {
     format!("frames_{}_of_{}.csv", shard.index, shard.count)
 }
 
-/// True for [`shard_csv_name`]'s names.
-fn is_shard_csv(name: &str) -> bool {
-    name.strip_prefix("frames_")
-        .and_then(|r| r.strip_suffix(".csv"))
-        .and_then(|r| r.split_once("_of_"))
-        .is_some_and(|(k, n)| {
-            [k, n]
-                .iter()
-                .all(|x| !x.is_empty() && x.bytes().all(|b| b.is_ascii_digit()))
-        })
-}
-
 /// The frame number of a `frame_NNNNN.png` / `.exr` name.
 pub fn frame_number(name: &str) -> Option<u64> {
     name.strip_prefix("frame_")
         .and_then(|r| r.strip_suffix(".png").or_else(|| r.strip_suffix(".exr")))
-        .filter(|n| n.len() >= 5)
+        .filter(|n| n.len() >= 5 && n.bytes().all(|b| b.is_ascii_digit()))
         .and_then(|n| n.parse().ok())
 }
 
 /// Makes `dir` ready for one shard's frames (`animate --shard K/N`), which other shards
-/// may be writing into at the same time: created if missing; a folder holding anything
-/// but `animate`'s files is refused (as [`prepare_output`]); of those, only this shard's
+/// may be writing into at the same time: created if missing; refused, touching nothing,
+/// when it holds anything illume cannot prove it wrote ([`OutputDir`]'s manifest) —
+/// except files another shard is writing now; of illume's files, only this shard's
 /// earlier frames and CSV are removed.
-pub fn prepare_shard_output(dir: &Path, shard: illume_core::Shard) -> Result<()> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("{}: cannot create folder", dir.display()))?;
+pub fn prepare_shard_output(dir: &Path, shard: illume_core::Shard) -> Result<OutputDir> {
+    let out = OutputDir::create(dir)?;
+    let owned = |name: &str| {
+        let name = temporary_target(name).unwrap_or(name);
+        frame_number(name).is_some_and(|i| shard.owns(i as usize)) || name == shard_csv_name(shard)
+    };
     let mut foreign = Vec::new();
     let mut mine = Vec::new();
-    for entry in
-        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?
-    {
-        let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if !(entry.file_type().is_ok_and(|t| t.is_file()) && is_animate_output(&name)) {
-            foreign.push(name);
-        } else if frame_number(&name).is_some_and(|i| shard.owns(i as usize))
-            || name == shard_csv_name(shard)
-        {
-            mine.push(entry.path());
+    for entry in out.survey()? {
+        match entry {
+            Entry::Foreign(n) => foreign.push(n),
+            // Being written by another shard: theirs to finish. Ours: changed since.
+            Entry::Pending(n) if owned(&n) => foreign.push(n),
+            Entry::Pending(_) => {}
+            Entry::Proven(n) if owned(&n) => mine.push(n),
+            Entry::Proven(_) => {}
         }
     }
-    if !foreign.is_empty() {
-        foreign.sort();
-        anyhow::bail!(
-            "{}: the output folder holds files illume did not write ({}); choose an empty or new folder with --output",
-            dir.display(),
-            foreign.join(", ")
-        );
+    out.refuse_foreign(foreign)?;
+    for name in mine {
+        out.remove(&name)?;
     }
-    for path in mine {
-        std::fs::remove_file(&path)
-            .with_context(|| format!("{}: cannot remove an earlier run's file", path.display()))?;
-    }
-    Ok(())
+    Ok(out)
 }
 
-/// Makes `dir` ready for a sequence: created if missing; a folder holding only what an
-/// earlier `animate` wrote ([`is_animate_output`]) is cleared of it, so no stale frame of
-/// a longer earlier run survives; a folder holding anything else is refused, naming it,
-/// and nothing in it is touched.
-pub fn prepare_output(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("{}: cannot create folder", dir.display()))?;
-    let mut ours = Vec::new();
-    let mut foreign = Vec::new();
-    for entry in
-        std::fs::read_dir(dir).with_context(|| format!("{}: cannot list", dir.display()))?
-    {
-        let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
-        let name = entry.file_name().to_string_lossy().into_owned();
-        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
-        if is_file && is_animate_output(&name) {
-            ours.push(entry.path());
-        } else {
-            foreign.push(name);
-        }
-    }
-    if !foreign.is_empty() {
-        foreign.sort();
-        let shown: Vec<&str> = foreign.iter().take(3).map(String::as_str).collect();
-        anyhow::bail!(
-            "{}: the output folder holds files illume did not write ({}{}); choose an empty or new folder with --output",
-            dir.display(),
-            shown.join(", "),
-            if foreign.len() > 3 {
-                format!(" and {} more", foreign.len() - 3)
-            } else {
-                String::new()
-            }
-        );
-    }
-    for path in ours {
-        std::fs::remove_file(&path)
-            .with_context(|| format!("{}: cannot remove an earlier run's file", path.display()))?;
-    }
-    Ok(())
+/// Makes `dir` ready for a sequence: created if missing; what an earlier run wrote (and
+/// nobody changed since, [`OutputDir`]) is removed, so no stale frame of a longer
+/// earlier run survives; a folder holding anything else is refused, naming it, and
+/// nothing in it is touched.
+pub fn prepare_output(dir: &Path) -> Result<OutputDir> {
+    Ok(OutputDir::clear(dir)?)
 }
 
 /// Frames waiting to be written may hold at most this many bytes (sRGB and HDR copies);
@@ -183,6 +107,7 @@ struct Budget {
 
 /// The background writer.
 pub struct FrameWriter {
+    out: OutputDir,
     dir: PathBuf,
     size: (u32, u32),
     frames: u64,
@@ -193,8 +118,10 @@ pub struct FrameWriter {
 }
 
 impl FrameWriter {
-    /// Starts a writer of `w × h` frames into `dir`.
-    pub fn start(dir: &Path, w: u32, h: u32) -> Result<Self> {
+    /// Starts a writer of `w × h` frames into `out` (each file recorded in its
+    /// manifest).
+    pub fn start(out: &OutputDir, w: u32, h: u32) -> Result<Self> {
+        let dir = out.dir();
         let preview = if ffmpeg_available() {
             Preview::Mp4
         } else {
@@ -205,7 +132,7 @@ impl FrameWriter {
         let budget = Arc::new(Budget::default());
         let gif = matches!(preview, Preview::Gif);
         let thread = {
-            let dir = dir.to_owned();
+            let out = out.clone();
             let budget = Arc::clone(&budget);
             std::thread::Builder::new()
                 .name("frame writer".into())
@@ -215,11 +142,12 @@ impl FrameWriter {
                     let _ = thread_priority::set_current_thread_priority(
                         thread_priority::ThreadPriority::Min,
                     );
-                    write_all(&dir, w, h, gif, rx, &budget)
+                    write_all(&out, w, h, gif, rx, &budget)
                 })
                 .context("cannot start the frame writer thread")?
         };
         Ok(Self {
+            out: out.clone(),
             dir: dir.to_owned(),
             size: (w, h),
             frames: 0,
@@ -278,15 +206,15 @@ impl FrameWriter {
         if let (Preview::Gif, Some(partial)) = (&self.preview, partial) {
             std::fs::rename(&partial, &out)
                 .with_context(|| format!("{}: cannot write", out.display()))?;
+            self.out.written("preview.gif")?;
             return Ok(out);
         }
-        match mp4(&self.dir, fps) {
+        match mp4(&self.out, fps) {
             Ok(path) => Ok(path),
             Err(e) => {
                 eprintln!("warning: {e:#}; writing a GIF instead");
                 let gif = gif_from_disk(&self.dir, self.frames, self.size, fps)?;
-                illume_core::atomic::write_file(&out, gif)
-                    .with_context(|| format!("{}: cannot write", out.display()))?;
+                self.out.write_file("preview.gif", gif)?;
                 Ok(out)
             }
         }
@@ -340,7 +268,7 @@ fn ffmpeg_available() -> bool {
 /// encoded when the next one arrives (its delay is the time until the next frame was
 /// shown, so the preview plays at the speed the sequence was rendered).
 fn write_all(
-    dir: &Path,
+    out_dir: &OutputDir,
     w: u32,
     h: u32,
     gif: bool,
@@ -348,8 +276,10 @@ fn write_all(
     budget: &Budget,
 ) -> Result<Option<PathBuf>> {
     // The GIF grows in a temporary file beside the frames, renamed into place at the end.
+    let dir = out_dir.dir();
     let partial = dir.join(".preview.gif.partial");
     let mut out = if gif {
+        out_dir.intend("preview.gif")?;
         let file = std::fs::File::create(&partial)
             .with_context(|| format!("{}: cannot create", partial.display()))?;
         Some(std::io::BufWriter::new(file))
@@ -366,7 +296,7 @@ fn write_all(
     let mut last_delay_s = 1.0 / 15.0;
     for frame in rx {
         let size = frame.bytes();
-        let written = write_frame(dir, &frame, w, h);
+        let written = write_frame(out_dir, &frame, w, h);
         let small = encoder.as_ref().map(|_| {
             image::RgbImage::from_raw(w, h, frame.srgb8.clone()).map(|rgb| half_size(&rgb, w, h))
         });
@@ -414,8 +344,9 @@ fn encode_gif_frame<W: std::io::Write>(
 
 /// Writes `frame_NNNNN.png` (and `.exr`), each through a temporary file renamed into
 /// place.
-fn write_frame(dir: &Path, f: &Frame, w: u32, h: u32) -> Result<()> {
-    let path = dir.join(format!("frame_{:05}.png", f.index));
+fn write_frame(out: &OutputDir, f: &Frame, w: u32, h: u32) -> Result<()> {
+    let name = format!("frame_{:05}.png", f.index);
+    let path = out.dir().join(&name);
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new_with_quality(
         &mut png,
@@ -424,18 +355,27 @@ fn write_frame(dir: &Path, f: &Frame, w: u32, h: u32) -> Result<()> {
     )
     .write_image(&f.srgb8, w, h, image::ExtendedColorType::Rgb8)
     .with_context(|| format!("{}: cannot encode", path.display()))?;
-    illume_core::atomic::write_file(&path, png)
-        .with_context(|| format!("{}: cannot write", path.display()))?;
+    out.write_file(&name, png)?;
     if let Some(hdr) = &f.hdr {
-        illume_core::image::write_exr(hdr, &path.with_extension("exr"))?;
+        write_exr_recorded(out, &format!("frame_{:05}.exr", f.index), hdr)?;
     }
+    Ok(())
+}
+
+/// Writes linear `name` into `out` (temporary file, rename), recorded in its manifest.
+pub fn write_exr_recorded(out: &OutputDir, name: &str, image: &RgbImage) -> Result<()> {
+    out.intend(name)?;
+    illume_core::image::write_exr(image, &out.dir().join(name))?;
+    out.written(name)?;
     Ok(())
 }
 
 /// `preview.mp4` from the PNG frames at `fps` through ffmpeg, written to a temporary
 /// sibling and renamed into place (a failed encode keeps an earlier preview whole).
-fn mp4(dir: &Path, fps: f64) -> Result<PathBuf> {
+fn mp4(out_dir: &OutputDir, fps: f64) -> Result<PathBuf> {
+    let dir = out_dir.dir();
     let out = dir.join("preview.mp4");
+    out_dir.intend("preview.mp4")?;
     let tmp = dir.join(format!(".preview.mp4.{}.tmp", std::process::id()));
     let status = std::process::Command::new("ffmpeg")
         .args([
@@ -463,45 +403,8 @@ fn mp4(dir: &Path, fps: f64) -> Result<PathBuf> {
         anyhow::bail!("ffmpeg failed ({status})");
     }
     std::fs::rename(&tmp, &out).with_context(|| format!("{}: cannot write", out.display()))?;
+    out_dir.written("preview.mp4")?;
     Ok(out)
 }
 
 use image::ImageEncoder as _;
-
-#[cfg(test)]
-mod tests {
-    use super::is_animate_output;
-
-    #[test]
-    fn animate_outputs_are_recognised_by_name() {
-        for ours in [
-            "frame_00000.png",
-            "frame_12345.exr",
-            "frame_1234567.png",
-            "frames.csv",
-            "frames_2_of_3.csv",
-            ".frames_0_of_12.csv.77.tmp",
-            "preview.gif",
-            "preview.mp4",
-            ".preview.gif.partial",
-            ".frame_00003.png.4242.tmp",
-            ".frames.csv.17.tmp",
-            ".preview.mp4.99.tmp",
-        ] {
-            assert!(is_animate_output(ours), "{ours}");
-        }
-        for theirs in [
-            "frame_0001.png",
-            "frame_0000a.png",
-            "frame_00000.jpg",
-            "notes.txt",
-            "frames.csv.bak",
-            "frames_x_of_3.csv",
-            "frames_1_of_.csv",
-            ".notes.txt.1.tmp",
-            "preview.webm",
-        ] {
-            assert!(!is_animate_output(theirs), "{theirs}");
-        }
-    }
-}

@@ -108,7 +108,7 @@ pub fn run(a: InfoArgs) -> Result<()> {
     );
     let r = b.bounding_radius();
     println!("lights       {}", scene.lights.len());
-    println!("units        {}", a.units.describe());
+    println!("units        {}", a.units.describe(&a.scene));
     for l in &scene.lights {
         let p = l.power(r);
         let kind = match l.kind {

@@ -6,6 +6,8 @@
 //! * `illume animate SCENE` — an animation: numbered frames, a preview, a per-frame CSV;
 //! * `illume demo` — photon streaming on `builtin:cornell-spot` in real time.
 //! * `illume bench SCENARIO.toml` — run a benchmark scenario and write its report.
+//! * `illume convert IN.exr OUT.png [--exposure EV]` — a linear image tone-mapped as
+//!   `render` writes PNGs.
 //! * `illume precompute SCENE --output FILE` — a day of precomputed indirect light
 //!   (`--shard K/N` for one shard, `--level L` for one adaptive level; `precompute
 //!   merge`, `precompute info`).
@@ -26,6 +28,7 @@
 mod animate;
 mod bench;
 mod compare;
+mod convert;
 mod frames;
 mod info;
 mod offline;
@@ -69,6 +72,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Run a benchmark scenario: techniques vs the converged reference, report and plots.
     Bench(bench::BenchArgs),
+    /// Turn a linear image (EXR) into a PNG with render's exposure and tone curve.
+    Convert(convert::ConvertArgs),
     // The techniques' offline commands (`illume precompute`, …) come next: `main` mounts
     // them from their registrations (`offline::mount`).
     /// Open a window on a scene: the engine's frames as they render, camera and scene
@@ -81,7 +86,7 @@ enum Command {
 fn main() {
     default_sigpipe();
     progress::install_logger();
-    let matches = offline::mount(Cli::command()).get_matches();
+    let matches = command().get_matches();
     let result = match matches
         .subcommand()
         .and_then(|(name, sub)| offline::run(name, sub))
@@ -95,6 +100,18 @@ fn main() {
     }
 }
 
+/// The whole command line: the app's commands, the techniques' offline commands, and a
+/// first `--help` line that names every one of them (made from the list itself, so that
+/// a new command cannot be missing from it).
+fn command() -> clap::Command {
+    let cli = offline::mount(Cli::command());
+    let names: Vec<String> = cli
+        .get_subcommands()
+        .map(|c| c.get_name().to_owned())
+        .collect();
+    cli.about(format!("The illume command line: {}.", names.join(", ")))
+}
+
 /// Runs one of the app's own commands.
 fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
@@ -104,6 +121,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Animate(a) => animate::run(a),
         Command::Demo(a) => animate::demo(a),
         Command::Bench(a) => bench::run_bench(a),
+        Command::Convert(a) => convert::run(a),
         #[cfg(feature = "view")]
         Command::View(a) => view::run(a),
     }

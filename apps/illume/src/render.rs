@@ -100,15 +100,9 @@ fn write(img: &RgbImage, path: &Path, tone: &ToneMap) -> Result<()> {
     Ok(())
 }
 
-/// Runs `illume render`.
-pub fn run(a: RenderArgs) -> Result<()> {
-    // A still wants the converged look, not the interactive one, and the same image on
-    // every run: the technique's `still` preset, when it has one and neither --preset
-    // nor --config says otherwise.
-    // The output must be writable as asked before minutes of rendering: a known format
-    // in a folder that exists (created here if need be).
-    match a
-        .output
+/// Checks that `-o OUTPUT` is .exr (linear) or .png (tone-mapped) and creates its folder.
+pub fn check_output(output: &Path) -> Result<()> {
+    match output
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .as_deref()
@@ -116,20 +110,31 @@ pub fn run(a: RenderArgs) -> Result<()> {
         Some("exr") | Some("png") => {}
         _ => anyhow::bail!(
             "-o {}: the output must be .exr (linear) or .png (tone-mapped)",
-            a.output.display()
+            output.display()
         ),
     }
-    if let Some(parent) = a.output.parent()
+    if let Some(parent) = output.parent()
         && !parent.as_os_str().is_empty()
     {
         std::fs::create_dir_all(parent).with_context(|| {
             format!(
                 "-o {}: cannot create the folder {}",
-                a.output.display(),
+                output.display(),
                 parent.display()
             )
         })?;
     }
+    Ok(())
+}
+
+/// Runs `illume render`.
+pub fn run(a: RenderArgs) -> Result<()> {
+    // A still wants the converged look, not the interactive one, and the same image on
+    // every run: the technique's `still` preset, when it has one and neither --preset
+    // nor --config says otherwise.
+    // The output must be writable as asked before minutes of rendering: a known format
+    // in a folder that exists (created here if need be).
+    check_output(&a.output)?;
     let mut config = a.setup.config(Some("still"))?;
     if let Some(s) = a.spp
         && !config.technique_settings_mut().set_samples_per_pixel(s)

@@ -132,13 +132,26 @@ impl Units {
         }
     }
 
-    /// How `illume info` names the reading.
-    pub fn describe(self) -> &'static str {
-        match self {
-            Units::Radiometric => {
+    /// How `illume info` names the reading of `scene` (a path or `builtin:NAME`), in
+    /// the terms of its own format: `--units` concerns glTF only.
+    pub fn describe(self, scene: &std::path::Path) -> &'static str {
+        let extension = scene
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match (extension.as_deref(), self) {
+            (Some("obj"), _) => {
+                "radiometric (OBJ/MTL emission Ke read as W/(m²·sr); --units is for glTF)"
+            }
+            (Some("ply"), _) => {
+                "radiometric (PLY holds geometry only: no lights or emission; --units is for glTF)"
+            }
+            (Some("gltf" | "glb"), Units::Radiometric) => {
                 "radiometric (glTF light intensities read as W/sr, W/m², emission as W/(m²·sr))"
             }
-            Units::Photometric => "photometric (glTF cd, lx, cd/m² divided by 683 lm/W)",
+            (Some("gltf" | "glb"), Units::Photometric) => {
+                "photometric (glTF cd, lx, cd/m² divided by 683 lm/W)"
+            }
+            _ => "radiometric (built-in scene: light intensities in W/sr, emission in W/(m²·sr))",
         }
     }
 }
@@ -271,10 +284,10 @@ impl SetupArgs {
                 .map_err(|m| anyhow::anyhow!("--look-from/--look-at: {m}"))?;
         }
         if let Some(radiance) = self.sky {
-            scene.sky = Some(illume_scene::Sky::Uniform { radiance });
+            scene.replace_sky(illume_scene::Sky::Uniform { radiance });
         }
         if let Some(file) = &self.envmap {
-            scene.sky = Some(illume_scene::load_envmap(
+            scene.replace_sky(illume_scene::load_envmap(
                 file,
                 self.envmap_scale,
                 self.envmap_rotation,

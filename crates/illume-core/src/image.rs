@@ -114,6 +114,15 @@ impl RgbImage {
         Self::filled(width, height, Rgb::ZERO)
     }
 
+    /// The first pixel (in row order) with a NaN or infinite channel: its x, y and value.
+    pub fn first_non_finite(&self) -> Option<(u32, u32, Rgb)> {
+        let w = self.width.max(1) as usize;
+        self.pixels()
+            .iter()
+            .position(|p| !p.is_finite())
+            .map(|i| ((i % w) as u32, (i / w) as u32, self.pixels()[i]))
+    }
+
     /// Per-channel mean over all pixels (f64 accumulation).
     pub fn mean(&self) -> Rgb {
         let mut s = [0.0f64; 3];
@@ -481,12 +490,38 @@ pub fn read_hdr(path: &Path) -> Result<RgbImage, ImageError> {
         path: path.to_owned(),
         message,
     };
-    let img = image::ImageReader::open(path)
-        .map_err(|e| read_error(e.to_string()))?
-        .with_guessed_format()
-        .map_err(|e| read_error(e.to_string()))?
+    let open = || {
+        image::ImageReader::open(path)
+            .map_err(|e| read_error(e.to_string()))?
+            .with_guessed_format()
+            .map_err(|e| read_error(e.to_string()))
+    };
+    // The name says Radiance HDR: content of another format (a PNG named .hdr) is
+    // refused as a .png name is, not decoded as what it happens to be.
+    let format = open()?.format();
+    if format != Some(image::ImageFormat::Hdr) {
+        return Err(read_error(match format {
+            Some(f) => {
+                format!("not a Radiance HDR file: its content is {f:?} (the name ends in .hdr)")
+            }
+            None => "not a Radiance HDR file (no #?RADIANCE or #?RGBE header)".into(),
+        }));
+    }
+    let img = open()?
         .decode()
-        .map_err(|e| read_error(e.to_string()))?
+        .map_err(|e| match e {
+            // "Memory limit exceeded" alone names no size: the header's claim does.
+            image::ImageError::Limits(_) => {
+                match open().ok().and_then(|r| r.into_dimensions().ok()) {
+                    Some((w, h)) => read_error(format!(
+                        "its header claims {w}×{h} pixels, more than the {} MiB illume decodes",
+                        image::Limits::default().max_alloc.unwrap_or(0) >> 20
+                    )),
+                    None => read_error(e.to_string()),
+                }
+            }
+            e => read_error(e.to_string()),
+        })?
         .to_rgb32f();
     let (w, h) = img.dimensions();
     let texels = img
@@ -516,10 +551,29 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
         path: path.to_owned(),
         message,
     };
-    let meta =
-        exr::meta::MetaData::read_from_file(path, false).map_err(|e| read_error(e.to_string()))?;
+    // The exr crate says "reference to missing bytes" for an empty or cut file: say what
+    // it means, with the file's size.
+    let explain = |e: exr::error::Error| {
+        let size = std::fs::metadata(path).map_or(0, |m| m.len());
+        let text = e.to_string();
+        if size == 0 {
+            read_error("empty file (0 bytes): not an OpenEXR image".into())
+        } else if text.contains("missing bytes") {
+            read_error(format!(
+                "truncated: the file ends ({size} bytes) before its header or pixel data is complete"
+            ))
+        } else {
+            read_error(text)
+        }
+    };
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(explain)?;
     for header in &meta.headers {
         let (w, h) = (header.layer_size.width(), header.layer_size.height());
+        if w == 0 || h == 0 {
+            return Err(read_error(format!(
+                "its header claims {w}×{h} pixels: an empty image"
+            )));
+        }
         let bytes = (w as u64)
             .saturating_mul(h as u64)
             .saturating_mul(std::mem::size_of::<Rgb>() as u64);
@@ -557,10 +611,7 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
             *img.get_mut(pos.x() as u32, pos.y() as u32) = Rgb::new(r, g, b);
         },
     )
-    .map_err(|e| ImageError::Read {
-        path: path.to_owned(),
-        message: e.to_string(),
-    })?;
+    .map_err(explain)?;
     Ok(img.layer_data.channel_data.pixels)
 }
 

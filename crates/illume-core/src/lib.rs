@@ -21,6 +21,7 @@ pub mod cpu_time;
 pub mod files;
 pub mod image;
 pub mod math;
+pub mod outputs;
 pub mod prefetch;
 pub mod progress;
 pub mod sampling;

@@ -157,6 +157,20 @@ impl PropertyTarget {
             _ => 1,
         }
     }
+
+    /// The quantity it animates, as messages name it.
+    pub fn quantity(&self) -> &'static str {
+        match self {
+            PropertyTarget::LightIntensity { .. } => "light intensity",
+            PropertyTarget::LightColour { .. } => "light colour",
+            PropertyTarget::SpotInnerCone { .. } => "spot inner cone angle",
+            PropertyTarget::SpotOuterCone { .. } => "spot outer cone angle",
+            PropertyTarget::BaseColour { .. } => "baseColorFactor",
+            PropertyTarget::Emissive { .. } => "emissiveFactor",
+            PropertyTarget::Metallic { .. } => "metallicFactor",
+            PropertyTarget::Roughness { .. } => "roughnessFactor",
+        }
+    }
 }
 
 /// One animated light or material value.
@@ -226,6 +240,40 @@ impl PropertyChannel {
         }
         if self.values.iter().any(|v| !v.is_finite()) {
             return Err("output values are not finite".into());
+        }
+        // The range the same value has when it is static (issue 38: animated values
+        // outside it were clamped where a static one is a load error). CUBICSPLINE keys
+        // are (in-tangent, value, out-tangent): only values are quantities.
+        use PropertyTarget as P;
+        let (low, high, range) = match self.target {
+            P::LightIntensity { .. } | P::LightColour { .. } | P::Emissive { .. } => {
+                (0.0, f32::INFINITY, "≥ 0")
+            }
+            P::BaseColour { .. } | P::Metallic { .. } | P::Roughness { .. } => {
+                (0.0, 1.0, "in [0, 1]")
+            }
+            P::SpotInnerCone { .. } | P::SpotOuterCone { .. } => {
+                (0.0, std::f32::consts::FRAC_PI_2, "in [0, π/2]")
+            }
+        };
+        let c = self.target.components();
+        for (k, key) in self.values.chunks_exact(c).enumerate() {
+            let is_value = match self.interpolation {
+                Interpolation::CubicSpline => k % 3 == 1,
+                _ => true,
+            };
+            if let Some(v) = key.iter().find(|v| !(low..=high).contains(*v))
+                && is_value
+            {
+                let key_index = match self.interpolation {
+                    Interpolation::CubicSpline => k / 3,
+                    _ => k,
+                };
+                return Err(format!(
+                    "key {key_index}: {} {v} is not {range} (as the static value must be)",
+                    self.target.quantity()
+                ));
+            }
         }
         Ok(())
     }

@@ -296,6 +296,21 @@ impl Scene {
         Ok(light)
     }
 
+    /// Replaces the sky (`--sky`, `--envmap`). With a sun path it is the sky at scale 1,
+    /// which the sun scales with the time of day — what a `.illumepc` file's scene
+    /// fingerprint holds — so a sky given on the command line is seen, and a precompute
+    /// and a render given the same one agree (issue 38). Without a sun it is the sky.
+    pub fn replace_sky(&mut self, sky: Sky) {
+        match &mut self.sun {
+            Some(sun) => {
+                sun.sky_base = Some(sky);
+                let mut ignored = Vec::new();
+                self.apply_sun(&mut ignored);
+            }
+            None => self.sky = Some(sky),
+        }
+    }
+
     /// Poses the sun's light for the current time (if the scene has a sun), merging its
     /// change into `changes` as one `LightChanged` from the state before.
     fn apply_sun(&mut self, changes: &mut Vec<SceneChange>) {

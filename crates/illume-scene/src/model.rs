@@ -1098,6 +1098,19 @@ impl Scene {
                 format_large(total)
             ));
         }
+        // A sun path scales its sky with the time of day (0 at night): the sky at scale
+        // 1 is what the day reaches, checked as the sky itself is.
+        if let Some(base) = self.sun.as_ref().and_then(|s| s.sky_base.as_ref()) {
+            base.validate()?;
+            let r = self.bounds().bounding_radius();
+            let day = total - self.sky_power(r) + base.integral() * (PI * r * r);
+            if !day.is_finite() || day.max_element() > MAX_POWER_W {
+                return Err(format!(
+                    "the scene's total light power with its sun path's sky at full day {} W exceeds {MAX_POWER_W:e} W (lights, emissive surfaces and sky together)",
+                    format_large(day)
+                ));
+            }
+        }
         for (i, a) in self.animations.iter().enumerate() {
             for c in &a.channels {
                 if c.node.index() >= self.nodes.len() {

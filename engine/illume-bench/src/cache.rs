@@ -137,15 +137,31 @@ impl ReferenceCache {
     }
 
     /// The stored image of `key`, or `render()`'s result, stored for next time.
+    /// A stored image that is not `size` (width, height) is an error naming its file.
     pub fn get_or_render(
         &mut self,
         key: &CacheKey,
+        size: (u32, u32),
         render: impl FnOnce() -> RgbImage,
     ) -> Result<RgbImage, BenchError> {
         let path = self.path(key);
         if self.contains(key) {
             self.hits += 1;
-            return Ok(RgbImage::read(&path)?);
+            let image = RgbImage::read(&path)?;
+            if (image.width(), image.height()) != size {
+                return Err(illume_core::image::ImageError::Read {
+                    path,
+                    message: format!(
+                        "the cached reference is {}×{}, the scenario's frames are {}×{}: a damaged or foreign cache file (remove it, or the cache folder, to render it again)",
+                        image.width(),
+                        image.height(),
+                        size.0,
+                        size.1
+                    ),
+                }
+                .into());
+            }
+            return Ok(image);
         }
         let image = render();
         std::fs::create_dir_all(&self.dir).map_err(|e| BenchError::io(&self.dir, e))?;

@@ -68,6 +68,10 @@ pub enum BenchError {
     /// A measurement or the report failed.
     #[error(transparent)]
     Metrics(#[from] illume_metrics::MetricsError),
+    /// The output folder holds a file illume did not write where it would write one
+    /// (the message names it), or its manifest could not be kept.
+    #[error(transparent)]
+    Output(#[from] illume_core::outputs::OutputError),
 }
 
 impl BenchError {

@@ -5,10 +5,11 @@
 use crate::error::BenchError;
 use crate::run::{BenchOutcome, FrameRecord, RunOptions};
 use crate::scenario::Scenario;
+use illume_core::outputs::OutputDir;
 use illume_metrics::report::{Bar, Cell, Series, Table, plot_bars, plot_lines, write_csv};
 use illume_metrics::{Counters, Metric, counters_table};
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The files [`write_report`] wrote.
 #[derive(Clone, Debug, PartialEq)]
@@ -243,21 +244,33 @@ pub fn write_report(
     options: &RunOptions,
 ) -> Result<ReportFiles, BenchError> {
     let dir = &options.output_dir;
-    std::fs::create_dir_all(dir).map_err(|e| BenchError::io(dir, e))?;
+    let out = OutputDir::create(dir)?;
+    // Each file is recorded in the folder's manifest; one that is there already and is
+    // not illume's is refused, untouched.
+    let recorded = |name: &str, write: &mut dyn FnMut(&Path) -> Result<(), BenchError>| {
+        out.intend(name)?;
+        write(&dir.join(name))?;
+        out.written(name)?;
+        Ok::<(), BenchError>(())
+    };
     let results_csv = dir.join("results.csv");
-    write_csv(&results_csv, &results_table(scenario, &outcome.records))?;
+    recorded("results.csv", &mut |p| {
+        Ok(write_csv(p, &results_table(scenario, &outcome.records))?)
+    })?;
 
     let mut plots = Vec::new();
     let mut plot_md = String::new();
     let error = scenario.error_metric;
     let path = dir.join("error_vs_time.svg");
-    plot_lines(
-        &path,
-        &format!("{error} vs time (against the converged reference)"),
-        "time [s]",
-        error.name(),
-        &metric_series(outcome, error),
-    )?;
+    recorded("error_vs_time.svg", &mut |p| {
+        Ok(plot_lines(
+            p,
+            &format!("{error} vs time (against the converged reference)"),
+            "time [s]",
+            error.name(),
+            &metric_series(outcome, error),
+        )?)
+    })?;
     let _ = write!(
         plot_md,
         "### {error} vs time\n\n![{error} vs time](error_vs_time.svg)\n\n"
@@ -266,13 +279,15 @@ pub fn write_report(
     for &m in scenario.metrics.iter().filter(|&&m| m != error) {
         let name = format!("error_vs_time_{}.svg", m.name());
         let path = dir.join(&name);
-        plot_lines(
-            &path,
-            &format!("{m} vs time"),
-            "time [s]",
-            m.name(),
-            &metric_series(outcome, m),
-        )?;
+        recorded(&name, &mut |p| {
+            Ok(plot_lines(
+                p,
+                &format!("{m} vs time"),
+                "time [s]",
+                m.name(),
+                &metric_series(outcome, m),
+            )?)
+        })?;
         let _ = write!(plot_md, "### {m} vs time\n\n![{m} vs time]({name})\n\n");
         plots.push(path);
     }
@@ -290,7 +305,9 @@ pub fn write_report(
         })
         .collect();
     let path = dir.join("fps.svg");
-    plot_lines(&path, "frames per second", "frame", "fps", &fps)?;
+    recorded("fps.svg", &mut |p| {
+        Ok(plot_lines(p, "frames per second", "frame", "fps", &fps)?)
+    })?;
     let _ = write!(
         plot_md,
         "### Frames per second\n\n![fps per frame](fps.svg)\n\n"
@@ -309,14 +326,16 @@ pub fn write_report(
         let name = format!("latency_{k}.svg");
         let path = dir.join(&name);
         let title = format!("latency after \"{}\" (frame {})", event.name, event.frame);
-        plot_bars(&path, &title, "latency [s]", &bars)?;
+        recorded(&name, &mut |p| {
+            Ok(plot_bars(p, &title, "latency [s]", &bars)?)
+        })?;
         let _ = write!(plot_md, "![{title}]({name})\n\n");
         plots.push(path);
     }
 
     let report_md = dir.join("report.md");
     let md = markdown(scenario, outcome, options, &plot_md);
-    illume_core::atomic::write_file(&report_md, md).map_err(|e| BenchError::io(&report_md, e))?;
+    out.write_file("report.md", md)?;
     Ok(ReportFiles {
         report_md,
         results_csv,

@@ -213,11 +213,17 @@ pub fn run(
         cache.renders,
         cache.dir().display()
     ));
-    let frames_dir = options.output_dir.join("frames");
-    if options.save_frames {
+    let out = if options.save_frames {
+        Some(illume_core::outputs::OutputDir::create(
+            &options.output_dir,
+        )?)
+    } else {
+        None
+    };
+    if let Some(out) = &out {
         for (i, r) in references.per_frame().enumerate() {
             if let Some(r) = r {
-                save_frame(&frames_dir.join("reference"), i, r)?;
+                save_frame(out, "reference", i, r)?;
             }
         }
     }
@@ -236,8 +242,10 @@ pub fn run(
             progress,
         )?;
         let frame_ms: Vec<f64> = technique_records.iter().map(|r| r.frame_ms).collect();
-        for (i, img) in images.iter().enumerate() {
-            save_frame(&frames_dir.join(file_safe(&label)), i, img)?;
+        if let Some(out) = &out {
+            for (i, img) in images.iter().enumerate() {
+                save_frame(out, &file_safe(&label), i, img)?;
+            }
         }
         records.extend(technique_records);
         if scenario.reference.equal_time {
@@ -253,8 +261,10 @@ pub fn run(
                 progress,
             )?;
             let series = equal_time_series(&label);
-            for (i, img) in images.iter().enumerate() {
-                save_frame(&frames_dir.join(file_safe(&series)), i, img)?;
+            if let Some(out) = &out {
+                for (i, img) in images.iter().enumerate() {
+                    save_frame(out, &file_safe(&series), i, img)?;
+                }
             }
             records.extend(equal);
         }
@@ -407,7 +417,8 @@ fn converged_references(
         if images[slot].is_some() || !shard.owns(slot) {
             continue;
         }
-        let image = cache.get_or_render(key, || {
+        let size = (scenario.width, scenario.height);
+        let image = cache.get_or_render(key, size, || {
             let mut r = ReferenceRenderer::new(settings.clone(), scenario.width, scenario.height);
             // Chunks keep the bar moving; the image does not depend on the chunking.
             let chunk = (spp / 16).max(1);
@@ -961,9 +972,20 @@ pub fn file_safe(text: &str) -> String {
         .collect()
 }
 
-fn save_frame(dir: &Path, i: usize, image: &RgbImage) -> Result<(), BenchError> {
-    std::fs::create_dir_all(dir).map_err(|e| BenchError::io(dir, e))?;
-    image.write(&dir.join(format!("{i:04}.png")), &ToneMap::default())?;
+/// Writes `frames/SERIES/NNNN.png` under `out`, recorded in its manifest (a file there
+/// that illume did not write is refused, untouched).
+fn save_frame(
+    out: &illume_core::outputs::OutputDir,
+    series: &str,
+    i: usize,
+    image: &RgbImage,
+) -> Result<(), BenchError> {
+    let dir = out.dir().join("frames").join(series);
+    std::fs::create_dir_all(&dir).map_err(|e| BenchError::io(&dir, e))?;
+    let name = format!("frames/{series}/{i:04}.png");
+    out.intend(&name)?;
+    image.write(&out.dir().join(&name), &ToneMap::default())?;
+    out.written(&name)?;
     Ok(())
 }
 

@@ -767,7 +767,34 @@ impl Scenario {
             None => scene.active_animation = None,
         }
         scene.set_time(self.frame_times().first().copied().unwrap_or(0.0));
+        self.check_edits(&scene)?;
         Ok(scene)
+    }
+
+    /// Replays every `[[edit]]` on a copy of `scene` and checks the result after each
+    /// with the loader's own checks ([`Scene::validate`]): an edit's albedo of 2 or −1,
+    /// or an emission of 3e38 (a total power beyond any scene's), is refused before any
+    /// frame is rendered, as the same value in the scene file would be (issue 38).
+    fn check_edits(&self, scene: &Scene) -> Result<(), BenchError> {
+        use crate::replay::EditTarget as _;
+        let mut replayed = scene.clone();
+        for index in self.edit_order() {
+            let edit_error = |message: String| BenchError::Edit {
+                path: self.file.clone(),
+                index,
+                message,
+            };
+            replayed
+                .apply_spec(&self.edits[index])
+                .map_err(edit_error)?;
+            replayed.validate().map_err(|m| {
+                edit_error(format!(
+                    "{} makes the scene invalid: {m}",
+                    self.edits[index].target()
+                ))
+            })?;
+        }
+        Ok(())
     }
 
     /// What identifies the scene's content for the reference cache: `builtin:NAME` (with

@@ -243,6 +243,37 @@ impl Config {
         self.settings_of(self.technique)
     }
 
+    /// Applies the CLI's pacing to the chosen technique (`--realtime`,
+    /// `--work-per-frame N`) and checks the result with the setting's own validation
+    /// ([`AnySettings::check`]), as a settings file's value would be: an amount the
+    /// setting refuses (0 samples per pixel) is refused, and so is one the setting
+    /// cannot hold (its budget is not `N`: `reference.spp_per_frame` is 32-bit). The
+    /// error names the flag, its value and the technique's setting's message.
+    pub fn pace(&mut self, pacing: Pacing) -> Result<(), String> {
+        self.technique_settings_mut().pace(pacing);
+        let Pacing::FixedWork {
+            work_per_frame: Some(n),
+        } = pacing
+        else {
+            return Ok(());
+        };
+        let technique = self.technique;
+        let flag = format!("--work-per-frame {n}");
+        self.technique_settings()
+            .check()
+            .map_err(|e| format!("{flag}: {e}"))?;
+        let held = self.technique_settings().default_budget().work;
+        if held != Some(n) {
+            return Err(format!(
+                "{flag}: {technique} cannot do {n} {} per frame: its setting holds {} \
+                 (the same limit a settings file has)",
+                technique.work_unit(),
+                held.map_or("no fixed amount".to_owned(), |h| format!("at most {h}"))
+            ));
+        }
+        Ok(())
+    }
+
     /// The chosen technique's settings, to change.
     pub fn technique_settings_mut(&mut self) -> &mut dyn AnySettings {
         self.settings_of_mut(self.technique)

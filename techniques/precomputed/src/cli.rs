@@ -220,6 +220,8 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
         .output
         .clone()
         .ok_or("illume precompute: give --output FILE")?;
+    // Before hours of rendering: the output must be new or an earlier .illumepc.
+    crate::file::check_overwritable(&output)?;
     let configured = host.settings(&a.sets)?;
     let (render_width, render_height) = configured.image_size;
     let mut s: PrecomputedSettings = *configured
@@ -290,6 +292,16 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
     if let Some(radiance) = a.sky {
         scene.sky = Some(illume_scene::Sky::Uniform { radiance });
     }
+    // The loader checked the scene; --sky changed it: the same checks as `render` makes,
+    // on the sky at scale 1 (before the sun scales it: at night it would pass as 0). A
+    // sky of 3e38 is a total power beyond any scene's.
+    scene.validate().map_err(|m| {
+        format!(
+            "{}{}: {m}",
+            scene.source,
+            if a.sky.is_some() { " with --sky" } else { "" }
+        )
+    })?;
     scene.attach_sun(sun)?;
     let world = illume_transport::World::new(scene);
     let previous = match &a.previous {
@@ -346,6 +358,7 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
 }
 
 fn run_merge(m: MergeArgs, host: &dyn OfflineHost) -> Result<()> {
+    crate::file::check_overwritable(&m.output)?;
     let parts = m
         .parts
         .iter()

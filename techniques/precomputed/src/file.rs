@@ -30,6 +30,13 @@ pub const MAGIC: &[u8; 8] = b"ILLUMEPC";
 pub const VERSION: u32 = 1;
 /// Largest file read \[bytes\] (an 8K atlas of 288 keys is ~40 GB raw; PCA files are small).
 pub const MAX_FILE_BYTES: u64 = 64 << 30;
+/// Most keys a file (and a precompute) may hold: a key a second over a whole day. Every
+/// key is rendered and kept in memory (a PCA needs all of them), so more is never a
+/// schedule but a typing error; the same rule as `animate`'s and `bench`'s frame caps.
+pub const MAX_KEYS: usize = 86_400;
+/// Largest key image side \[texels\] a header may state (an 8K atlas is 8192 wide;
+/// a cube file's height is 6 faces).
+pub const MAX_KEY_SIDE: u32 = 1 << 16;
 
 /// What can be wrong with a `.illumepc` file. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
@@ -117,6 +124,28 @@ pub enum FileError {
         found: String,
         /// The source named in the file.
         found_source: String,
+    },
+    /// A header field or a section value is out of range (checked on every read, before
+    /// anything indexes with it).
+    #[error("{path}: {field} = {value}: {reason}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// The header field or section (and index) that is wrong.
+        field: String,
+        /// Its value, as read.
+        value: String,
+        /// What it must be.
+        reason: String,
+    },
+    /// The output path holds something that is not an `.illumepc` file: illume
+    /// overwrites only its own files.
+    #[error(
+        "{path}: exists and is not an .illumepc file (it does not start with ILLUMEPC); illume overwrites only its own files: choose another --output or move it away"
+    )]
+    NotOurs {
+        /// The file.
+        path: PathBuf,
     },
     /// The file's camera or image size differs from the run's (screen and cube domains).
     #[error("{path}: {what} differs: the file has {found}, this run has {expected}")]
@@ -329,6 +358,141 @@ fn encode(section: &Section) -> Vec<u8> {
     }
 }
 
+/// Whether `path` may be written: it does not exist, or it is a regular file that starts
+/// with [`MAGIC`] (an earlier `.illumepc` file). Anything else — a user's file, a folder,
+/// a link — is refused, untouched. Call it before the work that makes the file, too.
+pub fn check_overwritable(path: &Path) -> Result<(), FileError> {
+    use std::io::Read;
+    let meta = match std::fs::symlink_metadata(path) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(source) => {
+            return Err(FileError::Io {
+                path: path.to_path_buf(),
+                source,
+            });
+        }
+    };
+    let mut magic = Vec::new();
+    if meta.is_file()
+        && let Ok(file) = std::fs::File::open(path)
+    {
+        let _ = file.take(8).read_to_end(&mut magic);
+    }
+    if magic == MAGIC {
+        return Ok(());
+    }
+    Err(FileError::NotOurs {
+        path: path.to_path_buf(),
+    })
+}
+
+impl Header {
+    /// Checks every field a reader indexes or computes with (issue 38): the kind and
+    /// domain are known, sizes within [`MAX_KEY_SIDE`], three channels, the camera 13
+    /// finite numbers, the exposure finite and > 0, the shard `K < N`, the keys at most
+    /// [`MAX_KEYS`], their times finite and strictly increasing, the components at most
+    /// the keys in the PCA, the eigenvalues finite. `path` is only named in errors.
+    pub fn check(&self, path: &Path) -> Result<(), FileError> {
+        let invalid = |field: &str, value: String, reason: &str| FileError::Invalid {
+            path: path.to_path_buf(),
+            field: field.into(),
+            value,
+            reason: reason.into(),
+        };
+        if !["partial", "pca", "levels"].contains(&self.kind.as_str()) {
+            return Err(invalid(
+                "kind",
+                format!("{:?}", illume_scene::excerpt(&self.kind)),
+                "must be partial, pca or levels",
+            ));
+        }
+        if !["screen", "cube", "atlas"].contains(&self.domain.as_str()) {
+            return Err(invalid(
+                "domain",
+                format!("{:?}", illume_scene::excerpt(&self.domain)),
+                "must be screen, cube or atlas",
+            ));
+        }
+        for (field, v) in [("width", self.width), ("height", self.height)] {
+            if v == 0 || v > MAX_KEY_SIDE {
+                return Err(invalid(
+                    field,
+                    v.to_string(),
+                    &format!("must be 1–{MAX_KEY_SIDE} texels"),
+                ));
+            }
+        }
+        if self.channels != 3 {
+            return Err(invalid(
+                "channels",
+                self.channels.to_string(),
+                "must be 3 (RGB)",
+            ));
+        }
+        if self.camera.len() != 13 || self.camera.iter().any(|v| !v.is_finite()) {
+            return Err(invalid(
+                "camera",
+                format!("{:?}", &self.camera[..self.camera.len().min(13)]),
+                "must be 13 finite numbers (a 3×4 matrix and the field of view)",
+            ));
+        }
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            return Err(invalid(
+                "exposure",
+                self.exposure.to_string(),
+                "must be finite and > 0",
+            ));
+        }
+        let [k, n] = self.shard;
+        if n == 0 || k >= n {
+            return Err(invalid(
+                "shard",
+                format!("[{k}, {n}]"),
+                "must be [K, N] with K < N",
+            ));
+        }
+        if self.keys.len() > MAX_KEYS {
+            return Err(invalid(
+                "keys",
+                format!("{} keys", self.keys.len()),
+                &format!("at most {MAX_KEYS} (a key a second for a day)"),
+            ));
+        }
+        if self.kind != "partial" && self.keys.is_empty() {
+            return Err(invalid("keys", "none".into(), "a merged file needs a key"));
+        }
+        for (i, key) in self.keys.iter().enumerate() {
+            let after_previous = i == 0 || key.hours > self.keys[i - 1].hours;
+            if !key.hours.is_finite() || !after_previous {
+                return Err(invalid(
+                    &format!("keys[{i}].hours"),
+                    key.hours.to_string(),
+                    "key times must be finite and strictly increasing",
+                ));
+            }
+        }
+        let bright = self.keys.iter().filter(|k| !k.dark).count();
+        if self.components as usize > bright {
+            return Err(invalid(
+                "components",
+                self.components.to_string(),
+                &format!("more than the {bright} keys in the PCA"),
+            ));
+        }
+        for (g, values) in self.eigenvalues.iter().enumerate() {
+            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                return Err(invalid(
+                    &format!("eigenvalues[{g}][{i}]"),
+                    values[i].to_string(),
+                    "must be finite",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl PcFile {
     /// The file's bytes (the header's section list rebuilt from `sections`).
     pub fn to_bytes(&self) -> Vec<u8> {
@@ -360,8 +524,10 @@ impl PcFile {
         out
     }
 
-    /// Writes the file (temporary sibling, then rename).
+    /// Writes the file (temporary sibling, then rename), over an earlier file only when
+    /// that is an `.illumepc` file ([`check_overwritable`]).
     pub fn write(&self, path: &Path) -> Result<(), FileError> {
+        check_overwritable(path)?;
         illume_core::atomic::write_file(path, self.to_bytes()).map_err(|source| FileError::Io {
             path: path.to_path_buf(),
             source,
@@ -454,6 +620,7 @@ impl PcFile {
             path: p(),
             message: e.to_string(),
         })?;
+        header.check(path)?;
         Ok((header, header_end + 8))
     }
 
@@ -500,7 +667,7 @@ impl PcFile {
                     found,
                 });
             }
-            let values = match info.format {
+            let values: Vec<f32> = match info.format {
                 SectionFormat::F32 => data
                     .chunks_exact(4)
                     .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
@@ -510,6 +677,16 @@ impl PcFile {
                     .map(|c| half::f16::from_le_bytes([c[0], c[1]]).to_f32())
                     .collect(),
             };
+            // A NaN or infinite value would render as 0 or poison every texel it
+            // reaches: a checksum only proves the bytes are the ones written.
+            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                return Err(FileError::Invalid {
+                    path: p(),
+                    field: format!("section {} value {i}", info.name),
+                    value: values[i].to_string(),
+                    reason: "every stored value must be finite".into(),
+                });
+            }
             sections.push(Section {
                 name: info.name.clone(),
                 format: info.format,

@@ -109,6 +109,15 @@ impl Precomputed {
                 sky_values.len().to_string(),
             ));
         }
+        // The sky image is radiance: a negative value would light the scene negatively.
+        if let Some(i) = sky_values.iter().position(|v| *v < 0.0) {
+            return Err(PrecomputedError::File(FileError::Invalid {
+                path: path.to_path_buf(),
+                field: format!("section sky value {i}"),
+                value: sky_values[i].to_string(),
+                reason: "sky radiance must be ≥ 0".into(),
+            }));
+        }
         let sky = sky_values
             .chunks_exact(3)
             .map(|c| Rgb::new(c[0], c[1], c[2]))

@@ -35,10 +35,15 @@ pub enum Criterion {
     VerifyMidpoint,
 }
 
-/// Uniform keys from `from_h` to `to_h` every `step_min` minutes (Eq. 1).
+/// Uniform keys from `from_h` to `to_h` every `step_min` minutes (Eq. 1), at most
+/// [`crate::file::MAX_KEYS`] (the settings refuse a step that asks for more,
+/// [`crate::settings::PrecomputedSettings::validate`]; the cap here only keeps an
+/// unchecked caller from allocating without bound).
 pub fn uniform(from_h: f64, to_h: f64, step_min: f64) -> Vec<KeyTime> {
     let step = step_min / 60.0;
-    let n = ((to_h - from_h) / step - 1e-9).ceil().max(1.0) as usize;
+    let n = ((to_h - from_h) / step - 1e-9)
+        .ceil()
+        .clamp(1.0, crate::file::MAX_KEYS as f64) as usize;
     (0..n)
         .map(|i| KeyTime {
             hours: from_h + i as f64 * step,
@@ -187,21 +192,29 @@ pub fn adaptive<T, E>(
 
 /// The keys around `hours` and the blend weight α of the later one (Eq. 3 generalised
 /// to non-uniform keys: a binary search, then `α = (t − t_N)/(t_{N+1} − t_N)`). Times
-/// before the first key or after the last clamp to it (α = 0 or 1). `times` must be
-/// sorted and non-empty.
+/// before the first key or after the last clamp to it (α = 0 or 1). `times` should be
+/// finite and strictly increasing (a file's are, [`crate::file::Header::check`]); any
+/// other input still gives indices within `times` (or `(0, 0, 0.0)` when it is empty)
+/// and an α in [0, 1], never a panic.
 pub fn bracket(times: &[f64], hours: f64) -> (usize, usize, f32) {
     let last = times.len().saturating_sub(1);
-    if times.is_empty() || hours <= times[0] {
+    if times.is_empty() || hours <= times[0] || hours.is_nan() {
         return (0, 0, 0.0);
     }
-    if hours >= times[last] {
+    if hours >= times[last] || last == 0 {
         return (last, last, 0.0);
     }
-    // First index with times[i] > hours.
-    let next = times.partition_point(|&t| t <= hours);
+    // First index with times[i] > hours (≥ 1, since hours > times[0]; clamped for
+    // unsorted or NaN times).
+    let next = times.partition_point(|&t| t <= hours).clamp(1, last);
     let n = next - 1;
     let alpha = ((hours - times[n]) / (times[next] - times[n])) as f32;
-    (n, next, alpha.clamp(0.0, 1.0))
+    let alpha = if alpha.is_nan() {
+        0.0
+    } else {
+        alpha.clamp(0.0, 1.0)
+    };
+    (n, next, alpha)
 }
 
 #[cfg(test)]
@@ -271,6 +284,30 @@ mod tests {
             // down to the ramp (0, 6, 12, 24 here).
             assert!(outside.len() <= 4, "{criterion:?}: {outside:?}");
         }
+    }
+
+    /// Issue 38: a NaN key time (or an unsorted list) made `bracket` index before the
+    /// first key; every answer must now be within the list.
+    #[test]
+    fn bracket_never_leaves_the_keys() {
+        let lists: [&[f64]; 5] = [
+            &[0.0, f64::NAN, 2.0],
+            &[f64::NAN, 1.0, 2.0],
+            &[3.0, 1.0, 2.0],
+            &[1.0, 1.0, 1.0],
+            &[f64::NAN],
+        ];
+        for times in lists {
+            for hours in [-1.0, 0.5, 1.0, 1.5, 2.5, f64::NAN, f64::INFINITY] {
+                let (n, m, alpha) = bracket(times, hours);
+                assert!(n < times.len() && m < times.len(), "{times:?} at {hours}");
+                assert!(
+                    (0.0..=1.0).contains(&alpha),
+                    "{times:?} at {hours}: {alpha}"
+                );
+            }
+        }
+        assert_eq!(bracket(&[], 1.0), (0, 0, 0.0));
     }
 
     #[test]

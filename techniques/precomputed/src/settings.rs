@@ -141,6 +141,23 @@ impl PrecomputedSettings {
         if !(self.from_h.is_finite() && self.to_h.is_finite() && self.to_h > self.from_h) {
             return bad("to_h", "must be finite and after from_h".to_owned());
         }
+        // Every key is rendered and held in memory for the PCA: refuse a step that asks
+        // for more than a file may hold before anything is allocated.
+        let keys = (self.to_h - self.from_h) * 60.0 / self.step_min;
+        if keys.is_nan() || keys >= crate::file::MAX_KEYS as f64 {
+            return bad(
+                "step_min",
+                format!(
+                    "{} min over {}–{} h gives {keys:.3e} keys, more than the {} a \
+                     precompute may hold (a key a second for a day: every key is rendered \
+                     and kept in memory for the PCA)",
+                    self.step_min,
+                    self.from_h,
+                    self.to_h,
+                    crate::file::MAX_KEYS
+                ),
+            );
+        }
         Ok(())
     }
 }

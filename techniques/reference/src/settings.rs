@@ -80,13 +80,16 @@ impl TechniqueSettings for ReferenceSettings {
         }
     }
 
-    /// Real time keeps `spp_per_frame`; a fixed amount of work sets it.
+    /// Real time keeps `spp_per_frame`; a fixed amount of work sets it: 0 stays 0 (which
+    /// [`TechniqueSettings::check`] refuses, as in a settings file) and more than a u32
+    /// holds saturates (its budget then differs from the amount asked for, which the
+    /// CLI refuses: `Config::pace`).
     fn pace(&mut self, pacing: Pacing) {
         if let Pacing::FixedWork {
             work_per_frame: Some(n),
         } = pacing
         {
-            self.spp_per_frame = n.clamp(1, u32::MAX as u64) as u32;
+            self.spp_per_frame = u32::try_from(n).unwrap_or(u32::MAX);
         }
     }
 

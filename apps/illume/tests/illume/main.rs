@@ -9,4 +9,5 @@ mod cli;
 mod common;
 mod corpus;
 mod exposure;
+mod robust;
 mod shards;

@@ -381,10 +381,18 @@ fn decode_image(bytes: &[u8], name: &str) -> Result<image::DynamicImage, String>
     };
     decoded.map_err(|e| match e {
         image::ImageError::Limits(_) => {
-            let claimed = image::ImageReader::new(std::io::Cursor::new(bytes))
+            // Formats without a magic number (TGA) are known by the file's name.
+            let reader = || image::ImageReader::new(std::io::Cursor::new(bytes));
+            let claimed = reader()
                 .with_guessed_format()
                 .ok()
-                .and_then(|r| r.into_dimensions().ok());
+                .and_then(|r| r.into_dimensions().ok())
+                .or_else(|| {
+                    let format = image::ImageFormat::from_path(name).ok()?;
+                    let mut r = reader();
+                    r.set_format(format);
+                    r.into_dimensions().ok()
+                });
             match claimed {
                 Some((w, h)) => format!(
                     "its header claims {w}×{h} pixels, more than the {} MiB illume decodes ({e})",

@@ -84,11 +84,8 @@ fn engine_sees_the_edit_at_the_same_frame() {
 fn edit_of_a_missing_instance_names_it_and_the_alternatives() {
     let text = SCENARIO.replace("instance = \"sphere\"", "instance = \"teapot\"");
     let s = Scenario::parse(&text, Path::new("dir/edit.toml")).unwrap();
-    let mut scene = s.load_scene().unwrap();
-    let e = Replay::new(&s)
-        .apply_due(&mut scene, 1.0)
-        .unwrap_err()
-        .to_string();
+    // Every edit is replayed and checked when the scene is loaded, before any frame.
+    let e = s.load_scene().unwrap_err().to_string();
     assert!(
         e.contains("dir/edit.toml")
             && e.contains("edit[0]")

@@ -137,3 +137,149 @@ fn each_bad_file_has_its_own_error() {
     moved.instances[i].world_from_object.translation.x += 0.01;
     assert!(file.check_scene(path, &moved).is_err());
 }
+
+/// Issue 38: a header whose checksum is right but whose fields are wrong (a NaN key time
+/// panicked the run time in `schedule::bracket`; duplicate and unsorted times, NaN data,
+/// impossible counts were accepted) is refused on read, naming the file, the field and
+/// the value. Each case is generated from the valid sample and written with a fresh
+/// checksum, so only the new checks can catch it.
+#[test]
+fn header_fields_and_values_are_checked_on_read() {
+    let path = Path::new("bad.illumepc");
+    type Edit = fn(&mut PcFile);
+    let cases: &[(&str, Edit, &[&str])] = &[
+        (
+            "nan key time",
+            |f| f.header.keys[1].hours = f64::NAN,
+            &["keys[1].hours", "NaN"],
+        ),
+        (
+            "inf key time",
+            |f| f.header.keys[0].hours = f64::NEG_INFINITY,
+            &["keys[0].hours", "-inf"],
+        ),
+        (
+            "duplicate key time",
+            |f| f.header.keys[1].hours = 0.0,
+            &["keys[1].hours", "strictly increasing"],
+        ),
+        (
+            "unsorted key times",
+            |f| f.header.keys[0].hours = 13.0,
+            &["keys[1].hours", "12"],
+        ),
+        ("no keys", |f| f.header.keys.clear(), &["keys", "none"]),
+        (
+            "more components than keys",
+            |f| f.header.components = 2,
+            &["components", "2"],
+        ),
+        ("width 0", |f| f.header.width = 0, &["width", "0"]),
+        (
+            "height 2^31",
+            |f| f.header.height = 1 << 31,
+            &["height", "2147483648"],
+        ),
+        ("channels 4", |f| f.header.channels = 4, &["channels", "4"]),
+        (
+            "camera short",
+            |f| f.header.camera.truncate(3),
+            &["camera", "13 finite"],
+        ),
+        (
+            "camera nan",
+            |f| f.header.camera[12] = f32::NAN,
+            &["camera", "NaN"],
+        ),
+        (
+            "exposure 0",
+            |f| f.header.exposure = 0.0,
+            &["exposure", "0"],
+        ),
+        (
+            "exposure inf",
+            |f| f.header.exposure = f32::INFINITY,
+            &["exposure", "inf"],
+        ),
+        (
+            "shard 2 of 2",
+            |f| f.header.shard = [2, 2],
+            &["shard", "[2, 2]"],
+        ),
+        (
+            "shard of 0",
+            |f| f.header.shard = [0, 0],
+            &["shard", "[0, 0]"],
+        ),
+        (
+            "unknown kind",
+            |f| f.header.kind = "full".into(),
+            &["kind", "full"],
+        ),
+        (
+            "unknown domain",
+            |f| f.header.domain = "sphere".into(),
+            &["domain", "sphere"],
+        ),
+        (
+            "nan eigenvalue",
+            |f| f.header.eigenvalues[0][1] = f64::NAN,
+            &["eigenvalues[0][1]", "NaN"],
+        ),
+        (
+            "nan value",
+            |f| f.sections[0].values[1] = f32::NAN,
+            &["section mean.r value 1", "NaN"],
+        ),
+        (
+            "inf value",
+            |f| f.sections[0].values[0] = f32::INFINITY,
+            &["section mean.r value 0", "inf"],
+        ),
+        (
+            "f16 overflow",
+            |f| f.sections[1].values[7] = 1e6,
+            &["section images.r value 7", "inf"],
+        ),
+        (
+            "too many keys",
+            |f| {
+                f.header.keys = (0..illume_precomputed::file::MAX_KEYS + 1)
+                    .map(|i| KeyInfo {
+                        hours: i as f64,
+                        level: 0,
+                        dark: true,
+                    })
+                    .collect();
+                f.header.components = 0;
+            },
+            &["keys", "86401 keys", "86400"],
+        ),
+    ];
+    for (name, edit, words) in cases {
+        let mut file = sample(&scene());
+        edit(&mut file);
+        let bytes = file.to_bytes();
+        let e = PcFile::from_bytes(path, &bytes).expect_err(name);
+        let message = e.to_string();
+        assert!(matches!(e, FileError::Invalid { .. }), "{name}: {message}");
+        for word in ["bad.illumepc"].iter().chain(words.iter()) {
+            assert!(message.contains(word), "{name}: {message:?} lacks {word:?}");
+        }
+        // The header alone (what `attach_file_sun` reads) is checked too.
+        let dir = std::env::temp_dir().join(format!("illumepc-bad-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let on_disk = dir.join("h.illumepc");
+        std::fs::write(&on_disk, &bytes).unwrap();
+        let header = PcFile::read_header(&on_disk);
+        let sections_only = matches!(*name, "nan value" | "inf value" | "f16 overflow");
+        assert_eq!(
+            header.is_err(),
+            !sections_only,
+            "{name}: read_header {header:?}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+    // The sample itself is fine.
+    PcFile::from_bytes(path, &sample(&scene()).to_bytes()).unwrap();
+}

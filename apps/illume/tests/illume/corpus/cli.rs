@@ -2,7 +2,7 @@
 //! environment maps, outputs.
 
 use crate::corpus::texture::png;
-use crate::corpus::{Case, Expect, RENDER_OUTPUT, error};
+use crate::corpus::{Case, Expect, RENDER_OUTPUT, error, warning};
 
 /// `illume render builtin:furnace` (reference, 1 spp, 8×8 unless `args` say otherwise)
 /// with `args`, writing `{dir}/out/render.png` unless `args` give `-o`.
@@ -103,6 +103,103 @@ fn animate(name: &str, args: &[&str], expect: Expect) -> Case {
         }
     }
     Case::new("cli", name).run(&all, expect)
+}
+
+/// `illume precompute builtin:sun-room` (uniform keys, 8×8, 1 spp, into
+/// `{dir}/out/x.illumepc`) with `args`.
+fn precompute(name: &str, args: &[&str], expect: Expect) -> Case {
+    let mut all = vec![
+        "precompute",
+        "builtin:sun-room",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--output",
+        "{dir}/out/x.illumepc",
+        "--spp",
+        "1",
+        "--schedule",
+        "uniform",
+    ];
+    all.extend_from_slice(args);
+    Case::new("cli", name).run(&all, expect)
+}
+
+/// `illume render builtin:sun-room --technique precomputed` reading `{dir}/x.illumepc`
+/// (`bytes`).
+fn precomputed_file(name: &str, bytes: &[u8], expect: Expect) -> Case {
+    render(
+        name,
+        &[
+            "--technique",
+            "precomputed",
+            "--set",
+            "precomputed.data={dir}/x.illumepc",
+        ],
+        expect,
+    )
+    .file("x.illumepc", bytes.to_vec())
+    .runs_replaced("builtin:furnace", "builtin:sun-room")
+}
+
+/// FNV-1a 64, as the `.illumepc` format checksums its header and sections.
+fn fnv1a64(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// An `.illumepc` file (format version 1) with correct checksums whose keys are at
+/// `hours` (TOML numbers, `nan` allowed) and whose one section `mean.r` holds `values`
+/// (none: no section): only the reader's field checks can refuse it.
+fn illumepc(hours: &[&str], values: &[f32]) -> Vec<u8> {
+    let data: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let sections = if values.is_empty() {
+        "[]".to_owned()
+    } else {
+        format!(
+            "[{{ name = \"mean.r\", format = \"f32\", values = {}, fnv1a64 = \"{:016x}\" }}]",
+            values.len(),
+            fnv1a64(&data)
+        )
+    };
+    let mut header = format!(
+        "kind = \"pca\"\nscene_source = \"builtin:sun-room\"\nscene_fingerprint = \"0000000000000000\"\n\
+         domain = \"screen\"\nwidth = 8\nheight = 8\nchannels = 3\n\
+         camera = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.8]\n\
+         exposure = 1.0\nshard = [0, 1]\ncomponents = 1\ncolour = \"per-channel\"\n\
+         eigenvalues = [[1.0]]\nsections = {sections}\n[settings]\n[sun]\n"
+    );
+    for h in hours {
+        header.push_str(&format!("[[keys]]\nhours = {h}\nlevel = 0\ndark = false\n"));
+    }
+    let mut out = b"ILLUMEPC".to_vec();
+    out.extend_from_slice(&1u32.to_le_bytes());
+    out.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(&fnv1a64(header.as_bytes()).to_le_bytes());
+    out.extend_from_slice(&data);
+    out
+}
+
+/// A 16×16 linear EXR whose pixel (0, 0) is `value` in every channel (the rest 0.5).
+fn exr_with(value: f32) -> Vec<u8> {
+    use illume_core::Rgb;
+    use illume_core::image::{RgbImage, ToneMap};
+    let mut image = RgbImage::filled(16, 16, Rgb::splat(0.5));
+    image.pixels_mut()[0] = Rgb::splat(value);
+    let path = std::env::temp_dir().join(format!(
+        "illume-corpus-{}-{}.exr",
+        std::process::id(),
+        value.to_bits()
+    ));
+    image
+        .write(&path, &ToneMap::default())
+        .expect("an EXR is written");
+    let bytes = std::fs::read(&path).expect("the EXR is read back");
+    let _ = std::fs::remove_file(&path);
+    bytes
 }
 
 /// Every command-line case.
@@ -365,6 +462,183 @@ pub fn cases() -> Vec<Case> {
             .run(
                 &["compare", "{dir}/a.png", "{dir}/b.png"],
                 error(&["16", "8"]),
+            ),
+        // --- issue 38 ---
+        animate(
+            "animate_work_per_frame_zero",
+            &["--technique", "reference", "--work-per-frame", "0"],
+            error(&["--work-per-frame 0", "spp_per_frame"]),
+        ),
+        animate(
+            "animate_work_per_frame_u64_max",
+            &[
+                "--technique",
+                "reference",
+                "--work-per-frame",
+                "18446744073709551615",
+            ],
+            error(&["--work-per-frame 18446744073709551615", "4294967295"]),
+        ),
+        animate(
+            "animate_over_user_files",
+            &[],
+            error(&["out", "frame_00000.png", "frames.csv", "preview.mp4"]),
+        )
+        .file("out/preview.mp4", "a user's film")
+        .file("out/frames.csv", "a user's table\n")
+        .file("out/frame_00000.png", png(8, 8)),
+        animate(
+            "animate_over_user_gif_and_shard_csv",
+            &[],
+            error(&["out", "frames_0_of_2.csv", "preview.gif"]),
+        )
+        .file("out/preview.gif", "a user's gif")
+        .file("out/frames_0_of_2.csv", "a user's table\n"),
+        animate(
+            "animate_collect_over_user_frame",
+            &["--collect", "2"],
+            error(&["out", "frame_00050.png"]),
+        )
+        .file("out/frame_00050.png", png(8, 8)),
+        precompute(
+            "precompute_step_min_1e-9",
+            &["--step-min", "1e-9"],
+            error(&["step_min", "86400"]),
+        ),
+        precompute(
+            "precompute_output_is_a_user_file",
+            &[],
+            error(&["x.illumepc", "not an .illumepc file"]),
+        )
+        .file("out/x.illumepc", "my notes"),
+        precompute(
+            "precompute_sky_3e38",
+            &["--sky", "3e38,1,1"],
+            error(&["--sky", "light power"]),
+        ),
+        precomputed_file(
+            "illumepc_key_time_nan",
+            &illumepc(&["6.0", "nan"], &[]),
+            error(&["x.illumepc", "keys[1].hours", "NaN"]),
+        ),
+        precomputed_file(
+            "illumepc_key_times_equal",
+            &illumepc(&["6.0", "6.0"], &[]),
+            error(&["x.illumepc", "keys[1].hours", "strictly increasing"]),
+        ),
+        precomputed_file(
+            "illumepc_key_times_unsorted",
+            &illumepc(&["12.0", "6.0"], &[]),
+            error(&["x.illumepc", "keys[1].hours", "6"]),
+        ),
+        precomputed_file(
+            "illumepc_value_nan",
+            &illumepc(&["6.0", "12.0"], &[f32::NAN, 1.0]),
+            error(&["x.illumepc", "section mean.r value 0", "NaN"]),
+        ),
+        precomputed_file(
+            "illumepc_value_inf",
+            &illumepc(&["6.0", "12.0"], &[1.0, f32::INFINITY]),
+            error(&["x.illumepc", "section mean.r value 1", "inf"]),
+        ),
+        Case::new("cli", "compare_metric_empty")
+            .file("a.png", png(8, 8))
+            .file("b.png", png(8, 8))
+            .run(
+                &["compare", "{dir}/a.png", "{dir}/b.png", "--metric", ""],
+                error(&["--metric", "at least one"]),
+            ),
+        Case::new("cli", "compare_infinite_pixel")
+            .file("a.exr", exr_with(f32::INFINITY))
+            .file("b.exr", exr_with(1.0))
+            .run(
+                &["compare", "{dir}/a.exr", "{dir}/b.exr"],
+                error(&["a.exr", "pixel (0, 0)", "inf"]),
+            ),
+        Case::new("cli", "compare_nan_pixel")
+            .file("a.exr", exr_with(1.0))
+            .file("b.exr", exr_with(f32::NAN))
+            .run(
+                &["compare", "{dir}/a.exr", "{dir}/b.exr"],
+                error(&["b.exr", "pixel (0, 0)", "NaN"]),
+            ),
+        Case::new("cli", "compare_png_with_exr")
+            .file("a.png", png(16, 16))
+            .file("b.exr", exr_with(1.0))
+            .run(
+                &["compare", "{dir}/a.png", "{dir}/b.exr"],
+                warning(&["a.png", "b.exr", "linear", "tone-mapped"]),
+            ),
+        Case::new("cli", "compare_error_map_exr")
+            .file("a.exr", exr_with(1.0))
+            .file("b.exr", exr_with(1.0))
+            .run(
+                &[
+                    "compare",
+                    "{dir}/a.exr",
+                    "{dir}/b.exr",
+                    "--error-map",
+                    "{dir}/out/map.exr",
+                ],
+                error(&["--error-map", "map.exr", ".png"]),
+            ),
+        Case::new("cli", "compare_error_map_folder")
+            .file("a.exr", exr_with(1.0))
+            .file("b.exr", exr_with(1.0))
+            .dir("out/map.png")
+            .run(
+                &[
+                    "compare",
+                    "{dir}/a.exr",
+                    "{dir}/b.exr",
+                    "--error-map",
+                    "{dir}/out/map.png",
+                ],
+                error(&["--error-map", "map.png"]),
+            ),
+        render(
+            "envmap_png_named_hdr",
+            &["--envmap", "{dir}/sky.hdr"],
+            error(&["sky.hdr", "not a Radiance HDR", "Png"]),
+        )
+        .file("sky.hdr", png(8, 8)),
+        Case::new("cli", "compare_empty_exr_says_empty")
+            .file("a.exr", Vec::new())
+            .file("b.exr", exr_with(1.0))
+            .run(
+                &["compare", "{dir}/a.exr", "{dir}/b.exr"],
+                error(&["a.exr", "empty file"]),
+            ),
+        Case::new("cli", "compare_truncated_exr_says_truncated")
+            .file("a.exr", exr_with(1.0)[..60].to_vec())
+            .file("b.exr", exr_with(1.0))
+            .run(
+                &["compare", "{dir}/a.exr", "{dir}/b.exr"],
+                error(&["a.exr", "truncated"]),
+            ),
+        Case::new("cli", "convert_valid")
+            .file("a.exr", exr_with(1.0))
+            .run(
+                &[
+                    "convert",
+                    "{dir}/a.exr",
+                    "{dir}/out/a.png",
+                    "--exposure",
+                    "-1",
+                ],
+                Expect::Success,
+            ),
+        Case::new("cli", "convert_nan_pixel")
+            .file("a.exr", exr_with(f32::NAN))
+            .run(
+                &["convert", "{dir}/a.exr", "{dir}/out/a.png"],
+                error(&["a.exr", "pixel (0, 0)", "not finite"]),
+            ),
+        Case::new("cli", "convert_output_jpg")
+            .file("a.exr", exr_with(1.0))
+            .run(
+                &["convert", "{dir}/a.exr", "{dir}/out/a.jpg"],
+                error(&["a.jpg", ".png"]),
             ),
         Case::new("cli", "compare_pipe")
             .fifo("a.png")

@@ -84,6 +84,31 @@ pub fn doc() -> Value {
     })
 }
 
+/// Two f32 keys (2, 2), (−1, −1) and (0.5, 0.5) as base64 data URIs.
+const TWO_TWO: &str = "AAAAQAAAAEA=";
+const MINUS_ONES: &str = "AACAvwAAgL8=";
+const HALVES: &str = "AAAAPwAAAD8=";
+
+/// Makes animation 0's channel a `KHR_animation_pointer` channel on `pointer` whose
+/// two scalar keys (at the base's times 0 and 1) come from `keys` (a data URI buffer).
+fn animate_scalar(d: &mut Value, pointer: &str, keys: &str) {
+    d["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_animation_pointer"]);
+    d["buffers"].as_array_mut().expect("buffers").push(
+        json!({"uri": format!("data:application/octet-stream;base64,{keys}"), "byteLength": 8}),
+    );
+    d["bufferViews"]
+        .as_array_mut()
+        .expect("views")
+        .push(json!({"buffer": 1, "byteOffset": 0, "byteLength": 8}));
+    d["accessors"]
+        .as_array_mut()
+        .expect("accessors")
+        .push(json!({"bufferView": 4, "componentType": 5126, "count": 2, "type": "SCALAR"}));
+    d["animations"][0]["samplers"][0]["output"] = json!(4);
+    d["animations"][0]["channels"][0] = json!({"sampler": 0, "target": {"path": "pointer",
+        "extensions": {"KHR_animation_pointer": {"pointer": pointer}}}});
+}
+
 /// The base document changed by `edit`, as `.gltf` text.
 fn edited(edit: impl FnOnce(&mut Value)) -> Vec<u8> {
     let mut d = doc();
@@ -955,6 +980,77 @@ pub fn cases() -> Vec<Case> {
                     json!({"sampler": "x", "target": {"path": "pointer"}});
             },
             warning(&[f, "animation 0", "pointer"]),
+        ),
+        // --- issue 38: values that rendered wrong without a word ---
+        gltf(
+            "texture_transform_offset_1e38",
+            |d| {
+                d["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_texture_transform"]);
+                d["images"] = json!([{"uri": "missing.png"}]);
+                d["textures"] = json!([{"source": 0}]);
+                d["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0,
+                    "extensions": {"KHR_texture_transform": {"offset": [1e38, 0.0]}}});
+            },
+            error(&[f, "material 0", "KHR_texture_transform offset", "1e38"]),
+        ),
+        gltf(
+            "texture_transform_scale_1e20",
+            |d| {
+                d["extensionsUsed"] = json!(["KHR_lights_punctual", "KHR_texture_transform"]);
+                d["images"] = json!([{"uri": "missing.png"}]);
+                d["textures"] = json!([{"source": 0}]);
+                d["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0,
+                    "extensions": {"KHR_texture_transform": {"scale": [1.0, -1e20]}}});
+            },
+            error(&[f, "material 0", "KHR_texture_transform scale"]),
+        ),
+        gltf(
+            "texture_index_2_pow_32",
+            |d| {
+                d["images"] = json!([{"uri": "missing.png"}]);
+                d["textures"] = json!([{"source": 0}]);
+                d["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] =
+                    json!({"index": 4_294_967_296u64});
+            },
+            error(&[f, "baseColorTexture.index", "4294967296"]),
+        ),
+        gltf(
+            "mesh_index_2_pow_32_plus_1",
+            |d| d["nodes"][0]["mesh"] = json!(4_294_967_297u64),
+            error(&[f, "nodes[0].mesh", "4294967297"]),
+        ),
+        gltf(
+            "animated_metallic_2",
+            |d| {
+                animate_scalar(
+                    d,
+                    "/materials/0/pbrMetallicRoughness/metallicFactor",
+                    TWO_TWO,
+                )
+            },
+            error(&[f, "animation 0", "metallicFactor 2", "[0, 1]"]),
+        ),
+        gltf(
+            "animated_light_intensity_negative",
+            |d| {
+                animate_scalar(
+                    d,
+                    "/extensions/KHR_lights_punctual/lights/0/intensity",
+                    MINUS_ONES,
+                )
+            },
+            error(&[f, "animation 0", "light intensity -1", "≥ 0"]),
+        ),
+        gltf(
+            "animated_roughness_valid",
+            |d| {
+                animate_scalar(
+                    d,
+                    "/materials/0/pbrMetallicRoughness/roughnessFactor",
+                    HALVES,
+                )
+            },
+            Expect::Success,
         ),
         // --- long names are cut in messages ---
         gltf(

@@ -412,6 +412,22 @@ pub fn cases() -> Vec<Case> {
             "at_s = inf\ninstance = \"sphere\"\ntranslation = [0, 0, 0]\n",
             error(&[s, "edit[0]", "at_s"]),
         ),
+        // Issue 38: edits go through the loader's checks.
+        edit(
+            "edit_emission_3e38",
+            "at_s = 0.0\nmaterial = \"furnace\"\nemission = [3e38, 3e38, 3e38]\n",
+            error(&[s, "edit[0]", "material \"furnace\"", "power"]),
+        ),
+        edit(
+            "edit_albedo_2",
+            "at_s = 0.0\nmaterial = \"furnace\"\nbase_color = [2, 2, 2]\n",
+            error(&[s, "edit[0]", "base colour", "[0, 1]"]),
+        ),
+        edit(
+            "edit_albedo_negative",
+            "at_s = 0.05\nmaterial = \"furnace\"\nbase_color = [-1, 0.5, 0.5]\n",
+            error(&[s, "edit[0]", "base colour", "-1"]),
+        ),
         edit(
             "edit_unknown_instance",
             "at_s = 0.0\ninstance = \"teapot\"\ntranslation = [0, 0, 0]\n",

@@ -11,6 +11,7 @@ use crate::model::NodeId;
 use ::gltf::json;
 use illume_core::{Rgb, Vec3, Vec4};
 use json::validation::Checked;
+use std::path::Path;
 
 /// An animation channel whose target is a JSON pointer (`KHR_animation_pointer`).
 #[derive(Clone, Debug)]
@@ -26,9 +27,10 @@ pub(super) struct PointerChannel {
 /// rebuilt) and the channels. A document without such channels comes back unchanged;
 /// one whose JSON does not parse too (the `gltf` crate reports that error).
 pub(super) fn split_pointer_channels(
+    path: &Path,
     bytes: Vec<u8>,
     is_glb: bool,
-) -> (Vec<u8>, Vec<PointerChannel>) {
+) -> Result<(Vec<u8>, Vec<PointerChannel>), LoadError> {
     let word = |b: &[u8], at: usize| {
         b.get(at..at + 4)
             .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize)
@@ -36,15 +38,16 @@ pub(super) fn split_pointer_channels(
     let json_range = if is_glb {
         match (word(&bytes, 12), bytes.get(16..20)) {
             (Some(len), Some(b"JSON")) if 20 + len <= bytes.len() => 20..20 + len,
-            _ => return (bytes, Vec::new()),
+            _ => return Ok((bytes, Vec::new())),
         }
     } else {
         0..bytes.len()
     };
     let Ok(mut doc) = serde_json::from_slice::<serde_json::Value>(&bytes[json_range.clone()])
     else {
-        return (bytes, Vec::new());
+        return Ok((bytes, Vec::new()));
     };
+    check_index_widths(path, &doc, &mut String::new())?;
     let mut found = Vec::new();
     if let Some(animations) = doc.get_mut("animations").and_then(|a| a.as_array_mut()) {
         for (ai, a) in animations.iter_mut().enumerate() {
@@ -72,13 +75,13 @@ pub(super) fn split_pointer_channels(
         }
     }
     if found.is_empty() {
-        return (bytes, found);
+        return Ok((bytes, found));
     }
     let Ok(mut json) = serde_json::to_vec(&doc) else {
-        return (bytes, Vec::new());
+        return Ok((bytes, Vec::new()));
     };
     if !is_glb {
-        return (json, found);
+        return Ok((json, found));
     }
     while json.len() % 4 != 0 {
         json.push(b' ');
@@ -91,7 +94,98 @@ pub(super) fn split_pointer_channels(
     out.extend_from_slice(b"JSON");
     out.extend_from_slice(&json);
     out.extend_from_slice(rest);
-    (out, found)
+    Ok((out, found))
+}
+
+/// The JSON keys whose values are indices into the document's arrays (glTF 2.0's
+/// `glTFid`s and `texCoord`), and the arrays of them.
+const INDEX_KEYS: &[&str] = &[
+    "index",
+    "source",
+    "sampler",
+    "texCoord",
+    "material",
+    "mesh",
+    "camera",
+    "node",
+    "scene",
+    "skin",
+    "bufferView",
+    "buffer",
+    "indices",
+    "input",
+    "output",
+    "light",
+    "skeleton",
+];
+const INDEX_ARRAYS: &[&str] = &["nodes", "children", "joints", "scenes"];
+
+/// Refuses an index that does not fit the 32 bits the `gltf` crate stores it in (issue
+/// 38: a texture index of 2³² wrapped to texture 0), naming its JSON path and value.
+fn check_index_widths(
+    path: &Path,
+    value: &serde_json::Value,
+    at: &mut String,
+) -> Result<(), LoadError> {
+    use serde_json::Value;
+    let wide = |v: &Value| v.as_u64().is_some_and(|n| n > u64::from(u32::MAX));
+    match value {
+        Value::Object(map) => {
+            for (key, v) in map {
+                let len = at.len();
+                if !at.is_empty() {
+                    at.push('.');
+                }
+                at.push_str(key);
+                let bad = if INDEX_KEYS.contains(&key.as_str()) {
+                    wide(v).then(|| at.clone())
+                } else if INDEX_ARRAYS.contains(&key.as_str()) {
+                    v.as_array()
+                        .and_then(|a| a.iter().position(wide))
+                        .map(|i| format!("{at}[{i}]"))
+                } else {
+                    None
+                };
+                if let Some(place) = bad {
+                    let shown = if place.ends_with(']') {
+                        v.as_array()
+                            .and_then(|a| a.iter().find(|x| wide(x)).cloned())
+                            .unwrap_or_default()
+                    } else {
+                        v.clone()
+                    };
+                    return Err(LoadError::malformed(
+                        path,
+                        place,
+                        format!("index {shown} is beyond 4294967295 (2³² − 1)"),
+                    ));
+                }
+                // Attribute maps (`attributes`, morph `targets`) hold indices by any name.
+                if (key == "attributes" || key == "targets")
+                    && let Some((name, v)) =
+                        v.as_object().and_then(|m| m.iter().find(|(_, x)| wide(x)))
+                {
+                    return Err(LoadError::malformed(
+                        path,
+                        format!("{at}.{name}"),
+                        format!("index {v} is beyond 4294967295 (2³² − 1)"),
+                    ));
+                }
+                check_index_widths(path, v, at)?;
+                at.truncate(len);
+            }
+        }
+        Value::Array(items) => {
+            for (i, v) in items.iter().enumerate() {
+                let len = at.len();
+                at.push_str(&format!("[{i}]"));
+                check_index_widths(path, v, at)?;
+                at.truncate(len);
+            }
+        }
+        _ => {}
+    }
+    Ok(())
 }
 
 impl Ctx<'_> {

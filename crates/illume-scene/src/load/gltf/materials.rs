@@ -35,6 +35,10 @@ pub(super) fn unsupported_material_extension_effect(name: &str) -> &'static str 
     }
 }
 
+/// Largest `KHR_texture_transform` offset or scale component accepted (a texture repeated
+/// 10⁴ times per unit of texture coordinate still has f32 precision to address a texel).
+pub(super) const MAX_UV_TRANSFORM: f32 = 1e4;
+
 /// A `KHR_texture_transform` as illume's [`UvTransform`] and its `texCoord` override.
 pub(super) fn transform_of(t: Option<&TextureTransform>) -> (Option<UvTransform>, Option<u32>) {
     match t {
@@ -299,6 +303,22 @@ impl Ctx<'_> {
                 user,
                 format!("{slot}: KHR_texture_transform values are not finite"),
             ));
+        }
+        // Finite but absurd: at 1e38 the texture coordinates overflow into NaN (an all-NaN
+        // image); beyond MAX_UV_TRANSFORM an f32 texture coordinate keeps no sub-texel
+        // precision at all.
+        if let Some(t) = transform {
+            for (what, v) in [("offset", t.offset), ("scale", t.scale)] {
+                if v.abs().max_element() > MAX_UV_TRANSFORM {
+                    return Err(self.malformed(
+                        user,
+                        format!(
+                            "{slot}: KHR_texture_transform {what} [{}, {}] is beyond ±{MAX_UV_TRANSFORM:e} (texture coordinates would lose all precision)",
+                            v.x, v.y
+                        ),
+                    ));
+                }
+            }
         }
         let set = set_override.unwrap_or(tex_coord);
         let material = self.materials.len();

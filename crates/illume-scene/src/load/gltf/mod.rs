@@ -133,7 +133,7 @@ pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
     if is_glb {
         check_glb_header(path, &bytes)?;
     }
-    let (bytes, pointers) = split_pointer_channels(bytes, is_glb);
+    let (bytes, pointers) = split_pointer_channels(path, bytes, is_glb)?;
     let document = ::gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| {
         LoadError::malformed(
             path,
