@@ -2,26 +2,14 @@
 //! that add up, animations with one CSV row per frame, and bad input rejected with a
 //! message naming the file and the key.
 
-use crate::common::{self, illume};
+use crate::common::{self, illume, ok, path};
 use illume_core::image::RgbImage;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 /// A fresh empty folder for one test.
 fn scratch(name: &str) -> PathBuf {
     common::scratch("cli", name)
-}
-
-fn ok(out: &Output) {
-    assert!(
-        out.status.success(),
-        "illume failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 #[test]

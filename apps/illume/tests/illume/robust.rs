@@ -2,25 +2,13 @@
 //! `--work-per-frame` checked as its setting is, `--sky` on a precomputed round trip,
 //! `convert` with render's tone curve, `--help` and `info` on first use.
 
-use crate::common::{self, illume};
+use crate::common::{self, illume, ok, path};
 use illume_core::image::RgbImage;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
 fn scratch(name: &str) -> PathBuf {
     common::scratch("robust", name)
-}
-
-fn ok(out: &Output) {
-    assert!(
-        out.status.success(),
-        "illume failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 fn stderr(out: &Output) -> String {
