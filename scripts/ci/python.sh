@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# The Python package (issue 37): installs python/ into a fresh venv and runs its pytest
+# tests. The package is built with the workspace's `test` profile into the workspace's
+# target folder, so the engine's crates that `cargo test --workspace` compiled just before
+# are reused and only pyo3, NumPy's bindings and the module itself compile.
+# Needs: python3 with venv and pip (PyPI reachable), cargo; ILLUME_BIN (the `illume`
+# binary the CLI comparisons run; .ci/run sets it).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+root=$PWD
+export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+t0=$(date +%s)
+python3 -m venv "$work/venv"
+py="$work/venv/bin/python"
+"$py" -m pip install -q --disable-pip-version-check "maturin>=1.9,<2" "numpy>=1.21" pytest
+t1=$(date +%s)
+PATH="$work/venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile test" "$py" -m pip install -q --disable-pip-version-check \
+    --no-build-isolation "$root/python"
+t2=$(date +%s)
+# From another folder, so that `import illume` is the installed package.
+(cd "$work" && "$py" -m pytest -q -p no:cacheprovider "$root/python/tests")
+t3=$(date +%s)
+echo "python: venv + pip $((t1 - t0)) s, package build $((t2 - t1)) s, pytest $((t3 - t2)) s"
