@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The Python package (issue 37): installs python/ into a fresh venv and runs its pytest
-# tests. The package is built with the workspace's `test` profile into the workspace's
-# target folder, so the engine's crates that `cargo test --workspace` compiled just before
-# are reused and only pyo3, NumPy's bindings and the module itself compile.
+# tests. The package is built into the workspace's target folder with the settings of the
+# workspace's `test` profile (python/Cargo.toml, `[profile.dev]`), so that crates `cargo
+# test --workspace` compiled just before are reused where their features and dependencies
+# match (python/README.md says which are not).
 # Needs: python3 with venv and pip (PyPI reachable), cargo; ILLUME_BIN (the `illume`
 # binary the CLI comparisons run; .ci/run sets it).
 set -euo pipefail
@@ -16,7 +17,7 @@ python3 -m venv "$work/venv"
 py="$work/venv/bin/python"
 "$py" -m pip install -q --disable-pip-version-check "maturin>=1.9,<2" "numpy>=1.21" pytest
 t1=$(date +%s)
-PATH="$work/venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile test" "$py" -m pip install -q --disable-pip-version-check \
+PATH="$work/venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile dev" "$py" -m pip install -q --disable-pip-version-check \
     --no-build-isolation "$root/python"
 t2=$(date +%s)
 # From another folder, so that `import illume` is the installed package.
