@@ -15,7 +15,8 @@ trap 'rm -rf "$work"' EXIT
 t0=$(date +%s)
 python3 -m venv "$work/venv"
 py="$work/venv/bin/python"
-"$py" -m pip install -q --disable-pip-version-check "maturin>=1.9,<2" "numpy>=1.21" pytest
+"$py" -m pip install -q --disable-pip-version-check "maturin>=1.9,<2" "numpy>=1.21" pytest \
+    matplotlib
 t1=$(date +%s)
 PATH="$work/venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile dev" "$py" -m pip install -q --disable-pip-version-check \
     --no-build-isolation "$root/python"
@@ -23,4 +24,9 @@ t2=$(date +%s)
 # From another folder, so that `import illume` is the installed package.
 (cd "$work" && "$py" -m pytest -q -p no:cacheprovider "$root/python/tests")
 t3=$(date +%s)
-echo "python: venv + pip $((t1 - t0)) s, package build $((t2 - t1)) s, pytest $((t3 - t2)) s"
+# The latency example (issue 37 goal 3) at a tiny size: it runs and writes its plot.
+(cd "$work" && "$py" "$root/examples/python/latency.py" --frames 2 --warmup 1 --width 16 \
+    --height 12 --spp 4 -o "$work/latency.png" >/dev/null)
+test -s "$work/latency.png"
+t4=$(date +%s)
+echo "python: venv + pip $((t1 - t0)) s, package build $((t2 - t1)) s, pytest $((t3 - t2)) s, example $((t4 - t3)) s"
