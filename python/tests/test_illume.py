@@ -248,8 +248,9 @@ def test_other_threads_run_while_a_render_is_in_progress():
         time.sleep(0.001)
     worker.join()
     assert span["render"] > 0.3, span
+    assert len(ticks) > 50, (len(ticks), span)  # a render holding the GIL: 0 or 1 tick
     gap = max(np.diff(ticks))
-    assert len(ticks) > 50 and gap < span["render"] / 4, (len(ticks), gap, span)
+    assert gap < span["render"] / 4, (gap, span)
 
 
 def test_ctrl_c_stops_a_long_render():
