@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The Python package (issue 37): installs python/ into a fresh venv and runs its pytest
-# tests. The package is built into the workspace's target folder with the settings of the
-# workspace's `test` profile (python/Cargo.toml, `[profile.dev]`), so that crates `cargo
-# test --workspace` compiled just before are reused where their features and dependencies
-# match (python/README.md says which are not).
+# tests. The package (a member of the workspace, python/Cargo.toml) is built into the
+# workspace's target folder with the settings of the workspace's `test` profile (`--profile
+# dev` with the test profile's opt-level; `--profile test` would make `cargo rustc` build a
+# test harness), so that it reuses what `cargo test --workspace` compiled just before and
+# compiles only pyo3, numpy and the module itself (python/README.md).
 # Needs: python3 with venv and pip (PyPI reachable), cargo; ILLUME_BIN (the `illume`
 # binary the CLI comparisons run; .ci/run sets it).
 set -euo pipefail
@@ -18,8 +19,8 @@ py="$work/venv/bin/python"
 "$py" -m pip install -q --disable-pip-version-check "maturin>=1.9,<2" "numpy>=1.21" pytest \
     matplotlib
 t1=$(date +%s)
-PATH="$work/venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile dev" "$py" -m pip install -q --disable-pip-version-check \
-    --no-build-isolation "$root/python"
+PATH="$work/venv/bin:$PATH" MATURIN_PEP517_ARGS="--profile dev" CARGO_PROFILE_DEV_OPT_LEVEL=3 \
+    "$py" -m pip install -q --disable-pip-version-check --no-build-isolation "$root/python"
 t2=$(date +%s)
 # From another folder, so that `import illume` is the installed package.
 (cd "$work" && "$py" -m pytest -q -p no:cacheprovider "$root/python/tests")
