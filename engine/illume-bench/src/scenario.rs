@@ -353,7 +353,7 @@ impl EditSpec {
     }
 
     /// Checks the entry on its own (one target, values fit the target).
-    fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), String> {
         if !self.at_s.is_finite() || self.at_s < 0.0 {
             return Err(format!("at_s = {} must be finite and ≥ 0", self.at_s));
         }
