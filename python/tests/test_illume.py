@@ -255,15 +255,26 @@ def test_other_threads_run_while_a_render_is_in_progress():
 
 def test_ctrl_c_stops_a_long_render():
     """KeyboardInterrupt (what Ctrl-C raises) stops a render at the next progress report
-    (the reference reports every 1/32 of its samples), long before it would finish."""
-    spp = 1 << 14
+    (the reference reports every 1/32 of its samples), long before it would finish.
+
+    The interrupt is sent from another thread 50 ms after the first report, so it lands
+    while the engine works whatever the machine's speed (a timer started before the call
+    fired after a 16 384-sample render had already finished on a quiet CI machine)."""
+    spp = 1 << 20
     seen = []
-    timer = threading.Timer(0.3, _thread.interrupt_main)
-    timer.start()
+    timers = []
+
+    def progress(what, done, total):
+        seen.append(done)
+        if not timers:
+            timers.append(threading.Timer(0.05, _thread.interrupt_main))
+            timers[0].start()
+
     with pytest.raises(KeyboardInterrupt):
         illume.render("builtin:cornell-spot", "reference", spp=spp, width=16, height=12,
-                      progress=lambda what, done, total: seen.append(done))
-    timer.cancel()
+                      progress=progress)
+    for t in timers:
+        t.cancel()
     assert seen and seen[-1] < spp // 2, seen
 
 
