@@ -291,7 +291,7 @@ pub const AUTO_EXPOSURE_KEY: f32 = 0.18;
 ///
 /// Measured on the Stanford bunny under `--spot-from-above` at 96×72, 160×120 and
 /// 320×240 (the reference at 4, 64 and 256 samples a pixel, photon_stream): every
-/// exposure within 0.15 EV of the others. A small object on black is exposed for the
+/// exposure within 0.14 EV of the others (docs/benchmarks/renderer.md). A small object on black is exposed for the
 /// zones it covers, so a little brighter than for itself.
 ///
 /// Non-finite and negative pixels count as black. None when nothing has light.
