@@ -9,3 +9,4 @@ mod precomputed;
 mod scene_changes;
 mod setting_ranges;
 mod technique_folders;
+mod test_harnesses;
