@@ -142,6 +142,9 @@ pub struct PlacementSettings {
     pub triangle_scale: f32,
     /// Seed.
     pub seed: u64,
+    /// Cells by orientation class (module doc; beyond the paper) when true, else the
+    /// paper's nearest VSL of the object.
+    pub oriented_cells: bool,
 }
 
 struct Candidate {
@@ -302,14 +305,17 @@ impl VslSet {
             .filter_map(|(c, k)| k.then_some(c))
             .collect();
         kept.sort_by_key(|c| c.instance); // stable: placement order within an object
-        let mut set = Self::indexed(scene, &kept);
+        let mut set = Self::indexed(scene, &kept, settings.oriented_cells);
         set.assign_areas(scene, settings, &areas, &object_area);
         set
     }
 
     /// The set of VSLs `kept` (sorted by instance, areas 0) with its per-object and
-    /// per-class nearest-VSL indices and each triangle's owner.
-    fn indexed(scene: &Scene, kept: &[Candidate]) -> Self {
+    /// per-class nearest-VSL indices and each triangle's owner. Without `oriented`
+    /// cells every triangle and VSL is of one class, 0: the class index is then the
+    /// object's, and a cell the paper's.
+    fn indexed(scene: &Scene, kept: &[Candidate], oriented: bool) -> Self {
+        let class_of = |c: u8| if oriented { c } else { 0 };
         let mut first = vec![0u32; scene.instances.len() + 1];
         for c in kept {
             first[c.instance as usize + 1] += 1;
@@ -330,12 +336,12 @@ impl VslSet {
         // Any-class indices answer only the rare point whose class has no VSL on its
         // object (and `nearest`): a k-d tree alone (an empty box builds no grid).
         let trees = object_indices(&vsls, &first, |_| Aabb::EMPTY);
-        let classes: Vec<u8> = kept.iter().map(|c| c.class).collect();
+        let classes: Vec<u8> = kept.iter().map(|c| class_of(c.class)).collect();
         let triangle_class: Vec<Vec<u8>> = (0..scene.instances.len())
             .map(|i| {
                 let mesh = mesh_of(i);
                 (0..mesh.triangle_count())
-                    .map(|t| triangle_class(mesh, t))
+                    .map(|t| class_of(triangle_class(mesh, t)))
                     .collect()
             })
             .collect();
@@ -591,6 +597,7 @@ mod tests {
                 oversampling: 0.1,
                 triangle_scale: 0.9,
                 seed: 5,
+                oriented_cells: true,
             },
         );
         let mut rng = Pcg32::new(6, 7);

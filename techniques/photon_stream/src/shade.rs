@@ -11,7 +11,8 @@
 //! cosθ'/(π r²). **Near-VSL singularity:** the denominator π r² + A_s is the exact
 //! on-axis form factor of a uniformly emitting disk of area A_s (irradiance at height h
 //! is Φ/(π h² + A)), so a point on or next to the VSL receives the VSL's exitance
-//! Φ_s/A_s at most, never infinity.
+//! Φ_s/A_s at most, never infinity. `falloff = "inverse_square"` (the `paper` preset)
+//! drops A_s: the paper's point light, unbounded next to a VSL.
 //!
 //! **Culling (§0.7.3, CPU form).** The screen is cut into tiles; for each tile the world
 //! box of its G-buffer points is computed, and a VSL is kept if its influence sphere of
@@ -81,6 +82,12 @@ pub struct VslField {
     pub back_w: Vec<Rgb>,
     /// Represented area A_s \[m²\].
     pub area_m2: Vec<f32>,
+    /// The paper's point-light falloff, π r² ([`VslFalloff::InverseSquare`]); false:
+    /// the disk's π r² + A_s ([`VslFalloff::Disk`]).
+    ///
+    /// [`VslFalloff::InverseSquare`]: crate::settings::VslFalloff::InverseSquare
+    /// [`VslFalloff::Disk`]: crate::settings::VslFalloff::Disk
+    pub inverse_square: bool,
 }
 
 impl VslField {
@@ -94,6 +101,17 @@ impl VslField {
         self.positions.is_empty()
     }
 
+    /// The area term of VSL `s`'s falloff denominator π r² + A: A_s, or 0 for the
+    /// paper's point lights.
+    #[inline]
+    pub fn disk_area(&self, s: usize) -> f32 {
+        if self.inverse_square {
+            0.0
+        } else {
+            self.area_m2[s]
+        }
+    }
+
     /// Unoccluded contribution weight (without Φ and ρ/π) of VSL `s` to a point, and
     /// whether the point sees its front side.
     #[inline]
@@ -102,7 +120,10 @@ impl VslField {
         let dd = d.length_squared().max(1e-20);
         let ci = n.dot(d).max(0.0);
         let cs = -self.normals[s].dot(d);
-        (ci * cs.abs() / (dd * (PI * dd + self.area_m2[s])), cs > 0.0)
+        (
+            ci * cs.abs() / (dd * (PI * dd + self.disk_area(s))),
+            cs > 0.0,
+        )
     }
 }
 
@@ -197,6 +218,8 @@ struct VslTerm {
     front: Rgb,
     back: Rgb,
     area: f32,
+    /// The falloff denominator's area term (A_s, or 0 for the paper's point lights).
+    disk_area: f32,
     /// The near-field window's squared scale; 0 when there is no near field (w = 1).
     scale2: f32,
 }
@@ -273,6 +296,7 @@ fn accumulate_loop<const WINDOW: bool>(
     );
     let (g, b) = (&mut g[..m], &mut b[..m]);
     let (p, n, f, bk, area, scale2) = (v.p, v.n, v.front, v.back, v.area, v.scale2);
+    let disk_area = v.disk_area;
     let window = |dd: f32| {
         if WINDOW {
             far_weight(dd, area, scale2)
@@ -288,7 +312,7 @@ fn accumulate_loop<const WINDOW: bool>(
             let dd = (dx * dx + dy * dy + dz * dz).max(1e-20);
             let ci = (nx[i] * dx + ny[i] * dy + nz[i] * dz).max(0.0);
             let cs = (-(n.x * dx + n.y * dy + n.z * dz)).max(0.0);
-            let wgt = ci * cs / (dd * (PI * dd + area)) * window(dd);
+            let wgt = ci * cs / (dd * (PI * dd + disk_area)) * window(dd);
             r[i] += wgt * f.x;
             g[i] += wgt * f.y;
             b[i] += wgt * f.z;
@@ -301,7 +325,7 @@ fn accumulate_loop<const WINDOW: bool>(
             let dd = (dx * dx + dy * dy + dz * dz).max(1e-20);
             let ci = (nx[i] * dx + ny[i] * dy + nz[i] * dz).max(0.0);
             let cs = -(n.x * dx + n.y * dy + n.z * dz);
-            let wgt = ci * cs.abs() / (dd * (PI * dd + area)) * window(dd);
+            let wgt = ci * cs.abs() / (dd * (PI * dd + disk_area)) * window(dd);
             let front = cs > 0.0;
             r[i] += wgt * if front { f.x } else { bk.x };
             g[i] += wgt * if front { f.y } else { bk.y };
@@ -588,6 +612,7 @@ impl TilePixels {
                 front: field.front_w[s],
                 back: field.back_w[s],
                 area: field.area_m2[s],
+                disk_area: field.disk_area(s),
                 scale2: near.map_or(0.0, |nf| nf.scale2),
             };
             accumulate(&vsl, &pixels, r, g, b);

@@ -64,6 +64,7 @@ impl PhotonStream {
                     oversampling: settings.oversampling,
                     triangle_scale: settings.triangle_scale,
                     seed: settings.seed,
+                    oriented_cells: settings.cells == crate::settings::VslCells::Oriented,
                 },
             );
             if vsls.is_empty() {
@@ -181,6 +182,7 @@ impl PhotonStream {
             front_w,
             back_w,
             area_m2,
+            inverse_square: self.settings.falloff == crate::settings::VslFalloff::InverseSquare,
         }
     }
 

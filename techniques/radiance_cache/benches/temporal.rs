@@ -153,7 +153,7 @@ fn deletion() {
         let settings = RadianceCacheSettings {
             temporal: TemporalMode::Extrapolated,
             deletion,
-            ..RadianceCacheSettings::paper()
+            ..RadianceCacheSettings::default()
         };
         let mut rc = RadianceCache::new(&world, &timeline, settings).unwrap();
         let start = Instant::now();

@@ -304,10 +304,20 @@ impl TechniqueSettings for RadianceCacheSettings {
 }
 
 impl RadianceCacheSettings {
-    /// The paper's values (§6) and the reasoned choices where it gives none: the
-    /// default.
+    /// The paper: its values (§6), the reasoned choices where it gives none (as the
+    /// default), and every addition of this implementation switched off
+    /// (`gradient_limit`, `replace_only_on_surface`, `reuse_directions`,
+    /// `expire_on_surprise`; `neighbour_aging` is off by default). The test
+    /// `settings::the_paper_preset_switches_every_deviation_off` pins this list.
     pub fn paper() -> Self {
-        Self::default()
+        Self {
+            gradient_limit: false,
+            replace_only_on_surface: false,
+            reuse_directions: false,
+            expire_on_surprise: false,
+            neighbour_aging: false,
+            ..Self::default()
+        }
     }
 
     /// The preset for `render`'s stills: the defaults in `per_frame` mode (one frame: the
@@ -315,7 +325,7 @@ impl RadianceCacheSettings {
     pub fn still() -> Self {
         Self {
             temporal: TemporalMode::PerFrame,
-            ..Self::paper()
+            ..Self::default()
         }
     }
 
@@ -330,7 +340,7 @@ impl RadianceCacheSettings {
             hsh_order: 6,
             traced_roughness_max: 0.6,
             hole_fill_max_passes: 32,
-            ..Self::paper()
+            ..Self::default()
         }
     }
 
@@ -340,11 +350,11 @@ impl RadianceCacheSettings {
         &[
             (
                 "default",
-                "paper: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated",
+                "the paper's values (§6: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated) with four additions `paper` turns off",
             ),
             (
                 "paper",
-                "the paper's values (§6): a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated",
+                "the paper: its §6 values, no gradient limit, replacements anywhere with new directions, no expiry on surprises",
             ),
             (
                 "still",
@@ -360,7 +370,8 @@ impl RadianceCacheSettings {
     /// The preset called `name`, if there is one.
     pub fn preset(name: &str) -> Option<Self> {
         match name {
-            "default" | "paper" => Some(Self::paper()),
+            "default" => Some(Self::default()),
+            "paper" => Some(Self::paper()),
             "fast" => Some(Self::fast()),
             "still" => Some(Self::still()),
             _ => None,

@@ -17,9 +17,9 @@ fn member_manifests(root: &Path) -> Vec<PathBuf> {
         .and_then(|rest| rest.split(']').next())
         .expect("a members list");
     members
-        .split(',')
-        .map(|m| m.trim().trim_matches('"'))
-        .filter(|m| !m.is_empty())
+        .lines()
+        .map(|line| line.split('#').next().unwrap_or("").trim())
+        .filter_map(|line| line.strip_prefix('"')?.split('"').next())
         .map(|m| root.join(m).join("Cargo.toml"))
         .collect()
 }

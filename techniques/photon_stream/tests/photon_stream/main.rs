@@ -11,6 +11,7 @@ mod emit;
 mod grain;
 mod placement;
 mod pool;
+mod presets;
 mod reference;
 mod shading_stride;
 mod snapshot;

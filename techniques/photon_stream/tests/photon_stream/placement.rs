@@ -74,6 +74,7 @@ fn placement_on_cornell_spot_honours_count_objects_edges_and_area() {
                 oversampling: 0.1,
                 triangle_scale: 0.8,
                 seed: 1,
+                oriented_cells: true,
             },
         );
         assert_eq!(set.len(), n.max(3) as usize, "N_v = {n}");
@@ -117,6 +118,7 @@ fn placement_on_cornell_spot_honours_count_objects_edges_and_area() {
             oversampling: 0.1,
             triangle_scale: 0.8,
             seed: 2,
+            oriented_cells: true,
         },
     );
     let walls = set.vsls().iter().filter(|v| v.instance.index() == 0);
@@ -141,6 +143,7 @@ fn photons_go_to_the_nearest_vsl_of_their_own_object() {
             oversampling: 0.1,
             triangle_scale: 0.8,
             seed: 5,
+            oriented_cells: true,
         },
     );
     let mut rng = illume_core::sampling::Pcg32::new(1, 2);

@@ -100,25 +100,37 @@ fn no_drift_after_a_billion_add_subtract_pairs() {
 }
 
 #[test]
-fn floating_point_sums_would_drift_which_is_why_the_pool_uses_integers() {
-    // The same add/subtract pattern on f32 accumulators leaves a residue once all
-    // photons are gone: the drift the fixed-point pool avoids.
+fn the_pools_watts_are_the_held_photons_flux_within_half_a_quantum_each() {
+    // Photons carrying real (f32) flux, quantised as the stream does, through a small
+    // pool for 10⁶ photons: the VSL powers in watts must equal the exact (f64) sum of
+    // the flux of the photons the pool holds now, within half a quantum per held impact
+    // (the rounding of each impact), with no residue of the evicted ones.
+    const CAPACITY: usize = 1000;
+    let quantum_w = 1e-6;
+    let inv_quantum = 1.0 / quantum_w;
+    let mut pool = PhotonPool::new(CAPACITY, 4, quantum_w);
     let mut rng = Pcg32::new(5, 5);
-    let mut window = std::collections::VecDeque::new();
-    let mut sum = 0.0f32;
+    let mut held: std::collections::VecDeque<(u32, f64)> = std::collections::VecDeque::new();
     for _ in 0..1_000_000 {
-        let v = (rng.next_u32() % 1_000_000) as f32 * 1e-3;
-        sum += v;
-        window.push_back(v);
-        if window.len() > 1000 {
-            sum -= window.pop_front().unwrap();
+        let slot = rng.next_below(4);
+        let flux = (rng.next_u32() % 1_000_000) as f32 * 1e-3;
+        let quanta = Quanta::from_flux(illume_core::Rgb::splat(flux), inv_quantum);
+        pool.push_photon(&[PoolImpact { slot, quanta }]);
+        held.push_back((slot, flux as f64));
+        if held.len() > CAPACITY {
+            held.pop_front();
         }
     }
-    let exact: f64 = window.iter().map(|&v| v as f64).sum();
-    assert!(
-        (sum as f64 - exact).abs() > 1e-3 * exact.abs() * 1e-3,
-        "f32 drift {} vs {}",
-        sum,
-        exact
-    );
+    assert_eq!(pool.len(), CAPACITY);
+    for slot in 0..4 {
+        let exact: f64 = held.iter().filter(|h| h.0 == slot).map(|h| h.1).sum();
+        let impacts = held.iter().filter(|h| h.0 == slot).count() as f64;
+        let watts = pool.power_quanta()[slot as usize].0[0] as f64 * quantum_w;
+        assert!(
+            (watts - exact).abs() <= 0.5 * quantum_w * impacts + 1e-9,
+            "slot {slot}: {watts} W in the pool, {exact} W held"
+        );
+    }
+    pool.flush();
+    assert!(pool.power_quanta().iter().all(|p| p.is_zero()));
 }

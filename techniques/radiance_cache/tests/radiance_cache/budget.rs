@@ -15,7 +15,7 @@ fn cache(world: &World, temporal: TemporalMode) -> RadianceCache {
         theta_strata: 16,
         phi_strata: 16,
         temporal,
-        ..RadianceCacheSettings::paper()
+        ..RadianceCacheSettings::default()
     };
     RadianceCache::new(world, &timeline, settings).unwrap()
 }
@@ -122,7 +122,7 @@ fn replacements_past_the_budget_wait_a_frame_and_their_records_stay_in_use() {
         max_age_frames: 2,
         // Replacement wherever a record was used (no surface test).
         replace_only_on_surface: false,
-        ..RadianceCacheSettings::paper()
+        ..RadianceCacheSettings::default()
     };
     let mut rc = RadianceCache::new(&world, &timeline, settings).unwrap();
     let first = rc.indirect(&world, &g);
@@ -175,7 +175,7 @@ fn the_budget_comes_from_work_per_frame_and_records_per_frame_max() {
         phi_strata: 16,
         temporal: TemporalMode::PerFrame,
         records_per_frame_max: 30,
-        ..RadianceCacheSettings::paper()
+        ..RadianceCacheSettings::default()
     };
     let mut rc = RadianceCache::new(&world, &timeline, settings).unwrap();
     rc.indirect(&world, &g);

@@ -34,7 +34,7 @@ fn run(temporal: TemporalMode) -> Vec<(RgbImage, GBuffer)> {
         theta_strata: 32,
         phi_strata: 32,
         temporal,
-        ..RadianceCacheSettings::paper()
+        ..RadianceCacheSettings::default()
     };
     let mut rc = RadianceCache::new(&world, &timeline, settings).unwrap();
     rc.precompute(&world, &mut Silent).unwrap();

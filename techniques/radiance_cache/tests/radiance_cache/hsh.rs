@@ -282,7 +282,7 @@ fn default_order_serves_lobes_down_to_the_traced_roughness() {
             .fold(0.0, f32::max)
     };
     for s in [
-        RadianceCacheSettings::paper(),
+        RadianceCacheSettings::default(),
         RadianceCacheSettings::fast(),
     ] {
         let order = s.hsh_order as usize;

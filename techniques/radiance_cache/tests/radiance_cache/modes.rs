@@ -1,5 +1,5 @@
-//! The four temporal modes over a known animation, the paper's Cube in a Box (§6:
-//! 100 frames per second, the cube moving 1 m/s), against the reference path tracer's
+//! The four temporal modes over a known animation, the paper's Cube in a Box (§6; at an
+//! assumed 100 frames per second, the cube moving 1 m/s: the paper gives neither), against the reference path tracer's
 //! indirect light at the same G-buffer points: each mode's error, flicker and record
 //! count, a static scene, and a camera pan.
 
@@ -31,7 +31,7 @@ fn settings(temporal: TemporalMode) -> RadianceCacheSettings {
         theta_strata: 16,
         phi_strata: 16,
         temporal,
-        ..RadianceCacheSettings::paper()
+        ..RadianceCacheSettings::default()
     }
 }
 

@@ -176,7 +176,7 @@ fn a_glossy_scene_agrees_with_the_reference() {
             phi_strata: 32,
             temporal: TemporalMode::PerFrame,
             traced_roughness_max,
-            ..RadianceCacheSettings::paper()
+            ..RadianceCacheSettings::default()
         };
         let timeline = Timeline::single(world.scene.clone(), 0.0, w, h);
         let mut rc = RadianceCache::new(&world, &timeline, s).unwrap();

@@ -104,7 +104,8 @@ fn a_quad_moved_by_a_known_step_equals_exact_sampling_outside_the_holes() {
 
 #[test]
 fn a_one_centimetre_step_keeps_the_irradiance_within_one_percent() {
-    // A frame's motion at 1 m/s and 100 frames per second (the paper's cube): the holes
+    // A frame's motion at 1 m/s and 100 frames per second (our assumption for the
+    // paper's cube, whose speed and frame rate the paper does not give): the holes
     // the quad leaves behind are filled from their neighbours, which costs little.
     let world = quad_world();
     let mut moved = world.scene.clone();
@@ -124,7 +125,8 @@ fn a_one_centimetre_step_keeps_the_irradiance_within_one_percent() {
 
 #[test]
 fn next_frame_irradiance_on_the_cube_in_box_is_within_one_percent_of_tracing_again() {
-    // The paper's test scene (§6): 100 frames per second, the cube moving 1 m/s. Records
+    // The paper's test scene (§6), at an assumed 100 frames per second with the cube
+    // moving 1 m/s (the paper gives neither). Records
     // on a 5×5 grid over the floor at frames t and t + 1 with the same rays; the paper
     // reports the estimate "99 % accurate". The worst record, 2 cm from the face coming
     // at it, is printed: there the cube's face spreads over 2–4 times more cells than it

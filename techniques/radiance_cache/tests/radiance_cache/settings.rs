@@ -3,10 +3,57 @@
 
 use illume_radiance_cache::{RadianceCacheSettings, TemporalMode};
 
+/// The settings by which this implementation departs from the paper, and whether `s`
+/// holds the paper's value. A setting documented as "beyond the paper" that is missing
+/// here fails `the_paper_preset_switches_every_deviation_off`.
+fn paper_values(s: &RadianceCacheSettings) -> Vec<(&'static str, bool)> {
+    vec![
+        ("gradient_limit", !s.gradient_limit),
+        ("replace_only_on_surface", !s.replace_only_on_surface),
+        ("reuse_directions", !s.reuse_directions),
+        ("expire_on_surprise", !s.expire_on_surprise),
+        ("neighbour_aging", !s.neighbour_aging),
+        // Only in real time, where the paper has no rule (its frames are a timeline).
+        ("max_age_frames", s.max_age_frames == 20),
+    ]
+}
+
+#[test]
+fn the_paper_preset_switches_every_deviation_off() {
+    use illume_transport::SettingsTable;
+    let paper = RadianceCacheSettings::preset("paper").expect("a `paper` preset");
+    paper.validate().unwrap();
+    let values = paper_values(&paper);
+    for (key, is_paper) in &values {
+        assert!(is_paper, "`paper` keeps `{key}` beyond the paper");
+    }
+    for field in <RadianceCacheSettings as SettingsTable>::FIELDS {
+        if field.doc.to_lowercase().contains("beyond the paper") {
+            assert!(
+                values.iter().any(|(k, _)| *k == field.key),
+                "`{}` is documented as beyond the paper but the paper preset's list does \
+                 not cover it",
+                field.key
+            );
+        }
+    }
+    // The paper's numbers are the default's; only the additions differ.
+    let default = RadianceCacheSettings::default();
+    assert_eq!(
+        RadianceCacheSettings {
+            gradient_limit: true,
+            replace_only_on_surface: true,
+            reuse_directions: true,
+            expire_on_surprise: true,
+            ..paper
+        },
+        default
+    );
+}
+
 #[test]
 fn defaults_are_the_papers_values() {
     let s = RadianceCacheSettings::default();
-    assert_eq!(s, RadianceCacheSettings::paper());
     assert_eq!(s.temporal_accuracy, 0.05);
     assert_eq!(s.max_age_frames, 20);
     assert_eq!((s.theta_strata, s.phi_strata), (64, 64));

@@ -20,7 +20,7 @@ fn real_time() -> RadianceCacheSettings {
         temporal: TemporalMode::Reuse,
         max_age_frames: MAX_AGE,
         paced_real_time: true,
-        ..RadianceCacheSettings::paper()
+        ..RadianceCacheSettings::default()
     }
 }
 

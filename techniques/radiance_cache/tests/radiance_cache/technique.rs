@@ -18,7 +18,7 @@ fn quick(temporal: TemporalMode) -> RadianceCacheSettings {
         theta_strata: 16,
         phi_strata: 16,
         temporal,
-        ..RadianceCacheSettings::paper()
+        ..RadianceCacheSettings::default()
     }
 }
 
@@ -31,7 +31,7 @@ fn furnace_indirect_light_is_rho_squared_le_over_one_minus_rho() {
     let rho = 0.5f32;
     let world = World::new(illume_scene::builtin::furnace(rho, Rgb::ONE));
     let g = GBuffer::render(&world, W, H, Vec2::splat(0.5));
-    let mut rc = cache(&world, RadianceCacheSettings::paper());
+    let mut rc = cache(&world, RadianceCacheSettings::default());
     let img = rc.indirect(&world, &g);
     let expect = rho * rho / (1.0 - rho);
     let mean = img.mean();
@@ -180,7 +180,7 @@ fn bad_settings_are_refused_by_name() {
     let timeline = Timeline::single(world.scene.clone(), 0.0, W, H);
     let s = RadianceCacheSettings {
         accuracy: 0.0,
-        ..RadianceCacheSettings::paper()
+        ..RadianceCacheSettings::default()
     };
     let e = RadianceCache::new(&world, &timeline, s)
         .err()
@@ -254,7 +254,7 @@ fn neighbour_aging_ends_the_records_usable_at_a_shorter_lived_newer_one_with_it(
     let (on, aged_on) = frame0(true);
     assert_eq!(aged_off, 0.0);
     assert_eq!(off.len(), on.len(), "aging does not move records");
-    let a = RadianceCacheSettings::paper().accuracy;
+    let a = RadianceCacheSettings::default().accuracy;
     let mut shortened = 0;
     for (k, rk) in off.iter().enumerate() {
         assert_eq!(rk.position, on[k].position);
