@@ -25,7 +25,6 @@ fn paper_values(s: &PhotonStreamSettings) -> Vec<(&'static str, bool)> {
         ("visibility_rays", s.visibility == VisibilityMode::Off), // used only with it
         ("filtered_textures", !s.filtered_textures),
         ("rest_when_settled", !s.rest_when_settled),
-        ("warm_up", !s.warm_up),
     ]
 }
 
