@@ -6,7 +6,8 @@
 //!
 //! * `fps` — frames per second of whole frames (G-buffer + direct light + VSL indirect),
 //!   with a static camera and with the camera turning every frame, at 800×600 and
-//!   1280×1024 for 10/50/100/200 VSLs on the Cornell box, Cornell dragon and Dabrovic Sponza (`../shared/scenes`, or `ILLUME_SCENES`),
+//!   1280×1024 for 10/50/100/200 VSLs on the Cornell box, Cornell dragon, Dabrovic Sponza
+//!   and the Sibenik cathedral (`../shared/scenes`, or `ILLUME_SCENES`),
 //!   with the streaming thread running. As in the paper, each scene is lit by one spot
 //!   light (file emitters are switched off).
 //! * `priority` — frames per second and photon rate with the streaming thread at normal
@@ -15,7 +16,7 @@
 //!   tracer's incoherent closest-hit rays per second on one thread, and the photon
 //!   paths' own rays traced alone (the ratio's ceiling with free photon work).
 //! * `visibility` — cost of the VSL visibility modes (beyond the paper).
-//! * `target` — the frame-rate targets only (Cornell box and Sponza, 800×600, 100 VSLs,
+//! * `target` — the frame-rate targets only (Cornell box, Sponza and Sibenik, 800×600, 100 VSLs,
 //!   static and moving camera), five rounds each, medians of fps and of each phase. With
 //!   `ILLUME_BENCH_PAUSED=1` the streaming thread stays paused: the frame alone, to
 //!   measure what the thread beside it costs; `ILLUME_BENCH_SHARE=S` sets its
@@ -59,13 +60,23 @@ fn load(name: &str) -> Scene {
         let (eye, target) = illume_scene::builtin::SPONZA_ATRIUM_VIEW;
         illume_scene::builtin::look_from(&mut scene, eye, target).expect("a valid view");
     }
+    if name.contains("sibenik") {
+        let (eye, target) = SIBENIK_NAVE_VIEW;
+        illume_scene::builtin::look_from(&mut scene, eye, target).expect("a valid view");
+    }
     scene
 }
 
-const SCENES: [(&str, &str); 3] = [
+/// Sibenik (`sibenik/sibenik.obj`, no camera in the file) seen down the nave from its
+/// west end at head height towards the altar, as the paper's Figure 10 (eye, target)
+/// \[m\]; the spot light from above shines down the nave.
+const SIBENIK_NAVE_VIEW: (Vec3, Vec3) = (Vec3::new(-17.0, -11.0, 0.0), Vec3::new(10.0, -9.0, 0.0));
+
+const SCENES: [(&str, &str); 4] = [
     ("Cornell box", "cornell_box/CornellBox-Sphere.obj"),
     ("Cornell dragon", "cornell_dragon/cornell_dragon.obj"),
     ("Sponza", "dabrovic_sponza/sponza.obj"),
+    ("Sibenik", "sibenik/sibenik.obj"),
 ];
 
 /// Whole-frame measurements of one configuration.
@@ -198,7 +209,7 @@ fn target_table() {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2]
     };
-    for (label, file) in [SCENES[0], SCENES[2]] {
+    for (label, file) in [SCENES[0], SCENES[2], SCENES[3]] {
         let world: SharedWorld = World::new(load(file)).shared();
         let mut runs: [Vec<FrameRun>; 2] = [Vec::new(), Vec::new()];
         for _ in 0..5 {
