@@ -270,10 +270,10 @@ impl SphereSpec {
         if !(self.radius.is_finite() && self.radius > 0.0) {
             return Err(("radius", format!("{} must be finite and > 0", self.radius)));
         }
-        if let Some(c) = self.base_color {
-            if !c.iter().all(|v| (0.0..=1.0).contains(v)) {
-                return Err(("base_color", format!("{c:?}: each value must be in [0, 1]")));
-            }
+        if let Some(c) = self.base_color
+            && !c.iter().all(|v| (0.0..=1.0).contains(v))
+        {
+            return Err(("base_color", format!("{c:?}: each value must be in [0, 1]")));
         }
         Ok(())
     }
