@@ -17,6 +17,11 @@
 //! in first, and the writer waited for ~70 steps (100 ms) before this. A scene update
 //! waits for one step at most. With nothing stale and the pool full the thread sleeps
 //! until the next scene change.
+//!
+//! A step traces its group's photons in parallel on the thread's own rayon pool
+//! (`stream_threads`, default 1), not on the global pool: the renderer's frames keep the
+//! global pool busy, and work a foreign thread queues there waits until a frame's
+//! parallel section has drained (issue 34, goal 6).
 
 use crate::elements::Elements;
 use crate::state::Selective;
