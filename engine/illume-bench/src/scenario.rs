@@ -132,6 +132,10 @@ pub struct Scenario {
     /// Scripted edits (`[[edit]]`), applied when the frame time reaches them.
     #[serde(rename = "edit")]
     pub edits: Vec<EditSpec>,
+    /// Spheres added to the scene as loaded (`[[sphere]]`), e.g. an object for an
+    /// `[[edit]]` to move in a scene file that has none. Default: none.
+    #[serde(rename = "sphere")]
+    pub spheres: Vec<SphereSpec>,
     /// The file this scenario was read from (empty for text parsed without a file).
     #[serde(skip)]
     pub file: PathBuf,
@@ -167,6 +171,7 @@ impl Default for Scenario {
             reference: ReferenceSpec::default(),
             techniques: Vec::new(),
             edits: Vec::new(),
+            spheres: Vec::new(),
             file: PathBuf::new(),
             text: String::new(),
         }
@@ -234,6 +239,74 @@ impl TechniqueSpec {
     /// The series name: `label`, or `name`.
     pub fn label(&self) -> &str {
         self.label.as_deref().unwrap_or(&self.name)
+    }
+}
+
+/// A sphere added to the scene (`[[sphere]]`): a dynamic instance of a 48×24 UV sphere
+/// with a diffuse material of its own, both named `name`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SphereSpec {
+    /// Name of the instance and its material (for `[[edit]] instance = …`); not one the
+    /// scene has. Required.
+    pub name: String,
+    /// Centre \[m\]. Required, finite.
+    pub center: [f32; 3],
+    /// Radius \[m\]: finite and > 0. Required.
+    pub radius: f32,
+    /// Diffuse albedo (linear RGB, each in [0, 1]). Default 0.8 grey.
+    pub base_color: Option<[f32; 3]>,
+}
+
+impl SphereSpec {
+    /// The problem with its values, if any, as `(field, message)`.
+    fn check(&self) -> Result<(), (&'static str, String)> {
+        if self.name.is_empty() {
+            return Err(("name", "required".into()));
+        }
+        if !self.center.iter().all(|c| c.is_finite()) {
+            return Err(("center", format!("{:?} must be finite", self.center)));
+        }
+        if !(self.radius.is_finite() && self.radius > 0.0) {
+            return Err(("radius", format!("{} must be finite and > 0", self.radius)));
+        }
+        if let Some(c) = self.base_color
+            && !c.iter().all(|v| (0.0..=1.0).contains(v))
+        {
+            return Err(("base_color", format!("{c:?}: each value must be in [0, 1]")));
+        }
+        Ok(())
+    }
+
+    /// Adds the sphere to `scene`; errors name what is wrong.
+    fn add_to(&self, scene: &mut Scene) -> Result<(), String> {
+        if scene.instances.iter().any(|i| i.name == self.name) {
+            return Err(format!(
+                "the scene already has an instance \"{}\"",
+                self.name
+            ));
+        }
+        let material = MaterialId(scene.materials.len() as u32);
+        scene.materials.push(illume_scene::Material {
+            name: self.name.clone(),
+            base_color: Rgb::from(self.base_color.unwrap_or([0.8; 3])),
+            ..Default::default()
+        });
+        let mut mesh = illume_scene::builtin::uv_sphere(1.0, 48, 24, material, false);
+        mesh.name = self.name.clone();
+        let mesh = scene.add_mesh(mesh).map_err(|e| e.to_string())?;
+        scene
+            .apply_edit(&Edit::AddInstance {
+                name: self.name.clone(),
+                mesh,
+                world_from_object: Affine3A::from_scale_rotation_translation(
+                    Vec3::splat(self.radius),
+                    Quat::IDENTITY,
+                    Vec3::from(self.center),
+                ),
+            })
+            .map_err(|e| e.to_string())?;
+        Ok(())
     }
 }
 
@@ -544,6 +617,11 @@ impl Scenario {
                 message,
             })?;
         }
+        for (i, sphere) in self.spheres.iter().enumerate() {
+            sphere
+                .check()
+                .map_err(|(field, m)| self.invalid(format!("sphere[{i}].{field}"), m))?;
+        }
         Ok(())
     }
 
@@ -761,6 +839,11 @@ impl Scenario {
             scene
                 .attach_sun(sun.clone())
                 .map_err(|e| scene_error(format!("[sun]: {e}")))?;
+        }
+        for (i, sphere) in self.spheres.iter().enumerate() {
+            sphere
+                .add_to(&mut scene)
+                .map_err(|m| scene_error(format!("sphere[{i}]: {m}")))?;
         }
         match &self.animation {
             Some(name) => scene.select_animation(name).map_err(scene_error)?,

@@ -404,9 +404,37 @@ impl Elements {
         quantum_w: f64,
         photons: u64,
     ) -> Display {
+        self.display_with(scene, accumulators, None, quantum_w, photons)
+    }
+
+    /// [`Elements::display`] with each vertex's noise ([`Display::noise`]) from the
+    /// impacts per element side `counts`: an element of flux Φ from n impacts has a
+    /// variance of about Φ²/n (n impacts of similar power, each present or not), the
+    /// elements around a vertex are independent, so the vertex's irradiance
+    /// Σ Φ / (N·Σ A) has a variance of Σ (Φ²/n) / (N·Σ A)², in luminance.
+    pub fn display_with_noise(
+        &self,
+        scene: &Scene,
+        accumulators: &[[Quanta; 2]],
+        counts: &[[i64; 2]],
+        quantum_w: f64,
+        photons: u64,
+    ) -> Display {
+        self.display_with(scene, accumulators, Some(counts), quantum_w, photons)
+    }
+
+    fn display_with(
+        &self,
+        scene: &Scene,
+        accumulators: &[[Quanta; 2]],
+        counts: Option<&[[i64; 2]]>,
+        quantum_w: f64,
+        photons: u64,
+    ) -> Display {
         let vertices = *self.instance_first_vertex.last().unwrap_or(&0) as usize;
         let mut flux = vec![[[0.0f64; 3]; 2]; vertices];
         let mut area = vec![0.0f64; vertices];
+        let mut var = vec![[0.0f64; 2]; if counts.is_some() { vertices } else { 0 }];
         let scale = if photons > 0 {
             quantum_w / photons as f64
         } else {
@@ -425,7 +453,14 @@ impl Elements {
                 let elems = k * k;
                 let a_e = world_area(mesh, t, &inst.world_from_object) as f64 / elems as f64;
                 for e in 0..elems {
-                    let acc = &accumulators[a0 + (g.first_element[t] + e) as usize];
+                    let index = a0 + (g.first_element[t] + e) as usize;
+                    let acc = &accumulators[index];
+                    let element_var = counts.map(|c| {
+                        [0, 1].map(|s| {
+                            let y = luminance_f64(acc[s].0) * scale;
+                            y * y / c[index][s].max(1) as f64
+                        })
+                    });
                     for (a, b) in element_corners(k, e) {
                         let v = v0 + g.vertex(t, a, b) as usize;
                         area[v] += a_e;
@@ -433,6 +468,10 @@ impl Elements {
                             for (fc, qc) in f.iter_mut().zip(q.0) {
                                 *fc += qc as f64 * scale;
                             }
+                        }
+                        if let Some(ev) = element_var {
+                            var[v][0] += ev[0];
+                            var[v][1] += ev[1];
                         }
                     }
                 }
@@ -456,14 +495,31 @@ impl Elements {
                 [e(0), e(1)]
             })
             .collect();
+        let mut noise: Vec<[f32; 2]> = var
+            .iter()
+            .zip(&area)
+            .map(|(v, &a)| {
+                [0, 1].map(|s| {
+                    if a > 0.0 {
+                        (v[s].sqrt() / a) as f32
+                    } else {
+                        0.0
+                    }
+                })
+            })
+            .collect();
         for (ii, inst) in scene.instances.iter().enumerate().take(self.instances()) {
             let v0 = self.instance_first_vertex[ii] as usize;
             for &(v, a, b, w) in &self.grids[inst.mesh.index()].hanging {
                 let (ea, eb) = (irradiance[v0 + a as usize], irradiance[v0 + b as usize]);
                 irradiance[v0 + v as usize] = [0, 1].map(|s| ea[s] * (1.0 - w) + eb[s] * w);
+                if !noise.is_empty() {
+                    let (na, nb) = (noise[v0 + a as usize], noise[v0 + b as usize]);
+                    noise[v0 + v as usize] = [0, 1].map(|s| na[s] * (1.0 - w) + nb[s] * w);
+                }
             }
         }
-        Display { irradiance }
+        Display { irradiance, noise }
     }
 
     /// Irradiance \[W/m²\] at barycentrics `b` of triangle `t` of `instance` (mesh `mesh`)
@@ -515,9 +571,19 @@ pub fn world_area(mesh: &Mesh, t: usize, world_from_object: &Affine3A) -> f32 {
     0.5 * (b - a).cross(c - a).length()
 }
 
+/// Luminance (Rec. 709) of integer RGB quanta.
+#[inline]
+fn luminance_f64(q: [i64; 3]) -> f64 {
+    0.2126 * q[0] as f64 + 0.7152 * q[1] as f64 + 0.0722 * q[2] as f64
+}
+
 /// Per display vertex, front and back irradiance \[W/m²\].
 #[derive(Clone, Debug, Default)]
 pub struct Display {
     /// `[front, back]` per vertex, instances one after another.
     pub irradiance: Vec<[Rgb; 2]>,
+    /// `[front, back]` standard deviation of each vertex's luminance irradiance
+    /// \[W/m²\] from the impacts per element ([`Elements::display_with_noise`]); empty
+    /// from [`Elements::display`].
+    pub noise: Vec<[f32; 2]>,
 }

@@ -25,6 +25,7 @@
 //! | §5.2 (BSDF changes), light changes (beyond the paper) | [`update`] |
 //! | the [`Technique`](illume_transport::Technique) the renderer drives | [`state`] |
 //! | §6: the solution on its own thread beside the frame loop | [`stream`] |
+//! | beyond the paper: frames shown through a noise-aware temporal filter while groups are stale | [`temporal`] |
 //! | settings (a tuning guide) and presets | [`settings`] |
 //!
 //! **Failure modes.** (1) Element-scale blur and leaks at contacts: irradiance is
@@ -55,6 +56,8 @@
 //! let settings = SelectiveSettings {
 //!     pilots_per_group: 8,
 //!     ratio: 4,
+//!     // A tiny pool for the example: not raised to 16 photons per element.
+//!     min_photons_per_element: 0,
 //!     warm_up: false,
 //!     ..SelectiveSettings::deterministic()
 //! };
@@ -77,6 +80,7 @@ pub mod settings;
 pub mod shade;
 pub mod state;
 pub mod stream;
+pub mod temporal;
 pub mod update;
 
 pub use error::SelectiveError;

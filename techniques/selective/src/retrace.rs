@@ -247,8 +247,9 @@ pub struct PilotHit {
     pub delta_p: f32,
 }
 
-/// One deposit: accumulator index, side (0 front, 1 back), signed quanta.
-pub type Deposit = (u32, u8, Quanta);
+/// One deposit: accumulator index, side (0 front, 1 back), sign (+1 an impact added, −1
+/// an impact taken back), signed quanta.
+pub type Deposit = (u32, u8, i8, Quanta);
 
 /// What tracing some photons of a group produced.
 #[derive(Clone, Debug, Default)]
@@ -350,8 +351,8 @@ impl TraceContext<'_> {
             .elements
             .element(inst, mesh, hit.triangle as usize, hit.barycentrics);
         let q = Quanta::from_flux(flux, self.inv_quantum);
-        let q = if sign < 0 { -q } else { q };
-        out.push((e, (!hit.front_face) as u8, q));
+        let (q, sign) = if sign < 0 { (-q, -1) } else { (q, 1) };
+        out.push((e, (!hit.front_face) as u8, sign, q));
     }
 
     /// Traces photons `indices` from scratch in `world` (mask [`MASK_DEFAULT`]) with

@@ -106,13 +106,28 @@ pub struct SelectiveSettings {
     /// Fewest photons per element, on average: when the pool N_g·N_p·R holds fewer
     /// than this many per element, N_p is raised until it does (the pool scaled with
     /// the element mesh, issue 34). Higher: less noise and boiling per element, at the
-    /// cost of tracing time after a change. 0 (default) turns it off: the pool is
-    /// N_g·N_p·R as set (tests and scenarios of other crates rely on their small pools).
-    /// 16 is advised on real models: Dabrovic Sponza's 75 213 elements get 1.2 M photons
-    /// instead of the default pool's 3.8 per element (the paper's ROOM: 1 152 000 over
-    /// 12 400 elements is 93; the default pool over a Cornell box's 14 752 is 19.5).
-    #[setting(default = 0, range = "0–100 000")]
+    /// cost of tracing time after a change. 0 turns it off: the pool is N_g·N_p·R as
+    /// set. Default 16: Dabrovic Sponza's 75 213 elements get 1.2 M photons instead of
+    /// the paper's pool's 3.8 per element, while the Cornell boxes keep the paper's pool
+    /// (288 000 over `builtin:cornell-spot`'s 14 752 elements is 19.5; the paper's ROOM:
+    /// 1 152 000 over 12 400 is 93).
+    #[setting(default = 16, range = "0–100 000")]
     pub min_photons_per_element: u32,
+    /// While groups are stale, each display vertex moves only this fraction of the way
+    /// from what the last frame showed towards the solution when the change lies within
+    /// `temporal_sigmas` of its impact noise ([`crate::temporal`], issue 34: re-traced
+    /// photons move whole impacts between elements, and the static parts of an animated
+    /// scene boiled). Lower: steadier static parts, at the cost of a lag of small real
+    /// changes (≈ 1/alpha frames) while objects move; once nothing is stale frames show
+    /// the solution exactly. In (0, 1]; 1 turns the filter off. Default 0.2.
+    #[setting(default = 0.2, range = "(0, 1]")]
+    pub temporal_alpha: f32,
+    /// Changes of a display vertex up to this many standard deviations of its impact
+    /// noise count as noise for `temporal_alpha`; beyond, the vertex follows with gain
+    /// 1 − (kσ/δ)². Higher: steadier, at the cost of lagging real changes of that size.
+    /// ≥ 0, default 2.
+    #[setting(default = 2.0, range = "[0, inf)")]
+    pub temporal_sigmas: f32,
     /// Element-grid vertices of one object within this angle of each other's face
     /// normal \[degrees\] are one display vertex (Gouraud smoothing across triangles,
     /// §6). Higher: smoother across creases, at the cost of light bleeding around
@@ -144,6 +159,13 @@ pub struct SelectiveSettings {
     /// `--work-per-frame` picks [`SelectiveMode::Deterministic`]).
     #[setting(default = SelectiveMode::Streaming)]
     pub mode: SelectiveMode,
+    /// Threads of the streaming thread's own pool, on which it traces a group's photons
+    /// in parallel ([`SelectiveMode::Streaming`]; issue 34, goal 6). 0: the process's
+    /// global pool, which the renderer's frames keep busy, so a group's photons wait
+    /// behind a frame's pixels. Higher: faster updates while frames render, at the cost
+    /// of the frame rate while groups are stale. Default 1.
+    #[setting(default = 1, range = "0–1 024")]
+    pub stream_threads: u32,
     /// Wall-clock budget for re-tracing between two frames in [`SelectiveMode::Timed`]
     /// (and in [`SelectiveMode::Streaming`] when no thread runs the solution, e.g.
     /// [`Selective::for_world`](crate::Selective::for_world)) when the frame loop gives
@@ -232,6 +254,11 @@ impl SelectiveSettings {
             mode: SelectiveMode::Deterministic,
             ..Self::default()
         }
+    }
+
+    /// Threads of the streaming thread's own pool (0: the global pool).
+    pub fn stream_threads(&self) -> u32 {
+        self.stream_threads
     }
 
     /// The photon paths these settings ask for (roulette remapped, §4.1).

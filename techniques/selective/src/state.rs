@@ -63,6 +63,11 @@ pub struct Selective {
     pub(crate) scramble: HaltonScramble,
     pub(crate) elements: Arc<Elements>,
     pub(crate) accumulators: Vec<[Quanta; 2]>,
+    /// Impacts per element side (added minus taken back): the display's noise estimate.
+    pub(crate) counts: Vec<[i64; 2]>,
+    /// The irradiance the last frame showed per display vertex (the temporal filter's
+    /// state, [`crate::temporal`]).
+    pub(crate) shown: Option<Vec<[illume_core::Rgb; 2]>>,
     pub(crate) quantum_w: f64,
     pub(crate) current: Arc<Snapshot>,
     pub(crate) next_snapshot: u64,
@@ -138,6 +143,8 @@ impl Selective {
             .collect();
         Ok(Self {
             accumulators: vec![[Quanta::ZERO; 2]; elements.len()],
+            counts: vec![[0; 2]; elements.len()],
+            shown: None,
             scramble: HaltonScramble::new(settings.seed),
             rng: Pcg32::new(settings.seed, 0x5e1ec7),
             settings,
@@ -193,6 +200,12 @@ impl Selective {
         &self.accumulators
     }
 
+    /// Impacts per element side (front, back), those taken back subtracted: a from-scratch
+    /// trace of the same photons leaves the same counts.
+    pub fn counts(&self) -> &[[i64; 2]] {
+        &self.counts
+    }
+
     /// Watts per quantum.
     pub fn quantum_w(&self) -> f64 {
         self.quantum_w
@@ -244,8 +257,9 @@ impl Selective {
     }
 
     pub(crate) fn apply(&mut self, out: &TraceOutput) {
-        for &(e, side, q) in &out.deposits {
+        for &(e, side, sign, q) in &out.deposits {
             self.accumulators[e as usize][side as usize] += q;
+            self.counts[e as usize][side as usize] += sign as i64;
         }
         self.counters.photons_traced += out.photons;
         self.counters.photons_invalid += out.invalid;
@@ -327,7 +341,7 @@ impl Technique for Selective {
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
         let t0 = Instant::now();
         self.set_aspect(gbuffer.width, gbuffer.height);
-        let display = self.display(world);
+        let display = self.frame_display(world);
         let img = shade::shade(world, gbuffer, &self.elements, &display);
         self.last_shade_ms = t0.elapsed().as_secs_f64() * 1e3;
         img

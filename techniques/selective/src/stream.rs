@@ -17,6 +17,11 @@
 //! in first, and the writer waited for ~70 steps (100 ms) before this. A scene update
 //! waits for one step at most. With nothing stale and the pool full the thread sleeps
 //! until the next scene change.
+//!
+//! A step traces its group's photons in parallel on the thread's own rayon pool
+//! (`stream_threads`, default 1), not on the global pool: the renderer's frames keep the
+//! global pool busy, and work a foreign thread queues there waits until a frame's
+//! parallel section has drained (issue 34, goal 6).
 
 use crate::elements::Elements;
 use crate::state::Selective;
@@ -96,6 +101,7 @@ impl Streaming {
     /// thread. With `warm_up` the pool is filled by [`Technique::precompute`] or the first
     /// [`Technique::advance`]; without it the thread fills it in index order.
     pub fn new(world: &SharedWorld, settings: SelectiveSettings) -> Result<Self, SelectiveError> {
+        let threads = settings.stream_threads();
         let solution = Selective::new(world, settings)?;
         let elements = solution.shared_elements();
         let shared = Arc::new(Shared {
@@ -106,8 +112,8 @@ impl Streaming {
             world_wanted_us: AtomicU64::new(0),
             start: Instant::now(),
         });
-        let thread =
-            spawn(Arc::clone(world), Arc::clone(&shared)).map_err(SelectiveError::Thread)?;
+        let thread = spawn(Arc::clone(world), Arc::clone(&shared), threads)
+            .map_err(SelectiveError::Thread)?;
         Ok(Self {
             shared,
             elements,
@@ -142,7 +148,16 @@ impl Streaming {
 }
 
 /// The thread's loop: one step at a time until asked to stop.
-fn spawn(world: SharedWorld, shared: Arc<Shared>) -> std::io::Result<JoinHandle<()>> {
+fn spawn(world: SharedWorld, shared: Arc<Shared>, threads: u32) -> std::io::Result<JoinHandle<()>> {
+    let pool = (threads > 0)
+        .then(|| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads as usize)
+                .thread_name(|i| format!("selective-{i}"))
+                .build()
+                .ok()
+        })
+        .flatten();
     std::thread::Builder::new()
         .name("selective".into())
         .spawn(move || {
@@ -157,8 +172,16 @@ fn spawn(world: SharedWorld, shared: Arc<Shared>) -> std::io::Result<JoinHandle<
                 }
                 let worked = {
                     let w = world.read().unwrap_or_else(|e| e.into_inner());
-                    let mut solution = shared.lock();
-                    let worked = solution.step(&w).is_some();
+                    let w: &World = &w;
+                    let mut guard = shared.lock();
+                    let solution: &mut Selective = &mut guard;
+                    // On the thread's own pool when it has one: the renderer's frames keep
+                    // the global pool busy, and work queued there waits for them.
+                    let worked = match &pool {
+                        Some(pool) => pool.install(|| solution.step(w)),
+                        None => solution.step(w),
+                    }
+                    .is_some();
                     if worked {
                         // Counted under the lock: whoever sees the step's effect sees it
                         // counted.
@@ -227,7 +250,7 @@ impl Technique for Streaming {
             solution.set_aspect(gbuffer.width, gbuffer.height);
             // Steps are counted under this lock: the count matches the values copied.
             self.steps_at_indirect = Some(self.shared.steps.load(Ordering::Acquire));
-            solution.display(world)
+            solution.frame_display(world)
         };
         let img = shade::shade(world, gbuffer, &self.elements, &display);
         self.last_shade_ms = t0.elapsed().as_secs_f64() * 1e3;

@@ -132,6 +132,9 @@ impl Selective {
         for a in &mut self.accumulators {
             *a = [Quanta::ZERO; 2];
         }
+        for c in &mut self.counts {
+            *c = [0; 2];
+        }
         for g in &mut self.groups {
             g.epoch = Arc::clone(&self.current);
             g.priority = Priority::default();

@@ -250,6 +250,7 @@ fn shipped_scenarios_parse() {
         "selective_sphere.toml",
         "selective_area.toml",
         "selective_cube.toml",
+        "selective_moving.toml",
     ] {
         match Scenario::load(&dir.join(name)) {
             Ok(s) => {
@@ -345,4 +346,54 @@ fn invalid_own_latency_threshold_names_the_file_and_the_key() {
         e.contains("latency_threshold") && e.contains("finite"),
         "{e}"
     );
+}
+
+/// `[[sphere]]` adds a named diffuse sphere that `[[edit]]` can move (issue 34: a moving
+/// object in a model file that has none); bad values and a taken name are refused,
+/// naming the entry and the field.
+#[test]
+fn spheres_are_added_and_checked() {
+    let text = format!(
+        "{MINIMAL}\n[[sphere]]\nname = \"ball\"\ncenter = [0.2, 0.5, 0.1]\nradius = 0.25\nbase_color = [0.9, 0.1, 0.1]\n\n[[edit]]\nat_s = 0.5\ninstance = \"ball\"\ntranslation = [0.2, 0.5, -0.4]\n"
+    );
+    let s = parse(&text).unwrap();
+    let scene = s.load_scene().unwrap();
+    let ball = scene.instances.iter().find(|i| i.name == "ball").unwrap();
+    let (scale, _, at) = ball.world_from_object.to_scale_rotation_translation();
+    assert!((scale - illume_core::Vec3::splat(0.25)).abs().max_element() < 1e-6);
+    assert!(
+        (at - illume_core::Vec3::new(0.2, 0.5, 0.1))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    let mesh = &scene.meshes[ball.mesh.index()];
+    assert!(
+        mesh.positions
+            .iter()
+            .all(|p| (p.length() - 1.0).abs() < 1e-5)
+    );
+    let m = scene.materials.last().unwrap();
+    assert_eq!((m.name.as_str(), m.base_color.x), ("ball", 0.9));
+    s.edits[0].resolve(&scene).unwrap();
+    for (bad, field) in [
+        ("radius = 0.0", "sphere[0].radius"),
+        ("radius = nan", "sphere[0].radius"),
+        ("radius = 1.0\ncenter = [0.0, inf, 0.0]", "sphere[0].center"),
+        (
+            "radius = 1.0\nbase_color = [2.0, 0.0, 0.0]",
+            "sphere[0].base_color",
+        ),
+    ] {
+        let e = error(&format!("{MINIMAL}\n[[sphere]]\nname = \"b\"\n{bad}\n"));
+        assert!(e.contains(field), "{bad}: {e}");
+    }
+    let e = error(&format!("{MINIMAL}\n[[sphere]]\nradius = 1.0\n"));
+    assert!(e.contains("sphere[0].name"), "{e}");
+    let taken = parse(&format!(
+        "{MINIMAL}\n[[sphere]]\nname = \"sphere\"\nradius = 0.1\n"
+    ))
+    .unwrap();
+    let e = taken.load_scene().unwrap_err().to_string();
+    assert!(e.contains("sphere[0]") && e.contains("already"), "{e}");
 }

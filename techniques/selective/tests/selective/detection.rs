@@ -222,6 +222,7 @@ fn a_camera_move_beside_a_light_change_resets_the_view_counters() {
         pilots_per_group: 4,
         ratio: 4,
         element_count: 500,
+        min_photons_per_element: 0,
         warm_up: false,
         // A light change never restarts (a restart clears the priorities anyway).
         restart_fraction: 1.0,

@@ -13,3 +13,4 @@ mod masking;
 mod qmc;
 mod recovery;
 mod stream;
+mod temporal;

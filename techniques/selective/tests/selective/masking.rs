@@ -344,6 +344,7 @@ fn priorities_after_move(mut world: World, texture_masking: bool, steps: usize) 
         pilots_per_group: 100,
         ratio: 4,
         element_count: ELEMENTS,
+        min_photons_per_element: 0,
         warm_up: false,
         order: GroupOrder::Index,
         texture_masking,

@@ -12,6 +12,7 @@ fn settings(order: GroupOrder) -> SelectiveSettings {
         pilots_per_group: 60,
         ratio: 16,
         element_count: 3000,
+        min_photons_per_element: 0,
         warm_up: false,
         restart_fraction: 1.0,
         order,

@@ -14,6 +14,7 @@ fn settings() -> SelectiveSettings {
         pilots_per_group: 12,
         ratio: 4,
         element_count: 1500,
+        min_photons_per_element: 0,
         warm_up: false,
         order: GroupOrder::Priority,
         mode: SelectiveMode::Streaming,
