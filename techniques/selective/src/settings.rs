@@ -93,8 +93,8 @@ pub struct SelectiveSettings {
     /// element side pair). Default 12 400 (§7, ROOM).
     #[setting(default = 12_400, range = "1–50 000 000", max = MAX_ELEMENTS)]
     pub element_count: u32,
-    /// Largest element side as a fraction of the scene's bounding-box diagonal (issue
-    /// 34): a triangle is split until its elements are no larger than this, whatever
+    /// Largest element side as a fraction of the scene's bounding-box diagonal (beyond
+    /// the paper, issue 34): a triangle is split until its elements are no larger than this, whatever
     /// element_count says, so the large triangles of a model are split even when
     /// element_count is small for its area. Grid sides are powers of two either way,
     /// which keeps the display free of T-junction seams. 0 (default) turns the bound
@@ -105,7 +105,7 @@ pub struct SelectiveSettings {
     pub element_max_side: f32,
     /// Fewest photons per element, on average: when the pool N_g·N_p·R holds fewer
     /// than this many per element, N_p is raised until it does (the pool scaled with
-    /// the element mesh, issue 34). Higher: less noise and boiling per element, at the
+    /// the element mesh; beyond the paper, issue 34). Higher: less noise and boiling per element, at the
     /// cost of tracing time after a change. 0 turns it off: the pool is N_g·N_p·R as
     /// set. Default 16: Dabrovic Sponza's 75 213 elements get 1.2 M photons instead of
     /// the paper's pool's 3.8 per element, while the Cornell boxes keep the paper's pool
@@ -113,7 +113,7 @@ pub struct SelectiveSettings {
     /// 1 152 000 over 12 400 is 93).
     #[setting(default = 16, range = "0–100 000")]
     pub min_photons_per_element: u32,
-    /// While groups are stale, each display vertex moves only this fraction of the way
+    /// Beyond the paper: while groups are stale, each display vertex moves only this fraction of the way
     /// from what the last frame showed towards the solution when the change lies within
     /// `temporal_sigmas` of its impact noise ([`crate::temporal`], issue 34: re-traced
     /// photons move whole impacts between elements, and the static parts of an animated
@@ -196,8 +196,8 @@ pub struct SelectiveSettings {
     #[setting(default = 32)]
     pub max_bounces: u32,
     /// Photons read base-colour textures through box-filtered copies (see
-    /// `photon_stream.filtered_textures`): element buckets are far larger than a
-    /// filtered texel.
+    /// `photon_stream.filtered_textures`; beyond the paper): element buckets are far
+    /// larger than a filtered texel.
     #[setting(default = true)]
     pub filtered_textures: bool,
     /// Visual masking of lighting patterns by textures (§5.3): a pilot hit on a textured
@@ -241,6 +241,24 @@ impl SelectiveSettings {
     pub fn deterministic() -> Self {
         Self {
             mode: SelectiveMode::Deterministic,
+            ..Self::default()
+        }
+    }
+
+    /// The paper: the defaults' §7 values with every addition of this implementation
+    /// off — no photon floor per element (the pool is N_g·N_p·R), no temporal filter of
+    /// the display, no element-size bound, no pool growth in still scenes, photons on
+    /// full-resolution textures, and light changes re-traced with negative and positive
+    /// energy (the paper's mechanism) rather than restarted. The test
+    /// `presets::the_paper_preset_switches_every_deviation_off` pins this list.
+    pub fn paper() -> Self {
+        Self {
+            min_photons_per_element: 0,
+            temporal_alpha: 1.0,
+            element_max_side: 0.0,
+            max_photons: 0,
+            filtered_textures: false,
+            restart_fraction: 1.0,
             ..Self::default()
         }
     }
@@ -334,7 +352,11 @@ impl TechniqueSettings for SelectiveSettings {
         &[
             (
                 "default",
-                "the paper's values: N_p = 250, R = 16, 12 400 elements, re-tracing on a background thread",
+                "the paper's values (N_p = 250, R = 16, 12 400 elements, re-tracing on a background thread) with the additions `paper` turns off",
+            ),
+            (
+                "paper",
+                "the paper: no photon floor per element, no temporal filter, no pool growth, light changes re-traced",
             ),
             (
                 "deterministic",
@@ -351,6 +373,7 @@ impl TechniqueSettings for SelectiveSettings {
     fn preset(name: &str) -> Option<Self> {
         match name {
             "default" => Some(Self::default()),
+            "paper" => Some(Self::paper()),
             "deterministic" => Some(Self::deterministic()),
             "quality" | "still" => Some(Self::quality()),
             _ => None,

@@ -11,6 +11,7 @@ mod elements;
 mod energy;
 mod masking;
 mod qmc;
+mod presets;
 mod recovery;
 mod stream;
 mod temporal;
