@@ -14,7 +14,7 @@
 //! 2. **Variance**: the key is rendered in two halves of its samples; `(half − all)²`
 //!    estimates the variance of the mean per texel (luminance of the demodulated value),
 //!    smoothed over the 5×5 neighbours on the same surface.
-//! 3. **À-trous passes** ([`PASSES`], steps 1, 2, 4, 8, 16 texels): a 5×5 B3-spline kernel
+//! 3. **À-trous passes** ([`PASSES`], steps 1, 2, 4 texels): a 5×5 B3-spline kernel
 //!    whose weights are cut by the normal (`max(0, n·n')^`[`NORMAL_POWER`]), the distance
 //!    of the neighbour from the texel's tangent plane (`exp(−d/footprint)`: other surfaces
 //!    at other depths), the region (a cube face, an atlas chart) and the luminance
@@ -31,7 +31,8 @@ use illume_core::{Rgb, Vec2, Vec3, luminance};
 use illume_transport::{GBuffer, World};
 use rayon::prelude::*;
 
-/// À-trous passes: the kernel's reach doubles each pass (±2, ±4, … ±32 texels).
+/// À-trous passes: the kernel's reach doubles each pass (±2, ±4, ±8 texels); five
+/// (±32) flattened the light's gradients of a 32×24 key beyond the reference's tolerance.
 pub const PASSES: u32 = 3;
 /// Exponent of the normal weight `max(0, n·n')^p` (SVGF's 128 is for noisy normals of
 /// rasterised detail; ours are exact, 64 keeps corners apart).
@@ -351,7 +352,7 @@ mod tests {
         let (w, h) = (16u32, 16u32);
         let mut guide = plane(w, h);
         for (i, t) in guide.texels.iter_mut().enumerate() {
-            let checker = ((i as u32 % w) + (i as u32 / w)) % 2 == 0;
+            let checker = ((i as u32 % w) + (i as u32 / w)).is_multiple_of(2);
             t.as_mut().unwrap().albedo = Rgb::splat(if checker { 0.8 } else { 0.2 });
         }
         let image = RgbImage::from_vec(

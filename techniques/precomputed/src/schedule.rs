@@ -163,6 +163,10 @@ pub fn keeps_middle<T>(
 /// Level 0 is [`adaptive_start`]; level L ≥ 1 renders [`level_middles`] and keeps those
 /// [`keeps_middle`] accepts, until a level keeps none. The sharded precompute
 /// ([`crate::shard`]) runs the same two steps level by level, across machines.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the span, the step, the criterion and the four steps it is generic over"
+)]
 pub fn adaptive<T, E>(
     from_h: f64,
     to_h: f64,
