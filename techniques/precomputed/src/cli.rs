@@ -196,6 +196,10 @@ struct InfoArgs {
     /// Write each key as restored from the file (and the sky image) as EXR into DIR.
     #[arg(long)]
     dump: Option<PathBuf>,
+    /// Also measure the mean HDR-FLIP between neighbouring lit keys as restored (noise
+    /// between keys shows as change; slow for large files: one FLIP per key).
+    #[arg(long)]
+    flip: bool,
     /// Write the plots into DIR: `variance.svg` (captured variance vs k, Fig. 5) and
     /// `keys_per_hour.svg` (Fig. 6).
     #[arg(long)]
@@ -481,6 +485,16 @@ fn run_info(i: InfoArgs) -> Result<()> {
             stored / 1e6
         );
     }
+    if i.flip && h.kind == "pca" {
+        match flip_between_keys(&file)? {
+            Some((mean, max, pairs)) => println!(
+                "between keys HDR-FLIP mean {mean:.4}, max {max:.4} ({pairs} pairs of \
+                 neighbouring lit keys, restored at k = {})",
+                h.components
+            ),
+            None => println!("between keys (fewer than two lit keys)"),
+        }
+    }
     if let Some(dir) = &i.dump {
         dump(&file, dir)?;
     }
@@ -529,11 +543,10 @@ fn run_info(i: InfoArgs) -> Result<()> {
     Ok(())
 }
 
-/// Restored keys (mean + Σ images · coefficients, clamped at 0) and the sky as EXR.
-fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
+/// Key `t` as restored from a `pca` file: mean + Σ images · coefficients, clamped at 0.
+fn restored_key(file: &PcFile, t: usize) -> Result<illume_core::image::RgbImage> {
     use illume_core::Rgb;
     use illume_core::image::RgbImage;
-    create_dir(dir)?;
     let h = &file.header;
     let pixels = h.width as usize * h.height as usize;
     let keys = h.keys.len();
@@ -543,36 +556,76 @@ fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
     let section = |name: &str| {
         file.section(name)
             .map(|s| s.values.as_slice())
-            .ok_or_else(|| format!("section {name} missing"))
+            .ok_or_else(|| format!("{}: section {name} missing", h.scene_source))
     };
-    for t in 0..keys {
-        let mut px = vec![Rgb::ZERO; pixels];
-        for (g, name) in names.iter().enumerate() {
-            let mean = section(&format!("mean.{name}"))?;
-            let temporal = section(&format!("temporal.{name}"))?;
-            let images = section(&format!("images.{name}"))?;
-            let rows = if joint { 3 * pixels } else { pixels };
-            for r in 0..rows {
-                let mut v = mean[t];
-                for c in 0..k {
-                    v += images.get(c * rows + r).copied().unwrap_or(0.0) * temporal[c * keys + t];
-                }
-                let (p, ch) = if joint { (r / 3, r % 3) } else { (r, g) };
-                px[p][ch] = v.max(0.0);
+    let mut px = vec![Rgb::ZERO; pixels];
+    for (g, name) in names.iter().enumerate() {
+        let mean = section(&format!("mean.{name}"))?;
+        let temporal = section(&format!("temporal.{name}"))?;
+        let images = section(&format!("images.{name}"))?;
+        let rows = if joint { 3 * pixels } else { pixels };
+        for r in 0..rows {
+            let mut v = mean.get(t).copied().unwrap_or(0.0);
+            for c in 0..k {
+                v += images.get(c * rows + r).copied().unwrap_or(0.0)
+                    * temporal.get(c * keys + t).copied().unwrap_or(0.0);
             }
+            let (p, ch) = if joint { (r / 3, r % 3) } else { (r, g) };
+            px[p][ch] = v.max(0.0);
         }
-        let img = RgbImage::from_vec(h.width, h.height, px).ok_or("image size")?;
+    }
+    Ok(RgbImage::from_vec(h.width, h.height, px).ok_or("image size")?)
+}
+
+/// Mean HDR-FLIP between neighbouring lit keys as restored from a `pca` file (the
+/// earlier key the reference), and the largest: noise between keys shows here as change.
+/// `None` with fewer than two lit keys.
+fn flip_between_keys(file: &PcFile) -> Result<Option<(f64, f64, usize)>> {
+    let lit: Vec<usize> = (0..file.header.keys.len())
+        .filter(|&t| !file.header.keys[t].dark)
+        .collect();
+    let mut flips = Vec::new();
+    let mut previous = None;
+    for &t in &lit {
+        let key = restored_key(file, t)?;
+        if let Some(before) = &previous {
+            let flip = illume_metrics::hdr_flip(before, &key, &Default::default())?;
+            flips.push(flip.map.mean());
+        }
+        previous = Some(key);
+    }
+    if flips.is_empty() {
+        return Ok(None);
+    }
+    let mean = flips.iter().sum::<f64>() / flips.len() as f64;
+    let max = flips.iter().copied().fold(0.0, f64::max);
+    Ok(Some((mean, max, flips.len())))
+}
+
+/// Restored keys ([`restored_key`]) and the sky as EXR.
+fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
+    use illume_core::Rgb;
+    use illume_core::image::RgbImage;
+    create_dir(dir)?;
+    let h = &file.header;
+    for t in 0..h.keys.len() {
+        let img = restored_key(file, t)?;
         let path = dir.join(format!("key_{t:03}_{:05.2}h.exr", h.keys[t].hours));
         img.write(&path, &Default::default())?;
     }
-    if let Ok(sky) = section("sky") {
+    if let Some(sky) = file.section("sky") {
         let px = sky
+            .values
             .chunks_exact(3)
             .map(|c| Rgb::new(c[0], c[1], c[2]))
             .collect();
         let img = RgbImage::from_vec(h.width, h.height, px).ok_or("image size")?;
         img.write(&dir.join("sky.exr"), &Default::default())?;
     }
-    eprintln!("wrote {} keys and the sky into {}", keys, dir.display());
+    eprintln!(
+        "wrote {} keys and the sky into {}",
+        h.keys.len(),
+        dir.display()
+    );
     Ok(())
 }

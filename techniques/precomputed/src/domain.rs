@@ -15,7 +15,8 @@
 
 use crate::PrecomputedError;
 use crate::atlas::{Atlas, PROBE_AXES};
-use crate::settings::{Domain, PrecomputedSettings};
+use crate::denoise::{Guide, GuideTexel};
+use crate::settings::{Denoise, Domain, PrecomputedSettings};
 use illume_core::image::RgbImage;
 use illume_core::sampling::{Pcg32, SampleStream, mix64};
 use illume_core::{Affine3A, Mat3, Ray, Rgb, Vec2, Vec3};
@@ -102,11 +103,19 @@ impl Layout {
     }
 
     /// Renders light of `world` into a key image: light reflected ≥ 2 times (`indirect`)
-    /// or all reflected light (`!indirect`, for the sky image), `spp` samples per texel.
-    pub fn render(&self, world: &World, spp: u32, seed: u64, indirect: bool) -> RgbImage {
+    /// or all reflected light (`!indirect`, for the sky image), `spp` samples per texel,
+    /// then `denoise`d ([`crate::denoise`]).
+    pub fn render(
+        &self,
+        world: &World,
+        spp: u32,
+        seed: u64,
+        indirect: bool,
+        denoise: Denoise,
+    ) -> RgbImage {
         match self {
             Self::Screen { width, height } => {
-                render_camera(world, (*width, *height), spp, seed, indirect)
+                render_camera(world, (*width, *height), spp, seed, indirect, denoise)
             }
             Self::Cube { face } => {
                 let mut pixels = Vec::with_capacity(6 * (*face as usize).pow(2));
@@ -121,12 +130,12 @@ impl Layout {
                     let mut scene = world.scene.clone();
                     scene.camera = camera;
                     let w = world.with_scene(scene);
-                    let image = render_camera(&w, (*face, *face), spp, seed, indirect);
+                    let image = render_camera(&w, (*face, *face), spp, seed, indirect, denoise);
                     pixels.extend_from_slice(image.pixels());
                 }
                 RgbImage::from_vec(*face, 6 * face, pixels).expect("six faces")
             }
-            Self::Atlas(atlas) => render_atlas(world, atlas, spp, seed, indirect),
+            Self::Atlas(atlas) => render_atlas(world, atlas, spp, seed, indirect, denoise),
         }
     }
 }
@@ -141,8 +150,17 @@ pub fn cube_face(asked: u32, height: u32, yfov: f32) -> u32 {
 }
 
 /// The reference path tracer's image of `world`'s camera: light reflected ≥ 2 times, or
-/// (`!indirect`) everything.
-fn render_camera(world: &World, size: (u32, u32), spp: u32, seed: u64, indirect: bool) -> RgbImage {
+/// (`!indirect`) everything; `denoise`d under the camera's guide, the variance from the
+/// first half of the samples (the samples and their sum are those of one call: the
+/// undenoised image is the same bit for bit).
+fn render_camera(
+    world: &World,
+    size: (u32, u32),
+    spp: u32,
+    seed: u64,
+    indirect: bool,
+    denoise: Denoise,
+) -> RgbImage {
     let mut r = ReferenceRenderer::new(
         ReferenceSettings {
             spp,
@@ -152,13 +170,26 @@ fn render_camera(world: &World, size: (u32, u32), spp: u32, seed: u64, indirect:
         size.0,
         size.1,
     );
-    r.add_samples(world, spp);
-    let images = r.images();
-    if indirect {
-        images.indirect
-    } else {
-        images.full
+    let pick = |r: &ReferenceRenderer| {
+        let images = r.images();
+        if indirect {
+            images.indirect
+        } else {
+            images.full
+        }
+    };
+    let filtering = denoise == Denoise::Atrous;
+    let half = (filtering && spp >= 2).then(|| {
+        r.add_samples(world, spp / 2);
+        pick(&r)
+    });
+    r.add_samples(world, spp - r.samples());
+    let image = pick(&r);
+    if !filtering {
+        return image;
     }
+    let guide = crate::denoise::Guide::camera(world, size.0, size.1, 0);
+    crate::denoise::atrous(&image, half.as_ref(), &guide)
 }
 
 /// A white Lambertian version of `hit` (albedo 1, no emission): what a lightmap texel
@@ -202,12 +233,24 @@ fn texel_hit(world: &World, p: &crate::atlas::TexelPoint) -> SurfaceHit {
     white(world.surface(&ray, &hit))
 }
 
-/// Mean of `spp` gathers from `hit` (seeded per sample and texel `index`).
-fn gather(world: &World, hit: SurfaceHit, spp: u32, seed: u64, index: u64, indirect: bool) -> Rgb {
+/// Mean of `spp` gathers from `hit` (seeded per sample and texel `index`), and the mean
+/// of the first half of them (for the denoiser's variance).
+fn gather(
+    world: &World,
+    hit: SurfaceHit,
+    spp: u32,
+    seed: u64,
+    index: u64,
+    indirect: bool,
+) -> (Rgb, Rgb) {
     let path = PathSettings::default();
     let wo = hit.facing_normal();
     let mut sum = [0f64; 3];
+    let mut half = [0f64; 3];
     for s in 0..spp {
+        if s == spp / 2 {
+            half = sum;
+        }
         let mut rng = Pcg32::new(mix64(seed.wrapping_add(s as u64)), index);
         let mut out = PathRadiance::default();
         continue_path(world, hit, wo, &mut rng, &path, &mut out);
@@ -220,12 +263,15 @@ fn gather(world: &World, hit: SurfaceHit, spp: u32, seed: u64, index: u64, indir
             sum[c] += v[c] as f64;
         }
     }
-    let n = spp.max(1) as f64;
-    Rgb::new(
-        (sum[0] / n) as f32,
-        (sum[1] / n) as f32,
-        (sum[2] / n) as f32,
-    )
+    let mean = |sum: [f64; 3], n: u32| {
+        let n = n.max(1) as f64;
+        Rgb::new(
+            (sum[0] / n) as f32,
+            (sum[1] / n) as f32,
+            (sum[2] / n) as f32,
+        )
+    };
+    (mean(sum, spp), mean(half, spp / 2))
 }
 
 /// Whether most of a few rays from `origin` about `normal` hit back faces within
@@ -252,13 +298,21 @@ fn buried(world: &World, origin: Vec3, normal: Option<Vec3>, reach: f32, index: 
     back * 2 > RAYS
 }
 
-/// Renders the atlas: lightmap texels (valid ones gathered, buried ones copied from the
-/// nearest valid texel of their chart), then the probes.
-fn render_atlas(world: &World, atlas: &Atlas, spp: u32, seed: u64, indirect: bool) -> RgbImage {
+/// Renders the atlas: lightmap texels (valid ones gathered and `denoise`d within their
+/// chart, buried ones then copied from the nearest valid texel of their chart), then the
+/// probes (never filtered: six directions of one point are not neighbours).
+fn render_atlas(
+    world: &World,
+    atlas: &Atlas,
+    spp: u32,
+    seed: u64,
+    indirect: bool,
+    denoise: Denoise,
+) -> RgbImage {
     let (w, h) = atlas.image_size();
     let texels = atlas.lightmap_texels();
     let reach = 2.0 / atlas.density;
-    let mut values: Vec<Option<Rgb>> = (0..texels)
+    let gathered: Vec<Option<(GuideTexel, Rgb, Rgb)>> = (0..texels)
         .into_par_iter()
         .with_min_len(64)
         .map(|i| {
@@ -268,9 +322,47 @@ fn render_atlas(world: &World, atlas: &Atlas, spp: u32, seed: u64, indirect: boo
             if buried(world, origin, Some(hit.facing_normal()), reach, i as u64) {
                 return None;
             }
-            Some(gather(world, hit, spp, seed, i as u64, indirect))
+            let (all, half) = gather(world, hit, spp, seed, i as u64, indirect);
+            let rect = atlas
+                .slot(p.instance, p.triangle, p.side == 1)
+                .map_or([0; 4], |s| s.rect);
+            let guide = GuideTexel {
+                position: hit.position,
+                normal: hit.facing_normal(),
+                albedo: Rgb::ONE,
+                footprint: 1.0 / atlas.density,
+                // A chart's top-left texel names it (charts never overlap).
+                region: rect[1].wrapping_mul(atlas.width).wrapping_add(rect[0]),
+            };
+            Some((guide, all, half))
         })
         .collect();
+    let mut values: Vec<Option<Rgb>> = gathered.iter().map(|g| g.map(|g| g.1)).collect();
+    if denoise == Denoise::Atrous && texels > 0 {
+        let lightmap = |f: fn(&(GuideTexel, Rgb, Rgb)) -> Rgb| {
+            RgbImage::from_vec(
+                atlas.width,
+                atlas.height,
+                gathered
+                    .iter()
+                    .map(|g| g.as_ref().map_or(Rgb::ZERO, f))
+                    .collect(),
+            )
+            .expect("lightmap size")
+        };
+        let guide = Guide {
+            width: atlas.width,
+            height: atlas.height,
+            texels: gathered.iter().map(|g| g.map(|g| g.0)).collect(),
+        };
+        let half = (spp >= 2).then(|| lightmap(|g| g.2));
+        let filtered = crate::denoise::atrous(&lightmap(|g| g.1), half.as_ref(), &guide);
+        for (v, f) in values.iter_mut().zip(filtered.pixels()) {
+            if v.is_some() {
+                *v = Some(*f);
+            }
+        }
+    }
     dilate(atlas, &mut values);
     let mut pixels: Vec<Rgb> = values.into_iter().map(|v| v.unwrap_or(Rgb::ZERO)).collect();
     // Probes: six white gathers each; buried probes black (their flag says so).
@@ -298,7 +390,7 @@ fn render_atlas(world: &World, atlas: &Atlas, spp: u32, seed: u64, indirect: boo
                 front_face: true,
                 ..template
             };
-            gather(world, hit, spp, seed, (texels + j) as u64, indirect)
+            gather(world, hit, spp, seed, (texels + j) as u64, indirect).0
         })
         .collect();
     pixels.extend(probe_values);

@@ -12,7 +12,9 @@
 //! - the sky is off for keys, and the sun off for the one sky image;
 //! - a key whose sun is at or below the horizon is exactly black, flagged dark, not
 //!   rendered and kept out of the PCA;
-//! - key t's samples are seeded from (seed, time): any machine renders the same key.
+//! - every key uses the same samples per texel (common random numbers,
+//!   [`key_seed`]), and is denoised ([`crate::denoise`]) unless `denoise = "none"`: any
+//!   machine renders the same key.
 
 use crate::PrecomputedError;
 use crate::domain::Layout;
@@ -55,9 +57,15 @@ pub fn static_scene(scene: &Scene) -> Scene {
     s
 }
 
-/// Samples' seed of the key at `hours`.
-pub fn key_seed(seed: u64, hours: f64) -> u64 {
-    mix64(seed ^ mix64(hours.to_bits()))
+/// Samples' seed of the key at `hours`: one seed for every key with `common_samples`
+/// (common random numbers: texel p's sample s follows the same path in every key, only
+/// the sun differs), else one from (seed, time).
+pub fn key_seed(settings: &PrecomputedSettings, hours: f64) -> u64 {
+    if settings.common_samples {
+        mix64(settings.seed ^ 0x6b65_7973)
+    } else {
+        mix64(settings.seed ^ mix64(hours.to_bits()))
+    }
 }
 
 /// Renders the key at clock time `time.hours` (sun only, sky off, dynamic masked) in
@@ -98,8 +106,9 @@ pub fn render_key_in(
     let image = layout.render(
         &world.with_scene(scene),
         settings.spp,
-        key_seed(settings.seed, time.hours),
+        key_seed(settings, time.hours),
         true,
+        settings.denoise,
     );
     Ok(Key {
         time,
@@ -150,6 +159,7 @@ pub fn render_sky_in(
         settings.spp,
         mix64(settings.seed ^ 0x0073_6b79),
         false,
+        crate::settings::Denoise::None,
     ))
 }
 
@@ -367,6 +377,22 @@ pub fn differs_visibly(a: &RgbImage, b: &RgbImage, exposure: f32) -> bool {
     .is_ok_and(|r| r.visible)
 }
 
+/// The adaptive schedule's daylight floor for `sun`: whether the interval between clock
+/// times `a` and `b` is longer than [`crate::schedule::MAX_DAYLIGHT_GAP_H`] with the sun
+/// above the horizon at some minute inside it.
+pub fn daylight_floor(sun: &SunSettings) -> impl Fn(f64, f64) -> bool + '_ {
+    move |a, b| {
+        if b - a <= crate::schedule::MAX_DAYLIGHT_GAP_H {
+            return false;
+        }
+        let minutes = ((b - a) * 60.0).ceil().min(1e6) as u32;
+        (0..=minutes).any(|m| {
+            let hours = (a + m as f64 / 60.0).min(b);
+            illume_scene::sun::solar_position(sun, hours).is_ok_and(|p| p.elevation_deg > 0.0)
+        })
+    }
+}
+
 /// `(1 − α)·a + α·b`, pixel by pixel (same sizes): the adaptive schedule's interpolation.
 pub fn lerp(a: &RgbImage, b: &RgbImage, alpha: f32) -> RgbImage {
     let px = a
@@ -379,7 +405,8 @@ pub fn lerp(a: &RgbImage, b: &RgbImage, alpha: f32) -> RgbImage {
 }
 
 /// The whole precompute in one process: the sky image, the keys (uniform or adaptive),
-/// the PCA. `progress` counts keys (adaptive: the total grows as levels add keys).
+/// the PCA. `progress` counts keys (adaptive: one bar per level, counting that level's
+/// keys).
 pub fn precompute(
     world: &World,
     settings: &PrecomputedSettings,
@@ -408,32 +435,38 @@ pub fn precompute(
             } else {
                 crate::schedule::Criterion::Ends
             };
-            let mut done = 0u64;
-            progress.begin("precomputed keys (adaptive)", 3);
+            let sun = sun_of(&world.scene)?;
+            // Level by level: each level's bar counts the keys that level renders.
+            let (mut done, mut level) = (0u64, 0u32);
             let exposure = settings.exposure;
             let keys = crate::schedule::adaptive(
                 settings.from_h,
                 settings.to_h,
                 settings.step_min,
                 criterion,
+                daylight_floor(&sun),
                 |times| {
-                    progress.begin("precomputed keys (adaptive)", done + times.len() as u64);
-                    progress.set(done);
+                    progress.begin(
+                        &format!(
+                            "precomputed keys, adaptive level {level} ({done} rendered before)"
+                        ),
+                        times.len() as u64,
+                    );
                     let mut out = Vec::with_capacity(times.len());
-                    for &hours in times {
+                    for (i, &hours) in times.iter().enumerate() {
                         let key =
                             render_key_in(world, settings, KeyTime { hours, level: 0 }, &layout)?;
                         out.push(key.image);
-                        done += 1;
-                        progress.set(done);
+                        progress.set(i as u64 + 1);
                     }
+                    progress.end();
+                    done += times.len() as u64;
+                    level += 1;
                     Ok::<_, PrecomputedError>(out)
                 },
                 |a, b| differs_visibly(a, b, exposure),
                 lerp,
             )?;
-            progress.end();
-            let sun = sun_of(&world.scene)?;
             keys.into_iter()
                 .map(|(time, image)| {
                     let dark = illume_scene::sun::solar_position(&sun, time.hours)

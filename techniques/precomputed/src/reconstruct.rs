@@ -22,6 +22,35 @@ pub(crate) struct Group {
     pub(crate) rows: usize,
 }
 
+/// Catmull–Rom weights of the four keys around α between keys `n` and `m = n + 1`,
+/// spaced by their times (not their indices: adaptive keys are uneven): a cubic Hermite
+/// segment whose tangents at `t_n` and `t_m` are the slopes `(P_m − P_{n−1})/(t_m −
+/// t_{n−1})` and `(P_{m+1} − P_n)/(t_{m+1} − t_n)`, ends repeated (a one-sided slope).
+/// It passes through the keys and reproduces any signal linear in time exactly.
+pub(crate) fn catmull_rom(times: &[f64], n: usize, m: usize, alpha: f32) -> Vec<(usize, f32)> {
+    let last = times.len().saturating_sub(1);
+    let (p0, p3) = (n.saturating_sub(1), (m + 1).min(last));
+    let h = times[m] - times[n];
+    if m == n || h <= 0.0 {
+        return vec![(n, 1.0)];
+    }
+    let t = alpha as f64;
+    let (t2, t3) = (t * t, t * t * t);
+    let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
+    let h10 = t3 - 2.0 * t2 + t;
+    let h01 = -2.0 * t3 + 3.0 * t2;
+    let h11 = t3 - t2;
+    // Tangent scale of each end: the segment's length over the span of its slope.
+    let a = h / (times[m] - times[p0]);
+    let b = h / (times[p3] - times[n]);
+    vec![
+        (p0, (-h10 * a) as f32),
+        (n, (h00 - h11 * b) as f32),
+        (m, (h01 + h10 * a) as f32),
+        (p3, (h11 * b) as f32),
+    ]
+}
+
 /// `cube`: texels are reconstructed in runs of this many (those some pixel reads).
 pub(crate) const RUN: usize = 64;
 
@@ -31,20 +60,7 @@ impl Precomputed {
         let (n, m, alpha) = bracket(&self.times, hours);
         match self.settings.interpolation {
             Interpolation::Linear => vec![(n, 1.0 - alpha), (m, alpha)],
-            Interpolation::Cubic => {
-                // Catmull–Rom in the key index (uniform parameter), ends repeated.
-                let last = self.times.len() - 1;
-                let p0 = n.saturating_sub(1);
-                let p3 = (m + 1).min(last);
-                let t = alpha;
-                let (t2, t3) = (t * t, t * t * t);
-                vec![
-                    (p0, 0.5 * (-t3 + 2.0 * t2 - t)),
-                    (n, 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0)),
-                    (m, 0.5 * (-3.0 * t3 + 4.0 * t2 + t)),
-                    (p3, 0.5 * (t3 - t2)),
-                ]
-            }
+            Interpolation::Cubic => catmull_rom(&self.times, n, m, alpha),
         }
     }
 

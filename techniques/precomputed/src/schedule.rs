@@ -3,8 +3,9 @@
 //!
 //! Times here are local clock hours ([`illume_scene::sun::SunSettings::clock_hours`]).
 //!
-//! - **Uniform** (Eq. 1): a key every ΔT (5 min: 288 keys a day), at `from + i·ΔT` for
-//!   `i < ⌈(to − from)/ΔT⌉`.
+//! - **Uniform** (Eq. 1): a key every ΔT from `from` to `to` inclusive, at `from + i·ΔT`
+//!   for `i ≤ ⌊(to − from)/ΔT⌋` (0–24 h at 5 min: 289 keys, both midnights; 8–16 h hourly:
+//!   9 keys, 16:00 included).
 //! - **Adaptive** (§3.2): start from two equal intervals (keys at `from`, the middle and
 //!   `to`: level 0). At each level, every interval made at the previous level whose length
 //!   is at least 2 ΔT_min is tested: its ends are interpolated to its middle, and if the
@@ -35,15 +36,19 @@ pub enum Criterion {
     VerifyMidpoint,
 }
 
-/// Uniform keys from `from_h` to `to_h` every `step_min` minutes (Eq. 1), at most
+/// Uniform keys from `from_h` to `to_h` inclusive (when `to_h` falls on a step) every
+/// `step_min` minutes (Eq. 1), at most
 /// [`crate::file::MAX_KEYS`] (the settings refuse a step that asks for more,
 /// [`crate::settings::PrecomputedSettings::validate`]; the cap here only keeps an
 /// unchecked caller from allocating without bound).
 pub fn uniform(from_h: f64, to_h: f64, step_min: f64) -> Vec<KeyTime> {
     let step = step_min / 60.0;
-    let n = ((to_h - from_h) / step - 1e-9)
-        .ceil()
-        .clamp(1.0, crate::file::MAX_KEYS as f64) as usize;
+    // + 1: the key at `to_h` itself (to a step's 10⁻⁹, so 8–16 h at 60 min is 9 keys
+    // whatever the rounding of the division).
+    let n = ((to_h - from_h) / step + 1e-9)
+        .floor()
+        .clamp(0.0, crate::file::MAX_KEYS as f64 - 1.0) as usize
+        + 1;
     (0..n)
         .map(|i| KeyTime {
             hours: from_h + i as f64 * step,
@@ -74,6 +79,13 @@ pub fn open_intervals(keys: &[KeyTime], level: u32, min_step_min: f64) -> Vec<(u
         .collect()
 }
 
+/// The daylight floor of the adaptive schedule \[hours\]: an interval longer than this
+/// with the sun above the horizon anywhere inside splits whatever the images say, so no
+/// hour of daylight goes without a key (bisecting a day, daylight keys end up at most
+/// 45 min apart). Night intervals, with black keys at both ends, are left alone. It holds
+/// for `step_min` ≤ 30 min (keys stay ≥ `step_min` apart first).
+pub const MAX_DAYLIGHT_GAP_H: f64 = 1.0;
+
 /// A middle that adaptive level `level` tests: the midpoint of the interval between
 /// keys `ends.0` and `ends.1` (indices into the keys of the levels before).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,15 +98,17 @@ pub struct Middle {
 
 /// The middles adaptive level `level` (≥ 1) renders, from the keys of the levels before
 /// (sorted by time, with their images): the middles of the intervals made at level
-/// `level − 1` that are at least `2 · min_step_min` long ([`open_intervals`]). With
-/// [`Criterion::Ends`] only those whose ends' interpolation at the middle `differs` from
-/// either end; with [`Criterion::VerifyMidpoint`] all of them (the rendered middle then
-/// decides, [`keeps_middle`]). Empty: the schedule is complete.
+/// `level − 1` that are at least `2 · min_step_min` long ([`open_intervals`]). Those
+/// `forced(from_h, to_h)` says must split (the daylight floor, [`MAX_DAYLIGHT_GAP_H`]),
+/// and with [`Criterion::Ends`] those whose ends' interpolation at the middle `differs`
+/// from either end; with [`Criterion::VerifyMidpoint`] all of them (the rendered middle
+/// then decides, [`keeps_middle`]). Empty: the schedule is complete.
 pub fn level_middles<T>(
     keys: &[(KeyTime, T)],
     level: u32,
     min_step_min: f64,
     criterion: Criterion,
+    forced: impl Fn(f64, f64) -> bool,
     mut differs: impl FnMut(&T, &T) -> bool,
     mut interpolate: impl FnMut(&T, &T, f32) -> T,
 ) -> Vec<Middle> {
@@ -104,12 +118,15 @@ pub fn level_middles<T>(
     };
     open_intervals(&times, previous, min_step_min)
         .into_iter()
-        .filter(|&(a, b)| match criterion {
-            Criterion::Ends => {
-                let mid = interpolate(&keys[a].1, &keys[b].1, 0.5);
-                differs(&mid, &keys[a].1) || differs(&mid, &keys[b].1)
-            }
-            Criterion::VerifyMidpoint => true,
+        .filter(|&(a, b)| {
+            forced(times[a].hours, times[b].hours)
+                || match criterion {
+                    Criterion::Ends => {
+                        let mid = interpolate(&keys[a].1, &keys[b].1, 0.5);
+                        differs(&mid, &keys[a].1) || differs(&mid, &keys[b].1)
+                    }
+                    Criterion::VerifyMidpoint => true,
+                }
         })
         .map(|(a, b)| Middle {
             hours: 0.5 * (times[a].hours + times[b].hours),
@@ -119,34 +136,43 @@ pub fn level_middles<T>(
 }
 
 /// Whether a rendered middle becomes a key: always with [`Criterion::Ends`] (its interval
-/// was split before rendering it); with [`Criterion::VerifyMidpoint`] when the ends'
-/// interpolation `differs` from the rendered `image`.
+/// was split before rendering it) or when the daylight floor `forced` the split; with
+/// [`Criterion::VerifyMidpoint`] otherwise when the ends' interpolation `differs` from
+/// the rendered `image`.
 pub fn keeps_middle<T>(
     criterion: Criterion,
+    forced: bool,
     ends: (&T, &T),
     image: &T,
     mut differs: impl FnMut(&T, &T) -> bool,
     mut interpolate: impl FnMut(&T, &T, f32) -> T,
 ) -> bool {
-    match criterion {
-        Criterion::Ends => true,
-        Criterion::VerifyMidpoint => differs(&interpolate(ends.0, ends.1, 0.5), image),
-    }
+    forced
+        || match criterion {
+            Criterion::Ends => true,
+            Criterion::VerifyMidpoint => differs(&interpolate(ends.0, ends.1, 0.5), image),
+        }
 }
 
 /// The whole adaptive schedule in one process: `render` makes the images of a batch of
 /// times (it may run them in parallel), `differs(a, b)` says whether two images differ
-/// noticeably, `interpolate(a, b, α)` blends two images. Returns the keys (sorted) with
-/// their images.
+/// noticeably, `interpolate(a, b, α)` blends two images, `forced(from_h, to_h)` says an
+/// interval must split whatever its images (the daylight floor). Returns the keys
+/// (sorted) with their images.
 ///
 /// Level 0 is [`adaptive_start`]; level L ≥ 1 renders [`level_middles`] and keeps those
 /// [`keeps_middle`] accepts, until a level keeps none. The sharded precompute
 /// ([`crate::shard`]) runs the same two steps level by level, across machines.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the span, the step, the criterion and the four steps it is generic over"
+)]
 pub fn adaptive<T, E>(
     from_h: f64,
     to_h: f64,
     min_step_min: f64,
     criterion: Criterion,
+    forced: impl Fn(f64, f64) -> bool,
     mut render: impl FnMut(&[f64]) -> Result<Vec<T>, E>,
     mut differs: impl FnMut(&T, &T) -> bool,
     mut interpolate: impl FnMut(&T, &T, f32) -> T,
@@ -160,6 +186,7 @@ pub fn adaptive<T, E>(
             level,
             min_step_min,
             criterion,
+            &forced,
             &mut differs,
             &mut interpolate,
         );
@@ -171,7 +198,15 @@ pub fn adaptive<T, E>(
         let mut kept = Vec::new();
         for (m, image) in middles.iter().zip(images) {
             let ends = (&keys[m.ends.0].1, &keys[m.ends.1].1);
-            if keeps_middle(criterion, ends, &image, &mut differs, &mut interpolate) {
+            let force = forced(keys[m.ends.0].0.hours, keys[m.ends.1].0.hours);
+            if keeps_middle(
+                criterion,
+                force,
+                ends,
+                &image,
+                &mut differs,
+                &mut interpolate,
+            ) {
                 kept.push((
                     KeyTime {
                         hours: m.hours,
@@ -223,11 +258,20 @@ mod tests {
 
     /// A synthetic "image": one value, rendered from a function of the time.
     fn run(f: impl Fn(f64) -> f32, criterion: Criterion) -> Vec<KeyTime> {
+        run_with(f, criterion, |_, _| false)
+    }
+
+    fn run_with(
+        f: impl Fn(f64) -> f32,
+        criterion: Criterion,
+        forced: impl Fn(f64, f64) -> bool,
+    ) -> Vec<KeyTime> {
         let keys = adaptive::<f32, ()>(
             0.0,
             24.0,
             5.0,
             criterion,
+            forced,
             |times| Ok(times.iter().map(|&t| f(t)).collect()),
             |a, b| (a - b).abs() > 0.01,
             |a, b, alpha| a + (b - a) * alpha,
@@ -236,11 +280,26 @@ mod tests {
         keys.into_iter().map(|k| k.0).collect()
     }
 
+    /// `--to` is inclusive (issue 36: `--from 8 --to 16 --step-min 60` gave 8 keys, 16:00
+    /// left out).
     #[test]
-    fn uniform_has_288_keys_a_day() {
-        let keys = uniform(0.0, 24.0, 5.0);
-        assert_eq!(keys.len(), 288);
-        assert!((keys[287].hours - (24.0 - 5.0 / 60.0)).abs() < 1e-9);
+    fn uniform_includes_the_last_hour() {
+        let hours = |from, to, step| -> Vec<f64> {
+            uniform(from, to, step).iter().map(|k| k.hours).collect()
+        };
+        assert_eq!(
+            hours(8.0, 16.0, 60.0),
+            (8..=16).map(f64::from).collect::<Vec<_>>()
+        );
+        // A day at 5 min: the paper's 288 frames 0:00–23:55, and midnight at the end.
+        let day = uniform(0.0, 24.0, 5.0);
+        assert_eq!(day.len(), 289);
+        assert!((day[287].hours - (24.0 - 5.0 / 60.0)).abs() < 1e-9);
+        assert_eq!(day[288].hours, 24.0);
+        // `to` off the grid: the last key is the last step before it.
+        assert_eq!(hours(10.0, 11.0, 25.0).len(), 3);
+        // 0.1 h steps whose sum rounds below 1: still 11 keys.
+        assert_eq!(hours(0.0, 1.0, 6.0).len(), 11);
     }
 
     #[test]
@@ -283,6 +342,31 @@ mod tests {
             // Outside only the bisection's way in: the three first keys and one per level
             // down to the ramp (0, 6, 12, 24 here).
             assert!(outside.len() <= 4, "{criterion:?}: {outside:?}");
+        }
+    }
+
+    /// The daylight floor (issue 36): a constant day (nothing the images would split)
+    /// still gets keys ≤ 1 h apart where the floor says so, and none elsewhere.
+    #[test]
+    fn the_floor_splits_daylight_hours_only() {
+        let day = |a: f64, b: f64| b - a > MAX_DAYLIGHT_GAP_H && b > 6.0 && a < 18.0;
+        for criterion in [Criterion::Ends, Criterion::VerifyMidpoint] {
+            let keys = run_with(|_| 0.5, criterion, day);
+            for w in keys.windows(2) {
+                let (a, b) = (w[0].hours, w[1].hours);
+                if b > 6.0 && a < 18.0 {
+                    assert!(b - a <= MAX_DAYLIGHT_GAP_H, "{criterion:?}: {a}–{b} h");
+                }
+            }
+            // The night (before 6 h, after 18 h) keeps the bisection's long intervals.
+            assert!(
+                keys.iter().filter(|k| k.hours < 6.0).count() <= 2,
+                "{keys:?}"
+            );
+            assert!(
+                keys.iter().filter(|k| k.hours > 18.0).count() <= 2,
+                "{keys:?}"
+            );
         }
     }
 

@@ -55,6 +55,21 @@ pub enum Colour {
     Joint,
 }
 
+/// How each key's Monte Carlo noise is removed before the PCA (beyond the paper, whose
+/// keys came from Mental Ray's photon map and final gather; issue 36).
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, illume_settings_derive::SettingValues,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Denoise {
+    /// Keys as the path tracer made them.
+    None,
+    /// An edge-aware à-trous wavelet filter guided by each texel's surface (normal,
+    /// position, albedo demodulated) and its estimated variance ([`crate::denoise`]).
+    /// Default.
+    Atrous,
+}
+
 /// The `[precomputed]` table. Defaults are the paper's where it has one.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, illume_settings_derive::Settings)]
 #[serde(deny_unknown_fields, default)]
@@ -105,6 +120,16 @@ pub struct PrecomputedSettings {
     /// removes some of it.
     #[setting(default = 256, range = "≥ 1")]
     pub spp: u32,
+    /// Common random numbers: every key uses the same sample pattern per texel (the same
+    /// paths; only the sun differs), so what noise is left changes smoothly with the sun
+    /// instead of looking like change between keys. Default true; false seeds each key
+    /// from its time (the files before issue 36).
+    #[setting(default = true)]
+    pub common_samples: bool,
+    /// Noise removal on each key before the PCA. Default `atrous`; `none` keeps the path
+    /// tracer's keys (noisier: lower variance captured at k, more adaptive keys).
+    #[setting(default = Denoise::Atrous)]
+    pub denoise: Denoise,
     /// Kept PCA components k. Higher: more variance kept (98.6 % at 10, 99.83 % at 20 in
     /// the paper), larger file and O(k) run time per texel. Default 10 (§3.2).
     #[setting(default = 10, range = "≥ 1")]
@@ -124,7 +149,8 @@ pub struct PrecomputedSettings {
     /// stored in the file.
     #[setting(default = 1.0, range = "(0, inf)")]
     pub exposure: f32,
-    /// Seed; key t's samples are seeded from (seed, time), reproducible on any machine.
+    /// Seed of the keys' samples (with `common_samples = false`, of (seed, time)):
+    /// reproducible on any machine.
     #[setting(default = 0)]
     pub seed: u64,
 }

@@ -35,7 +35,8 @@ use crate::PrecomputedError;
 use crate::file::{FileError, PcFile, Section, SectionFormat};
 use crate::file::{Header, KeyInfo};
 use crate::precompute::{
-    Key, base_header, compress, differs_visibly, lerp, render_key, render_sky, sun_of,
+    Key, base_header, compress, daylight_floor, differs_visibly, lerp, render_key, render_sky,
+    sun_of,
 };
 use crate::schedule::{Criterion, KeyTime, Middle, adaptive_start, keeps_middle, level_middles};
 use crate::settings::{PrecomputedSettings, ScheduleKind};
@@ -490,6 +491,8 @@ fn merge_adaptive(
     let criterion = criterion(settings);
     let exposure = settings.exposure;
     let differs = |a: &RgbImage, b: &RgbImage| differs_visibly(a, b, exposure);
+    let sun: SunSettings = sun_from(first_path, header)?;
+    let forced = daylight_floor(&sun);
     let mut kept = Vec::new();
     for (j, &i) in middles.iter().enumerate() {
         let info = &header.keys[i];
@@ -511,7 +514,8 @@ fn merge_adaptive(
                 ));
             }
             let ends = (&keys[after - 1].1, &keys[after].1);
-            keeps_middle(criterion, ends, &image, differs, lerp)
+            let force = forced(keys[after - 1].0.hours, keys[after].0.hours);
+            keeps_middle(criterion, force, ends, &image, differs, lerp)
         };
         if keep {
             kept.push((time, image));
@@ -520,13 +524,13 @@ fn merge_adaptive(
     let added = !kept.is_empty();
     keys.extend(kept);
     keys.sort_by(|a, b| a.0.hours.total_cmp(&b.0.hours));
-    let sun: SunSettings = sun_from(first_path, header)?;
     let complete = !added
         || level_middles(
             &keys,
             level + 1,
             settings.step_min,
             criterion,
+            &forced,
             differs,
             lerp,
         )
@@ -677,6 +681,7 @@ pub fn precompute_level(
                 level,
                 settings.step_min,
                 criterion(settings),
+                daylight_floor(&sun),
                 |a, b| differs_visibly(a, b, exposure),
                 lerp,
             );

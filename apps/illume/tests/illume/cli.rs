@@ -929,7 +929,8 @@ fn data_flag_reads_a_precomputed_file_like_the_set_key() {
     // stderr is a pipe here: progress comes as plain lines (a batch job's log).
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("precomputed keys: started, 6 to do")
+        // 3:00–15:00 every 2 h, 15:00 included.
+        err.contains("precomputed keys: started, 7 to do")
             && err.contains("precomputed keys: done in"),
         "{err}"
     );

@@ -20,7 +20,8 @@ fn a_frame_between_keys_matches_the_reference() {
     config.render.height = H;
     config.precomputed.schedule = illume_precomputed::settings::ScheduleKind::Uniform;
     config.precomputed.from_h = 11.0;
-    config.precomputed.to_h = 13.0;
+    // Inclusive: the keys of 11:00 and 12:00.
+    config.precomputed.to_h = 12.0;
     config.precomputed.step_min = 60.0;
     config.precomputed.spp = 64;
     let mut engine = Engine::new(scene.clone(), &config).unwrap();

@@ -21,8 +21,9 @@ fn settings(domain: Domain) -> PrecomputedSettings {
     PrecomputedSettings {
         domain,
         schedule: ScheduleKind::Uniform,
+        // 10:00, 11:00 and 12:00 (`to_h` is inclusive).
         from_h: 10.0,
-        to_h: 13.0,
+        to_h: 12.0,
         step_min: 60.0,
         spp: 48,
         components: 10,
@@ -188,8 +189,13 @@ fn atlas_lights_a_camera_the_precompute_never_used() {
 #[test]
 fn cube_lets_the_camera_turn_but_not_move() {
     let world = world();
+    // Keys as the path tracer made them: on 24-pixel faces at 48 spp the denoiser's
+    // luminance weights drop outliers' energy: mean −6.6 % and block RMS 12 % against the
+    // reference here, −3.5 % and 7.6 % unfiltered (issue 36, left open); this test is
+    // about the cube's lookups.
     let s = PrecomputedSettings {
         cube_face: 24,
+        denoise: illume_precomputed::settings::Denoise::None,
         ..settings(Domain::Cube)
     };
     let file = precompute(&world, &s, SIZE, &mut illume_core::progress::Silent).unwrap();

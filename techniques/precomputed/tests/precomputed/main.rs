@@ -4,6 +4,7 @@
 //! Each module is one mechanism; the tests of all modules run in parallel threads of
 //! one process (a test that needs the process to itself says so in its module).
 
+mod clean_keys;
 mod common;
 mod domains;
 mod file;

@@ -13,8 +13,9 @@ use illume_transport::World;
 fn settings() -> PrecomputedSettings {
     PrecomputedSettings {
         schedule: ScheduleKind::Uniform,
+        // 10:00–13:30 every 30 min (`to_h` is inclusive): 8 keys.
         from_h: 10.0,
-        to_h: 14.0,
+        to_h: 13.5,
         step_min: 30.0,
         spp: 96,
         components: 20,
