@@ -9,5 +9,6 @@ mod common;
 mod domains;
 mod file;
 mod pca_paper_size;
+mod presets;
 mod shards;
 mod sun_room;

@@ -41,6 +41,10 @@ fn the_paper_preset_switches_every_deviation_off() {
     let default = SelectiveSettings::default();
     assert_eq!(
         (paper.pilots_per_group, paper.ratio, paper.element_count),
-        (default.pilots_per_group, default.ratio, default.element_count)
+        (
+            default.pilots_per_group,
+            default.ratio,
+            default.element_count
+        )
     );
 }
