@@ -507,6 +507,9 @@ pub fn read_hdr(path: &Path) -> Result<RgbImage, ImageError> {
             None => "not a Radiance HDR file (no #?RADIANCE or #?RGBE header)".into(),
         }));
     }
+    if let Some((w, h)) = open().ok().and_then(|r| r.into_dimensions().ok()) {
+        check_decoded_size(w, h).map_err(read_error)?;
+    }
     let img = open()?
         .decode()
         .map_err(|e| match e {
@@ -644,8 +647,38 @@ pub fn to_srgb8(img: &RgbImage, tone: &ToneMap) -> Vec<u8> {
         .collect()
 }
 
-/// Reads an 8-bit image (PNG, JPEG) and decodes sRGB to linear.
+/// `Ok` when an image of `width × height` pixels fits in [`MAX_DECODED_IMAGE_BYTES`] as
+/// linear RGB (12 bytes a pixel, what illume keeps of any image or texture); otherwise
+/// the message, saying what the header claims, the size it would take and the limit.
+/// Checked on the header before anything is decoded: the `image` crate's own limit
+/// (512 MiB) is on the file's own pixel format, so an 8-bit grey PNG passes it with 4×
+/// the pixels and takes 12× its decoded size once linear RGB.
+pub fn check_decoded_size(width: u32, height: u32) -> Result<(), String> {
+    let bytes = u64::from(width) * u64::from(height) * std::mem::size_of::<Rgb>() as u64;
+    if bytes > MAX_DECODED_IMAGE_BYTES {
+        return Err(format!(
+            "its header claims {width}×{height} pixels, {} MiB as linear RGB, more than the {} MiB illume decodes for one image",
+            bytes >> 20,
+            MAX_DECODED_IMAGE_BYTES >> 20
+        ));
+    }
+    Ok(())
+}
+
+/// Reads an 8-bit image (PNG, JPEG) and decodes sRGB to linear; the header's size is
+/// checked ([`check_decoded_size`]) before the pixels are decoded.
 pub fn read_ldr(path: &Path) -> Result<RgbImage, ImageError> {
+    let read_error = |message: String| ImageError::Read {
+        path: path.to_owned(),
+        message,
+    };
+    let claimed = image::ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .ok()
+        .and_then(|r| r.into_dimensions().ok());
+    if let Some((w, h)) = claimed {
+        check_decoded_size(w, h).map_err(read_error)?;
+    }
     let dynimg = image::open(path).map_err(|e| ImageError::Read {
         path: path.to_owned(),
         message: e.to_string(),

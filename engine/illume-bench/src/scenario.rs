@@ -762,9 +762,25 @@ impl Scenario {
         if let Some(settings) = settings {
             table.insert(spec.name.clone(), toml::Value::Table(settings));
         }
-        let config: Config = toml::Value::Table(table)
-            .try_into()
-            .map_err(|e: toml::de::Error| error(format!("settings: {}", e.message())))?;
+        // A value of the wrong type is named by its key in the scenario: the entry's
+        // `settings` (or preset) table, or the scenario's `[render]` table.
+        let config: Config =
+            toml::Value::Table(table.clone())
+                .try_into()
+                .map_err(|e: toml::de::Error| {
+                    let key =
+                        illume_engine::config::refused_key::<Config>(&table).map(|(key, value)| {
+                            match key.strip_prefix(&format!("{}.", spec.name)) {
+                                Some(setting) => format!("{setting} = {value}: "),
+                                None => format!("{key} = {value}: "),
+                            }
+                        });
+                    error(format!(
+                        "settings: {}{}",
+                        key.unwrap_or_default(),
+                        e.message()
+                    ))
+                })?;
         config
             .check()
             .map_err(|m| error(format!("settings: {m}")))?;

@@ -125,11 +125,13 @@ impl Config {
         Self::parse(&read(path)?, path)
     }
 
-    /// Parses configuration text; `path` names it in errors.
+    /// Parses configuration text; `path` names it in errors. A value of the wrong type
+    /// or an unknown key is named with its table, its value and its line
+    /// (`photon_stream.vsl_count = "x": invalid type: …, expected u32 (line 5, column 13)`).
     pub fn parse(text: &str, path: &Path) -> Result<Self, ConfigError> {
         let config: Self = toml::from_str(text).map_err(|e| ConfigError::Parse {
             path: path.into(),
-            message: e.to_string(),
+            message: typed_error_message::<Self>(text, &e),
         })?;
         config.validate(&path.display().to_string())
     }
@@ -179,9 +181,12 @@ impl Config {
         for argument in layers.sets {
             apply_set(&mut table, technique, argument)?;
         }
-        let config: Self = from_table(table).map_err(|message| ConfigError::Set {
+        let config: Self = from_table(table.clone()).map_err(|message| ConfigError::Set {
             argument: layers.sets.join(" "),
-            message,
+            message: match refused_key::<Self>(&table) {
+                Some((key, value)) => format!("{key} = {value}: {message}"),
+                None => message,
+            },
         })?;
         config.validate("--set")
     }
@@ -308,6 +313,77 @@ fn from_table<T: serde::de::DeserializeOwned>(table: toml::Table) -> Result<T, S
         .map_err(|e: toml::de::Error| e.message().to_owned())
 }
 
+/// Longest value quoted in a message about a key \[characters\].
+const QUOTED_VALUE_CHARS: usize = 40;
+
+/// The key of `table` that `T` refuses — its dotted path (`photon_stream.vsl_count`)
+/// and its value as TOML (cut to 40 characters) — found by deserialising each key alone
+/// (and, in a table, each of its keys alone, recursively). `None` when every key is
+/// accepted alone (the error is in their combination) or when `T` does not accept an
+/// empty table (a required field: keys cannot be tried alone).
+///
+/// A value deserialised from a `toml::Value` (a bench scenario's technique settings, a
+/// `--set` layer) has no position, and serde's message names the value's type but not
+/// its key: this names the key.
+pub fn refused_key<T: serde::de::DeserializeOwned>(
+    table: &toml::Table,
+) -> Option<(String, String)> {
+    fn alone<T: serde::de::DeserializeOwned>(path: &[String], value: &toml::Value) -> bool {
+        let mut t = toml::Table::new();
+        insert_path(&mut t, path, value.clone());
+        from_table::<T>(t).is_ok()
+    }
+    fn walk<T: serde::de::DeserializeOwned>(
+        table: &toml::Table,
+        prefix: &[String],
+    ) -> Option<(Vec<String>, toml::Value)> {
+        for (key, value) in table {
+            let mut path = prefix.to_vec();
+            path.push(key.clone());
+            if alone::<T>(&path, value) {
+                continue;
+            }
+            if let toml::Value::Table(inner) = value
+                && let Some(found) = walk::<T>(inner, &path)
+            {
+                return Some(found);
+            }
+            return Some((path, value.clone()));
+        }
+        None
+    }
+    from_table::<T>(toml::Table::new()).ok()?;
+    let (path, value) = walk::<T>(table, &[])?;
+    let text = value.to_string();
+    let quoted = match text.char_indices().nth(QUOTED_VALUE_CHARS) {
+        Some((end, _)) => format!("{}…", &text[..end]),
+        None => text,
+    };
+    Some((path.join("."), quoted))
+}
+
+/// The message of `error`, from deserialising `text` as `T`: when one key is to blame
+/// ([`refused_key`]), `KEY = VALUE: MESSAGE (line L, column C)` on one line; otherwise
+/// (a syntax error, a combination) the parser's own message, which shows the line.
+fn typed_error_message<T: serde::de::DeserializeOwned>(
+    text: &str,
+    error: &toml::de::Error,
+) -> String {
+    let Some((key, value)) = toml::from_str::<toml::Table>(text)
+        .ok()
+        .and_then(|table| refused_key::<T>(&table))
+    else {
+        return error.to_string();
+    };
+    let place = error.span().map_or_else(String::new, |span| {
+        let before = text.get(..span.start).unwrap_or(text);
+        let line = before.matches('\n').count() + 1;
+        let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        format!(" (line {line}, column {column})")
+    });
+    format!("{key} = {value}: {}{place}", error.message())
+}
+
 /// Sets `TABLE.KEY=VALUE` (`argument`) in `table`, a configuration of `technique`;
 /// checked alone first, so that an unknown key or a wrong type names this argument.
 fn apply_set(
@@ -427,6 +503,33 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("b.toml") && e.contains("nope"), "{e}");
+    }
+
+    /// Issue 38: a value of the wrong type inside a table is named — table, key and
+    /// value — on the message's first line, from a file and from a table alike.
+    #[test]
+    fn a_type_error_in_a_table_names_the_key_and_the_value() {
+        let e = Config::parse(
+            "[render]\nwidth = 8\n[photon_stream]\nvsl_count = \"x\"\n",
+            Path::new("cfg/c.toml"),
+        )
+        .unwrap_err()
+        .to_string();
+        let first = e.lines().next().unwrap_or_default();
+        assert!(
+            first.contains("cfg/c.toml")
+                && first.contains("photon_stream.vsl_count = \"x\"")
+                && first.contains("line 4"),
+            "{e}"
+        );
+        let mut table: toml::Table =
+            toml::from_str("[render.shadow_maps]\nresolution = 512\npcf_texels = [1]\n").unwrap();
+        assert_eq!(
+            refused_key::<Config>(&table),
+            Some(("render.shadow_maps.pcf_texels".into(), "[1]".into()))
+        );
+        table.remove("render");
+        assert_eq!(refused_key::<Config>(&table), None);
     }
 
     #[test]

@@ -312,9 +312,19 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
         Some(p) => Some((p.clone(), PcFile::read(p)?)),
         None => None,
     };
+    let size = (width, height);
+    // Every key is held for the PCA (a shard's until it is written): refuse, before
+    // rendering any, keys that this machine cannot hold.
+    let key_size = crate::domain::Layout::new(&world, &s, size)?.image_size();
+    let span_keys = crate::file::most_keys(&s);
+    let held = match (a.level, a.shard) {
+        (None, Some(shard)) => span_keys.div_ceil(shard.count.max(1) as usize),
+        _ => span_keys,
+    };
+    crate::file::check_keys_memory(held, key_size.0, key_size.1)
+        .map_err(|m| format!("{}: {m}", output.display()))?;
     let start = Instant::now();
     let mut bars = host.progress("precomputed PCA");
-    let size = (width, height);
     let file = match (s.schedule, a.level, a.shard) {
         (ScheduleKind::Uniform, Some(_), _) => {
             return Err(
@@ -372,6 +382,11 @@ fn run_merge(m: MergeArgs, host: &dyn OfflineHost) -> Result<()> {
         Some(p) => Some((p.clone(), PcFile::read(p)?)),
         None => None,
     };
+    if let Some((path, first)) = parts.first() {
+        let h = &first.header;
+        crate::file::check_keys_memory(h.keys.len(), h.width, h.height)
+            .map_err(|m| format!("{}: {m}", path.display()))?;
+    }
     let start = Instant::now();
     let mut spinner = host.progress("precomputed PCA");
     let file = merge_level(&parts, previous.as_ref().map(|(p, f)| (p.as_path(), f)))?;

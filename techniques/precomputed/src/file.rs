@@ -38,6 +38,50 @@ pub const MAX_KEYS: usize = 86_400;
 /// a cube file's height is 6 faces).
 pub const MAX_KEY_SIDE: u32 = 1 << 16;
 
+/// Bytes a precompute or a merge holds for `keys` key images of `width × height`
+/// texels: each key as linear RGB (12 bytes a texel) and the PCA's copy of it in its
+/// channel groups (as much again).
+pub fn keys_bytes(keys: usize, width: u32, height: u32) -> u64 {
+    (keys as u64)
+        .saturating_mul(u64::from(width) * u64::from(height))
+        .saturating_mul(24)
+}
+
+/// The most keys `settings` can make: the uniform schedule's count, or for the adaptive
+/// one a key every `step_min` with both ends.
+pub fn most_keys(settings: &crate::PrecomputedSettings) -> usize {
+    let s = settings;
+    match s.schedule {
+        crate::settings::ScheduleKind::Uniform => {
+            crate::schedule::uniform(s.from_h, s.to_h, s.step_min).len()
+        }
+        crate::settings::ScheduleKind::Adaptive => {
+            let n = ((s.to_h - s.from_h) * 60.0 / s.step_min).ceil() + 1.0;
+            n.clamp(1.0, MAX_KEYS as f64 + 1.0) as usize
+        }
+    }
+}
+
+/// `Ok` when [`keys_bytes`] fits in the memory this process may still allocate
+/// ([`illume_render::available_memory_bytes`]); else a message with both sizes and why.
+/// Every key is held in memory for the PCA, so a run that cannot hold them would abort
+/// at its last key (after hours of rendering): checked before any key is rendered or
+/// read, the same rule as `render`'s image size and `animate`'s frames.
+pub fn check_keys_memory(keys: usize, width: u32, height: u32) -> Result<(), String> {
+    let need = keys_bytes(keys, width, height);
+    match illume_render::available_memory_bytes() {
+        Some(available) if need > available => Err(format!(
+            "{keys} keys of {width}×{height} texels need about {} MiB (every key is held in \
+             memory for the PCA, as linear RGB and again in its PCA groups), more than the \
+             {} MiB available: use fewer keys (a larger step_min, a shorter from_h–to_h) or \
+             a smaller image, or merge the shards on a machine with more memory",
+            need >> 20,
+            available >> 20
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// What can be wrong with a `.illumepc` file. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum FileError {
@@ -389,8 +433,10 @@ pub fn check_overwritable(path: &Path) -> Result<(), FileError> {
 
 impl Header {
     /// Checks every field a reader indexes or computes with (issue 38): the kind and
-    /// domain are known, sizes within [`MAX_KEY_SIDE`], three channels, the camera 13
-    /// finite numbers, the exposure finite and > 0, the shard `K < N`, the keys at most
+    /// domain are known, sizes within [`MAX_KEY_SIDE`] and of the domain's shape (a
+    /// screen image within the render size limit, six square cube faces, an atlas within
+    /// its texel limit, the atlas layout's numbers finite and > 0), three channels, the camera 13
+    /// finite numbers, the exposure finite and > 0, the shard `K < N ≤` [`MAX_KEYS`], the keys at most
     /// [`MAX_KEYS`], their times finite and strictly increasing, the components at most
     /// the keys in the PCA, the eigenvalues finite. `path` is only named in errors.
     pub fn check(&self, path: &Path) -> Result<(), FileError> {
@@ -423,6 +469,55 @@ impl Header {
                 ));
             }
         }
+        // The shapes a precompute writes, so that nothing sized by the header (a dark
+        // key's black image, the atlas) is larger than a run could have made it.
+        let (w, h) = (u64::from(self.width), u64::from(self.height));
+        let shape = match self.domain.as_str() {
+            "screen" => (self.width <= illume_render::MAX_IMAGE_SIDE
+                && self.height <= illume_render::MAX_IMAGE_SIDE)
+                .then_some(())
+                .ok_or(format!(
+                    "a screen key is an image of at most {0}×{0} pixels",
+                    illume_render::MAX_IMAGE_SIDE
+                )),
+            "cube" => (h == 6 * w)
+                .then_some(())
+                .ok_or("a cube key is six square faces: height = 6 × width".to_owned()),
+            _ => (w * h <= crate::atlas::MAX_TEXELS + w)
+                .then_some(())
+                .ok_or(format!(
+                    "an atlas key holds at most {} texels",
+                    crate::atlas::MAX_TEXELS
+                )),
+        };
+        if let Err(reason) = shape {
+            return Err(invalid(
+                "width/height",
+                format!("{}×{} ({})", self.width, self.height, self.domain),
+                &reason,
+            ));
+        }
+        if let Some(atlas) = &self.atlas {
+            for (field, v) in [
+                ("atlas.density", atlas.density),
+                ("atlas.probe_spacing", atlas.probe_spacing),
+            ] {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(invalid(field, v.to_string(), "must be finite and > 0"));
+                }
+            }
+            let [lw, lh] = atlas.lightmap;
+            if lw != self.width || lh == 0 || lh > self.height {
+                return Err(invalid(
+                    "atlas.lightmap",
+                    format!("[{lw}, {lh}]"),
+                    &format!(
+                        "must be as wide as the key image and at most as high ({}×{})",
+                        self.width, self.height
+                    ),
+                ));
+            }
+        }
         if self.channels != 3 {
             return Err(invalid(
                 "channels",
@@ -445,11 +540,11 @@ impl Header {
             ));
         }
         let [k, n] = self.shard;
-        if n == 0 || k >= n {
+        if n == 0 || k >= n || n as usize > MAX_KEYS {
             return Err(invalid(
                 "shard",
                 format!("[{k}, {n}]"),
-                "must be [K, N] with K < N",
+                &format!("must be [K, N] with K < N ≤ {MAX_KEYS} (at most a shard per key)"),
             ));
         }
         if self.keys.len() > MAX_KEYS {

@@ -416,6 +416,13 @@ pub fn precompute(
     settings.validate()?;
     sun_of(&world.scene)?;
     let layout = Layout::new(world, settings, size)?;
+    let (w, h) = layout.image_size();
+    crate::file::check_keys_memory(crate::file::most_keys(settings), w, h).map_err(|reason| {
+        PrecomputedError::InvalidSetting {
+            field: "step_min",
+            reason,
+        }
+    })?;
     let sky = render_sky_in(world, settings, &layout)?;
     let keys = match settings.schedule {
         crate::settings::ScheduleKind::Uniform => {

@@ -368,10 +368,17 @@ pub fn default_camera_for_bounds(scene: &mut Scene) {
 }
 
 /// Decodes image bytes, the format found from their content or, for formats without a
-/// signature (TGA), from the extension of `name`. The `image` crate refuses an image
-/// whose header claims more than its default limit (512 MiB decoded) before allocating
-/// it; the message then says what the header claims.
+/// signature (TGA), from the extension of `name`. A header claiming more than illume
+/// keeps of one image as linear RGB ([`illume_core::image::check_decoded_size`]) is
+/// refused before anything is decoded, and the `image` crate refuses one beyond its own
+/// limit (512 MiB in the file's pixel format); either message says what the header
+/// claims.
 fn decode_image(bytes: &[u8], name: &str) -> Result<image::DynamicImage, String> {
+    // A texture is kept as linear RGB (12 bytes a texel): its size is checked on the
+    // header first, the same limit as any image illume reads.
+    if let Some((w, h)) = claimed_size(bytes, name) {
+        illume_core::image::check_decoded_size(w, h)?;
+    }
     let decoded = match image::load_from_memory(bytes) {
         Ok(decoded) => return Ok(decoded),
         Err(e) => match image::ImageFormat::from_path(name) {
@@ -380,29 +387,31 @@ fn decode_image(bytes: &[u8], name: &str) -> Result<image::DynamicImage, String>
         },
     };
     decoded.map_err(|e| match e {
-        image::ImageError::Limits(_) => {
-            // Formats without a magic number (TGA) are known by the file's name.
-            let reader = || image::ImageReader::new(std::io::Cursor::new(bytes));
-            let claimed = reader()
-                .with_guessed_format()
-                .ok()
-                .and_then(|r| r.into_dimensions().ok())
-                .or_else(|| {
-                    let format = image::ImageFormat::from_path(name).ok()?;
-                    let mut r = reader();
-                    r.set_format(format);
-                    r.into_dimensions().ok()
-                });
-            match claimed {
-                Some((w, h)) => format!(
-                    "its header claims {w}×{h} pixels, more than the {} MiB illume decodes ({e})",
-                    image::Limits::default().max_alloc.unwrap_or(0) >> 20
-                ),
-                None => e.to_string(),
-            }
-        }
+        image::ImageError::Limits(_) => match claimed_size(bytes, name) {
+            Some((w, h)) => format!(
+                "its header claims {w}×{h} pixels, more than the {} MiB illume decodes ({e})",
+                image::Limits::default().max_alloc.unwrap_or(0) >> 20
+            ),
+            None => e.to_string(),
+        },
         e => e.to_string(),
     })
+}
+
+/// The size an image's header claims (`None` when it has no header the `image` crate
+/// reads); formats without a magic number (TGA) are known by the file's name.
+fn claimed_size(bytes: &[u8], name: &str) -> Option<(u32, u32)> {
+    let reader = || image::ImageReader::new(std::io::Cursor::new(bytes));
+    reader()
+        .with_guessed_format()
+        .ok()
+        .and_then(|r| r.into_dimensions().ok())
+        .or_else(|| {
+            let format = image::ImageFormat::from_path(name).ok()?;
+            let mut r = reader();
+            r.set_format(format);
+            r.into_dimensions().ok()
+        })
 }
 
 /// An image read as a coverage (opacity) map, MTL `map_d`: its alpha channel when it

@@ -211,6 +211,22 @@ fn header_fields_and_values_are_checked_on_read() {
             |f| f.header.shard = [0, 0],
             &["shard", "[0, 0]"],
         ),
+        // What a header makes a merge or the run time allocate is bounded on read.
+        (
+            "shard count 4e9",
+            |f| f.header.shard = [0, 4_000_000_000],
+            &["shard", "4000000000", "86400"],
+        ),
+        (
+            "screen wider than a render",
+            |f| f.header.width = 65_536,
+            &["width/height", "65536×2", "16384"],
+        ),
+        (
+            "cube not six faces",
+            |f| f.header.domain = "cube".into(),
+            &["width/height", "4×2", "6 × width"],
+        ),
         (
             "unknown kind",
             |f| f.header.kind = "full".into(),

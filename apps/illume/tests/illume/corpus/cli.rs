@@ -126,6 +126,29 @@ fn precompute(name: &str, args: &[&str], expect: Expect) -> Case {
     Case::new("cli", name).run(&all, expect)
 }
 
+/// The header text of [`illumepc`] as a shard's `partial` file (no PCA components).
+fn partial(header: String) -> String {
+    header
+        .replace("kind = \"pca\"", "kind = \"partial\"")
+        .replace("components = 1", "components = 0")
+}
+
+/// `illume precompute merge {dir}/x.illumepc` (`bytes`) into `{dir}/out/m.illumepc`.
+fn merge_file(name: &str, bytes: &[u8], expect: Expect) -> Case {
+    Case::new("cli", name)
+        .file("x.illumepc", bytes.to_vec())
+        .run(
+            &[
+                "precompute",
+                "merge",
+                "{dir}/x.illumepc",
+                "--output",
+                "{dir}/out/m.illumepc",
+            ],
+            expect,
+        )
+}
+
 /// `illume render builtin:sun-room --technique precomputed` reading `{dir}/x.illumepc`
 /// (`bytes`).
 fn precomputed_file(name: &str, bytes: &[u8], expect: Expect) -> Case {
@@ -154,6 +177,11 @@ fn fnv1a64(bytes: &[u8]) -> u64 {
 /// `hours` (TOML numbers, `nan` allowed) and whose one section `mean.r` holds `values`
 /// (none: no section): only the reader's field checks can refuse it.
 fn illumepc(hours: &[&str], values: &[f32]) -> Vec<u8> {
+    illumepc_edited(hours, values, |h| h)
+}
+
+/// [`illumepc`] with its header text changed by `edit` before the checksum is taken.
+fn illumepc_edited(hours: &[&str], values: &[f32], edit: impl Fn(String) -> String) -> Vec<u8> {
     let data: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
     let sections = if values.is_empty() {
         "[]".to_owned()
@@ -174,6 +202,7 @@ fn illumepc(hours: &[&str], values: &[f32]) -> Vec<u8> {
     for h in hours {
         header.push_str(&format!("[[keys]]\nhours = {h}\nlevel = 0\ndark = false\n"));
     }
+    let header = edit(header);
     let mut out = b"ILLUMEPC".to_vec();
     out.extend_from_slice(&1u32.to_le_bytes());
     out.extend_from_slice(&(header.len() as u32).to_le_bytes());
@@ -456,6 +485,18 @@ pub fn cases() -> Vec<Case> {
                 &["compare", "{dir}/a.exr", "{dir}/b.exr"],
                 error(&["a.exr", "100000×100000"]),
             ),
+        // Issue 38: a PNG header within the decoder's own limit but beyond illume's as
+        // linear RGB is refused on its header, saying the limit.
+        Case::new("cli", "compare_png_header_claims_10000_squared")
+            .file(
+                "a.png",
+                crate::corpus::texture::png_claiming(10_000, 10_000),
+            )
+            .file("b.png", png(2, 2))
+            .run(
+                &["compare", "{dir}/a.png", "{dir}/b.png"],
+                error(&["a.png", "10000×10000", "1024 MiB"]),
+            ),
         Case::new("cli", "compare_different_sizes")
             .file("a.png", png(16, 16))
             .file("b.png", png(8, 8))
@@ -505,6 +546,13 @@ pub fn cases() -> Vec<Case> {
             &["--step-min", "1e-9"],
             error(&["step_min", "86400"]),
         ),
+        // Issue 38: keys this machine cannot hold for the PCA (288 cube keys of 4096-pixel
+        // faces, 690 GiB) are refused before the first is rendered, saying why.
+        precompute(
+            "precompute_keys_beyond_memory",
+            &["--domain", "cube", "--set", "precomputed.cube_face=4096"],
+            error(&["x.illumepc", "288 keys", "4096×24576", "MiB available"]),
+        ),
         precompute(
             "precompute_output_is_a_user_file",
             &[],
@@ -540,6 +588,35 @@ pub fn cases() -> Vec<Case> {
             "illumepc_value_inf",
             &illumepc(&["6.0", "12.0"], &[1.0, f32::INFINITY]),
             error(&["x.illumepc", "section mean.r value 1", "inf"]),
+        ),
+        // Issue 38: what a header makes a merge allocate is bounded on read. A shard
+        // count of 4·10⁹ (a 32 GB table of shards) and dark keys of 16384² pixels (3 GiB
+        // of black each) are refused before anything is allocated.
+        merge_file(
+            "illumepc_merge_shard_count_4e9",
+            &illumepc_edited(&["6.0", "12.0"], &[], |h| {
+                partial(h)
+                    .replace("shard = [0, 1]", "shard = [0, 4000000000]")
+                    .replace("dark = false", "dark = true")
+            }),
+            error(&["x.illumepc", "shard", "86400"]),
+        ),
+        merge_file(
+            "illumepc_merge_dark_keys_16384_squared",
+            &illumepc_edited(&["6.0", "12.0", "18.0"], &[], |h| {
+                partial(h)
+                    .replace("width = 8\nheight = 8", "width = 16384\nheight = 16384")
+                    .replace("[settings]\n", "[settings]\nschedule = \"uniform\"\n")
+                    .replace("dark = false", "dark = true")
+            }),
+            error(&["x.illumepc", "3 keys of 16384×16384", "MiB available"]),
+        ),
+        merge_file(
+            "illumepc_screen_65536_wide",
+            &illumepc_edited(&["6.0"], &[], |h| {
+                partial(h).replace("width = 8", "width = 65536")
+            }),
+            error(&["x.illumepc", "width/height", "65536×8", "16384"]),
         ),
         Case::new("cli", "compare_metric_empty")
             .file("a.png", png(8, 8))

@@ -192,6 +192,18 @@ pub fn cases() -> Vec<Case> {
             "[render]\nwidth = 8\nheight = 8\n[photon_stream]\nvsl_count = 4000000000\n",
             error(&[c, "vsl_count"]),
         ),
+        // Issue 38: a type error inside a technique's table names the table, the key and
+        // the value on the error's first line (not only in the parser's excerpt).
+        config(
+            "photon_stream_vsl_count_a_string",
+            "[render]\nwidth = 8\nheight = 8\n[photon_stream]\nvsl_count = \"x\"\n",
+            error(&[c, "photon_stream.vsl_count = \"x\"", "line 5"]),
+        ),
+        config(
+            "shadow_map_resolution_a_string",
+            &small("[render.shadow_maps]\nresolution = \"high\"\n"),
+            error(&[c, "render.shadow_maps.resolution = \"high\""]),
+        ),
         config(
             "photon_stream_share_above_one",
             "[render]\nwidth = 8\nheight = 8\n[photon_stream]\nstream_share = 1.5\n",
@@ -375,6 +387,19 @@ pub fn cases() -> Vec<Case> {
             "technique_settings_unknown_key",
             &scene_text("", "[technique.settings]\nspp_per_fram = 2"),
             error(&[s, "spp_per_fram"]),
+        ),
+        // Issue 38: the same in a bench scenario's technique settings, which reach the
+        // configuration as a table (no position): the key is named.
+        scenario_replacing(
+            "technique_settings_wrong_type",
+            "name = \"reference\"\nsamples = 1",
+            "name = \"photon_stream\"\n[technique.settings]\nvsl_count = \"x\"",
+            error(&[s, "technique[0]", "vsl_count = \"x\""]),
+        ),
+        scenario(
+            "render_table_wrong_type",
+            &scene_text("[render]\narea_light_samples = \"many\"", ""),
+            error(&[s, "render.area_light_samples = \"many\""]),
         ),
         scenario_replacing(
             "technique_settings_nan",

@@ -32,7 +32,7 @@ pub fn png(w: u32, h: u32) -> Vec<u8> {
 
 /// A 1×1 PNG whose header (with a correct CRC) claims `w × h` pixels: a decoder that
 /// believed it would allocate w·h·3 bytes.
-fn png_claiming(w: u32, h: u32) -> Vec<u8> {
+pub fn png_claiming(w: u32, h: u32) -> Vec<u8> {
     let mut b = png(1, 1);
     // Signature (8), IHDR length (4), "IHDR" (4), width, height, …, CRC at 29.
     b[16..20].copy_from_slice(&w.to_be_bytes());
@@ -106,7 +106,15 @@ pub fn cases() -> Vec<Case> {
         "decompression_bomb",
         "t.png",
         Some(Ok(png_claiming(100_000, 100_000))),
-        &["100000×100000", "512 MiB"],
+        &["100000×100000", "1024 MiB"],
+    ));
+    // Issue 38: a header within the decoder's own limit (300 MB as 8-bit RGB) that is
+    // 1144 MiB as the linear RGB illume keeps: refused on its header, saying the limit.
+    c.extend(texture(
+        "png_header_claims_10000_squared",
+        "t.png",
+        Some(Ok(png_claiming(10_000, 10_000))),
+        &["10000×10000", "1024 MiB"],
     ));
     c.extend(texture(
         "png_header_claims_u32_max",
