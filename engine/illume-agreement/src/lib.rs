@@ -213,6 +213,36 @@ pub fn reference(lighting: Lighting) -> &'static RgbImage {
     }
 }
 
+/// Checks that `--preset paper` is the paper (issue 35) and returns it: the technique
+/// has a `paper` preset that passes its checks, every `(key, holds_the_papers_value)` of
+/// `paper_values` (the technique's own list of its departures from the paper) holds in
+/// it, and every setting whose documentation says "beyond the paper" is in that list, so
+/// a new departure cannot be added without the preset and its test knowing of it.
+pub fn assert_paper_preset<S>(paper_values: fn(&S) -> Vec<(&'static str, bool)>) -> S
+where
+    S: TechniqueSettings + illume_transport::SettingsTable,
+{
+    let paper = S::preset("paper").expect("a `paper` preset");
+    if let Err(e) = paper.check() {
+        panic!("the `paper` preset is refused: {e}");
+    }
+    let values = paper_values(&paper);
+    for (key, is_paper) in &values {
+        assert!(is_paper, "`paper` keeps `{key}` beyond the paper");
+    }
+    for field in S::FIELDS {
+        if field.doc.to_lowercase().contains("beyond the paper") {
+            assert!(
+                values.iter().any(|(k, _)| *k == field.key),
+                "`{}` is documented as beyond the paper but the paper preset's list does \
+                 not cover it",
+                field.key
+            );
+        }
+    }
+    paper
+}
+
 /// Relative L1 error of block means (shared metric, `illume_metrics::block_error`).
 pub fn block_error(img: &RgbImage, reference: &RgbImage) -> f64 {
     illume_metrics::block_error(reference, img, BLOCK).expect("same sizes")

@@ -9,7 +9,6 @@ use illume_photon_stream::placement::{PlacementSettings, VslSet};
 use illume_photon_stream::settings::{VisibilityMode, VslCells, VslFalloff};
 use illume_photon_stream::shade::VslField;
 use illume_scene::InstanceId;
-use illume_transport::{SettingsTable, TechniqueSettings};
 
 /// The settings by which this implementation departs from the paper, and the value that
 /// is the paper's. A setting documented as "beyond the paper" that is missing here fails
@@ -30,24 +29,8 @@ fn paper_values(s: &PhotonStreamSettings) -> Vec<(&'static str, bool)> {
 
 #[test]
 fn the_paper_preset_switches_every_deviation_off() {
-    let paper = PhotonStreamSettings::preset("paper").expect("a `paper` preset");
+    let paper = illume_agreement::assert_paper_preset(paper_values);
     paper.validate().unwrap();
-    let values = paper_values(&paper);
-    for (key, is_paper) in &values {
-        assert!(is_paper, "`paper` keeps `{key}` beyond the paper");
-    }
-    // Every deviation the settings' own docs declare is in the list above.
-    for field in <PhotonStreamSettings as SettingsTable>::FIELDS {
-        let doc = field.doc.to_lowercase();
-        if doc.contains("beyond the paper") || doc.contains("as the paper does") {
-            assert!(
-                values.iter().any(|(k, _)| *k == field.key),
-                "`{}` is documented as a departure from the paper but the paper preset's \
-                 list does not cover it",
-                field.key
-            );
-        }
-    }
     // And the default keeps the improvements (each measured in BENCHMARKS.md).
     let default = PhotonStreamSettings::default();
     assert_eq!(default.falloff, VslFalloff::Disk);

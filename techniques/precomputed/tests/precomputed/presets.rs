@@ -4,7 +4,6 @@
 
 use illume_precomputed::PrecomputedSettings;
 use illume_precomputed::settings::{Colour, Denoise, Interpolation, ScheduleKind};
-use illume_transport::{SettingsTable, TechniqueSettings};
 
 /// The settings by which this implementation departs from the paper's algorithm, and
 /// whether `s` holds the paper's behaviour. A setting documented as "beyond the paper"
@@ -24,22 +23,7 @@ fn paper_values(s: &PrecomputedSettings) -> Vec<(&'static str, bool)> {
 
 #[test]
 fn the_paper_preset_switches_every_deviation_off() {
-    let paper = PrecomputedSettings::preset("paper").expect("a `paper` preset");
-    paper.validate().unwrap();
-    let values = paper_values(&paper);
-    for (key, is_paper) in &values {
-        assert!(is_paper, "`paper` keeps `{key}` beyond the paper");
-    }
-    for field in <PrecomputedSettings as SettingsTable>::FIELDS {
-        if field.doc.to_lowercase().contains("beyond the paper") {
-            assert!(
-                values.iter().any(|(k, _)| *k == field.key),
-                "`{}` is documented as beyond the paper but the paper preset's list does \
-                 not cover it",
-                field.key
-            );
-        }
-    }
+    let paper = illume_agreement::assert_paper_preset(paper_values);
     // The stand-ins for the paper's noise-free keys stay on (the preset's doc says why).
     assert_eq!(paper.denoise, Denoise::Atrous);
     assert!(paper.common_samples);

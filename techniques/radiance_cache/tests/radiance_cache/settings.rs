@@ -20,23 +20,7 @@ fn paper_values(s: &RadianceCacheSettings) -> Vec<(&'static str, bool)> {
 
 #[test]
 fn the_paper_preset_switches_every_deviation_off() {
-    use illume_transport::SettingsTable;
-    let paper = RadianceCacheSettings::preset("paper").expect("a `paper` preset");
-    paper.validate().unwrap();
-    let values = paper_values(&paper);
-    for (key, is_paper) in &values {
-        assert!(is_paper, "`paper` keeps `{key}` beyond the paper");
-    }
-    for field in <RadianceCacheSettings as SettingsTable>::FIELDS {
-        if field.doc.to_lowercase().contains("beyond the paper") {
-            assert!(
-                values.iter().any(|(k, _)| *k == field.key),
-                "`{}` is documented as beyond the paper but the paper preset's list does \
-                 not cover it",
-                field.key
-            );
-        }
-    }
+    let paper = illume_agreement::assert_paper_preset(paper_values);
     // The paper's numbers are the default's; only the additions differ.
     let default = RadianceCacheSettings::default();
     assert_eq!(

@@ -2,7 +2,6 @@
 //! holds the paper's behaviour in it.
 
 use illume_selective::SelectiveSettings;
-use illume_transport::{SettingsTable, TechniqueSettings};
 
 /// The settings by which this implementation departs from the paper, and whether `s`
 /// holds the paper's behaviour. A setting documented as "beyond the paper" that is
@@ -21,22 +20,7 @@ fn paper_values(s: &SelectiveSettings) -> Vec<(&'static str, bool)> {
 
 #[test]
 fn the_paper_preset_switches_every_deviation_off() {
-    let paper = SelectiveSettings::preset("paper").expect("a `paper` preset");
-    paper.validate().unwrap();
-    let values = paper_values(&paper);
-    for (key, is_paper) in &values {
-        assert!(is_paper, "`paper` keeps `{key}` beyond the paper");
-    }
-    for field in <SelectiveSettings as SettingsTable>::FIELDS {
-        if field.doc.to_lowercase().contains("beyond the paper") {
-            assert!(
-                values.iter().any(|(k, _)| *k == field.key),
-                "`{}` is documented as beyond the paper but the paper preset's list does \
-                 not cover it",
-                field.key
-            );
-        }
-    }
+    let paper = illume_agreement::assert_paper_preset(paper_values);
     // The paper's numbers (§7) are the default's.
     let default = SelectiveSettings::default();
     assert_eq!(
