@@ -237,7 +237,30 @@ impl Atlas {
             .iter()
             .map(|chart| chart_rectangle(&faces, chart, density))
             .collect();
-        let area: u64 = placed.iter().map(|(_, w, h)| *w as u64 * *h as u64).sum();
+        // Sizes in checked arithmetic (issue 38): a density high enough makes a chart's
+        // side saturate at u32::MAX, and the packing's sums would wrap.
+        let too_many = |what: String| {
+            bad(
+                "atlas_density",
+                format!(
+                    "{density} texels/m makes {what}, more than the atlas's {MAX_TEXELS} texels: lower atlas_density"
+                ),
+            )
+        };
+        let mut area = 0u64;
+        for (_, w, h) in &placed {
+            let chart = u64::from(*w) * u64::from(*h);
+            area = area
+                .checked_add(chart)
+                .filter(|&a| chart <= MAX_TEXELS && a <= MAX_TEXELS)
+                .ok_or_else(|| {
+                    too_many(if chart > MAX_TEXELS {
+                        format!("a chart of {w}×{h} texels")
+                    } else {
+                        format!("charts of more than {MAX_TEXELS} texels in all")
+                    })
+                })?;
+        }
         let widest = placed.iter().map(|(_, w, _)| *w).max().unwrap_or(1);
         let width = ((area as f64 * 1.15).sqrt().ceil() as u32)
             .max(widest)
@@ -253,16 +276,18 @@ impl Atlas {
         });
         let (mut x, mut y, mut shelf) = (0u32, 0u32, 0u32);
         let mut origin = vec![(0u32, 0u32); placed.len()];
+        let overflow = || too_many("a lightmap wider or taller than 2³² texels".into());
         for &c in &order {
             let (_, w, h) = placed[c];
-            if x + w > width {
-                y += shelf;
+            if x.checked_add(w).is_none_or(|right| right > width) {
+                y = y.checked_add(shelf).ok_or_else(overflow)?;
                 x = 0;
                 shelf = 0;
             }
             origin[c] = (x, y);
-            x += w;
+            x = x.checked_add(w).ok_or_else(overflow)?;
             shelf = shelf.max(h);
+            y.checked_add(shelf).ok_or_else(overflow)?;
         }
         let height = (y + shelf).max(1);
         let texels = width as u64 * height as u64;
@@ -678,6 +703,25 @@ fn fill_chart(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 38: densities whose lightmap sizes overflowed u32 (a chart's side saturates
+    /// at 2³² − 1 texels from about 1e9 texels/m in this 4.4 m room, and the packing's
+    /// sums wrapped or panicked) are refused, naming the setting and the value.
+    #[test]
+    fn huge_densities_are_refused_not_overflowed() {
+        let scene = illume_scene::builtin::load("sun-room").unwrap();
+        for density in [1e4f32, 1e9, 1e30, f32::MAX] {
+            let e = Atlas::build(&scene, density, 0.5)
+                .expect_err("beyond the texel cap")
+                .to_string();
+            assert!(
+                e.contains("precomputed.atlas_density")
+                    && e.contains(&format!("{density} texels/m"))
+                    && e.contains(&MAX_TEXELS.to_string()),
+                "{density}: {e}"
+            );
+        }
+    }
 
     #[test]
     fn a_quad_is_one_chart_at_the_density_asked() {

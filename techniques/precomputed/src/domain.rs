@@ -74,7 +74,7 @@ impl Layout {
                 height: size.1,
             },
             Domain::Cube => Self::Cube {
-                face: cube_face(settings.cube_face, size.1, world.scene.camera.yfov_rad),
+                face: cube_face(settings.cube_face, size.1, world.scene.camera.yfov_rad)?,
             },
             Domain::Atlas => Self::Atlas(Box::new(Atlas::build(
                 &world.scene,
@@ -140,13 +140,37 @@ impl Layout {
     }
 }
 
+/// Most pixels along a cube face's side: six faces of 3344² hold 67.1 M texels, the
+/// atlas's cap ([`crate::atlas::MAX_TEXELS`], 2²⁶: a key of them is 805 MB of f32 RGB,
+/// and the PCA keeps every key in memory).
+pub const MAX_CUBE_FACE: u32 = 3344;
+
 /// A cube face's side: `asked`, or (0) the side whose texels match the density of a
-/// `height`-pixel image with vertical field of view `yfov` at its centre.
-pub fn cube_face(asked: u32, height: u32, yfov: f32) -> u32 {
-    if asked > 0 {
-        return asked;
+/// `height`-pixel image with vertical field of view `yfov` at its centre. Either above
+/// [`MAX_CUBE_FACE`] (a narrow field of view makes the automatic side huge) is refused,
+/// naming the setting and the value.
+pub fn cube_face(asked: u32, height: u32, yfov: f32) -> Result<u32, PrecomputedError> {
+    let too_big = |reason: String| PrecomputedError::InvalidSetting {
+        field: "cube_face",
+        reason,
+    };
+    if asked > MAX_CUBE_FACE {
+        return Err(too_big(format!(
+            "{asked} pixels is more than {MAX_CUBE_FACE} (six faces of it would exceed {} texels a key)",
+            crate::atlas::MAX_TEXELS
+        )));
     }
-    ((height as f32 / (0.5 * yfov).tan()).round() as u32).max(1)
+    if asked > 0 {
+        return Ok(asked);
+    }
+    let side = (height as f32 / (0.5 * yfov).tan()).round();
+    if !(side.is_finite() && side <= MAX_CUBE_FACE as f32) {
+        return Err(too_big(format!(
+            "0 (automatic) gives {side} pixels for {height} rows at a {:.3}° field of view, more than {MAX_CUBE_FACE}: set cube_face to at most {MAX_CUBE_FACE}",
+            yfov.to_degrees()
+        )));
+    }
+    Ok((side as u32).max(1))
 }
 
 /// The reference path tracer's image of `world`'s camera: light reflected ≥ 2 times, or
@@ -567,6 +591,31 @@ mod tests {
                     "face {f} ({x},{y}): {got} vs {expect}"
                 );
             }
+        }
+    }
+
+    /// Issue 38: the cube's side is capped, asked or automatic, and the error names the
+    /// setting and the value; the automatic side of an ordinary camera is unchanged.
+    #[test]
+    fn cube_face_is_capped() {
+        let fov = 70f32.to_radians();
+        assert_eq!(cube_face(0, 600, fov).unwrap(), 857);
+        assert_eq!(cube_face(24, 600, fov).unwrap(), 24);
+        assert_eq!(cube_face(MAX_CUBE_FACE, 600, fov).unwrap(), MAX_CUBE_FACE);
+        for (asked, height, yfov, value) in [
+            (MAX_CUBE_FACE + 1, 600, fov, "3345 pixels"),
+            (u32::MAX, 600, fov, "4294967295 pixels"),
+            // 600 rows at 0.01°: 6.9 M pixels a side.
+            (0, 600, 0.01f32.to_radians(), "0 (automatic)"),
+            (0, 600, 0.0, "inf pixels"),
+        ] {
+            let e = cube_face(asked, height, yfov)
+                .expect_err("above the cap")
+                .to_string();
+            assert!(
+                e.contains("precomputed.cube_face") && e.contains(value) && e.contains("3344"),
+                "{e}"
+            );
         }
     }
 }

@@ -229,3 +229,45 @@ fn the_daylight_floor_follows_the_sun() {
     assert!(!floor(22.5, 24.0), "after sunset");
     assert!(floor(12.0, 24.0), "sunset inside");
 }
+
+/// `illume render --technique reference --denoise` (goal 6): without the filter the
+/// still is the reference's own, bit for bit; with it, `builtin:furnace` (every pixel
+/// converges to 2) keeps its answer while the noise falls, and the parts sum to the
+/// whole. Never ground truth: the reference's settings take no denoising (the bench's and
+/// the tests' references cannot be filtered by a setting or `--set`).
+#[test]
+fn denoised_reference_still_keeps_the_furnace() {
+    use illume_precomputed::denoise::reference_still;
+    let scene = illume_scene::builtin::load("furnace").unwrap();
+    let s = ReferenceSettings {
+        spp: 8,
+        ..Default::default()
+    };
+    let size = (16, 16);
+    let silent = &mut illume_core::progress::Silent;
+    let raw = reference_still(scene.clone(), &s, size, false, silent);
+    let mut r = ReferenceRenderer::new(s.clone(), size.0, size.1);
+    r.add_samples(&World::new(scene.clone()), s.spp);
+    assert!(
+        raw.full.pixels() == r.images().full.pixels(),
+        "raw = the reference's"
+    );
+    let denoised = reference_still(scene, &s, size, true, silent);
+    let rms = |img: &RgbImage| {
+        let n = img.pixels().len() as f32;
+        (img.pixels()
+            .iter()
+            .map(|p| (p.x - 2.0).powi(2))
+            .sum::<f32>()
+            / n)
+            .sqrt()
+    };
+    let (m, e_raw, e_den) = (denoised.full.mean().x, rms(&raw.full), rms(&denoised.full));
+    eprintln!("furnace 8 spp: denoised mean {m:.4}, RMS error {e_den:.4} (raw {e_raw:.4})");
+    assert!((m - 2.0).abs() < 0.04, "mean {m}");
+    assert!(e_den < 0.5 * e_raw, "{e_den} vs raw {e_raw}");
+    let parts = denoised.direct.add(&denoised.indirect);
+    assert!(parts.pixels() == denoised.full.pixels());
+    let e = toml::from_str::<ReferenceSettings>("denoise = true").expect_err("no such setting");
+    assert!(e.to_string().contains("denoise"), "{e}");
+}
