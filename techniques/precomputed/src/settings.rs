@@ -89,7 +89,7 @@ pub struct PrecomputedSettings {
     /// Six faces of that side cost 6·side²/(width·height) times a screen key (9× at
     /// 800×600). At most 3344, asked or automatic (six faces within an atlas's 2²⁶
     /// texels).
-    #[setting(default = 0, unit = "pixels", range = "≤ 3 344")]
+    #[setting(default = 0, unit = "pixels", range = "≤ 3344")]
     pub cube_face: u32,
     /// `atlas`: lightmap texels per metre of surface. Higher: sharper indirect light and
     /// sky shadows, more texels to render and store (∝ density²). Default 16 (6 cm

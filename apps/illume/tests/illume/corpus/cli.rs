@@ -546,12 +546,18 @@ pub fn cases() -> Vec<Case> {
             &["--step-min", "1e-9"],
             error(&["step_min", "86400"]),
         ),
-        // Issue 38: keys this machine cannot hold for the PCA (289 cube keys of 4096-pixel
-        // faces, 690 GiB) are refused before the first is rendered, saying why.
+        // Issue 38: keys this machine cannot hold for the PCA (289 cube keys of 3000-pixel
+        // faces, hundreds of GiB) are refused before the first is rendered, saying why.
         precompute(
             "precompute_keys_beyond_memory",
+            &["--domain", "cube", "--set", "precomputed.cube_face=3000"],
+            error(&["x.illumepc", "289 keys", "3000×18000", "MiB available"]),
+        ),
+        // A face beyond the cube's cap (six faces within the atlas's 2²⁶ texels).
+        precompute(
+            "precompute_cube_face_beyond_the_cap",
             &["--domain", "cube", "--set", "precomputed.cube_face=4096"],
-            error(&["x.illumepc", "289 keys", "4096×24576", "MiB available"]),
+            error(&["precomputed.cube_face", "4096", "3344"]),
         ),
         precompute(
             "precompute_output_is_a_user_file",
