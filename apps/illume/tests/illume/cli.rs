@@ -40,49 +40,33 @@ fn reference_render_of_the_furnace_gives_le_over_one_minus_rho() {
     }
 }
 
-/// `--denoise` (issue 36, goal 6): the furnace's analytic answer (2 everywhere) is kept
-/// while the noise falls, the split parts still sum to the full image, and only the
-/// reference takes the flag (a denoised still is never a technique's ground truth).
+/// `--denoise` (issue 36, goal 6) end to end: the furnace's analytic answer (2
+/// everywhere) is kept and the split parts sum to the full image (the filter's noise
+/// reduction: `illume-precomputed`'s `denoised_reference_still_keeps_the_furnace`); only
+/// the reference takes the flag (a denoised still is never a technique's ground truth).
 #[test]
-fn reference_denoise_keeps_the_furnace_and_lowers_its_noise() {
+fn reference_denoise_keeps_the_furnace() {
     let dir = scratch("denoise");
-    let render = |name: &str, extra: &[&str]| {
-        let exr = dir.join(name);
-        let mut args = vec![
-            "render",
-            "builtin:furnace",
-            "--technique",
-            "reference",
-            "--spp",
-            "8",
-            "--width",
-            "16",
-            "--height",
-            "16",
-            "--split",
-            "-o",
-            path(&exr),
-        ];
-        args.extend_from_slice(extra);
-        ok(&illume(&args));
-        RgbImage::read(&exr).unwrap()
-    };
-    let (raw, denoised) = (render("raw.exr", &[]), render("den.exr", &["--denoise"]));
-    let rms = |img: &RgbImage| {
-        let n = img.pixels().len() as f32;
-        (img.pixels()
-            .iter()
-            .map(|p| (p.x - 2.0).powi(2))
-            .sum::<f32>()
-            / n)
-            .sqrt()
-    };
-    let (m, e_raw, e_den) = (denoised.mean().x, rms(&raw), rms(&denoised));
+    let exr = dir.join("den.exr");
+    ok(&illume(&[
+        "render",
+        "builtin:furnace",
+        "--technique",
+        "reference",
+        "--spp",
+        "8",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--split",
+        "--denoise",
+        "-o",
+        path(&exr),
+    ]));
+    let denoised = RgbImage::read(&exr).unwrap();
+    let m = denoised.mean().x;
     assert!((m - 2.0).abs() < 0.04, "denoised mean {m}, expected 2");
-    assert!(
-        e_den < 0.5 * e_raw,
-        "RMS error denoised {e_den} vs raw {e_raw}"
-    );
     let parts = RgbImage::read(&dir.join("den_direct.exr"))
         .unwrap()
         .add(&RgbImage::read(&dir.join("den_indirect.exr")).unwrap());
