@@ -858,43 +858,34 @@ fn room() -> Scene {
         },
         true,
     );
-    // A red sofa against the left wall, facing +x.
-    let sofa = b.mesh(boxes(
-        "sofa",
-        &[
-            (v(0.0, 0.22, 0.0), v(0.45, 0.22, 1.0), red),
-            (v(-0.35, 0.6, 0.0), v(0.1, 0.38, 1.0), red),
-            (v(0.05, 0.32, -0.92), v(0.4, 0.1, 0.08), red),
-            (v(0.05, 0.32, 0.92), v(0.4, 0.1, 0.08), red),
-        ],
-    ));
-    b.placed(
-        "sofa",
-        sofa,
-        Trs::from_translation(v(-2.5, 0.0, 0.2)),
-        false,
-    );
-    // A tall bookcase against the back wall, a low green cabinet against the right one.
-    let bookcase = b.mesh(boxes(
-        "bookcase",
-        &[(v(0.0, 1.0, 0.0), v(0.6, 1.0, 0.2), wood)],
-    ));
-    b.placed(
-        "bookcase",
-        bookcase,
-        Trs::from_translation(v(-1.6, 0.0, -2.3)),
-        false,
-    );
-    let cabinet = b.mesh(boxes(
-        "cabinet",
-        &[(v(0.0, 0.45, 0.0), v(0.25, 0.45, 0.7), green)],
-    ));
-    b.placed(
-        "cabinet",
-        cabinet,
-        Trs::from_translation(v(2.75, 0.0, -0.8)),
-        false,
-    );
+    // Static pieces: a red sofa against the left wall (facing +x), a tall bookcase
+    // against the back wall, a low green cabinet against the right one.
+    let pieces: [(&str, Vec<(Vec3, Vec3, MaterialId)>, Vec3); 3] = [
+        (
+            "sofa",
+            vec![
+                (v(0.0, 0.22, 0.0), v(0.45, 0.22, 1.0), red),
+                (v(-0.35, 0.6, 0.0), v(0.1, 0.38, 1.0), red),
+                (v(0.05, 0.32, -0.92), v(0.4, 0.1, 0.08), red),
+                (v(0.05, 0.32, 0.92), v(0.4, 0.1, 0.08), red),
+            ],
+            v(-2.5, 0.0, 0.2),
+        ),
+        (
+            "bookcase",
+            vec![(v(0.0, 1.0, 0.0), v(0.6, 1.0, 0.2), wood)],
+            v(-1.6, 0.0, -2.3),
+        ),
+        (
+            "cabinet",
+            vec![(v(0.0, 0.45, 0.0), v(0.25, 0.45, 0.7), green)],
+            v(2.75, 0.0, -0.8),
+        ),
+    ];
+    for (name, parts, at) in pieces {
+        let mesh = b.mesh(boxes(name, &parts));
+        b.placed(name, mesh, Trs::from_translation(at), false);
+    }
     // Four spot lights 0.1 m below the ceiling, pointing down (−z of the light is its
     // axis): the stand-ins for the paper's goniometric lights.
     for (i, (x, z)) in [(-1.5, -1.25), (1.5, -1.25), (-1.5, 1.25), (1.5, 1.25)]

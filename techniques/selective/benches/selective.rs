@@ -253,7 +253,7 @@ fn room() {
     );
     println!("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|");
     let to = Vec3::new(0.6, 0.0, 0.0);
-    let mut run = |name: &str, factors: Vec<[u32; 2]>, pilots: u32, ratio: u32, order| {
+    let run = |name: &str, factors: Vec<[u32; 2]>, pilots: u32, ratio: u32, order| {
         let s = base(factors, pilots, ratio, order);
         let r = recovery_of(TABLE, &s, Vec3::ZERO, to);
         let groups: u64 = s
