@@ -755,8 +755,11 @@ fn append_box(m: &mut Mesh, c: Vec3, h: Vec3, material: MaterialId) {
         .extend_from_slice(&unit.triangle_materials);
 }
 
-/// A mesh of outward boxes `(centre, half sizes, material)`, named `name`.
-fn boxes(name: &str, parts: &[(Vec3, Vec3, MaterialId)]) -> Mesh {
+/// One box of a piece of furniture: centre, half sizes, material.
+type BoxPart = (Vec3, Vec3, MaterialId);
+
+/// A mesh of outward boxes, named `name`.
+fn boxes(name: &str, parts: &[BoxPart]) -> Mesh {
     let mut m = Mesh {
         name: name.into(),
         ..Default::default()
@@ -860,7 +863,7 @@ fn room() -> Scene {
     );
     // Static pieces: a red sofa against the left wall (facing +x), a tall bookcase
     // against the back wall, a low green cabinet against the right one.
-    let pieces: [(&str, Vec<(Vec3, Vec3, MaterialId)>, Vec3); 3] = [
+    let pieces: [(&str, Vec<BoxPart>, Vec3); 3] = [
         (
             "sofa",
             vec![
