@@ -30,6 +30,12 @@
 //!   (Koldinghus, 21 June; irradiance × 10⁻³) and a uniform sky of radiance 0.05 at
 //!   sky scale 1. Scene time is seconds since local midnight (Bahnsen et al.'s scene in
 //!   kind: indirect light of a day of sun).
+//! * `room` — selective photon tracing's ROOM in kind (Dmitriev et al. 2002, §7): one
+//!   closed room (x∈[−3,3], y∈\[0,2.8\], z∈[−2.5,2.5]) furnished with boxes — a table,
+//!   two chairs, a red sofa, a bookcase and a low cabinet — lit by **four spot lights**
+//!   below the ceiling, standing in for the paper's four goniometric lights (the loader
+//!   has no measured light profiles). The table and the chairs are dynamic (furniture
+//!   to move); animation `move_table` (0–1 s) pushes the table 0.6 m along +x.
 //!
 //! [`SceneBuilder`] is the same construction kit the loaders use.
 
@@ -38,7 +44,7 @@ use crate::model::*;
 use illume_core::{Affine3A, PI, Quat, Rgb, Vec2, Vec3};
 
 /// Names accepted by [`load`].
-pub const NAMES: [&str; 7] = [
+pub const NAMES: [&str; 8] = [
     "furnace",
     "cornell-spot",
     "cube-in-box",
@@ -46,6 +52,7 @@ pub const NAMES: [&str; 7] = [
     "kite",
     "glossy-box",
     "sun-room",
+    "room",
 ];
 
 /// A built-in scene name that does not exist.
@@ -66,6 +73,7 @@ pub fn load(name: &str) -> Result<Scene, UnknownBuiltin> {
         "kite" => kite(),
         "glossy-box" => glossy_box(),
         "sun-room" => sun_room(),
+        "room" => room(),
         _ => {
             return Err(UnknownBuiltin {
                 name: name.to_owned(),
@@ -731,6 +739,199 @@ fn sun_room() -> Scene {
     // The defaults are valid.
     let _ = scene.attach_sun(sun);
     scene
+}
+
+/// Appends an axis-aligned box with centre `c` and half sizes `h`, faces outwards.
+fn append_box(m: &mut Mesh, c: Vec3, h: Vec3, material: MaterialId) {
+    let unit = unit_box(material, false);
+    let base = m.positions.len() as u32;
+    m.positions
+        .extend(unit.positions.iter().map(|p| c + *p * h));
+    m.normals.extend_from_slice(&unit.normals);
+    m.uvs.extend_from_slice(&unit.uvs);
+    m.indices
+        .extend(unit.indices.iter().map(|t| t.map(|i| i + base)));
+    m.triangle_materials
+        .extend_from_slice(&unit.triangle_materials);
+}
+
+/// One box of a piece of furniture: centre, half sizes, material.
+type BoxPart = (Vec3, Vec3, MaterialId);
+
+/// A mesh of outward boxes, named `name`.
+fn boxes(name: &str, parts: &[BoxPart]) -> Mesh {
+    let mut m = Mesh {
+        name: name.into(),
+        ..Default::default()
+    };
+    for &(c, h, mat) in parts {
+        append_box(&mut m, c, h, mat);
+    }
+    m
+}
+
+/// Where `builtin:room`'s table stands (the centre of its footprint, on the floor).
+pub const ROOM_TABLE_AT: Vec3 = Vec3::new(0.2, 0.0, -0.6);
+
+/// The ROOM of `builtin:room` (see the module doc).
+fn room() -> Scene {
+    let mut b = SceneBuilder::new();
+    let wall = b.material(lambert("wall", [0.72, 0.7, 0.64], false));
+    let ceiling = b.material(lambert("ceiling", [0.8, 0.8, 0.8], false));
+    let floor = b.material(lambert("floor", [0.5, 0.36, 0.22], false));
+    let wood = b.material(lambert("wood", [0.55, 0.38, 0.2], false));
+    let red = b.material(lambert("sofa", [0.7, 0.1, 0.08], false));
+    let blue = b.material(lambert("chair", [0.15, 0.25, 0.65], false));
+    let green = b.material(lambert("cabinet", [0.2, 0.5, 0.25], false));
+    let (w, hgt, d) = (3.0f32, 2.8f32, 2.5f32);
+    // The shell: one mesh of inward quads (floor, ceiling, four walls).
+    let mut shell = Mesh {
+        name: "room".into(),
+        ..Default::default()
+    };
+    append_quad(&mut shell, Vec3::ZERO, Vec3::Z * d, Vec3::X * w, floor);
+    append_quad(
+        &mut shell,
+        Vec3::new(0.0, hgt, 0.0),
+        Vec3::X * w,
+        Vec3::Z * d,
+        ceiling,
+    );
+    let half_h = hgt / 2.0;
+    append_quad(
+        &mut shell,
+        Vec3::new(0.0, half_h, -d),
+        Vec3::X * w,
+        Vec3::Y * half_h,
+        wall,
+    ); // back, faces +z
+    append_quad(
+        &mut shell,
+        Vec3::new(0.0, half_h, d),
+        Vec3::Y * half_h,
+        Vec3::X * w,
+        wall,
+    ); // front, faces −z
+    append_quad(
+        &mut shell,
+        Vec3::new(-w, half_h, 0.0),
+        Vec3::Y * half_h,
+        Vec3::Z * d,
+        wall,
+    ); // left, faces +x
+    append_quad(
+        &mut shell,
+        Vec3::new(w, half_h, 0.0),
+        Vec3::Z * d,
+        Vec3::Y * half_h,
+        wall,
+    ); // right, faces −x
+    let shell = b.mesh(shell);
+    b.placed("room", shell, Trs::IDENTITY, false);
+    let v = Vec3::new;
+    // Table: a 1.6 × 0.9 m top at 0.75 m on four legs (object space: footprint centre).
+    let mut table_parts = vec![(v(0.0, 0.73, 0.0), v(0.8, 0.025, 0.45), wood)];
+    for (x, z) in [(-0.74, -0.39), (0.74, -0.39), (-0.74, 0.39), (0.74, 0.39)] {
+        table_parts.push((v(x, 0.355, z), v(0.03, 0.355, 0.03), wood));
+    }
+    let table = b.mesh(boxes("table", &table_parts));
+    let table = b.placed("table", table, Trs::from_translation(ROOM_TABLE_AT), true);
+    let table_node = b.scene().instances[table.index()].node;
+    // Chairs: a seat at 0.45 m, a back, four legs; the back towards −z in object space.
+    let mut chair_parts = vec![
+        (v(0.0, 0.45, 0.0), v(0.22, 0.025, 0.22), blue),
+        (v(0.0, 0.72, -0.2), v(0.22, 0.25, 0.02), blue),
+    ];
+    for (x, z) in [(-0.19, -0.19), (0.19, -0.19), (-0.19, 0.19), (0.19, 0.19)] {
+        chair_parts.push((v(x, 0.21, z), v(0.02, 0.21, 0.02), blue));
+    }
+    let chair = b.mesh(boxes("chair", &chair_parts));
+    b.placed(
+        "chair_1",
+        chair,
+        Trs::from_translation(ROOM_TABLE_AT + v(-0.4, 0.0, -0.75)),
+        true,
+    );
+    b.placed(
+        "chair_2",
+        chair,
+        Trs {
+            rotation: Quat::from_rotation_y(PI),
+            ..Trs::from_translation(ROOM_TABLE_AT + v(0.4, 0.0, 0.75))
+        },
+        true,
+    );
+    // Static pieces: a red sofa against the left wall (facing +x), a tall bookcase
+    // against the back wall, a low green cabinet against the right one.
+    let pieces: [(&str, Vec<BoxPart>, Vec3); 3] = [
+        (
+            "sofa",
+            vec![
+                (v(0.0, 0.22, 0.0), v(0.45, 0.22, 1.0), red),
+                (v(-0.35, 0.6, 0.0), v(0.1, 0.38, 1.0), red),
+                (v(0.05, 0.32, -0.92), v(0.4, 0.1, 0.08), red),
+                (v(0.05, 0.32, 0.92), v(0.4, 0.1, 0.08), red),
+            ],
+            v(-2.5, 0.0, 0.2),
+        ),
+        (
+            "bookcase",
+            vec![(v(0.0, 1.0, 0.0), v(0.6, 1.0, 0.2), wood)],
+            v(-1.6, 0.0, -2.3),
+        ),
+        (
+            "cabinet",
+            vec![(v(0.0, 0.45, 0.0), v(0.25, 0.45, 0.7), green)],
+            v(2.75, 0.0, -0.8),
+        ),
+    ];
+    for (name, parts, at) in pieces {
+        let mesh = b.mesh(boxes(name, &parts));
+        b.placed(name, mesh, Trs::from_translation(at), false);
+    }
+    // Four spot lights 0.1 m below the ceiling, pointing down (−z of the light is its
+    // axis): the stand-ins for the paper's goniometric lights.
+    for (i, (x, z)) in [(-1.5, -1.25), (1.5, -1.25), (-1.5, 1.25), (1.5, 1.25)]
+        .into_iter()
+        .enumerate()
+    {
+        let node = b.node(
+            &format!("spot_{i}"),
+            None,
+            Trs {
+                rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+                ..Trs::from_translation(v(x, hgt - 0.1, z))
+            },
+        );
+        b.light(
+            &format!("spot_{i}"),
+            LightKind::Spot {
+                intensity: Rgb::new(6.0, 5.6, 5.0),
+                inner_cone_rad: 40f32.to_radians(),
+                outer_cone_rad: 60f32.to_radians(),
+            },
+            node,
+        );
+    }
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_x(-15f32.to_radians()),
+            ..Trs::from_translation(v(0.0, 1.7, 2.35))
+        },
+    );
+    b.camera("camera", 65f32.to_radians(), cam);
+    b.animation(Animation {
+        name: "move_table".into(),
+        channels: vec![linear_translation(
+            table_node,
+            &[0.0, 1.0],
+            &[ROOM_TABLE_AT, ROOM_TABLE_AT + v(0.6, 0.0, 0.0)],
+        )],
+        properties: Vec::new(),
+    });
+    b.finish("builtin:room")
 }
 
 /// Where the Cube in a Box's cube starts (its centre; half size 0.2 m).

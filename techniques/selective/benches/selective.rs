@@ -6,6 +6,9 @@
 //!   one-light scene's default), 288 (the paper's ROOM) and 10 080, the sphere lit directly (in the spot's
 //!   cone) or only indirectly (outside it), priority order beside random order;
 //! * `fig7` — the same for R = 8, 16, 32, 64 at an equal pool;
+//! * `room` — Fig. 5 (N_g = 288 and 10 080) and Fig. 7 (R = 8 … 64) on `builtin:room`
+//!   (ROOM in kind: four spot lights, ≈ 12 400 elements) with the paper's pool of
+//!   1 152 000 photons, the table pushed 0.6 m (issue 34 goal 3);
 //! * `pool` — recovery against pool size (N_p = 125 … 2000 at N_g = 72, R = 16);
 //! * `costs` — pool fill, full update after the move, restart vs re-trace after a light
 //!   move, memory per element;
@@ -15,7 +18,7 @@
 //!   grid sides, hanging vertices, the scaled pool, memory and the display's cost per
 //!   element (issue 34).
 //!
-//! `cargo bench -p illume-selective [-- fig5|fig7|pool|costs|elements]`
+//! `cargo bench -p illume-selective [-- fig5|fig7|room|pool|costs|elements]`
 
 use illume_core::{Affine3A, Vec3};
 use illume_scene::{Edit, InstanceId, LightId};
@@ -23,14 +26,15 @@ use illume_selective::{GroupOrder, Selective, SelectiveSettings};
 use illume_transport::{Technique, World};
 use std::time::Instant;
 
-fn sphere(world: &World) -> InstanceId {
+fn instance(world: &World, name: &str) -> InstanceId {
     InstanceId(
         world
             .scene
             .instances
             .iter()
-            .position(|i| i.name == "sphere")
-            .expect("cornell-spot has a sphere") as u32,
+            .position(|i| i.name == name)
+            .unwrap_or_else(|| panic!("{} has no instance {name}", world.scene.source))
+            as u32,
     )
 }
 
@@ -45,10 +49,34 @@ fn base(factors: Vec<[u32; 2]>, pilots: u32, ratio: u32, order: GroupOrder) -> S
     }
 }
 
+/// What moves: a built-in scene and the instance in it.
+#[derive(Clone, Copy)]
+struct Mover {
+    scene: &'static str,
+    instance: &'static str,
+}
+
+/// `builtin:cornell-spot`'s sphere.
+const SPHERE: Mover = Mover {
+    scene: "cornell-spot",
+    instance: "sphere",
+};
+
+/// `builtin:room`'s table (ROOM in kind).
+const TABLE: Mover = Mover {
+    scene: "room",
+    instance: "table",
+};
+
 /// The sphere moved from `from` to `to` (world offsets from its place in the scene).
 fn moved_world(from: Vec3, to: Vec3) -> (World, World, Vec<illume_scene::SceneChange>) {
-    let mut old = World::new(illume_scene::builtin::load("cornell-spot").unwrap());
-    let s = sphere(&old);
+    moved(SPHERE, from, to)
+}
+
+/// `mover` moved from `from` to `to` (world offsets from its place in the scene).
+fn moved(mover: Mover, from: Vec3, to: Vec3) -> (World, World, Vec<illume_scene::SceneChange>) {
+    let mut old = World::new(illume_scene::builtin::load(mover.scene).unwrap());
+    let s = instance(&old, mover.instance);
     let at = old.scene.instances[s.index()].world_from_object;
     old.apply_edit(&Edit::SetInstanceTransform {
         instance: s,
@@ -76,7 +104,11 @@ struct Recovery {
 }
 
 fn recovery(settings: &SelectiveSettings, from: Vec3, to: Vec3) -> Recovery {
-    let (old, new, changes) = moved_world(from, to);
+    recovery_of(SPHERE, settings, from, to)
+}
+
+fn recovery_of(mover: Mover, settings: &SelectiveSettings, from: Vec3, to: Vec3) -> Recovery {
+    let (old, new, changes) = moved(mover, from, to);
     let mut sel = Selective::for_world(&old, settings.clone()).unwrap();
     sel.converge(&old);
     sel.scene_changed(&new, &changes);
@@ -209,6 +241,79 @@ fn fig7() {
     );
 }
 
+/// Fig. 5 and Fig. 7 on ROOM in kind (`builtin:room`: four spot lights, ≈ 12 400
+/// elements), the table pushed 0.6 m, with the paper's pool of 1 152 000 photons and its
+/// N_g = 288 (2^5·3^2) beside 10 080.
+fn room() {
+    println!(
+        "\n## room: Fig. 5 and Fig. 7 on builtin:room (four spot lights), the table pushed 0.6 m"
+    );
+    println!(
+        "| N_g | R | N_p | pool | order | found @10 % | @25 % | @50 % of groups | s to 90 % | all groups [s] | relevant |"
+    );
+    println!("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|");
+    let to = Vec3::new(0.6, 0.0, 0.0);
+    let run = |name: &str, factors: Vec<[u32; 2]>, pilots: u32, ratio: u32, order| {
+        let s = base(factors, pilots, ratio, order);
+        let r = recovery_of(TABLE, &s, Vec3::ZERO, to);
+        let groups: u64 = s
+            .group_factors
+            .iter()
+            .map(|f| (f[0] as u64).pow(f[1]))
+            .product();
+        println!(
+            "| {name} | {ratio} | {pilots} | {} | {order:?} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} |",
+            groups * (pilots * ratio) as u64,
+            r.at[0],
+            r.at[1],
+            r.at[2],
+            r.t90,
+            r.curve.last().map_or(f64::NAN, |c| c.0),
+            r.total
+        );
+        r.curve
+    };
+    // Fig. 5: N_g = 288 (N_p = 250) and 10 080 (N_p = 7: 1 128 960 photons, the nearest
+    // whole N_p to the paper's 1 152 000), priority and random order.
+    let mut series = Vec::new();
+    for (name, factors, pilots) in [
+        ("288 (2^5·3^2)", vec![[2, 5], [3, 2]], 250),
+        ("10 080", vec![[2, 5], [3, 2], [5, 1], [7, 1]], 7),
+    ] {
+        for order in [GroupOrder::Priority, GroupOrder::Random] {
+            series.push(illume_metrics::report::Series {
+                name: format!("N_g = {name}, {order:?}"),
+                points: run(name, factors.clone(), pilots, 16, order),
+            });
+        }
+    }
+    plot(
+        "room_fig5.svg",
+        "Fig. 5 on ROOM in kind: the table pushed 0.6 m (N = 1 152 000)",
+        series,
+    );
+    // Fig. 7: R = 8 … 64 at N_g = 288 and an equal pool (R = 64: N_p = 62, 1 142 784).
+    let mut series = Vec::new();
+    for ratio in [8u32, 16, 32, 64] {
+        let pilots = 4000 / ratio;
+        series.push(illume_metrics::report::Series {
+            name: format!("R = {ratio} ({:.2} % pilots)", 100.0 / ratio as f64),
+            points: run(
+                "288",
+                vec![[2, 5], [3, 2]],
+                pilots,
+                ratio,
+                GroupOrder::Priority,
+            ),
+        });
+    }
+    plot(
+        "room_fig7.svg",
+        "Fig. 7 on ROOM in kind: pilot ratio at N_g = 288 (N = 1 152 000)",
+        series,
+    );
+}
+
 fn pool() {
     println!(
         "\n## pool: recovery against pool size (N_g = 72, R = 16, sphere moved 0.3 m, lit directly)"
@@ -322,6 +427,9 @@ fn main() {
     }
     if want("fig7") {
         fig7();
+    }
+    if want("room") {
+        room();
     }
     if want("pool") {
         pool();

@@ -327,3 +327,24 @@ fn the_pool_grows_with_the_elements() {
         l.pilots
     );
 }
+
+/// Issue 34 goal 3: at its defaults selective lays out the paper's ROOM configuration on
+/// `builtin:room` (§7: four lights → N_g = 2^5·3^2 = 288, 1 152 000 photons, about
+/// 12 400 mesh elements).
+#[test]
+fn builtin_room_gets_the_papers_room_layout() {
+    let world = World::new(illume_scene::builtin::load("room").unwrap());
+    assert_eq!(world.scene.lights.len(), 4);
+    let sel = Selective::for_world(
+        &world,
+        SelectiveSettings {
+            warm_up: false,
+            ..SelectiveSettings::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(sel.factors().factors(), &[(2, 5), (3, 2)]);
+    assert_eq!(sel.layout().pool(), 1_152_000);
+    let n = sel.elements().len() as f64;
+    assert!((n / 12_400.0 - 1.0).abs() < 0.1, "{n} elements");
+}
