@@ -698,12 +698,47 @@ fn selective_runs_on_its_thread_in_real_time_and_on_the_frame_thread_with_fixed_
         path(&realtime),
     ];
     args.extend(small);
-    ok(&illume(&args));
+    let out = illume(&args);
+    ok(&out);
     let csv = std::fs::read_to_string(realtime.join("frames.csv")).unwrap();
     let steps = last_csv_value(&csv, "selective.thread_steps");
     assert!(
         steps.is_some_and(|s| s > 0.0),
         "--realtime: the streaming thread took no step ({steps:?}):\n{csv}"
+    );
+    // The printed median frame time is the median interval of frames.csv's wall times.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let printed: f64 = stderr
+        .split("median frame ")
+        .nth(1)
+        .and_then(|r| r.split(" ms").next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no median frame time printed:\n{stderr}"));
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = header
+        .iter()
+        .position(|h| *h == "wall_s")
+        .expect("wall_s column");
+    let walls: Vec<f64> = lines
+        .map(|l| l.split(',').nth(k).unwrap().parse().unwrap())
+        .collect();
+    let mut d: Vec<f64> = walls.windows(2).map(|w| (w[1] - w[0]) * 1e3).collect();
+    assert!(
+        d.len() >= 2,
+        "a 0.5 s real-time run renders several frames: {walls:?}"
+    );
+    d.sort_by(f64::total_cmp);
+    let m = d.len() / 2;
+    let median = if d.len() % 2 == 1 {
+        d[m]
+    } else {
+        0.5 * (d[m - 1] + d[m])
+    };
+    // frames.csv rounds wall_s; the message prints 2 decimals.
+    assert!(
+        (printed - median).abs() < 0.02 + 1e-3 * median.max(1.0),
+        "printed median {printed} ms, frames.csv's {median} ms:\n{stderr}"
     );
 
     let fixed = scratch("selective-fixed");
