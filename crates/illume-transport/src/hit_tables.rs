@@ -174,11 +174,7 @@ impl HitTables {
             .collect();
         let chains: Vec<_> = missing
             .iter()
-            .map(|&i| {
-                // Unpacked textures (f32 texels) get a compact level 0 of their own.
-                let own_base = self.textures[i].is_none();
-                MipChain::new(&scene.textures[i], own_base).map(Arc::new)
-            })
+            .map(|&i| MipChain::new(&scene.textures[i]).map(Arc::new))
             .collect();
         for (i, chain) in missing.into_iter().zip(chains) {
             self.mips[i] = chain;
@@ -207,8 +203,7 @@ impl HitTables {
     }
     /// Trilinear mip-mapped lookup of scene texture `texture` at `uv` for a pixel whose
     /// texture coordinates change by `footprint` to its neighbours (see [`crate::mip`]):
-    /// where the footprint is at most one texel, [`HitTables::sample`] (bit for bit for
-    /// packed textures; the others read the chain's own copy, to f32 rounding).
+    /// exactly [`HitTables::sample`] where the footprint is at most one texel.
     #[inline]
     pub fn sample_footprint(
         &self,

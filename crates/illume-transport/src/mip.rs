@@ -71,62 +71,40 @@ pub(crate) struct MipLevel {
     texels: Vec<Vec4>,
 }
 
-impl MipLevel {
-    fn new(width: u32, height: u32, texels: &[Rgb]) -> Self {
-        Self {
-            width,
-            height,
-            size: Vec2::new(width as f32, height as f32),
-            texels: texels.iter().map(|t| t.extend(0.0)).collect(),
-        }
-    }
-}
-
 /// A texture's mip levels 1, 2, … down to one texel (level 0 is the texture itself):
 /// level k + 1 is level k box-filtered to half its size in each direction (rounded
 /// down, at least 1), each texel the area-weighted mean of the texels it covers, so
 /// every level keeps the texture's mean up to f32 rounding.
 #[derive(Clone, Debug)]
 pub(crate) struct MipChain {
-    /// A copy of the texture itself, read instead of the caller's level-0 lookup
-    /// (see [`MipChain::new`]).
-    base: Option<MipLevel>,
     levels: Vec<MipLevel>,
-    /// The texture's size (level 0).
-    width: u32,
-    height: u32,
     wrap_u: WrapMode,
     wrap_v: WrapMode,
 }
 
 impl MipChain {
-    /// The chain of `texture`; `None` for a texture of one texel or none. With
-    /// `own_base`, the chain also keeps level 0 in its own 16-byte texels, read by
-    /// [`MipChain::sample`] in place of its caller's lookup: for textures that have no
-    /// compact copy elsewhere (normal maps computed from height maps are 12-byte `f32`
-    /// texels, read through the generic [`Texture::sample`] with its libm `floor` calls;
-    /// aligned texels take the chain's SIMD lerps: 8 % fewer instructions in Sponza's
-    /// moving-camera G-buffer, `BENCHMARKS.md`).
-    pub(crate) fn new(texture: &Texture, own_base: bool) -> Option<Self> {
+    /// The chain of `texture`; `None` for a texture of one texel or none.
+    pub(crate) fn new(texture: &Texture) -> Option<Self> {
         let (mut w, mut h) = (texture.width, texture.height);
         if texture.texels.len() != (w as usize) * (h as usize) || w * h <= 1 {
             return None;
         }
         let mut levels: Vec<MipLevel> = Vec::new();
-        let base = own_base.then(|| MipLevel::new(w, h, &texture.texels));
         let mut source = texture.texels.clone();
         while w > 1 || h > 1 {
             let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
             let texels = downsample(&source, w, h, nw, nh);
-            levels.push(MipLevel::new(nw, nh, &texels));
+            levels.push(MipLevel {
+                width: nw,
+                height: nh,
+                size: Vec2::new(nw as f32, nh as f32),
+                texels: texels.iter().map(|t| t.extend(0.0)).collect(),
+            });
             source = texels;
             (w, h) = (nw, nh);
         }
         Some(Self {
-            base,
             levels,
-            width: texture.width,
-            height: texture.height,
             wrap_u: texture.wrap_u,
             wrap_v: texture.wrap_v,
         })
@@ -148,24 +126,13 @@ impl MipChain {
             .collect()
     }
 
-    /// The level of detail of `footprint` on this chain's texture
-    /// ([`UvFootprint::lod`]).
-    #[inline]
-    pub(crate) fn lod(&self, footprint: &UvFootprint) -> f32 {
-        footprint.lod(self.width, self.height)
-    }
-
     /// Trilinear lookup at `uv` for level of detail `lod`, `level0` reading the texture
-    /// itself bilinearly (unless the chain keeps its own copy); exactly `level0(uv)`
-    /// where `lod ≤ 0` or is NaN, the one-texel level beyond the chain's end.
+    /// itself bilinearly; exactly `level0(uv)` where `lod ≤ 0` or is NaN, the one-texel
+    /// level beyond the chain's end.
     #[inline]
     pub(crate) fn sample(&self, uv: Vec2, lod: f32, level0: impl Fn(Vec2) -> Rgb) -> Rgb {
-        let base = |uv: Vec2| match &self.base {
-            Some(l) => self.bilinear(l, uv),
-            None => level0(uv).extend(0.0),
-        };
         if lod.is_nan() || lod <= 0.0 {
-            return base(uv).truncate();
+            return level0(uv);
         }
         let top = self.levels.len() as f32;
         let lod = lod.min(top);
@@ -173,19 +140,20 @@ impl MipChain {
         let k = lod as usize;
         let f = lod - k as f32;
         let below = match k {
-            0 => base(uv),
-            _ => self.bilinear(&self.levels[k - 1], uv),
+            0 => level0(uv).extend(0.0),
+            _ => self.bilinear(k - 1, uv),
         };
         if f <= 0.0 {
             return below.truncate();
         }
-        below.lerp(self.bilinear(&self.levels[k], uv), f).truncate()
+        below.lerp(self.bilinear(k, uv), f).truncate()
     }
 
-    /// Bilinear lookup in level `l`, texel centres at half-integers as in
+    /// Bilinear lookup in `levels[i]`, texel centres at half-integers as in
     /// [`Texture::sample`] (whose arithmetic it follows in SIMD lanes).
     #[inline(always)]
-    fn bilinear(&self, l: &MipLevel, uv: Vec2) -> Vec4 {
+    fn bilinear(&self, i: usize, uv: Vec2) -> Vec4 {
+        let l = &self.levels[i];
         let p = uv * l.size - Vec2::splat(0.5);
         let (ix, iy) = (floor_i64(p.x), floor_i64(p.y));
         let (fx, fy) = (p.x - ix as f32, p.y - iy as f32);
@@ -256,7 +224,7 @@ mod tests {
                 let k = (x * 7919 + y * 104_729) % 97;
                 Rgb::new(k as f32 / 97.0, ((x ^ y) % 5) as f32 / 4.0, 0.25)
             });
-            let chain = MipChain::new(&tex, false).expect("more than one texel");
+            let chain = MipChain::new(&tex).expect("more than one texel");
             let m0 = mean(&tex.texels);
             let last = chain.level(chain.len());
             assert_eq!(last.len(), 1, "{w}x{h}: the chain ends at one texel");
@@ -268,7 +236,7 @@ mod tests {
                 );
             }
         }
-        assert!(MipChain::new(&texture(1, 1, |_, _| Rgb::ONE), false).is_none());
+        assert!(MipChain::new(&texture(1, 1, |_, _| Rgb::ONE)).is_none());
     }
 
     #[test]
@@ -291,7 +259,7 @@ mod tests {
     #[test]
     fn magnified_lookups_equal_the_plain_bilinear_one() {
         let tex = texture(16, 8, |x, y| Rgb::new(x as f32, y as f32, (x * y) as f32));
-        let chain = MipChain::new(&tex, false).expect("chain");
+        let chain = MipChain::new(&tex).expect("chain");
         for (i, uv) in [(0.1f32, 0.2f32), (0.97, 0.5), (-0.3, 1.7)]
             .into_iter()
             .enumerate()
@@ -314,23 +282,11 @@ mod tests {
     }
 
     #[test]
-    fn an_own_base_reads_like_the_texture() {
-        let tex = texture(16, 8, |x, y| Rgb::new(x as f32 / 15.0, y as f32 / 9.0, 0.3));
-        let chain = MipChain::new(&tex, true).expect("chain");
-        let never = |_| -> Rgb { panic!("the chain reads its own level 0") };
-        for i in 0..200 {
-            let uv = Vec2::new(i as f32 * 0.618_034 - 40.0, i as f32 * 0.414_214 - 30.0);
-            let (a, b) = (chain.sample(uv, 0.0, never), tex.sample(uv));
-            assert!((a - b).abs().max_element() <= 1e-6, "{uv}: {a} {b}");
-        }
-    }
-
-    #[test]
     fn a_minified_checkerboard_reads_its_mean_grey() {
         // One-texel checks: a pixel covering 8×8 texels must see the mean (0.5), where
         // a bilinear lookup at the pixel centre reads 0 or 1 (aliasing).
         let tex = texture(256, 256, |x, y| Rgb::splat(((x + y) % 2) as f32));
-        let chain = MipChain::new(&tex, false).expect("chain");
+        let chain = MipChain::new(&tex).expect("chain");
         let f = UvFootprint {
             duv_dx: Vec2::new(8.0 / 256.0, 0.0),
             duv_dy: Vec2::new(0.0, 8.0 / 256.0),
