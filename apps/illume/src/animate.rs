@@ -162,6 +162,10 @@ pub fn run(a: AnimateArgs) -> Result<()> {
     let start = Instant::now();
     let mut render_s = 0.0;
     let mut index = 0u64;
+    // Wall time at each frame's record (frames.csv's `wall_s`): the median interval
+    // between consecutive frames is the rate a viewer sees, robust to the first frame's
+    // start-up and to a stall.
+    let mut walls: Vec<f64> = Vec::new();
     loop {
         let t = if a.realtime {
             start.elapsed().as_secs_f64().min(duration)
@@ -177,9 +181,10 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         // Precompute is its own column: frame 0 carries the phase before the first
         // frame, any frame a rebuild's.
         let earlier_ms = if index == 0 { precompute_ms } else { 0.0 };
+        walls.push(start.elapsed().as_secs_f64());
         csv.push(&StepRecord {
             frame: index,
-            wall_s: start.elapsed().as_secs_f64(),
+            wall_s: *walls.last().expect("pushed above"),
             ..StepRecord::from_step(t, &out, earlier_ms)
         });
         // Written on the writer thread while the next frames render (memory stays
@@ -240,6 +245,13 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         },
         index as f64 / render_s
     );
+    if let Some(ms) = median_interval_ms(&walls) {
+        eprintln!(
+            "median frame {ms:.2} ms ({:.2} frames per second) over {} frame intervals",
+            1e3 / ms,
+            walls.len().saturating_sub(1).max(1)
+        );
+    }
     eprintln!(
         "exposure {:+.2} EV ({:?})",
         exposure_ev.unwrap_or(a.exposure),
@@ -253,6 +265,24 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         preview.display()
     );
     Ok(())
+}
+
+/// The median of the intervals between consecutive frames' wall times, in ms (the
+/// first frame's own time when there is only one); `None` without frames.
+fn median_interval_ms(walls: &[f64]) -> Option<f64> {
+    let mut d: Vec<f64> = match walls {
+        [] => return None,
+        [only] => vec![*only],
+        _ => walls.windows(2).map(|w| w[1] - w[0]).collect(),
+    };
+    d.sort_by(f64::total_cmp);
+    let m = d.len() / 2;
+    let median = if d.len() % 2 == 1 {
+        d[m]
+    } else {
+        0.5 * (d[m - 1] + d[m])
+    };
+    Some(median * 1e3)
 }
 
 /// Runs `illume demo`: builtin:cornell-spot, sphere and spot light moving, photon

@@ -23,6 +23,9 @@
 //!   glossy blue box (dielectric, roughness 0.5); animation `light_then_objects`: the
 //!   light travels for 2 s, then the sphere rolls for 2 s (the glossy row of temporal
 //!   radiance caching's Table 1, in kind).
+//! * `metal-box` — the same box with white metals: a sphere at roughness 0.3 and a box at
+//!   roughness 0.6 (metallic 1, base colour 0.9), static: light that photons and
+//!   receivers must treat by the BRDF, not as Lambertian (issue 33).
 //!
 //! * `sun-room` — a closed room (x∈[−2,2], y∈\[0,3\], z∈[−2,2]) with a window in its
 //!   south wall (+z; north is −z, see [`crate::sun`]), a table and a red cabinet (static)
@@ -44,7 +47,7 @@ use crate::model::*;
 use illume_core::{Affine3A, PI, Quat, Rgb, Vec2, Vec3};
 
 /// Names accepted by [`load`].
-pub const NAMES: [&str; 8] = [
+pub const NAMES: [&str; 9] = [
     "furnace",
     "cornell-spot",
     "cube-in-box",
@@ -53,6 +56,7 @@ pub const NAMES: [&str; 8] = [
     "glossy-box",
     "sun-room",
     "room",
+    "metal-box",
 ];
 
 /// A built-in scene name that does not exist.
@@ -74,6 +78,7 @@ pub fn load(name: &str) -> Result<Scene, UnknownBuiltin> {
         "glossy-box" => glossy_box(),
         "sun-room" => sun_room(),
         "room" => room(),
+        "metal-box" => metal_box(),
         _ => {
             return Err(UnknownBuiltin {
                 name: name.to_owned(),
@@ -1187,17 +1192,7 @@ fn glossy_box() -> Scene {
     let start = Vec3::new(-0.45, 0.25, -0.35);
     let s = b.placed("sphere", sphere, Trs::from_translation(start), true);
     let sphere_node = b.scene().instances[s.index()].node;
-    let cube = b.mesh(unit_box(blue, false));
-    b.placed(
-        "glossy_box",
-        cube,
-        Trs {
-            rotation: Quat::from_rotation_y(0.4),
-            scale: Vec3::new(0.22, 0.35, 0.22),
-            translation: Vec3::new(0.4, 0.35, -0.45),
-        },
-        false,
-    );
+    standing_box(&mut b, "glossy_box", blue);
     let times = [0.0, 2.0, 4.0];
     let at = Vec3::new(0.0, 1.8, -0.2);
     let end = Vec3::new(0.55, 1.6, 0.3);
@@ -1214,6 +1209,46 @@ fn glossy_box() -> Scene {
         properties: Vec::new(),
     });
     b.finish("builtin:glossy-box")
+}
+
+fn metal_box() -> Scene {
+    let mut b = SceneBuilder::new();
+    white_room(&mut b);
+    let metal = |b: &mut SceneBuilder, name: &str, roughness: f32| {
+        b.material(Material {
+            name: name.into(),
+            base_color: Rgb::splat(0.9),
+            metallic: 1.0,
+            roughness,
+            ..Default::default()
+        })
+    };
+    let smooth = metal(&mut b, "metal_r03", 0.3);
+    let rough = metal(&mut b, "metal_r06", 0.6);
+    let sphere = b.mesh(uv_sphere(0.25, 48, 24, smooth, false));
+    b.placed(
+        "sphere",
+        sphere,
+        Trs::from_translation(Vec3::new(-0.4, 0.25, -0.3)),
+        false,
+    );
+    standing_box(&mut b, "metal_box", rough);
+    b.finish("builtin:metal-box")
+}
+
+/// The tall box of `glossy-box` and `metal-box` (static, turned 0.4 rad, right back).
+fn standing_box(b: &mut SceneBuilder, name: &str, material: MaterialId) {
+    let cube = b.mesh(unit_box(material, false));
+    b.placed(
+        name,
+        cube,
+        Trs {
+            rotation: Quat::from_rotation_y(0.4),
+            scale: Vec3::new(0.22, 0.35, 0.22),
+            translation: Vec3::new(0.4, 0.35, -0.45),
+        },
+        false,
+    );
 }
 
 #[cfg(test)]

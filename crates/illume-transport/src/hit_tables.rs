@@ -48,11 +48,12 @@ impl InstanceFrame {
 }
 
 /// Tables derived from a scene that make [`PhotonHit`](crate::surface::PhotonHit)s cheap: each instance's
-/// [`InstanceFrame`] (no cofactor matrix per hit), and each base-colour texture packed
-/// as one 8-bit index per channel into its 256 decoded sRGB values (a quarter of the
-/// memory of `f32` texels, so far fewer cache misses for scattered photon lookups)
-/// whenever that reproduces every texel exactly — always for textures decoded from
-/// 8-bit images; other textures are sampled as they are.
+/// [`InstanceFrame`] (no cofactor matrix per hit), and each texture packed as one 8-bit
+/// index per channel into its 256 decoded values — sRGB for colour, code/255 for data
+/// such as normal maps (a quarter of the memory of `f32` texels, so far fewer cache
+/// misses for scattered photon lookups and the G-buffer's normal maps) — whenever that
+/// reproduces every texel exactly: always for textures decoded from 8-bit images; other
+/// textures are sampled as they are.
 ///
 /// Cloning copies the instance frames only: the packed textures never change once
 /// packed and are shared (`Arc`) between clones, so a second world (another time) does
@@ -80,7 +81,8 @@ pub struct HitTables {
 /// read one texel per impact, made Sponza's photon impacts 1.3× as fast (`BENCHMARKS.md`).
 pub const PHOTON_TEXTURE_SIDE: u32 = 128;
 
-/// A texture as packed sRGB-8 indices `[r, g, b, 0]` into [`SRGB8_LUT`].
+/// A texture as packed 8-bit indices `[r, g, b, 0]` into `lut`: [`SRGB8_LUT`] for
+/// colour textures, [`LINEAR8_LUT`] for data textures (normal maps, decoded as code/255).
 #[derive(Clone, Debug)]
 struct PackedTexture {
     width: u32,
@@ -88,12 +90,19 @@ struct PackedTexture {
     texels: Vec<[u8; 4]>,
     wrap_u: WrapMode,
     wrap_v: WrapMode,
+    /// The 256 values the codes stand for.
+    lut: &'static [f32; 256],
 }
 
 /// The 256 linear values of 8-bit sRGB codes, computed as the image loaders compute them.
 static SRGB8_LUT: std::sync::LazyLock<[f32; 256]> = std::sync::LazyLock::new(|| {
     std::array::from_fn(|i| illume_core::image::srgb_decode(i as f32 / 255.0))
 });
+
+/// The 256 values of 8-bit data codes (`code / 255`), computed as the image loaders
+/// compute them for textures that are not colour (normal and metal-roughness maps).
+static LINEAR8_LUT: std::sync::LazyLock<[f32; 256]> =
+    std::sync::LazyLock::new(|| std::array::from_fn(|i| i as f32 / 255.0));
 
 /// For each of the 2¹⁶ high halves `h` of an f32 bit pattern, the first code whose
 /// [`SRGB8_LUT`] value has a bit pattern ≥ `h << 16` (256 if none). Non-negative floats
@@ -205,10 +214,7 @@ impl HitTables {
     ) -> Rgb {
         let level0 = |uv| self.sample(scene, texture, uv);
         match self.mips.get(texture.index()) {
-            Some(Some(chain)) => {
-                let t = &scene.textures[texture.index()];
-                chain.sample(uv, footprint.lod(t.width, t.height), level0)
-            }
+            Some(Some(chain)) => chain.sample(uv, chain.lod(footprint), level0),
             _ => level0(uv),
         }
     }
@@ -228,41 +234,57 @@ impl HitTables {
 }
 
 impl PackedTexture {
-    /// Packs `texture` when every channel of every texel is one of [`SRGB8_LUT`].
+    /// Packs `texture` when every channel of every texel is one of [`SRGB8_LUT`], or
+    /// else one of [`LINEAR8_LUT`] (normal maps: 12-byte texels become 4-byte ones, read
+    /// back bit for bit).
     fn new(texture: &Texture) -> Option<Self> {
-        let lut = &*SRGB8_LUT;
+        let srgb = &*SRGB8_LUT;
         let buckets = &*SRGB8_BUCKETS;
         // The first code at or above `v`'s bucket, then up to `v`: a code or two.
-        let code = |v: f32| -> Option<u8> {
+        let srgb_code = |v: f32| -> Option<u8> {
             let bits = v.to_bits();
             let mut k = usize::from(buckets[(bits >> 16) as usize]);
-            while k < 256 && lut[k].to_bits() < bits {
+            while k < 256 && srgb[k].to_bits() < bits {
                 k += 1;
             }
-            (k < 256 && lut[k].to_bits() == bits).then_some(k as u8)
+            (k < 256 && srgb[k].to_bits() == bits).then_some(k as u8)
         };
-        let texels: Option<Vec<[u8; 4]>> = texture
-            .texels
-            .par_iter()
-            .map(|t| Some([code(t.x)?, code(t.y)?, code(t.z)?, 0]))
-            .collect();
+        let linear = &*LINEAR8_LUT;
+        let linear_code = |v: f32| -> Option<u8> {
+            let k = (v * 255.0).round();
+            (0.0..=255.0).contains(&k).then_some(())?;
+            (linear[k as usize].to_bits() == v.to_bits()).then_some(k as u8)
+        };
+        let pack = |code: &(dyn Fn(f32) -> Option<u8> + Sync)| -> Option<Vec<[u8; 4]>> {
+            texture
+                .texels
+                .par_iter()
+                .map(|t| Some([code(t.x)?, code(t.y)?, code(t.z)?, 0]))
+                .collect::<Option<Vec<_>>>()
+                .filter(|t| !t.is_empty())
+        };
+        let (texels, lut) = match pack(&srgb_code) {
+            Some(t) => (t, srgb),
+            None => (pack(&linear_code)?, linear),
+        };
         Some(Self {
             width: texture.width,
             height: texture.height,
-            texels: texels.filter(|t| !t.is_empty())?,
+            texels,
             wrap_u: texture.wrap_u,
             wrap_v: texture.wrap_v,
+            lut,
         })
     }
 
     /// A copy box-filtered to at most `side` texels a side: each texel is the
     /// area-weighted mean of the linear values of the texels it covers, stored as the
-    /// nearest sRGB-8 code. `None` when the texture already fits.
+    /// nearest code of the same table. `None` when the texture already fits.
     fn box_filtered(&self, side: u32) -> Option<Self> {
         if self.width <= side && self.height <= side {
             return None;
         }
-        let lut = &*SRGB8_LUT;
+        let lut = self.lut;
         let (w, h) = (self.width.min(side), self.height.min(side));
         let (wx, wy) = (box_weights(self.width, w), box_weights(self.height, h));
         // Horizontal pass: every source row to `w` linear texels.
@@ -302,13 +324,14 @@ impl PackedTexture {
             texels,
             wrap_u: self.wrap_u,
             wrap_v: self.wrap_v,
+            lut,
         })
     }
 
     /// The texel containing `uv` (wrapped as [`Texture::sample`] wraps).
     #[inline]
     fn sample_nearest(&self, uv: Vec2) -> Rgb {
-        let lut = &*SRGB8_LUT;
+        let lut = self.lut;
         let x = self
             .wrap_u
             .wrap(floor_i64(uv.x * self.width as f32), self.width);
@@ -322,14 +345,14 @@ impl PackedTexture {
     /// [`Texture::sample`]'s arithmetic on the decoded texels.
     #[inline]
     fn sample(&self, uv: Vec2) -> Rgb {
-        let lut = &*SRGB8_LUT;
+        let lut = self.lut;
         let x = uv.x * self.width as f32 - 0.5;
         let y = uv.y * self.height as f32 - 0.5;
         let (ix, iy) = (floor_i64(x), floor_i64(y));
         let (x0, y0) = (ix as f32, iy as f32);
         let (fx, fy) = (x - x0, y - y0);
-        let (cx0, cx1) = self.wrap_u.wrap_pair(ix, self.width);
-        let (cy0, cy1) = self.wrap_v.wrap_pair(iy, self.height);
+        let (cx0, cx1) = crate::mip::wrap_pair(self.wrap_u, ix, self.width);
+        let (cy0, cy1) = crate::mip::wrap_pair(self.wrap_v, iy, self.height);
         let (r0, r1) = (cy0 * self.width as usize, cy1 * self.width as usize);
         let t = |i: usize| {
             let [r, g, b, _] = self.texels[i];
@@ -546,12 +569,13 @@ mod tests {
 
     #[test]
     fn packed_textures_sample_bit_for_bit_like_their_source() {
-        let lut = &*SRGB8_LUT;
         let mut rng = Pcg32::new(1, 2);
-        for (wrap_u, wrap_v) in [
-            (WrapMode::Repeat, WrapMode::Repeat),
-            (WrapMode::Clamp, WrapMode::Mirror),
-            (WrapMode::Mirror, WrapMode::Clamp),
+        // Colour (sRGB codes) and data (code/255: normal maps) textures.
+        for (lut, wrap_u, wrap_v) in [
+            (&*SRGB8_LUT, WrapMode::Repeat, WrapMode::Repeat),
+            (&*SRGB8_LUT, WrapMode::Clamp, WrapMode::Mirror),
+            (&*LINEAR8_LUT, WrapMode::Mirror, WrapMode::Clamp),
+            (&*LINEAR8_LUT, WrapMode::Repeat, WrapMode::Repeat),
         ] {
             let (width, height) = (7u32, 5u32);
             let mut code = || lut[(rng.next_1d() * 256.0) as usize % 256];
@@ -566,7 +590,8 @@ mod tests {
                 wrap_v,
                 alpha: vec![],
             };
-            let packed = PackedTexture::new(&texture).expect("8-bit sRGB texels pack");
+            let packed = PackedTexture::new(&texture).expect("8-bit texels pack");
+            assert!(std::ptr::eq(packed.lut, lut), "packed with the other table");
             for _ in 0..5000 {
                 let uv = Vec2::new(rng.next_1d() * 6.0 - 3.0, rng.next_1d() * 6.0 - 3.0);
                 let (a, b) = (packed.sample(uv), texture.sample(uv));

@@ -171,7 +171,7 @@ impl MipChain {
 /// `(mode.wrap(i, n), mode.wrap(i + 1, n))` ([`WrapMode::wrap_pair`]), with the
 /// interior of the texture answered inline.
 #[inline(always)]
-fn wrap_pair(mode: WrapMode, i: i64, n: u32) -> (usize, usize) {
+pub(crate) fn wrap_pair(mode: WrapMode, i: i64, n: u32) -> (usize, usize) {
     if i >= 0 && i < i64::from(n) - 1 {
         return (i as usize, i as usize + 1);
     }

@@ -231,15 +231,35 @@ pub struct PhotonHit {
     /// True when the surface reflects light arriving on this side (front face, or a
     /// double-sided material).
     pub reflects: bool,
+    /// glTF metallic factor at the hit (texture × factor), in [0, 1].
+    pub metallic: f32,
+    /// glTF perceptual roughness at the hit (texture × factor), in [0, 1]. With
+    /// `metallic = 0` and `roughness = 1` the surface is Lambertian
+    /// ([`MetalRough::is_lambertian`](crate::metal_rough::MetalRough::is_lambertian)).
+    pub roughness: f32,
+}
+
+/// What a photon reads of a surface's material at a hit: see [`photon_material`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotonMaterial {
+    /// Diffuse albedo ρ (texture × factor); zero where `reflects` is false.
+    pub albedo: Rgb,
+    /// The surface reflects light arriving on this side.
+    pub reflects: bool,
+    /// Metallic (texture × factor).
+    pub metallic: f32,
+    /// Perceptual roughness (texture × factor).
+    pub roughness: f32,
 }
 
 /// A photon's albedo and sidedness at barycentrics `b` of triangle `t` of `mesh` with
 /// material `mat`, arriving on the front face or not (see [`PhotonHit::new`]): the one
-/// formula [`PhotonHit::new`] and [`World::photon_albedo`](crate::World::photon_albedo)
-/// share, so a path re-traced with another material state gets bit-identical albedos.
+/// formula [`PhotonHit::new`] and [`World::photon_material`](crate::World::photon_material)
+/// share, so a path re-traced with another material state gets bit-identical albedos;
+/// with the metallic and roughness the photon scatters by.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-pub(crate) fn photon_albedo(
+pub(crate) fn photon_material(
     scene: &Scene,
     tables: &HitTables,
     mesh: &illume_scene::Mesh,
@@ -248,21 +268,23 @@ pub(crate) fn photon_albedo(
     front_face: bool,
     mat: &illume_scene::Material,
     filtered_textures: bool,
-) -> (Rgb, bool) {
+) -> PhotonMaterial {
     let reflects = front_face || mat.double_sided;
+    let uv = || {
+        let (b1, b2) = (b.x, b.y);
+        let b0 = 1.0 - b1 - b2;
+        if mesh.uvs.is_empty() {
+            Vec2::ZERO
+        } else {
+            let [i0, i1, i2] = mesh.indices[t].map(|i| i as usize);
+            mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2
+        }
+    };
     let albedo = match (reflects, mat.base_color_texture) {
         (false, _) => Rgb::ZERO,
         (true, None) => mat.base_color,
         (true, Some(texture)) => {
-            let (b1, b2) = (b.x, b.y);
-            let b0 = 1.0 - b1 - b2;
-            let uv = if mesh.uvs.is_empty() {
-                Vec2::ZERO
-            } else {
-                let [i0, i1, i2] = mesh.indices[t].map(|i| i as usize);
-                mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2
-            };
-            let uv = mat.base_color_uv(uv);
+            let uv = mat.base_color_uv(uv());
             let texel = if filtered_textures {
                 tables.sample_filtered(scene, texture, uv)
             } else {
@@ -271,7 +293,21 @@ pub(crate) fn photon_albedo(
             mat.base_color * texel
         }
     };
-    (albedo, reflects)
+    // Metal-roughness textures as `Scene::metal_rough` reads them (blue metallic, green
+    // roughness); photons read them at full resolution (few materials have them).
+    let (metallic, roughness) = match (reflects, mat.metallic_roughness_texture) {
+        (true, Some(texture)) => {
+            let texel = tables.sample(scene, texture, mat.metallic_roughness_uv(uv()));
+            (mat.metallic * texel.z, mat.roughness * texel.y)
+        }
+        _ => (mat.metallic, mat.roughness),
+    };
+    PhotonMaterial {
+        albedo,
+        reflects,
+        metallic,
+        roughness,
+    }
 }
 
 impl PhotonHit {
@@ -324,7 +360,7 @@ impl PhotonHit {
         }
         let material = mesh.triangle_materials[t];
         let mat = &scene.materials[material.index()];
-        let (albedo, reflects) = photon_albedo(
+        let m = photon_material(
             scene,
             tables,
             mesh,
@@ -339,12 +375,14 @@ impl PhotonHit {
             position_object,
             geometric_normal,
             shading_normal,
-            albedo,
+            albedo: m.albedo,
             instance: hit.instance,
             triangle: hit.triangle,
             barycentrics: hit.barycentrics,
             front_face,
-            reflects,
+            reflects: m.reflects,
+            metallic: m.metallic,
+            roughness: m.roughness,
         }
     }
 

@@ -179,20 +179,19 @@ impl World {
         PhotonHit::new(&self.scene, &self.hit_tables, ray, hit, &geometry, false)
     }
 
-    /// The albedo and sidedness `hit` would have with material `material` instead of
-    /// the scene's (the same formula as [`PhotonHit::new`], bit for bit): selective
-    /// photon tracing re-traces old paths with the materials of their time.
-    /// `filtered_textures` as for [`World::trace_photon_hit`]. Returns `(albedo,
-    /// reflects)`.
-    pub fn photon_albedo(
+    /// The albedo, sidedness, metallic and roughness `hit` would have with material
+    /// `material` instead of the scene's (the same formula as [`PhotonHit::new`], bit for
+    /// bit): selective photon tracing re-traces old paths with the materials of their
+    /// time. `filtered_textures` as for [`World::trace_photon_hit`].
+    pub fn photon_material(
         &self,
         hit: &PhotonHit,
         material: &illume_scene::Material,
         filtered_textures: bool,
-    ) -> (illume_core::Rgb, bool) {
+    ) -> crate::surface::PhotonMaterial {
         let inst = &self.scene.instances[hit.instance.index()];
         let mesh = &self.scene.meshes[inst.mesh.index()];
-        crate::surface::photon_albedo(
+        crate::surface::photon_material(
             &self.scene,
             &self.hit_tables,
             mesh,

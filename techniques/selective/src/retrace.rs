@@ -403,10 +403,15 @@ impl TraceContext<'_> {
                         if sign < 0 {
                             let m = u.material_of(&hit);
                             if u.changes.materials[m] {
-                                let (albedo, reflects) =
-                                    world.photon_albedo(&hit, &old[m], self.path.filtered_textures);
-                                hit.albedo = albedo;
-                                hit.reflects = reflects;
+                                let was = world.photon_material(
+                                    &hit,
+                                    &old[m],
+                                    self.path.filtered_textures,
+                                );
+                                hit.albedo = was.albedo;
+                                hit.reflects = was.reflects;
+                                hit.metallic = was.metallic;
+                                hit.roughness = was.roughness;
                             }
                         }
                         u.original[hit.instance.index()]

@@ -751,12 +751,44 @@ fn selective_runs_on_its_thread_in_real_time_and_on_the_frame_thread_with_fixed_
         path(&realtime),
     ];
     args.extend(small);
-    ok(&illume(&args));
+    let out = illume(&args);
+    ok(&out);
     let csv = std::fs::read_to_string(realtime.join("frames.csv")).unwrap();
     let steps = last_csv_value(&csv, "selective.thread_steps");
     assert!(
         steps.is_some_and(|s| s > 0.0),
         "--realtime: the streaming thread took no step ({steps:?}):\n{csv}"
+    );
+    // The printed median frame time is the median interval of frames.csv's wall times.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let printed: f64 = stderr
+        .split("median frame ")
+        .nth(1)
+        .and_then(|r| r.split(" ms").next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no median frame time printed:\n{stderr}"));
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = header
+        .iter()
+        .position(|h| *h == "wall_s")
+        .expect("wall_s column");
+    let walls: Vec<f64> = lines
+        .map(|l| l.split(',').nth(k).unwrap().parse().unwrap())
+        .collect();
+    let d: Vec<f64> = walls.windows(2).map(|w| (w[1] - w[0]) * 1e3).collect();
+    assert!(
+        d.len() >= 2,
+        "a 0.5 s real-time run renders several frames: {walls:?}"
+    );
+    // A median: at least half the intervals on each side of it (frames.csv keeps µs, the
+    // message 2 decimals of a ms).
+    let slack = 0.006;
+    let below = d.iter().filter(|&&x| x <= printed + slack).count();
+    let above = d.iter().filter(|&&x| x >= printed - slack).count();
+    assert!(
+        2 * below >= d.len() && 2 * above >= d.len(),
+        "printed median {printed} ms is not the median of frames.csv's intervals {d:?}:\n{stderr}"
     );
 
     let fixed = scratch("selective-fixed");
