@@ -214,7 +214,10 @@ impl HitTables {
     ) -> Rgb {
         let level0 = |uv| self.sample(scene, texture, uv);
         match self.mips.get(texture.index()) {
-            Some(Some(chain)) => chain.sample(uv, chain.lod(footprint), level0),
+            Some(Some(chain)) => {
+                let t = &scene.textures[texture.index()];
+                chain.sample(uv, footprint.lod(t.width, t.height), level0)
+            }
             _ => level0(uv),
         }
     }
