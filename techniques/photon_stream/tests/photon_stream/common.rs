@@ -34,3 +34,21 @@ pub fn in_own_process(path: &str) -> bool {
     );
     false
 }
+
+/// 60 VSLs placed on `scene` with the settings the cell tests share (Cornell box: every
+/// object gets several), cells `oriented_cells` or nearest.
+pub fn sixty_vsls(
+    scene: &illume_scene::Scene,
+    oriented_cells: bool,
+) -> illume_photon_stream::placement::VslSet {
+    illume_photon_stream::placement::VslSet::place(
+        scene,
+        &illume_photon_stream::placement::PlacementSettings {
+            vsl_count: 60,
+            oversampling: 0.1,
+            triangle_scale: 0.8,
+            seed: 5,
+            oriented_cells,
+        },
+    )
+}

@@ -136,16 +136,7 @@ fn placement_on_cornell_spot_honours_count_objects_edges_and_area() {
 #[test]
 fn photons_go_to_the_nearest_vsl_of_their_own_object() {
     let scene = illume_scene::builtin::load("cornell-spot").unwrap();
-    let set = VslSet::place(
-        &scene,
-        &PlacementSettings {
-            vsl_count: 60,
-            oversampling: 0.1,
-            triangle_scale: 0.8,
-            seed: 5,
-            oriented_cells: true,
-        },
-    );
+    let set = crate::common::sixty_vsls(&scene, true);
     let mut rng = illume_core::sampling::Pcg32::new(1, 2);
     use illume_core::sampling::SampleStream;
     for _ in 0..5000 {

@@ -2,10 +2,11 @@
 //! is switched off by it, and the two estimator choices it makes — point-light falloff
 //! and nearest-VSL cells — compute what §0.4.1 and Algorithm 2 say.
 
+use crate::common::sixty_vsls;
 use illume_core::Vec3;
 use illume_core::sampling::{Pcg32, SampleStream, uniform_triangle};
 use illume_photon_stream::PhotonStreamSettings;
-use illume_photon_stream::placement::{PlacementSettings, VslSet};
+use illume_photon_stream::placement::VslSet;
 use illume_photon_stream::settings::{VisibilityMode, VslCells, VslFalloff};
 use illume_photon_stream::shade::VslField;
 use illume_scene::InstanceId;
@@ -74,19 +75,7 @@ fn the_falloff_is_the_papers_point_light_or_the_disk() {
 #[test]
 fn nearest_cells_give_every_impact_to_the_closest_vsl_of_its_object() {
     let scene = illume_scene::builtin::load("cornell-spot").unwrap();
-    let place = |oriented_cells| {
-        VslSet::place(
-            &scene,
-            &PlacementSettings {
-                vsl_count: 60,
-                oversampling: 0.1,
-                triangle_scale: 0.8,
-                seed: 5,
-                oriented_cells,
-            },
-        )
-    };
-    let (paper, oriented) = (place(false), place(true));
+    let (paper, oriented) = (sixty_vsls(&scene, false), sixty_vsls(&scene, true));
     let mut rng = Pcg32::new(3, 4);
     let (mut samples, mut oriented_differs) = (0, 0);
     for (i, inst) in scene.instances.iter().enumerate() {
