@@ -54,12 +54,13 @@ fn power_is_conserved_after_every_update_and_across_flushes() {
 }
 
 #[test]
-fn no_drift_after_a_billion_add_subtract_pairs() {
-    // 10⁹ single-impact photons through a 1024-impact pool on 8 VSL slots: every push
+fn no_drift_after_a_hundred_million_add_subtract_pairs() {
+    // 10⁸ single-impact photons through a 1024-impact pool on 8 VSL slots: every push
     // after the first 1024 is one Algorithm 2 step (subtract the oldest, add the new).
     // Integer quanta make the sums exact by construction; this checks the bookkeeping
-    // end to end (and takes a few seconds at opt-level 3).
-    const N: u64 = 1_000_000_000;
+    // end to end. (It ran 10⁹ until 2026-11-28: 40–80 s of CI's 2 cores for nothing
+    // more, as no counter or sum comes near its type's range at either count.)
+    const N: u64 = 100_000_000;
     let mut pool = PhotonPool::new(1024, 4, 1.0);
     let mut rng = Pcg32::new(99, 1);
     let mut imp = [PoolImpact {
@@ -77,7 +78,7 @@ fn no_drift_after_a_billion_add_subtract_pairs() {
             ]),
         };
         pool.push_photon(&imp);
-        if i % 100_000_000 == 0 {
+        if i % 10_000_000 == 0 {
             pool.validate().unwrap();
         }
     }
