@@ -44,8 +44,8 @@ pub struct RenderArgs {
     /// Random seed of the renderer and the technique.
     #[arg(long, allow_negative_numbers = true)]
     pub seed: Option<u64>,
-    /// `--technique reference` only: filter the still's noise with precomputed's
-    /// à-trous denoiser, guided by albedo, normal and position (direct and indirect
+    /// `--technique reference` only: filter the still's noise with the à-trous
+    /// denoiser (`illume_render::denoise`), guided by albedo, normal and position (direct and indirect
     /// light each). For looking at, never ground truth: bench, the agreement checks and
     /// the tests take their references unfiltered.
     #[arg(long)]
@@ -133,40 +133,6 @@ pub fn check_output(output: &Path) -> Result<()> {
     Ok(())
 }
 
-/// `--denoise`: the reference's still through precomputed's denoiser
-/// ([`illume_precomputed::denoise::reference_still`]); other techniques are refused.
-fn denoised_still(
-    scene: illume_scene::Scene,
-    config: &illume_engine::Config,
-    progress: &mut dyn illume_core::Progress,
-) -> Result<illume_engine::Still> {
-    let settings = config
-        .technique_settings()
-        .as_any()
-        .downcast_ref::<illume_reference::ReferenceSettings>()
-        .with_context(|| {
-            format!(
-                "--denoise: only --technique reference renders denoised stills (asked: {})",
-                config.technique
-            )
-        })?;
-    config
-        .technique_settings()
-        .check()
-        .map_err(|e| anyhow::anyhow!("reference: {e}"))?;
-    scene
-        .validate()
-        .map_err(|e| anyhow::anyhow!("{}: {e}", scene.source))?;
-    let size = (config.render.width, config.render.height);
-    let i = illume_precomputed::denoise::reference_still(scene, settings, size, true, progress);
-    Ok(illume_engine::Still {
-        full: i.full,
-        direct: i.direct,
-        indirect: i.indirect,
-        precompute_ms: 0.0,
-    })
-}
-
 /// Runs `illume render`.
 pub fn run(a: RenderArgs) -> Result<()> {
     // A still wants the converged look, not the interactive one, and the same image on
@@ -193,10 +159,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let mut bars = progress::Bars::with_spinner(&format!("{}: rendering", config.technique));
     let still = if a.denoise {
-        denoised_still(scene, &config, &mut bars)
+        illume_engine::render_denoised_still(scene, &config, &mut bars)
     } else {
-        render_still(scene, &config, &mut bars).map_err(anyhow::Error::from)
-    };
+        render_still(scene, &config, &mut bars)
+    }
+    .map_err(anyhow::Error::from);
     bars.finish();
     let still = still?;
     let secs = t0.elapsed().as_secs_f64();

@@ -1,12 +1,15 @@
-//! Key denoising (beyond the paper; issue 36): an edge-aware à-trous wavelet filter on
-//! each key, guided by the surface every texel sees (Dammertz, Sewtz, Hanika & Lensch,
+//! Denoising guided by the surfaces (beyond the papers; issue 36): an edge-aware
+//! à-trous wavelet filter on an image or a key of precomputed light, guided by the
+//! surface every texel sees (Dammertz, Sewtz, Hanika & Lensch,
 //! *Edge-avoiding À-Trous wavelet transform for fast global illumination filtering*,
 //! HPG 2010), with the variance-guided luminance weight of SVGF (Schied et al., HPG
 //! 2017). Pure Rust, no library.
 //!
-//! The paper's keys came from Mental Ray's photon map and final gather, smooth by
-//! construction; ours are path traced, and their noise is what the PCA and the adaptive
-//! schedule then see as change. The filter, per key:
+//! Two users: precomputed's keys (its paper's keys came from Mental Ray's photon map and
+//! final gather, smooth by construction; ours are path traced, and their noise is what the
+//! PCA and the adaptive schedule then see as change), and the reference's denoised still
+//! (`illume render --technique reference --denoise`). It lives here, below the
+//! techniques, because both need it. The filter, per key (or image):
 //!
 //! 1. **Demodulate**: divide each texel by its albedo (averaged over the pixel's 2×2
 //!    sub-pixel hits, floored at [`ALBEDO_FLOOR`]), so texture detail never blurs;
@@ -28,7 +31,7 @@
 //!
 //! Texels that see nothing, and atlas probes, are left as they are. The filter is a pure
 //! function of the key and its guide: with common random numbers across keys
-//! ([`crate::precompute::key_seed`]) what noise is left is also common to every key.
+//! (precomputed's `precompute::key_seed`) what noise is left is also common to every key.
 
 use illume_core::image::RgbImage;
 use illume_core::{Rgb, Vec2, Vec3, luminance};
@@ -188,59 +191,6 @@ pub fn atrous(image: &RgbImage, half: Option<&RgbImage>, guide: &Guide) -> RgbIm
         })
         .collect();
     RgbImage::from_vec(image.width(), image.height(), pixels).expect("one value per texel")
-}
-
-/// A still of the reference path tracer, denoised (issue 36, goal 6: `illume render
-/// --technique reference --denoise`): `settings.spp` samples in two halves (the first
-/// half's mean gives the variance), then the direct and the indirect image each filtered
-/// under the camera's guide; `full` is their sum, so a split still sums to it. With
-/// `denoise = false` the images are the reference's own, bit for bit (chunking does not
-/// change them).
-///
-/// Never ground truth: the bench, the agreement harness and the tests take their
-/// references from [`illume_reference`] directly, whose settings have no denoising (the
-/// filter blurs what noise hides: a reference that is filtered cannot show a technique's
-/// blur). Only the `render` command's flag reaches this function.
-pub fn reference_still(
-    scene: illume_scene::Scene,
-    settings: &illume_reference::ReferenceSettings,
-    (width, height): (u32, u32),
-    denoise: bool,
-    progress: &mut dyn illume_core::Progress,
-) -> illume_transport::StillImages {
-    let world = World::new(scene);
-    let mut r = illume_reference::ReferenceRenderer::new(settings.clone(), width, height);
-    let spp = settings.spp;
-    progress.begin("path tracing", u64::from(spp));
-    let chunk = (spp / 32).max(1);
-    let mut run_to = |r: &mut illume_reference::ReferenceRenderer, to: u32| {
-        while r.samples() < to {
-            r.add_samples(&world, chunk.min(to - r.samples()));
-            progress.set(u64::from(r.samples()));
-        }
-    };
-    let half = (denoise && spp >= 2).then(|| {
-        run_to(&mut r, spp / 2);
-        r.images()
-    });
-    run_to(&mut r, spp);
-    progress.end();
-    let all = r.images();
-    if !denoise {
-        return illume_transport::StillImages {
-            full: all.full,
-            direct: all.direct,
-            indirect: all.indirect,
-        };
-    }
-    let guide = Guide::camera(&world, width, height, 0);
-    let direct = atrous(&all.direct, half.as_ref().map(|h| &h.direct), &guide);
-    let indirect = atrous(&all.indirect, half.as_ref().map(|h| &h.indirect), &guide);
-    illume_transport::StillImages {
-        full: direct.add(&indirect),
-        direct,
-        indirect,
-    }
 }
 
 /// The weight of the surface at `q` seen from `p` (normal and tangent-plane distance), 0

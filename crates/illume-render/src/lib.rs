@@ -27,6 +27,7 @@ use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+pub mod denoise;
 pub mod shadow_choice;
 pub mod shadow_map;
 

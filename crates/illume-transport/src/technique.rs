@@ -285,6 +285,12 @@ pub trait Registration: 'static {
     /// technique's precompute and one frame.
     const STILL: Option<StillFn<Self::Settings>> = None;
 
+    /// A denoised still by the technique's own route (`illume render --denoise`), when it
+    /// has one (the reference: its path-traced still through
+    /// `illume_render::denoise`). Never ground truth: benches and tests take their
+    /// references from [`Registration::STILL`]. Default: none (`--denoise` refused).
+    const DENOISED_STILL: Option<StillFn<Self::Settings>> = None;
+
     /// The technique's offline command, which the CLI mounts as `illume NAME …`
     /// (precomputed's `illume precompute`). Default: none.
     const OFFLINE: Option<OfflineCommand> = None;
@@ -337,7 +343,8 @@ pub trait OfflineProgress: illume_core::Progress {
     fn finish(&mut self);
 }
 
-/// A technique's own route to a still ([`Registration::STILL`]): the image of `scene`
+/// A technique's own route to a still ([`Registration::STILL`],
+/// [`Registration::DENOISED_STILL`]): the image of `scene`
 /// (already validated, at its current time) at `(width, height)` pixels with
 /// `settings` (already checked), reporting to `progress`.
 pub type StillFn<S> =

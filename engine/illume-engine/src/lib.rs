@@ -30,7 +30,7 @@ pub mod technique_kind;
 pub use config::{AnySettings, ConfigError, ConfigLayers};
 pub use illume_transport::{Agreement, AgreementSpec, FrameHistory};
 pub use step_record::{FRAMES_CSV_COLUMNS, FramesCsv, StepRecord};
-pub use still::{Still, render_still};
+pub use still::{Still, render_denoised_still, render_still};
 
 // The one list of techniques: `Variant(table): registration`. Everything the engine, the
 // CLI and the window know of a technique comes from its registration, in its own crate.
@@ -105,6 +105,14 @@ pub enum EngineError {
         technique: &'static str,
         /// The technique's own error.
         source: TechniqueError,
+    },
+    /// `illume render --denoise` with a technique that has no denoised still.
+    #[error("--denoise: {technique} has no denoised still (techniques with one: {have})")]
+    NoDenoisedStill {
+        /// The technique asked for.
+        technique: &'static str,
+        /// The techniques that have one, comma-separated.
+        have: String,
     },
 }
 

@@ -29,20 +29,7 @@ pub fn render_still(
 ) -> Result<Still, EngineError> {
     let kind = config.technique;
     if kind.has_own_still() {
-        config
-            .technique_settings()
-            .check()
-            .map_err(|source| kind.error(source))?;
-        scene
-            .validate()
-            .map_err(|e| EngineError::InvalidScene(format!("{}: {e}", scene.source)))?;
-        let i = kind.own_still(scene, config, progress)?;
-        return Ok(Still {
-            full: i.full,
-            direct: i.direct,
-            indirect: i.indirect,
-            precompute_ms: 0.0,
-        });
+        return own_still(scene, config, false, progress);
     }
     let t = scene.time;
     let mut engine = Engine::new(scene, config)?;
@@ -53,5 +40,54 @@ pub fn render_still(
         direct: out.frame.direct,
         indirect: out.frame.indirect,
         precompute_ms: precompute_ms + out.precompute_ms,
+    })
+}
+
+/// [`render_still`], denoised by the technique's own route (`illume render --denoise`;
+/// [`TechniqueKind::has_denoised_still`](crate::TechniqueKind::has_denoised_still): the
+/// reference's path-traced still through `illume_render::denoise`). A technique without
+/// one is refused, naming those that have one. Never ground truth (the bench and the
+/// tests take [`render_still`]'s).
+pub fn render_denoised_still(
+    scene: Scene,
+    config: &Config,
+    progress: &mut dyn Progress,
+) -> Result<Still, EngineError> {
+    let kind = config.technique;
+    if !kind.has_denoised_still() {
+        let have: Vec<&str> = crate::TechniqueKind::ALL
+            .iter()
+            .filter(|k| k.has_denoised_still())
+            .map(|k| k.name())
+            .collect();
+        return Err(EngineError::NoDenoisedStill {
+            technique: kind.name(),
+            have: have.join(", "),
+        });
+    }
+    own_still(scene, config, true, progress)
+}
+
+/// The technique's own still: its settings checked and the scene validated first.
+fn own_still(
+    scene: Scene,
+    config: &Config,
+    denoised: bool,
+    progress: &mut dyn Progress,
+) -> Result<Still, EngineError> {
+    let kind = config.technique;
+    config
+        .technique_settings()
+        .check()
+        .map_err(|source| kind.error(source))?;
+    scene
+        .validate()
+        .map_err(|e| EngineError::InvalidScene(format!("{}: {e}", scene.source)))?;
+    let i = kind.own_still(scene, config, denoised, progress)?;
+    Ok(Still {
+        full: i.full,
+        direct: i.direct,
+        indirect: i.indirect,
+        precompute_ms: 0.0,
     })
 }

@@ -127,6 +127,7 @@ pub trait Registered: Sync {
     ) -> Result<Box<dyn Technique>, TechniqueError>;
     fn prepare_scene(&self, scene: &mut Scene, settings: &dyn Any) -> Result<(), TechniqueError>;
     fn has_still(&self) -> bool;
+    fn has_denoised_still(&self) -> bool;
     fn setting_fields(&self) -> &'static [illume_transport::SettingField];
     fn data_key(&self) -> Option<&'static str>;
     fn offline(&self) -> Option<illume_transport::OfflineCommand>;
@@ -135,6 +136,7 @@ pub trait Registered: Sync {
         scene: Scene,
         settings: &dyn Any,
         size: (u32, u32),
+        denoised: bool,
         progress: &mut dyn illume_core::Progress,
     ) -> Result<StillImages, TechniqueError>;
 }
@@ -191,6 +193,9 @@ impl<R: Registration> Registered for Entry<R> {
     fn has_still(&self) -> bool {
         R::STILL.is_some()
     }
+    fn has_denoised_still(&self) -> bool {
+        R::DENOISED_STILL.is_some()
+    }
     fn setting_fields(&self) -> &'static [illume_transport::SettingField] {
         <R::Settings as illume_transport::SettingsTable>::FIELDS
     }
@@ -205,9 +210,13 @@ impl<R: Registration> Registered for Entry<R> {
         scene: Scene,
         settings: &dyn Any,
         size: (u32, u32),
+        denoised: bool,
         progress: &mut dyn illume_core::Progress,
     ) -> Result<StillImages, TechniqueError> {
-        let still = R::STILL.expect("asked only where has_still");
+        let still = match denoised {
+            false => R::STILL.expect("asked only where has_still"),
+            true => R::DENOISED_STILL.expect("asked only where has_denoised_still"),
+        };
         still(scene, Self::settings(settings), size, progress)
     }
 }
@@ -303,17 +312,31 @@ impl TechniqueKind {
         self.registration().has_still()
     }
 
-    /// The still of `scene` by the technique's own route (see
-    /// [`TechniqueKind::has_own_still`]; panics for a technique without one).
+    /// True when the technique renders a denoised still (`illume render --denoise`,
+    /// [`Registration::DENOISED_STILL`]).
+    pub fn has_denoised_still(self) -> bool {
+        self.registration().has_denoised_still()
+    }
+
+    /// The still of `scene` by the technique's own route, denoised or not (see
+    /// [`TechniqueKind::has_own_still`], [`TechniqueKind::has_denoised_still`]; panics
+    /// for a technique without that route).
     pub(crate) fn own_still(
         self,
         scene: Scene,
         config: &Config,
+        denoised: bool,
         progress: &mut dyn illume_core::Progress,
     ) -> Result<StillImages, EngineError> {
         let size = (config.render.width, config.render.height);
         self.registration()
-            .still(scene, config.settings_of(self).as_any(), size, progress)
+            .still(
+                scene,
+                config.settings_of(self).as_any(),
+                size,
+                denoised,
+                progress,
+            )
             .map_err(|source| self.error(source))
     }
 

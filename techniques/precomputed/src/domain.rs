@@ -15,12 +15,12 @@
 
 use crate::PrecomputedError;
 use crate::atlas::{Atlas, PROBE_AXES};
-use crate::denoise::{Guide, GuideTexel};
 use crate::settings::{Denoise, Domain, PrecomputedSettings};
 use illume_core::image::RgbImage;
 use illume_core::sampling::{Pcg32, SampleStream, mix64};
 use illume_core::{Affine3A, Mat3, Ray, Rgb, Vec2, Vec3};
 use illume_reference::{ReferenceRenderer, ReferenceSettings};
+use illume_render::denoise::{Guide, GuideTexel};
 use illume_transport::path::{PathRadiance, PathSettings, continue_path};
 use illume_transport::{SurfaceHit, World};
 use rayon::prelude::*;
@@ -104,7 +104,7 @@ impl Layout {
 
     /// Renders light of `world` into a key image: light reflected ≥ 2 times (`indirect`)
     /// or all reflected light (`!indirect`, for the sky image), `spp` samples per texel,
-    /// then `denoise`d ([`crate::denoise`]).
+    /// then `denoise`d ([`illume_render::denoise`]).
     pub fn render(
         &self,
         world: &World,
@@ -212,8 +212,8 @@ fn render_camera(
     if !filtering {
         return image;
     }
-    let guide = crate::denoise::Guide::camera(world, size.0, size.1, 0);
-    crate::denoise::atrous(&image, half.as_ref(), &guide)
+    let guide = illume_render::denoise::Guide::camera(world, size.0, size.1, 0);
+    illume_render::denoise::atrous(&image, half.as_ref(), &guide)
 }
 
 /// A white Lambertian version of `hit` (albedo 1, no emission): what a lightmap texel
@@ -380,7 +380,7 @@ fn render_atlas(
             texels: gathered.iter().map(|g| g.map(|g| g.0)).collect(),
         };
         let half = (spp >= 2).then(|| lightmap(|g| g.2));
-        let filtered = crate::denoise::atrous(&lightmap(|g| g.1), half.as_ref(), &guide);
+        let filtered = illume_render::denoise::atrous(&lightmap(|g| g.1), half.as_ref(), &guide);
         for (v, f) in values.iter_mut().zip(filtered.pixels()) {
             if v.is_some() {
                 *v = Some(*f);

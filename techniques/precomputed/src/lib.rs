@@ -36,7 +36,6 @@
 
 pub mod atlas;
 pub mod cli;
-pub mod denoise;
 pub mod domain;
 pub mod error;
 pub mod file;

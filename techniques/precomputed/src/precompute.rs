@@ -13,7 +13,7 @@
 //! - a key whose sun is at or below the horizon is exactly black, flagged dark, not
 //!   rendered and kept out of the PCA;
 //! - every key uses the same samples per texel (common random numbers,
-//!   [`key_seed`]), and is denoised ([`crate::denoise`]) unless `denoise = "none"`: any
+//!   [`key_seed`]), and is denoised ([`illume_render::denoise`]) unless `denoise = "none"`: any
 //!   machine renders the same key.
 
 use crate::PrecomputedError;

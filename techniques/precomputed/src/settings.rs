@@ -65,7 +65,7 @@ pub enum Denoise {
     /// Keys as the path tracer made them.
     None,
     /// An edge-aware à-trous wavelet filter guided by each texel's surface (normal,
-    /// position, albedo demodulated) and its estimated variance ([`crate::denoise`]).
+    /// position, albedo demodulated) and its estimated variance ([`illume_render::denoise`]).
     /// Default.
     Atrous,
 }

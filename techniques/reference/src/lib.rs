@@ -22,6 +22,7 @@
 //! | full-image progressive rendering, direct/indirect split | [`full_image`] |
 //! | indirect light at G-buffer points, accumulated over frames ([`Technique`](illume_transport::Technique)) | [`state`] |
 //! | scene changes → restart of the average | [`update`] |
+//! | the still of `illume render`, plain or denoised (`--denoise`, `illume_render::denoise`) | `still` |
 //! | settings and presets | [`settings`] |
 //!
 //! **Failure modes.** Noise, falling as 1/√spp; caustics through specular paths are
@@ -42,6 +43,7 @@ pub mod error;
 pub mod full_image;
 pub mod settings;
 pub mod state;
+mod still;
 pub mod update;
 
 pub use error::ReferenceError;
@@ -73,7 +75,9 @@ impl illume_transport::Registration for Descriptor {
                   halves, photon_stream's tests/photon_stream/reference.rs), its energy noise well below 1 %",
         },
     );
-    const STILL: Option<illume_transport::StillFn<ReferenceSettings>> = Some(still);
+    const STILL: Option<illume_transport::StillFn<ReferenceSettings>> = Some(still::still);
+    const DENOISED_STILL: Option<illume_transport::StillFn<ReferenceSettings>> =
+        Some(still::denoised_still);
 
     fn build(
         _world: &illume_transport::SharedWorld,
@@ -82,32 +86,4 @@ impl illume_transport::Registration for Descriptor {
     ) -> Result<Box<dyn illume_transport::Technique>, illume_transport::TechniqueError> {
         Ok(Box::new(ReferenceTechnique::new(settings.clone())?))
     }
-}
-
-/// The whole image by path tracing ([`ReferenceRenderer`], `spp` samples per pixel,
-/// progress per chunk of samples).
-fn still(
-    scene: illume_scene::Scene,
-    settings: &ReferenceSettings,
-    (width, height): (u32, u32),
-    progress: &mut dyn illume_core::Progress,
-) -> Result<illume_transport::StillImages, illume_transport::TechniqueError> {
-    let world = illume_transport::World::new(scene);
-    let mut r = ReferenceRenderer::new(settings.clone(), width, height);
-    let spp = settings.spp;
-    progress.begin("path tracing", spp as u64);
-    // Chunks of samples keep the bar moving and the work parallel over pixels; the
-    // image does not depend on the chunking.
-    let chunk = (spp / 32).max(1);
-    while r.samples() < spp {
-        r.add_samples(&world, chunk.min(spp - r.samples()));
-        progress.set(r.samples() as u64);
-    }
-    progress.end();
-    let i = r.images();
-    Ok(illume_transport::StillImages {
-        full: i.full,
-        direct: i.direct,
-        indirect: i.indirect,
-    })
 }

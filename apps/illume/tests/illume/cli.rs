@@ -42,7 +42,7 @@ fn reference_render_of_the_furnace_gives_le_over_one_minus_rho() {
 
 /// `--denoise` (issue 36, goal 6) end to end: the furnace's analytic answer (2
 /// everywhere) is kept and the split parts sum to the full image (the filter's noise
-/// reduction: `illume-precomputed`'s `denoised_reference_still_keeps_the_furnace`); only
+/// reduction: illume-reference's `denoised_reference_still_keeps_the_furnace`); only
 /// the reference takes the flag (a denoised still is never a technique's ground truth).
 #[test]
 fn reference_denoise_keeps_the_furnace() {

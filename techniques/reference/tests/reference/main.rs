@@ -6,4 +6,5 @@
 
 mod agreement;
 mod analytic;
+mod denoised;
 mod independent_renderer;
