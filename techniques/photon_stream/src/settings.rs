@@ -222,6 +222,20 @@ pub struct PhotonStreamSettings {
     /// photon rates).
     #[setting(default = true)]
     pub rest_when_settled: bool,
+    /// Streaming mode: the most frames a change that affects lighting takes to reach the
+    /// whole pool when the streaming thread falls behind (beyond the paper, issue 33 goal
+    /// 5). Before each frame, while photons from before the last change remain pooled,
+    /// the frame loop checks the impacts that entered the pool since the previous frame;
+    /// below `pool_size / turnover_frames` it traces the rest itself, on every core. The
+    /// thread at low priority beside frames rendered back to back can fall to a few tens
+    /// of thousands of impacts a second (latency 2.3 s in `illume demo`, issue 33), and
+    /// when it then gets the cores, the indirect light jumps. Lower: lower latency and
+    /// smoother changes, at up to `pool_size / turnover_frames` impacts of tracing per
+    /// frame (≈ 1–3 ms at the default pool on 2 cores); it costs nothing while the thread
+    /// keeps up. 0: off (the paper: latency = pool size / the thread's rate). Default 15:
+    /// 0.5 s at 30 fps.
+    #[setting(default = 15, unit = "frames", per_frame)]
+    pub turnover_frames: u32,
     /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
     /// cost linear in the count.
@@ -334,7 +348,7 @@ impl PhotonStreamSettings {
     /// switched off: VSLs as point lights (`falloff = inverse_square`), impacts to the
     /// nearest VSL (`cells = nearest`), every pixel shaded (`shading_stride = 1`), no
     /// near-field gather, no VSL shadows, photons on full-resolution textures and a stream
-    /// that never rests. 100 VSLs as Tables 2–3; the pool keeps the default's 100 000
+    /// that never rests nor is topped up by the frame loop. 100 VSLs as Tables 2–3; the pool keeps the default's 100 000
     /// impacts, a size the paper does not give. The synchronous warm-up stays on: it
     /// changes no estimate, only fills the pool before the first frame (the state the
     /// paper's stream reaches a moment after it starts; without it a still is dark). The
@@ -349,6 +363,7 @@ impl PhotonStreamSettings {
             visibility: VisibilityMode::Off,
             filtered_textures: false,
             rest_when_settled: false,
+            turnover_frames: 0,
             ..Self::default()
         }
     }

@@ -29,6 +29,11 @@ pub struct PhotonStream {
     warmed_up: bool,
     /// Photons pushed to the pool when the last [`Technique::indirect`] read it.
     pushed_at_indirect: Option<u64>,
+    /// Impacts pushed to the pool at the end of the last [`Technique::advance`]
+    /// ([`PhotonStreamSettings::turnover_frames`]).
+    impacts_at_advance: Option<u64>,
+    /// Photons the last [`Technique::advance`] traced to keep the turnover.
+    topped_up: u64,
 }
 
 /// VSL fluxes \[W\] from a pool snapshot: front and back side of each VSL.
@@ -123,6 +128,8 @@ impl PhotonStream {
             shading_ms: 0.0,
             warmed_up: false,
             pushed_at_indirect: None,
+            impacts_at_advance: None,
+            topped_up: 0,
         })
     }
 
@@ -164,6 +171,31 @@ impl PhotonStream {
         }
         self.warmed_up = true;
         shot
+    }
+
+    /// Streaming mode, [`PhotonStreamSettings::turnover_frames`]: photons to trace now so
+    /// that the impacts pooled since the last frame reach `pool_size / turnover_frames`,
+    /// while photons from before the last lighting change remain (0 when the thread
+    /// keeps up, is paused or rests, and at the first frame).
+    fn turnover_deficit(&self) -> u64 {
+        let frames = u64::from(self.settings.turnover_frames);
+        let Some(before) = self.impacts_at_advance else {
+            return 0;
+        };
+        if frames == 0 || self.shared.is_paused() {
+            return 0;
+        }
+        let s = self.shared.lock();
+        let pool = &s.pool;
+        let evicted = pool.photons_pushed() - pool.photons();
+        if s.photons_at_change <= evicted {
+            return 0; // every pooled photon was traced after the last change
+        }
+        let floor = (pool.capacity() as u64).div_ceil(frames);
+        let deficit = floor.saturating_sub(pool.impacts_pushed() - before);
+        // Impacts per photon so far (≥ 1 in a closed scene; escaping photons lower it).
+        let per_photon = pool.impacts_pushed() as f64 / pool.photons_pushed().max(1) as f64;
+        (deficit as f64 / per_photon.max(0.25)).ceil() as u64
     }
 
     /// A consistent copy of the VSL powers.
@@ -245,15 +277,32 @@ impl Technique for PhotonStream {
 
     /// First call with [`PhotonStreamSettings::warm_up`]: fills the pool. Then, in
     /// deterministic mode: shoots `budget.work` photons (default
-    /// [`PhotonStreamSettings::photons_per_frame`]). Streaming mode: nothing (the thread
-    /// runs by itself); `budget` is ignored.
+    /// [`PhotonStreamSettings::photons_per_frame`]). Streaming mode: the thread runs by
+    /// itself (`budget` is ignored); when it has fallen behind a change, the frame loop
+    /// traces what [`PhotonStreamSettings::turnover_frames`] asks.
     fn advance(&mut self, world: &World, budget: &Budget) {
         if self.settings.warm_up && !self.warmed_up {
             self.warm_up(world);
         }
-        if self.settings.mode == StreamMode::Deterministic {
-            let n = budget.work.unwrap_or(self.settings.photons_per_frame);
-            self.shoot(world, n);
+        match self.settings.mode {
+            StreamMode::Deterministic => {
+                let n = budget.work.unwrap_or(self.settings.photons_per_frame);
+                self.shoot(world, n);
+            }
+            StreamMode::Streaming => {
+                // The count per photon is an average: a second round (rarely a third)
+                // makes up a shortfall.
+                self.topped_up = 0;
+                for _ in 0..4 {
+                    let n = self.turnover_deficit();
+                    if n == 0 {
+                        break;
+                    }
+                    self.shoot(world, n);
+                    self.topped_up += n;
+                }
+                self.impacts_at_advance = Some(self.shared.lock().pool.impacts_pushed());
+            }
         }
     }
 
@@ -316,6 +365,7 @@ impl Technique for PhotonStream {
             ("shading_ms", self.shading_ms),
             ("shadow_rays", self.last_shade.shadow_rays as f64),
             ("paused", if self.shared.is_paused() { 1.0 } else { 0.0 }),
+            ("topped_up_photons", self.topped_up as f64),
         ] {
             c.set(name, x);
         }
@@ -341,6 +391,8 @@ impl Technique for PhotonStream {
         self.shared.flush();
         self.warmed_up = false;
         self.pushed_at_indirect = None;
+        self.impacts_at_advance = None;
+        self.topped_up = 0;
         self.frames = 0;
         self.last_shade = ShadeStats::default();
     }

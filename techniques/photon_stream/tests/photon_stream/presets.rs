@@ -25,6 +25,7 @@ fn paper_values(s: &PhotonStreamSettings) -> Vec<(&'static str, bool)> {
         ("visibility_rays", s.visibility == VisibilityMode::Off), // used only with it
         ("filtered_textures", !s.filtered_textures),
         ("rest_when_settled", !s.rest_when_settled),
+        ("turnover_frames", s.turnover_frames == 0),
     ]
 }
 
