@@ -268,7 +268,8 @@ struct Taps {
 /// walls read outside [0, 1] for a third of their lookups).
 #[inline(always)]
 pub(crate) fn wrap_pair(mode: WrapMode, i: i64, n: u32) -> (usize, usize) {
-    if i >= 0 && i < i64::from(n) - 1 {
+    // `0 ≤ i < n − 1` in one unsigned comparison (a negative `i` is above any `n`).
+    if (i as u64) < u64::from(n).wrapping_sub(1) {
         return (i as usize, i as usize + 1);
     }
     if mode == WrapMode::Repeat {
