@@ -409,32 +409,50 @@ impl<'a> PrimarySurfaces<'a> {
             _ => None,
         };
         let scene = &self.world.scene;
+        let tables = &self.world.hit_tables;
+        // Normal map and base colour read at the same coordinates (no texture transform
+        // or the same one): one filtered lookup of both, bit for bit the two lookups.
+        let pair = match (&footprint, &tri.normal_map) {
+            (Some(f), Some(map)) if tri.textured => {
+                let mat = &scene.materials[tri.material.index()];
+                match mat.base_color_texture {
+                    Some(base) if mat.base_color_transform == mat.normal_transform => {
+                        let f = f.through(uv, |uv| mat.normal_uv(uv));
+                        let textures = [map.texture, base];
+                        Some(tables.sample_footprint_pair(scene, textures, mat.normal_uv(uv), &f))
+                    }
+                    _ => None,
+                }
+            }
+            _ => None,
+        };
         if let Some(map) = &tri.normal_map {
             let [t0, t1, t2] = map.tangents;
             let mat = &scene.materials[tri.material.index()];
-            let tables = &self.world.hit_tables;
             shading_normal = crate::surface::normal_mapped_with(
                 mat,
                 shading_normal,
                 t0 * b0 + t1 * b1 + t2 * b2,
                 map.sign,
-                || match &footprint {
-                    Some(f) => {
+                || match (&pair, &footprint) {
+                    (Some((normal, _)), _) => *normal,
+                    (None, Some(f)) => {
                         let at = mat.normal_uv(uv);
                         let f = f.through(uv, |uv| mat.normal_uv(uv));
                         tables.sample_footprint(scene, map.texture, at, &f)
                     }
-                    None => scene.textures[map.texture.index()].sample(mat.normal_uv(uv)),
+                    (None, None) => scene.textures[map.texture.index()].sample(mat.normal_uv(uv)),
                 },
             );
         }
         if shading_normal.dot(ng) < 0.0 {
             shading_normal = -shading_normal;
         }
-        let albedo = match (tri.textured, &footprint) {
-            (false, _) => tri.albedo,
-            (true, Some(f)) => self.world.albedo_footprint(tri.material, uv, f),
-            (true, None) => self.world.albedo(tri.material, uv),
+        let albedo = match (tri.textured, &footprint, pair) {
+            (false, _, _) => tri.albedo,
+            (true, _, Some((_, base))) => scene.materials[tri.material.index()].base_color * base,
+            (true, Some(f), None) => self.world.albedo_footprint(tri.material, uv, f),
+            (true, None, None) => self.world.albedo(tri.material, uv),
         };
         let (metallic, roughness) = if tri.metal_rough_textured {
             self.world.scene.metal_rough(tri.material, uv)

@@ -214,11 +214,33 @@ impl HitTables {
     ) -> Rgb {
         let level0 = |uv| self.sample(scene, texture, uv);
         match self.mips.get(texture.index()) {
-            Some(Some(chain)) => {
-                let t = &scene.textures[texture.index()];
-                chain.sample(uv, footprint.lod(t.width, t.height), level0)
-            }
+            Some(Some(chain)) => chain.sample(uv, chain.lod(footprint), level0),
             _ => level0(uv),
+        }
+    }
+
+    /// `(sample_footprint(a, …), sample_footprint(b, …))` at the same `uv` and
+    /// `footprint`, bit for bit: a material's normal map and base colour usually share
+    /// their texture size, wrap modes and coordinates, and then the level of detail,
+    /// texel positions and weights are found once for both.
+    #[inline]
+    pub fn sample_footprint_pair(
+        &self,
+        scene: &Scene,
+        [a, b]: [TextureId; 2],
+        uv: Vec2,
+        footprint: &UvFootprint,
+    ) -> (Rgb, Rgb) {
+        match (self.mips.get(a.index()), self.mips.get(b.index())) {
+            (Some(Some(ca)), Some(Some(cb))) if ca.same_layout(cb) => {
+                ca.sample_pair(cb, uv, ca.lod(footprint), |uv| {
+                    (self.sample(scene, a, uv), self.sample(scene, b, uv))
+                })
+            }
+            _ => (
+                self.sample_footprint(scene, a, uv, footprint),
+                self.sample_footprint(scene, b, uv, footprint),
+            ),
         }
     }
 
@@ -445,6 +467,72 @@ mod tests {
         });
         tables.update(&scene);
         assert!(tables.mips[emissive.index()].is_some());
+    }
+
+    #[test]
+    fn paired_footprint_lookups_equal_the_two_lookups_bit_for_bit() {
+        use illume_scene::Material;
+        use illume_scene::builtin::SceneBuilder;
+        let mut rng = Pcg32::new(5, 6);
+        let mut b = SceneBuilder::new();
+        // A packed sRGB base colour and an unpacked (f32) normal map of the same size
+        // and wraps (the shared path), and a normal map one texel narrower (not shared).
+        let mut base = srgb8_texture(37, 21, |x, y| {
+            [(x * 7) as u8, (y * 11) as u8, (x ^ y) as u8]
+        });
+        base.wrap_v = WrapMode::Mirror;
+        let f32_map = |w: u32| {
+            let mut t = Texture::from_fn("n", w, 21, |x, y| {
+                Rgb::new(x as f32 * 0.0173 + 0.01, y as f32 * 0.029 + 0.001, 0.5)
+            });
+            t.wrap_v = WrapMode::Mirror;
+            t
+        };
+        let (base, normal, narrow) = (
+            b.texture(base),
+            b.texture(f32_map(37)),
+            b.texture(f32_map(36)),
+        );
+        for n in [normal, narrow] {
+            b.material(Material {
+                base_color_texture: Some(base),
+                normal_texture: Some(n),
+                ..Default::default()
+            });
+        }
+        let scene = b.finish("test:pairs");
+        let tables = HitTables::new(&scene);
+        let chain = |t: TextureId| tables.mips[t.index()].as_ref().expect("chain");
+        assert!(
+            tables.textures[base.index()].is_some() && tables.textures[normal.index()].is_none()
+        );
+        assert!(chain(normal).same_layout(chain(base)));
+        assert!(!chain(narrow).same_layout(chain(base)));
+        let bits = |c: Rgb| c.to_array().map(f32::to_bits);
+        let mut levels = [0usize; 3];
+        for i in 0..20_000 {
+            let uv = Vec2::new(rng.next_1d() * 8.0 - 4.0, rng.next_1d() * 8.0 - 4.0);
+            // Footprints from a fraction of a texel (level 0) to beyond the chain.
+            let scale = 2f32.powf(rng.next_1d() * 14.0 - 8.0) / 37.0;
+            let footprint = UvFootprint {
+                duv_dx: Vec2::new(rng.next_1d() - 0.5, rng.next_1d() - 0.5) * scale,
+                duv_dy: Vec2::new(rng.next_1d() - 0.5, rng.next_1d() - 0.5) * scale,
+            };
+            let lod = chain(base).lod(&footprint);
+            levels[usize::from(lod > 0.0) + usize::from(lod > 1.0)] += 1;
+            for n in [normal, narrow] {
+                let (a, b) = tables.sample_footprint_pair(&scene, [n, base], uv, &footprint);
+                let a0 = tables.sample_footprint(&scene, n, uv, &footprint);
+                let b0 = tables.sample_footprint(&scene, base, uv, &footprint);
+                assert_eq!(
+                    (bits(a), bits(b)),
+                    (bits(a0), bits(b0)),
+                    "{i}: {uv} lod {lod}"
+                );
+            }
+        }
+        // Every branch was taken: magnified, between level 0 and 1, deeper levels.
+        assert!(levels.iter().all(|&n| n > 1000), "{levels:?}");
     }
 
     #[test]

@@ -35,7 +35,12 @@ impl UvFootprint {
     /// not finite (a neighbouring ray parallel to the surface) gets the coarsest level.
     #[inline]
     pub fn lod(&self, width: u32, height: u32) -> f32 {
-        let size = Vec2::new(width as f32, height as f32);
+        self.lod_for_size(Vec2::new(width as f32, height as f32))
+    }
+
+    /// [`UvFootprint::lod`] for a texture of `size = (width, height)` texels, as floats.
+    #[inline]
+    pub(crate) fn lod_for_size(&self, size: Vec2) -> f32 {
         let (x, y) = (self.duv_dx * size, self.duv_dy * size);
         0.5 * log2_approx(x.length_squared().max(y.length_squared()))
     }
@@ -77,6 +82,9 @@ pub(crate) struct MipLevel {
 /// every level keeps the texture's mean up to f32 rounding.
 #[derive(Clone, Debug)]
 pub(crate) struct MipChain {
+    /// The texture's own size (level 0), for the level of detail, and as floats.
+    size0: (u32, u32),
+    size0_f32: Vec2,
     levels: Vec<MipLevel>,
     wrap_u: WrapMode,
     wrap_v: WrapMode,
@@ -104,6 +112,8 @@ impl MipChain {
             (w, h) = (nw, nh);
         }
         Some(Self {
+            size0: (texture.width, texture.height),
+            size0_f32: Vec2::new(texture.width as f32, texture.height as f32),
             levels,
             wrap_u: texture.wrap_u,
             wrap_v: texture.wrap_v,
@@ -126,54 +136,146 @@ impl MipChain {
             .collect()
     }
 
+    /// True when `other` has this chain's texture size and wrap modes: a lookup at the
+    /// same `uv` and level of detail then reads the same texel positions with the same
+    /// weights in both ([`MipChain::sample_pair`]).
+    #[inline]
+    pub(crate) fn same_layout(&self, other: &Self) -> bool {
+        // Level k's size follows from level 0's: equal sizes, equal chains.
+        self.size0 == other.size0 && self.wrap_u == other.wrap_u && self.wrap_v == other.wrap_v
+    }
+
+    /// The level of detail of `footprint` for this texture ([`UvFootprint::lod`]).
+    #[inline]
+    pub(crate) fn lod(&self, footprint: &UvFootprint) -> f32 {
+        footprint.lod_for_size(self.size0_f32)
+    }
+
     /// Trilinear lookup at `uv` for level of detail `lod`, `level0` reading the texture
     /// itself bilinearly; exactly `level0(uv)` where `lod ≤ 0` or is NaN, the one-texel
     /// level beyond the chain's end.
     #[inline]
     pub(crate) fn sample(&self, uv: Vec2, lod: f32, level0: impl Fn(Vec2) -> Rgb) -> Rgb {
-        if lod.is_nan() || lod <= 0.0 {
+        let Some((k, f)) = self.split_lod(lod) else {
             return level0(uv);
+        };
+        match (k, f > 0.0) {
+            (0, false) => level0(uv),
+            (0, true) => level0(uv)
+                .extend(0.0)
+                .lerp(self.blend(0, &self.taps(0, uv)), f)
+                .truncate(),
+            (_, false) => self.blend(k - 1, &self.taps(k - 1, uv)).truncate(),
+            (_, true) => self
+                .blend(k - 1, &self.taps(k - 1, uv))
+                .lerp(self.blend(k, &self.taps(k, uv)), f)
+                .truncate(),
+        }
+    }
+
+    /// [`MipChain::sample`] of this chain and of `other` (whose layout is the same,
+    /// [`MipChain::same_layout`]) at the same `uv` and `lod`, bit for bit, with the
+    /// level, texel positions and weights found once for both.
+    #[inline]
+    pub(crate) fn sample_pair(
+        &self,
+        other: &Self,
+        uv: Vec2,
+        lod: f32,
+        level0: impl Fn(Vec2) -> (Rgb, Rgb),
+    ) -> (Rgb, Rgb) {
+        debug_assert!(self.same_layout(other));
+        let Some((k, f)) = self.split_lod(lod) else {
+            return level0(uv);
+        };
+        let both = |i: usize, taps: &Taps| (self.blend(i, taps), other.blend(i, taps));
+        let lerp = |(a, b): (Vec4, Vec4), (c, d): (Vec4, Vec4)| {
+            (a.lerp(c, f).truncate(), b.lerp(d, f).truncate())
+        };
+        match (k, f > 0.0) {
+            (0, false) => level0(uv),
+            (0, true) => {
+                let (a, b) = level0(uv);
+                lerp((a.extend(0.0), b.extend(0.0)), both(0, &self.taps(0, uv)))
+            }
+            (_, false) => {
+                let (a, b) = both(k - 1, &self.taps(k - 1, uv));
+                (a.truncate(), b.truncate())
+            }
+            (_, true) => lerp(
+                both(k - 1, &self.taps(k - 1, uv)),
+                both(k, &self.taps(k, uv)),
+            ),
+        }
+    }
+
+    /// `lod` as the level `k` at or below it and the blend `f` towards level `k + 1`
+    /// (`k = 0` is the texture itself), clamped to the chain's end; `None` for
+    /// `lod ≤ 0` or NaN (the texture itself).
+    #[inline(always)]
+    fn split_lod(&self, lod: f32) -> Option<(usize, f32)> {
+        if lod.is_nan() || lod <= 0.0 {
+            return None;
         }
         let top = self.levels.len() as f32;
         let lod = lod.min(top);
-        // lod ∈ (0, top]: `k` the coarser-or-equal level below it, `f` the blend.
-        let k = lod as usize;
-        let f = lod - k as f32;
-        let below = match k {
-            0 => level0(uv).extend(0.0),
-            _ => self.bilinear(k - 1, uv),
-        };
-        if f <= 0.0 {
-            return below.truncate();
-        }
-        below.lerp(self.bilinear(k, uv), f).truncate()
+        // lod ∈ (0, top] < 2³¹: the cast truncates.
+        let k = lod as i32 as usize;
+        Some((k, lod - k as f32))
     }
 
-    /// Bilinear lookup in `levels[i]`, texel centres at half-integers as in
-    /// [`Texture::sample`] (whose arithmetic it follows in SIMD lanes).
+    /// Where the bilinear lookup at `uv` reads in `levels[i]`: texel centres at
+    /// half-integers as in [`Texture::sample`] (whose arithmetic it follows).
     #[inline(always)]
-    fn bilinear(&self, i: usize, uv: Vec2) -> Vec4 {
+    fn taps(&self, i: usize, uv: Vec2) -> Taps {
         let l = &self.levels[i];
         let p = uv * l.size - Vec2::splat(0.5);
         let (ix, iy) = (floor_i64(p.x), floor_i64(p.y));
-        let (fx, fy) = (p.x - ix as f32, p.y - iy as f32);
         let (cx0, cx1) = wrap_pair(self.wrap_u, ix, l.width);
         let (cy0, cy1) = wrap_pair(self.wrap_v, iy, l.height);
         let w = l.width as usize;
-        let (r0, r1) = (cy0 * w, cy1 * w);
-        let t = &l.texels;
-        let top = t[r0 + cx0].lerp(t[r0 + cx1], fx);
-        let bottom = t[r1 + cx0].lerp(t[r1 + cx1], fx);
-        top.lerp(bottom, fy)
+        Taps {
+            rows: [cy0 * w, cy1 * w],
+            columns: [cx0, cx1],
+            fx: p.x - ix as f32,
+            fy: p.y - iy as f32,
+        }
+    }
+
+    /// The bilinear blend of `levels[i]`'s texels at `taps`.
+    #[inline(always)]
+    fn blend(&self, i: usize, taps: &Taps) -> Vec4 {
+        let t = &self.levels[i].texels;
+        let ([r0, r1], [cx0, cx1]) = (taps.rows, taps.columns);
+        let top = t[r0 + cx0].lerp(t[r0 + cx1], taps.fx);
+        let bottom = t[r1 + cx0].lerp(t[r1 + cx1], taps.fx);
+        top.lerp(bottom, taps.fy)
     }
 }
 
+/// The four texels a bilinear lookup reads in one level (row offsets and columns) and
+/// its fractions between them.
+#[derive(Clone, Copy, Debug)]
+struct Taps {
+    rows: [usize; 2],
+    columns: [usize; 2],
+    fx: f32,
+    fy: f32,
+}
+
 /// `(mode.wrap(i, n), mode.wrap(i + 1, n))` ([`WrapMode::wrap_pair`]), with the
-/// interior of the texture answered inline.
+/// interior of the texture and repeating textures answered inline (tiled floors and
+/// walls read outside [0, 1] for a third of their lookups).
 #[inline(always)]
 pub(crate) fn wrap_pair(mode: WrapMode, i: i64, n: u32) -> (usize, usize) {
-    if i >= 0 && i < i64::from(n) - 1 {
+    // `0 ≤ i < n − 1` in one unsigned comparison (a negative `i` is above any `n`).
+    if (i as u64) < u64::from(n).wrapping_sub(1) {
         return (i as usize, i as usize + 1);
+    }
+    if mode == WrapMode::Repeat {
+        // `n ≥ 1` (`max` tells the compiler so: no division-by-zero check).
+        let a = i.rem_euclid(i64::from(n.max(1))) as usize;
+        return (a, if a + 1 == n as usize { 0 } else { a + 1 });
     }
     mode.wrap_pair(i, n)
 }
@@ -254,6 +356,23 @@ mod tests {
         }
         assert!(log2_approx(f32::INFINITY) >= 128.0);
         assert!(log2_approx(0.0) <= -127.0);
+    }
+
+    #[test]
+    fn inline_wrapping_equals_the_wrap_modes() {
+        for mode in [WrapMode::Repeat, WrapMode::Clamp, WrapMode::Mirror] {
+            for n in [1u32, 2, 3, 7, 64, 477] {
+                let n64 = i64::from(n);
+                let far = [i64::MIN, i64::MIN + 1, -(1 << 40), 1 << 40, i64::MAX - 1];
+                for i in (-3 * n64 - 2..3 * n64 + 2).chain(far) {
+                    assert_eq!(
+                        wrap_pair(mode, i, n),
+                        mode.wrap_pair(i, n),
+                        "{mode:?} i {i} n {n}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
