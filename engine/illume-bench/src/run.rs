@@ -982,10 +982,13 @@ fn save_frame(
 ) -> Result<(), BenchError> {
     let dir = out.dir().join("frames").join(series);
     std::fs::create_dir_all(&dir).map_err(|e| BenchError::io(&dir, e))?;
-    let name = format!("frames/{series}/{i:04}.png");
-    out.intend(&name)?;
-    image.write(&out.dir().join(&name), &ToneMap::default())?;
-    out.written(&name)?;
+    // The PNG to look at, the EXR (linear) for `illume compare`'s per-channel means.
+    for ext in ["png", "exr"] {
+        let name = format!("frames/{series}/{i:04}.{ext}");
+        out.intend(&name)?;
+        image.write(&out.dir().join(&name), &ToneMap::default())?;
+        out.written(&name)?;
+    }
     Ok(())
 }
 

@@ -106,6 +106,17 @@ pub struct Scenario {
     /// the sky scaled by it (for `precomputed` and any technique on a day of sun).
     /// Default: none (a scene's own `[sun]`, e.g. `builtin:sun-room`'s, stays).
     pub sun: Option<illume_scene::sun::SunSettings>,
+    /// Relight the scene as the photon-streaming paper's measurements do
+    /// ([`illume_scene::builtin::spot_from_above`], as `--spot-from-above` of `render`):
+    /// its emitters switched off and one spot light near the top of its bounds shining
+    /// straight down, e.g. for a model file without lights (Sibenik). Applied before
+    /// `[sun]` and `[[sphere]]`. Default false.
+    pub spot_from_above: bool,
+    /// World position \[m\] of `spot_from_above`'s spot light (still shining straight
+    /// down), e.g. under a vault that the default place near the top of the bounds lies
+    /// above (Sibenik: the roof is above the vault, so the default spot lights only the
+    /// outside). Only with `spot_from_above`. Default: near the top of the bounds.
+    pub spot_at: Option<[f32; 3]>,
     /// Camera position \[m\] (with `look_at`), replacing the scene's camera placement
     /// (as `--look-from` of `render`). Default: the scene's camera.
     pub look_from: Option<[f32; 3]>,
@@ -164,6 +175,8 @@ impl Default for Scenario {
             reference_frames: None,
             sky: None,
             sun: None,
+            spot_from_above: false,
+            spot_at: None,
             look_from: None,
             look_at: None,
             own_converged_frames: 0,
@@ -823,6 +836,26 @@ impl Scenario {
             message,
         };
         let mut scene = illume_scene::load_scene(&path).map_err(|e| scene_error(e.to_string()))?;
+        if self.spot_from_above {
+            scene = illume_scene::builtin::spot_from_above(scene);
+        }
+        match (self.spot_at, self.spot_from_above) {
+            (Some(p), true) if p.iter().all(|c| c.is_finite()) => {
+                if let Some(node) = scene.nodes.iter_mut().find(|n| n.name == "spot_from_above") {
+                    node.local.translation = p.into();
+                }
+                scene.update_world_transforms();
+            }
+            (Some(p), true) => {
+                return Err(scene_error(format!("spot_at = {p:?}: must be finite")));
+            }
+            (Some(_), false) => {
+                return Err(scene_error(
+                    "spot_at places spot_from_above's light: set spot_from_above = true".into(),
+                ));
+            }
+            (None, _) => {}
+        }
         match (self.look_from, self.look_at) {
             (Some(eye), Some(target)) => {
                 illume_scene::builtin::look_from(&mut scene, eye.into(), target.into())
@@ -1028,6 +1061,40 @@ mod tests {
             ..Scenario::default()
         };
         assert_eq!(s.frame_times(), vec![0.5, 0.75, 1.0, 1.25]);
+    }
+
+    #[test]
+    fn spot_from_above_relights_the_scene_and_spot_at_places_it() {
+        let s = Scenario {
+            scene: "builtin:cornell-spot".into(),
+            spot_from_above: true,
+            spot_at: Some([0.1, 0.5, -0.2]),
+            times_s: Some(vec![0.0]),
+            ..Scenario::default()
+        };
+        let scene = s.load_scene().unwrap();
+        assert_eq!(scene.lights.len(), 1);
+        let light = &scene.lights[0];
+        assert_eq!(light.name, "spot_from_above");
+        let at = illume_core::Vec3::from(light.world_from_light.translation);
+        assert!(
+            (at - illume_core::Vec3::new(0.1, 0.5, -0.2)).length() < 1e-6,
+            "{at:?}"
+        );
+        // spot_at without spot_from_above, or not finite: errors naming the key.
+        for bad in [
+            Scenario {
+                spot_from_above: false,
+                ..s.clone()
+            },
+            Scenario {
+                spot_at: Some([f32::NAN, 0.0, 0.0]),
+                ..s.clone()
+            },
+        ] {
+            let e = bad.load_scene().unwrap_err().to_string();
+            assert!(e.contains("spot_at"), "{e}");
+        }
     }
 
     #[test]

@@ -17,6 +17,19 @@
 //! Σ Φ / (N·Σ A), and a pixel interpolates its element's three corners (the paper's
 //! Gouraud shading of the mesh).
 //!
+//! **Gather over neighbouring elements** (beyond the paper, issue 34 goal 2). Where the
+//! elements around a display vertex hold few photon impacts (a finely tessellated object
+//! whose triangles are each one element, or a dimly lit region), the plain mean of its
+//! own elements is mostly noise. With [`Gather`] on, such a vertex gathers flux and area
+//! from the rings of display vertices around it, one ring per pass (each pass adds every
+//! vertex's neighbours' sums of the previous pass to its own, a binomial-like kernel that
+//! weighs the vertex most), until the gathered elements hold `impacts` impacts or
+//! `max_rings` rings are reached: a density estimate whose support adapts to the photon
+//! density, as a k-nearest-neighbour estimate does. Rings follow the welded display mesh,
+//! so they stay on one instance and never cross a crease sharper than
+//! `smoothing_angle_deg`. The estimate is a ratio Σ w·Φ / (N·Σ w·A): a constant
+//! irradiance stays exact.
+//!
 //! **No T-junction seams.** Two triangles that share an edge may have different k.
 //! Because every k is a power of two, the coarser side's grid vertices along the edge
 //! are also the finer side's; the finer side's other edge vertices ("hanging"
@@ -28,6 +41,7 @@
 use illume_core::{Affine3A, Rgb, Vec2, Vec3};
 use illume_scene::{Mesh, Scene};
 use illume_transport::flux::Quanta;
+use rayon::prelude::*;
 use std::collections::HashMap;
 
 /// Quantized object-space position.
@@ -54,6 +68,11 @@ pub struct MeshGrid {
     pub vertex_count: u32,
     /// Hanging display vertices: `(vertex, a, b, w)`, shown as `(1 − w)·a + w·b`.
     pub hanging: Vec<(u32, u32, u32, f32)>,
+    /// Neighbours of each display vertex (those sharing an element with it) in
+    /// `neighbours[neighbour_first[v] .. neighbour_first[v + 1]]`; empty until
+    /// [`Elements::set_gather`] turns the gather on.
+    neighbour_first: Vec<u32>,
+    neighbours: Vec<u32>,
 }
 
 /// Index of grid vertex `(a, b)` (a along b₁, b along b₂, a + b ≤ k) in its triangle.
@@ -230,6 +249,8 @@ impl MeshGrid {
             vertex_ids,
             vertex_count,
             hanging: Vec::new(),
+            neighbour_first: Vec::new(),
+            neighbours: Vec::new(),
         };
         grid.hanging = grid.hanging_vertices(mesh, cell, cos_smooth);
         grid
@@ -290,6 +311,48 @@ impl MeshGrid {
         out
     }
 
+    /// Builds the display vertices' adjacency (vertices sharing an element), once.
+    fn build_neighbours(&mut self) {
+        if !self.neighbour_first.is_empty() {
+            return;
+        }
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        for (t, &k) in self.k.iter().enumerate() {
+            for e in 0..k * k {
+                let v = element_corners(k, e).map(|(a, b)| self.vertex(t, a, b));
+                for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+                    if v[i] != v[j] {
+                        pairs.push((v[i], v[j]));
+                        pairs.push((v[j], v[i]));
+                    }
+                }
+            }
+        }
+        pairs.sort_unstable();
+        pairs.dedup();
+        let mut first = vec![0u32; self.vertex_count as usize + 1];
+        for &(a, _) in &pairs {
+            first[a as usize + 1] += 1;
+        }
+        for v in 0..self.vertex_count as usize {
+            first[v + 1] += first[v];
+        }
+        self.neighbours = pairs.into_iter().map(|(_, b)| b).collect();
+        self.neighbour_first = first;
+    }
+
+    /// The display vertices sharing an element with `v` (empty before
+    /// [`Elements::set_gather`]).
+    pub fn neighbours(&self, v: u32) -> &[u32] {
+        match (
+            self.neighbour_first.get(v as usize),
+            self.neighbour_first.get(v as usize + 1),
+        ) {
+            (Some(&a), Some(&b)) => &self.neighbours[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+
     /// Elements of the mesh.
     pub fn element_count(&self) -> u32 {
         *self.first_element.last().unwrap_or(&0)
@@ -311,6 +374,27 @@ pub struct Elements {
     pub instance_first: Vec<u32>,
     /// First display vertex of each instance, then the total.
     instance_first_vertex: Vec<u32>,
+    /// The density estimate over neighbouring elements (off unless set).
+    gather: Gather,
+}
+
+/// The display's density estimate over neighbouring elements (module docs; beyond the
+/// paper, issue 34): a display vertex whose elements hold fewer than `impacts` photon
+/// impacts gathers rings of neighbouring display vertices, up to `max_rings`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Gather {
+    /// Impacts a vertex's estimate should rest on; 0: off (each vertex the mean of its
+    /// own elements, the paper's Gouraud display).
+    pub impacts: u32,
+    /// Most rings gathered.
+    pub max_rings: u32,
+}
+
+impl Gather {
+    /// True when the gather changes the display.
+    pub fn is_on(&self) -> bool {
+        self.impacts > 0 && self.max_rings > 0
+    }
 }
 
 impl Elements {
@@ -368,7 +452,25 @@ impl Elements {
             grids,
             instance_first,
             instance_first_vertex,
+            gather: Gather::default(),
         }
+    }
+
+    /// Turns the density estimate over neighbouring elements on (or off, `impacts` 0):
+    /// it applies to displays made with impact counts ([`Elements::display_with_noise`]).
+    /// Builds each mesh's vertex adjacency the first time.
+    pub fn set_gather(&mut self, gather: Gather) {
+        if gather.is_on() {
+            for g in &mut self.grids {
+                g.build_neighbours();
+            }
+        }
+        self.gather = gather;
+    }
+
+    /// The density estimate over neighbouring elements in use.
+    pub fn gather(&self) -> Gather {
+        self.gather
     }
 
     /// Total elements (accumulators hold a front and a back side each).
@@ -435,6 +537,8 @@ impl Elements {
         let mut flux = vec![[[0.0f64; 3]; 2]; vertices];
         let mut area = vec![0.0f64; vertices];
         let mut var = vec![[0.0f64; 2]; if counts.is_some() { vertices } else { 0 }];
+        let gather = counts.is_some() && self.gather.is_on();
+        let mut impacts = vec![[0.0f64; 2]; if gather { vertices } else { 0 }];
         let scale = if photons > 0 {
             quantum_w / photons as f64
         } else {
@@ -473,15 +577,52 @@ impl Elements {
                             var[v][0] += ev[0];
                             var[v][1] += ev[1];
                         }
+                        if let (true, Some(c)) = (gather, counts) {
+                            impacts[v][0] += c[index][0].max(0) as f64;
+                            impacts[v][1] += c[index][1].max(0) as f64;
+                        }
                     }
+                }
+            }
+        }
+        // Per vertex and side: the area the flux is spread over, and the noise's scale
+        // (√ of own impacts over gathered impacts; 1 without the gather).
+        let mut side_area: Vec<[f64; 2]> = area.iter().map(|&a| [a, a]).collect();
+        let mut noise_scale = vec![[1.0f64; 2]; if gather { vertices } else { 0 }];
+        if gather {
+            for (ii, inst) in scene.instances.iter().enumerate().take(self.instances()) {
+                let range = self.instance_first_vertex[ii] as usize
+                    ..self.instance_first_vertex[ii + 1] as usize;
+                if inst.mask == 0 || range.is_empty() {
+                    continue;
+                }
+                let g = &self.grids[inst.mesh.index()];
+                let own: Vec<[f64; 2]> = impacts[range.clone()].to_vec();
+                for side in 0..2 {
+                    gather_rings(
+                        g,
+                        self.gather,
+                        side,
+                        &mut flux[range.clone()],
+                        &mut side_area[range.clone()],
+                        &mut impacts[range.clone()],
+                    );
+                }
+                for ((s, o), n) in noise_scale[range.clone()]
+                    .iter_mut()
+                    .zip(&own)
+                    .zip(&impacts[range])
+                {
+                    *s = [0, 1].map(|k| (o[k].max(1.0) / n[k].max(1.0)).sqrt());
                 }
             }
         }
         let mut irradiance: Vec<[Rgb; 2]> = flux
             .iter()
-            .zip(&area)
-            .map(|(f, &a)| {
+            .zip(&side_area)
+            .map(|(f, a)| {
                 let e = |s: usize| {
+                    let a = a[s];
                     if a > 0.0 {
                         Rgb::new(
                             (f[s][0] / a) as f32,
@@ -498,10 +639,12 @@ impl Elements {
         let mut noise: Vec<[f32; 2]> = var
             .iter()
             .zip(&area)
-            .map(|(v, &a)| {
+            .enumerate()
+            .map(|(i, (v, &a))| {
                 [0, 1].map(|s| {
                     if a > 0.0 {
-                        (v[s].sqrt() / a) as f32
+                        let scale = noise_scale.get(i).map_or(1.0, |n| n[s]);
+                        (v[s].sqrt() / a * scale) as f32
                     } else {
                         0.0
                     }
@@ -544,6 +687,70 @@ impl Elements {
         corners.iter().fold(Rgb::ZERO, |acc, &(a, bb, w)| {
             acc + display.irradiance[v0 + g.vertex(t, a, bb) as usize][side] * w
         })
+    }
+}
+
+/// The density estimate over neighbouring elements of one instance's display vertices
+/// (module docs) on side `side`: a vertex whose `impacts` fall short of
+/// `gather.impacts` takes its sums after the first pass (ring) that reaches them, or
+/// after `gather.max_rings`. `flux`, `area` and `impacts` hold the vertices' own sums on
+/// entry and the gathered ones on return. A side without impacts is left alone.
+fn gather_rings(
+    grid: &MeshGrid,
+    gather: Gather,
+    side: usize,
+    flux: &mut [[[f64; 3]; 2]],
+    area: &mut [[f64; 2]],
+    impacts: &mut [[f64; 2]],
+) {
+    let target = gather.impacts as f64;
+    let n = flux.len().min(grid.vertex_count as usize);
+    let mut pending: Vec<bool> = (0..n).map(|v| impacts[v][side] < target).collect();
+    if !pending.iter().any(|&p| p) || impacts.iter().all(|c| c[side] <= 0.0) {
+        return;
+    }
+    // Flux (3), area and impacts.
+    let mut current: Vec<[f64; 5]> = (0..n)
+        .map(|v| {
+            let f = flux[v][side];
+            [f[0], f[1], f[2], area[v][side], impacts[v][side]]
+        })
+        .collect();
+    for ring in 1..=gather.max_rings {
+        let next: Vec<[f64; 5]> = current
+            .par_iter()
+            .enumerate()
+            .map(|(v, own)| {
+                let mut sum = *own;
+                for &u in grid.neighbours(v as u32) {
+                    if let Some(other) = current.get(u as usize) {
+                        for (a, b) in sum.iter_mut().zip(other) {
+                            *a += b;
+                        }
+                    }
+                }
+                sum
+            })
+            .collect();
+        let mut left = false;
+        for (v, p) in pending.iter_mut().enumerate() {
+            if !*p {
+                continue;
+            }
+            let x = &next[v];
+            if x[4] >= target || ring == gather.max_rings {
+                flux[v][side] = [x[0], x[1], x[2]];
+                area[v][side] = x[3];
+                impacts[v][side] = x[4];
+                *p = false;
+            } else {
+                left = true;
+            }
+        }
+        if !left {
+            break;
+        }
+        current = next;
     }
 }
 

@@ -113,6 +113,27 @@ pub struct SelectiveSettings {
     /// 1 152 000 over 12 400 is 93).
     #[setting(default = 16, range = "0–100 000")]
     pub min_photons_per_element: u32,
+    /// Beyond the paper (issue 34, goal 2): photon impacts a display vertex's irradiance
+    /// should rest on. A vertex whose own elements hold fewer gathers flux and area from
+    /// the rings of display vertices around it (on the same object, across edges within
+    /// `smoothing_angle_deg`), one ring at a time up to `gather_rings`, until they hold
+    /// this many, counted with the gather's weights ([`crate::elements`]): a density
+    /// estimate over neighbouring elements whose support adapts to the photon density.
+    /// It matters where elements hold few photons: a finely tessellated object whose
+    /// triangles are each an element (a 2 304-triangle sphere in Dabrovic Sponza holds
+    /// ≈ 0.5 photons per element), and dim regions. Higher: smoother indirect light, at
+    /// the cost of blurring it over a wider area (up to `gather_rings` element rings)
+    /// and of display time (one pass over the display vertices per ring). 0 turns it
+    /// off: each vertex shows the mean of its own elements, the paper's Gouraud display.
+    /// Default 256.
+    #[setting(default = 256, range = "0–1 000 000 000")]
+    pub gather_impacts: u32,
+    /// Most rings of neighbouring display vertices `gather_impacts` gathers over
+    /// (beyond the paper). Higher: enough impacts also where elements are tiny or dim,
+    /// at the cost of a blur up to this many elements wide and a pass over the display
+    /// vertices per ring in every frame's display. 0 turns the gather off. Default 6.
+    #[setting(default = 6, range = "0–64")]
+    pub gather_rings: u32,
     /// Beyond the paper: while groups are stale, each display vertex moves only this fraction of the way
     /// from what the last frame showed towards the solution when the change lies within
     /// `temporal_sigmas` of its impact noise ([`crate::temporal`], issue 34: re-traced
@@ -254,6 +275,7 @@ impl SelectiveSettings {
     pub fn paper() -> Self {
         Self {
             min_photons_per_element: 0,
+            gather_impacts: 0,
             temporal_alpha: 1.0,
             element_max_side: 0.0,
             max_photons: 0,

@@ -97,12 +97,16 @@ impl Selective {
     /// [`Selective::new`] for an unshared world.
     pub fn for_world(world: &World, settings: SelectiveSettings) -> Result<Self, SelectiveError> {
         settings.validate()?;
-        let elements = Elements::with_max_side(
+        let mut elements = Elements::with_max_side(
             &world.scene,
             settings.element_count,
             settings.smoothing_angle_deg,
             settings.element_max_side,
         );
+        elements.set_gather(crate::elements::Gather {
+            impacts: settings.gather_impacts,
+            max_rings: settings.gather_rings,
+        });
         if elements.is_empty() {
             return Err(SelectiveError::NoSurfaces {
                 scene: world.scene.source.clone(),
@@ -275,11 +279,13 @@ impl Selective {
         }
     }
 
-    /// Irradiance display for `world`'s transforms.
+    /// Irradiance display for `world`'s transforms (with the density estimate over
+    /// neighbouring elements when `gather_impacts` is on).
     pub fn display(&self, world: &World) -> crate::elements::Display {
-        self.elements.display(
+        self.elements.display_with_noise(
             &world.scene,
             &self.accumulators,
+            &self.counts,
             self.quantum_w,
             self.filled,
         )

@@ -251,6 +251,8 @@ fn shipped_scenarios_parse() {
         "selective_area.toml",
         "selective_cube.toml",
         "selective_moving.toml",
+        "selective_sponza.toml",
+        "selective_sibenik.toml",
     ] {
         match Scenario::load(&dir.join(name)) {
             Ok(s) => {

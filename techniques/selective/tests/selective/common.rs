@@ -52,3 +52,19 @@ pub fn box_scene(box_material: impl FnOnce(&mut SceneBuilder) -> MaterialId) -> 
     scene.set_time(0.0);
     World::new(scene)
 }
+
+/// A scene of `mesh` alone (every triangle of the material `m` of `b`), placed static
+/// at the origin as `name` and set to time 0.
+pub fn one_mesh_scene(
+    mut b: SceneBuilder,
+    m: MaterialId,
+    mut mesh: illume_scene::Mesh,
+    name: &str,
+) -> illume_scene::Scene {
+    mesh.triangle_materials = vec![m; mesh.indices.len()];
+    let id = b.mesh(mesh);
+    b.placed(name, id, Trs::IDENTITY, false);
+    let mut scene = b.finish(&format!("test:{name}"));
+    scene.set_time(0.0);
+    scene
+}

@@ -114,7 +114,7 @@ fn barycentrics(mesh: &illume_scene::Mesh, t: usize, p: illume_core::Vec3) -> Ve
 fn fan_floor() -> illume_scene::Scene {
     use illume_core::Vec3;
     use illume_scene::builtin::SceneBuilder;
-    use illume_scene::{Material, Mesh, Trs};
+    use illume_scene::{Material, Mesh};
     let mut b = SceneBuilder::new();
     let m = b.material(Material::default());
     let mut mesh = Mesh {
@@ -132,12 +132,7 @@ fn fan_floor() -> illume_scene::Scene {
     // (a conforming mesh: no vertex of the model on the edge's inside).
     mesh.positions.push(Vec3::new(2.1, 0.0, 2.1));
     mesh.indices.push([2, 1, 3]);
-    mesh.triangle_materials = vec![m; mesh.indices.len()];
-    let id = b.mesh(mesh);
-    b.placed("fan", id, Trs::IDENTITY, false);
-    let mut scene = b.finish("test:fan");
-    scene.set_time(0.0);
-    scene
+    crate::common::one_mesh_scene(b, m, mesh, "fan")
 }
 
 /// Issue 34 goal 1: shared edges are split alike (grid sides are powers of two, the

@@ -9,6 +9,7 @@ mod common;
 mod detection;
 mod elements;
 mod energy;
+mod gather;
 mod masking;
 mod presets;
 mod qmc;

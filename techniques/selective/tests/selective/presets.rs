@@ -9,6 +9,8 @@ use illume_selective::SelectiveSettings;
 fn paper_values(s: &SelectiveSettings) -> Vec<(&'static str, bool)> {
     vec![
         ("min_photons_per_element", s.min_photons_per_element == 0),
+        ("gather_impacts", s.gather_impacts == 0),
+        ("gather_rings", s.gather_impacts == 0), // used only by the gather
         ("temporal_alpha", s.temporal_alpha == 1.0),
         ("temporal_sigmas", s.temporal_alpha == 1.0), // used only by the filter
         ("element_max_side", s.element_max_side == 0.0),
