@@ -463,6 +463,22 @@ pub fn spot_from_above(mut scene: Scene) -> Scene {
     scene
 }
 
+/// Moves [`spot_from_above`]'s light to `at` \[m\] (still shining straight down, its
+/// intensity unchanged): for a scene whose top is a roof, where the default position
+/// lights only the outside (Sibenik: under the vault, `(0, 2.5, 0)`). False when `scene`
+/// has no such light or `at` is not finite (the scene unchanged).
+pub fn move_spot_from_above(scene: &mut Scene, at: Vec3) -> bool {
+    if !at.is_finite() {
+        return false;
+    }
+    let Some(node) = scene.nodes.iter_mut().find(|n| n.name == "spot_from_above") else {
+        return false;
+    };
+    node.local.translation = at;
+    scene.update_world_transforms();
+    true
+}
+
 /// The furnace: closed sphere (radius 1, inner faces), albedo `rho`, emission `le`.
 pub fn furnace(rho: f32, le: Rgb) -> Scene {
     let mut b = SceneBuilder::new();

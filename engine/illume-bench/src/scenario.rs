@@ -841,10 +841,7 @@ impl Scenario {
         }
         match (self.spot_at, self.spot_from_above) {
             (Some(p), true) if p.iter().all(|c| c.is_finite()) => {
-                if let Some(node) = scene.nodes.iter_mut().find(|n| n.name == "spot_from_above") {
-                    node.local.translation = p.into();
-                }
-                scene.update_world_transforms();
+                illume_scene::builtin::move_spot_from_above(&mut scene, p.into());
             }
             (Some(p), true) => {
                 return Err(scene_error(format!("spot_at = {p:?}: must be finite")));

@@ -63,14 +63,24 @@ fn load(name: &str) -> Scene {
     if name.contains("sibenik") {
         let (eye, target) = SIBENIK_NAVE_VIEW;
         illume_scene::builtin::look_from(&mut scene, eye, target).expect("a valid view");
+        // Near the top of the bounds the spot sits above the vault and the nave is black
+        // (the rows before 2026-11-28 were measured so); under the vault, as
+        // scenarios/selective_sibenik.toml.
+        assert!(illume_scene::builtin::move_spot_from_above(
+            &mut scene,
+            SIBENIK_SPOT
+        ));
     }
     scene
 }
 
 /// Sibenik (`sibenik/sibenik.obj`, no camera in the file) seen down the nave from its
 /// west end at head height towards the altar, as the paper's Figure 10 (eye, target)
-/// \[m\]; the spot light from above shines down the nave.
+/// \[m\]; the spot light ([`SIBENIK_SPOT`]) shines down from under the vault.
 const SIBENIK_NAVE_VIEW: (Vec3, Vec3) = (Vec3::new(-17.0, -11.0, 0.0), Vec3::new(10.0, -9.0, 0.0));
+
+/// Sibenik's spot light under the vault, shining down the nave \[m\].
+const SIBENIK_SPOT: Vec3 = Vec3::new(0.0, 2.5, 0.0);
 
 const SCENES: [(&str, &str); 4] = [
     ("Cornell box", "cornell_box/CornellBox-Sphere.obj"),

@@ -234,7 +234,7 @@ pub struct PhotonStreamSettings {
     /// frame (≈ 1–3 ms at the default pool on 2 cores); it costs nothing while the thread
     /// keeps up. 0: off (the paper: latency = pool size / the thread's rate). Default 15:
     /// 0.5 s at 30 fps.
-    #[setting(default = 15, unit = "frames", per_frame)]
+    #[setting(default = 15, unit = "frames")]
     pub turnover_frames: u32,
     /// Photons shot between two frames in [`StreamMode::Deterministic`] when the frame
     /// loop's budget does not say. Higher: faster convergence per frame, at a per-frame
