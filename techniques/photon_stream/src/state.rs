@@ -186,11 +186,10 @@ impl PhotonStream {
             return 0;
         }
         let s = self.shared.lock();
-        let pool = &s.pool;
-        let evicted = pool.photons_pushed() - pool.photons();
-        if s.photons_at_change <= evicted {
+        if s.stale_photons() == 0 {
             return 0; // every pooled photon was traced after the last change
         }
+        let pool = &s.pool;
         let floor = (pool.capacity() as u64).div_ceil(frames);
         let deficit = floor.saturating_sub(pool.impacts_pushed() - before);
         // Impacts per photon so far (≥ 1 in a closed scene; escaping photons lower it).
@@ -334,8 +333,7 @@ impl Technique for PhotonStream {
         let stale = if pool.photons() == 0 {
             0.0
         } else {
-            let evicted = pool.photons_pushed() - pool.photons();
-            s.photons_at_change.saturating_sub(evicted) as f64 / pool.photons() as f64
+            s.stale_photons() as f64 / pool.photons() as f64
         };
         let latency = if s.impacts_per_s > 0.0 {
             pool.capacity() as f64 / s.impacts_per_s

@@ -44,6 +44,13 @@ pub struct PoolState {
 }
 
 impl PoolState {
+    /// Pooled photons traced before the last lighting change (the oldest ones: the pool
+    /// is a FIFO).
+    pub fn stale_photons(&self) -> u64 {
+        let evicted = self.pool.photons_pushed() - self.pool.photons();
+        self.photons_at_change.saturating_sub(evicted)
+    }
+
     /// Marks every photon pushed so far as stale (traced before the last lighting change).
     fn mark_stale(&mut self) {
         self.photons_at_change = self.pool.photons_pushed();
