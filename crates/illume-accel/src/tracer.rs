@@ -31,6 +31,12 @@ impl ScopedTracer<'_> {
     pub fn intersect_geometry(&mut self, ray: &Ray, mask: u32) -> Option<(Hit, HitGeometry)> {
         self.tracer.geometry_of(ray, mask, self.stack)
     }
+
+    /// [`Tracer::occluded`].
+    #[inline]
+    pub fn occluded(&mut self, ray: &Ray, mask: u32) -> bool {
+        self.tracer.occluded_with(ray, mask, self.stack)
+    }
 }
 
 /// Size and cost of a [`Tracer`]'s structures.

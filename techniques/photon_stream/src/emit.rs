@@ -6,7 +6,9 @@
 //! What an impact deposits: the flux *leaving* the surface it hit, ρ(x)·Φ_arriving
 //! (diffusely reflected), for every impact of the path (bounce 0, 1, 2, …). Shading a
 //! point with these VSLs therefore gives light reflected two or more times: exactly the
-//! reference's `indirect` image, never direct light (the renderer's).
+//! reference's `indirect` image, never direct light (the renderer's). With
+//! [`Emitter::first_deposit`] = 1 (`gather_direct`) bounce 0 deposits nothing: the gather
+//! computes that light at its hits by next-event estimation ([`crate::near_field`]).
 //!
 //! Photon `seq` uses PCG stream `seq` of the technique's seed, so the same photon index
 //! in the same world gives the same path, whatever the thread count.
@@ -65,6 +67,9 @@ pub struct Emitter<'a> {
     pub path: PhotonPathSettings,
     /// Seed of the photon streams.
     pub seed: u64,
+    /// Impacts of a lower bounce deposit nothing
+    /// ([`PhotonStreamSettings::first_deposit`](crate::PhotonStreamSettings::first_deposit)).
+    pub first_deposit: u32,
 }
 
 impl<'a> Emitter<'a> {
@@ -82,6 +87,15 @@ impl<'a> Emitter<'a> {
             inv_quantum,
             path,
             seed: mix64(seed ^ 0x9407_0a57),
+            first_deposit: 0,
+        }
+    }
+
+    /// This emitter with impacts below bounce `first` depositing nothing.
+    pub fn with_first_deposit(self, first: u32) -> Self {
+        Self {
+            first_deposit: first,
+            ..self
         }
     }
 
@@ -111,6 +125,9 @@ impl<'a> Emitter<'a> {
             }
             let mut rng = Pcg32::new(self.seed, seq);
             let stats = trace_photon(world, &mut rng, &self.path, |imp| {
+                if imp.bounce < self.first_deposit {
+                    return;
+                }
                 let Some(vsl) = self.vsls.nearest_on(
                     imp.hit.instance,
                     imp.hit.triangle,

@@ -2,6 +2,12 @@
 //! [`near_field_rays`](crate::PhotonStreamSettings::near_field_rays) > 0): close to a
 //! point, the light of the surfaces around it is gathered by rays instead of summed
 //! from VSLs (the estimator and its bias are in [`crate::shade`]'s module doc).
+//!
+//! **First bounce at the hit** ([`gather_direct`](crate::PhotonStreamSettings::gather_direct)):
+//! a hit's exitance is then ρ(y)·E_direct(y) + Φ_s/A_s, the first term by one light
+//! sample (and one sky sample when there is a sky) with a shadow ray, the second from
+//! photons' second and later impacts only. The light arriving straight from the lights is
+//! what varies most sharply (shadow boundaries), and it no longer averages over a cell.
 
 use crate::placement::VslSet;
 use crate::shade::{VslField, far_weight};
@@ -10,12 +16,15 @@ use illume_core::{Frame, Ray, Rgb, Vec2};
 use illume_transport::{GBuffer, World};
 
 /// What the near-field gather reads besides the field: the VSLs (to find a hit's cell),
-/// the rays per pixel and the window's squared scale.
+/// the rays per pixel, the window's squared scale, and whether hits take their first
+/// bounce by next-event estimation (with photons' albedo: `filtered_textures`).
 #[derive(Clone, Copy)]
 pub(crate) struct NearField<'a> {
     pub(crate) vsls: &'a VslSet,
     pub(crate) rays: u32,
     pub(crate) scale2: f32,
+    pub(crate) direct: bool,
+    pub(crate) filtered_textures: bool,
 }
 
 /// Adds the near-field share to each gathered pixel of `out` (pixel index, Σ Φ·G).
@@ -73,6 +82,10 @@ fn near_gather(
             continue; // below the geometric surface: no light from there
         }
         let ray = Ray::new(hit.spawn_origin(dir), dir);
+        if nf.direct {
+            sum += exitance_with_direct(world, tracer, field, nf, &ray, &mut rng);
+            continue;
+        }
         // A side that does not reflect (the back of a one-sided surface) or a black one
         // received no photon: its VSL side has no power, nothing to test here.
         let Some((y, position_object, front_face)) =
@@ -98,4 +111,64 @@ fn near_gather(
         sum += phi * ((1.0 - w) / area.max(1e-12));
     }
     sum * inv_n
+}
+
+/// The exitance a gather ray `ray` reads at its hit with
+/// [`gather_direct`](crate::PhotonStreamSettings::gather_direct) (everything gathered, so
+/// the window's weight is 0): the cell's Φ_s/A_s on the side facing the ray (photons'
+/// later impacts) plus ρ(y)·E_direct(y) by one light sample and one sky sample.
+fn exitance_with_direct(
+    world: &World,
+    tracer: &mut illume_accel::ScopedTracer<'_>,
+    field: &VslField,
+    nf: NearField,
+    ray: &Ray,
+    rng: &mut Pcg32,
+) -> Rgb {
+    let mask = illume_scene::MASK_DEFAULT;
+    let Some(y) = world.trace_photon_hit(tracer, ray, mask, nf.filtered_textures) else {
+        return Rgb::ZERO;
+    };
+    if !y.reflects {
+        return Rgb::ZERO;
+    }
+    let mut m = Rgb::ZERO;
+    if let Some(s) = nf
+        .vsls
+        .nearest_on(y.instance, y.triangle, y.position_object)
+    {
+        let s = s as usize;
+        let phi = if y.front_face {
+            field.front_w[s]
+        } else {
+            field.back_w[s]
+        };
+        m += phi / field.area_m2[s].max(1e-12);
+    }
+    let (n, ng) = (y.facing_normal(), y.facing_geometric_normal());
+    let mut irradiance = Rgb::ZERO;
+    let lights = &world.lights;
+    for sample in [
+        lights.sample_incident(y.position, rng),
+        lights.sample_sky(n, rng),
+    ]
+    .into_iter()
+    .flatten()
+    {
+        let cos = sample.wi.dot(n);
+        if cos <= 0.0 || sample.wi.dot(ng) <= 0.0 {
+            continue;
+        }
+        // As `World::unoccluded`: from just off the surface to just short of the light.
+        let t_max = if sample.distance.is_finite() {
+            (sample.distance - 2e-4 * (1.0 + sample.distance)).max(0.0)
+        } else {
+            f32::INFINITY
+        };
+        let shadow = Ray::segment(y.spawn_origin(sample.wi), sample.wi, t_max);
+        if !tracer.occluded(&shadow, mask) {
+            irradiance += sample.weight * cos;
+        }
+    }
+    m + y.albedo * irradiance
 }

@@ -300,6 +300,22 @@ pub struct PhotonStreamSettings {
     /// presets: 3200 cells).
     #[setting(default = 3.0, range = "≥ 0.5 (or inf)")]
     pub near_field_scale: f32,
+    /// With everything gathered (`near_field_scale` = ∞; beyond the paper): a gather
+    /// ray's hit takes the light that reached it straight from the lights and the sky
+    /// by next-event estimation (a light sample and a shadow ray at the hit) instead of
+    /// from its cell, and photons deposit only from their second impact on, so a
+    /// cell's mean stands for light already scattered once. A cell averages its
+    /// exitance over its whole area, across shadow boundaries and through walls; where
+    /// the view sees the dark side of such cells (a gallery beside a sunlit court) the
+    /// mean reads too bright: on Dabrovic Sponza under the noon sun (99 % of the frame
+    /// indirect) the `still` preset's image mean against a 2048-spp reference goes from
+    /// +6.7 % to +1.1 % with it (HDR-FLIP 0.171 → 0.144), `balanced` from +7.0 % to
+    /// +2.8 % (`docs/benchmarks/photon_stream.md`). Costs a texture lookup, a light
+    /// sample and a shadow ray per gather ray: 1.5–1.9× the frame of a gathering
+    /// preset. Default false (no gather by default); the `balanced`, `quality` and
+    /// `still` presets turn it on.
+    #[setting(default = false)]
+    pub gather_direct: bool,
     /// Longest photon path in bounces, a safety net behind Russian roulette (§0.7.1).
     #[setting(default = 32)]
     pub max_bounces: u32,
@@ -379,7 +395,8 @@ impl PhotonStreamSettings {
 
     /// Preset for interactive frames closer to the reference than the paper's: all
     /// indirect light gathered over 1600 VSL cells fed by a 200 000-impact pool, 64 rays
-    /// per shaded pixel one pixel in sixteen (stride 4, 4 rays a pixel). Several times
+    /// per shaded pixel one pixel in sixteen (stride 4, 4 rays a pixel), the first
+    /// bounce taken at each hit ([`PhotonStreamSettings::gather_direct`]). Several times
     /// the default's frame time for a fraction of its error; some fixed-pattern gather
     /// noise (`BENCHMARKS.md`).
     pub fn balanced() -> Self {
@@ -389,6 +406,7 @@ impl PhotonStreamSettings {
             near_field_rays: 64,
             near_field_scale: f32::INFINITY,
             shading_stride: 4,
+            gather_direct: true,
             ..Self::default()
         }
     }
@@ -396,8 +414,9 @@ impl PhotonStreamSettings {
     /// Preset for stills and slow previews (streaming): the whole indirect light
     /// gathered over 3200 VSL cells fed by a 10⁶-impact pool
     /// ([`near_field_scale`](PhotonStreamSettings::near_field_scale) = ∞), 576 rays
-    /// per shaded pixel one pixel in nine (stride 3). No visibility noise, no dark
-    /// edges; about a second per 320×240 frame on 2 cores (`BENCHMARKS.md`).
+    /// per shaded pixel one pixel in nine (stride 3), the first bounce taken at each hit
+    /// ([`PhotonStreamSettings::gather_direct`]). No visibility noise, no dark edges;
+    /// about 1–2 s per 320×240 frame on 2 cores (`BENCHMARKS.md`).
     pub fn quality() -> Self {
         Self {
             vsl_count: 3200,
@@ -405,6 +424,7 @@ impl PhotonStreamSettings {
             near_field_rays: 576,
             near_field_scale: f32::INFINITY,
             shading_stride: 3,
+            gather_direct: true,
             ..Self::default()
         }
     }
@@ -416,6 +436,13 @@ impl PhotonStreamSettings {
             mode: StreamMode::Deterministic,
             ..Self::quality()
         }
+    }
+
+    /// The first impact of a photon path that deposits into the pool: 1 with
+    /// [`PhotonStreamSettings::gather_direct`] (the gather computes the first bounce
+    /// itself), else 0.
+    pub fn first_deposit(&self) -> u32 {
+        u32::from(self.gather_direct)
     }
 
     /// The photon paths these settings ask for.
@@ -435,6 +462,15 @@ impl PhotonStreamSettings {
         };
         if let Err((field, reason)) = self.validate_ranges() {
             return bad(field, reason);
+        }
+        if self.gather_direct && !(self.near_field_rays > 0 && self.near_field_scale.is_infinite())
+        {
+            return bad(
+                "gather_direct",
+                "needs everything gathered (near_field_rays > 0 and near_field_scale = inf): \
+                 the VSLs would lose the light of their first impacts"
+                    .into(),
+            );
         }
         if (self.pool_size as u64) < self.max_bounces as u64 + 1 {
             return bad(
@@ -483,11 +519,11 @@ impl TechniqueSettings for PhotonStreamSettings {
             ),
             (
                 "balanced",
-                "all indirect light gathered over 1600 VSL cells, 4 rays a pixel: interactive, closer to the reference",
+                "all indirect light gathered over 1600 VSL cells, 4 rays a pixel, the first bounce at each hit: interactive, closer to the reference",
             ),
             (
                 "quality",
-                "all indirect light gathered over 3200 VSL cells (10⁶-impact pool), streaming",
+                "all indirect light gathered over 3200 VSL cells (10⁶-impact pool), the first bounce at each hit, streaming",
             ),
             ("still", "quality, deterministic: `render`'s default"),
         ]

@@ -350,6 +350,8 @@ pub fn shade(
         vsls,
         rays: settings.near_field_rays,
         scale2: settings.near_field_scale * settings.near_field_scale,
+        direct: settings.gather_direct,
+        filtered_textures: settings.filtered_textures,
     });
     let (w, h) = (gbuffer.width, gbuffer.height);
     let n = (w * h) as usize;

@@ -108,6 +108,7 @@ impl PhotonStream {
                         priority: settings.stream_priority,
                         path: settings.photon_path(),
                         seed: settings.seed,
+                        first_deposit: settings.first_deposit(),
                         inv_quantum,
                         share: settings.stream_share,
                         rest_when_settled: settings.rest_when_settled,
@@ -152,7 +153,8 @@ impl PhotonStream {
             self.inv_quantum,
             self.settings.photon_path(),
             self.settings.seed,
-        );
+        )
+        .with_first_deposit(self.settings.first_deposit());
         let epoch = self.shared.epoch();
         let first = self.shared.reserve(count);
         let batch = emitter.trace_parallel(world, first, count);
@@ -362,6 +364,9 @@ impl Technique for PhotonStream {
             ("vsls_per_tile", self.last_shade.vsls_per_tile()),
             ("shading_ms", self.shading_ms),
             ("shadow_rays", self.last_shade.shadow_rays as f64),
+            ("near_field_rays", self.last_shade.near_rays as f64),
+            ("interpolated_pixels", self.last_shade.interpolated as f64),
+            ("fallback_pixels", self.last_shade.fallbacks as f64),
             ("paused", if self.shared.is_paused() { 1.0 } else { 0.0 }),
             ("topped_up_photons", self.topped_up as f64),
         ] {

@@ -305,6 +305,9 @@ pub struct StreamConfig {
     pub path: PhotonPathSettings,
     /// Seed.
     pub seed: u64,
+    /// The first impact that deposits
+    /// ([`PhotonStreamSettings::first_deposit`](crate::PhotonStreamSettings::first_deposit)).
+    pub first_deposit: u32,
     /// 1 / (watts per quantum).
     pub inv_quantum: f64,
     /// With [`StreamPriority::Low`]: the share of one core the thread may take from
@@ -339,7 +342,8 @@ pub fn spawn(
                 let epoch = shared.epoch();
                 let generation = shared.world_generation.load(Ordering::Acquire);
                 let w = shared.world();
-                let emitter = Emitter::new(&w, &vsls, config.inv_quantum, config.path, config.seed);
+                let emitter = Emitter::new(&w, &vsls, config.inv_quantum, config.path, config.seed)
+                    .with_first_deposit(config.first_deposit);
                 let first = shared.reserve(config.batch_photons);
                 let mut traced = 0u32;
                 let wanted = || {

@@ -87,6 +87,7 @@ fn the_quality_preset_has_no_grain() {
     let grainy = PhotonStreamSettings {
         vsl_count: 200,
         near_field_rays: 0,
+        gather_direct: false,
         visibility: VisibilityMode::Stochastic,
         shading_stride: 1,
         ..quality.clone()

@@ -26,6 +26,7 @@ fn paper_values(s: &PhotonStreamSettings) -> Vec<(&'static str, bool)> {
         ("filtered_textures", !s.filtered_textures),
         ("rest_when_settled", !s.rest_when_settled),
         ("turnover_frames", s.turnover_frames == 0),
+        ("gather_direct", !s.gather_direct),
     ]
 }
 

@@ -36,6 +36,23 @@ fn converged(world: &SharedWorld, settings: PhotonStreamSettings, g: &GBuffer) -
     ps.indirect(&w, g)
 }
 
+/// The path tracer's indirect light (reflected ≥ 2 times) at the points of `g`, 256 spp.
+fn reference_indirect(w: &World, g: &GBuffer) -> RgbImage {
+    let mut r = ReferenceTechnique::new(ReferenceSettings {
+        spp_per_frame: 256,
+        ..Default::default()
+    })
+    .unwrap();
+    r.advance(
+        w,
+        &Budget {
+            work: Some(256),
+            ..Default::default()
+        },
+    );
+    r.indirect(w, g)
+}
+
 fn average(a: &RgbImage, b: &RgbImage) -> RgbImage {
     RgbImage::from_vec(
         W,
@@ -147,19 +164,7 @@ fn in_the_empty_box_vsl_shading_converges_to_the_reference_as_the_vsl_count_grow
     let world = World::new(scene).shared();
     let w = world.read().unwrap();
     let g = GBuffer::render(&w, W, H, Vec2::splat(0.5));
-    let mut r = ReferenceTechnique::new(ReferenceSettings {
-        spp_per_frame: 256,
-        ..Default::default()
-    })
-    .unwrap();
-    r.advance(
-        &w,
-        &Budget {
-            work: Some(256),
-            ..Default::default()
-        },
-    );
-    let ref_img = r.indirect(&w, &g);
+    let ref_img = reference_indirect(&w, &g);
     let ratios: Vec<f64> = [25u32, 100, 400]
         .iter()
         .map(|&n| {
@@ -206,4 +211,47 @@ fn in_the_empty_box_vsl_shading_converges_to_the_reference_as_the_vsl_count_grow
             "{n} VSLs, near field at {scale}: energy ratio {ratio} not within ±{bound}"
         );
     }
+}
+
+/// With everything gathered over coarse cells (100 for the box), a gather hit reads its
+/// cell's mean exitance: the spot's sharp pool of light on the floor is smeared over
+/// every cell it touches, and the walls and the boxes' sides that see a cell's dark part
+/// read light that only its lit part has. `gather_direct` (beyond the paper) takes the
+/// light arriving straight from the spot at each hit by a light sample and a shadow
+/// ray, leaving the cells only light already scattered once: both the block error
+/// (shape) and the energy must come closer to the reference's indirect light.
+#[test]
+fn taking_the_first_bounce_at_the_gather_hits_removes_the_cells_averaging() {
+    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
+    let w = world.read().unwrap();
+    let g = GBuffer::render(&w, W, H, Vec2::splat(0.5));
+    let ref_img = reference_indirect(&w, &g);
+    let gathered = |gather_direct: bool| {
+        let settings = PhotonStreamSettings {
+            vsl_count: 100,
+            pool_size: 1_000_000,
+            warm_up: false,
+            near_field_rays: 256,
+            near_field_scale: f32::INFINITY,
+            gather_direct,
+            shading_stride: 1,
+            ..PhotonStreamSettings::deterministic()
+        };
+        let img = converged(&world, settings, &g);
+        (block_error(&img, &ref_img), mean_ratio(&img, &ref_img))
+    };
+    let (cells_err, cells_ratio) = gathered(false);
+    let (direct_err, direct_ratio) = gathered(true);
+    eprintln!(
+        "100 cells all gathered: block error {cells_err:.3}, energy ratio {cells_ratio:.3}; \
+         first bounce at the hits: {direct_err:.3}, {direct_ratio:.3}"
+    );
+    assert!(
+        direct_err < 0.8 * cells_err,
+        "block error {direct_err:.3} with the first bounce at the hits, {cells_err:.3} without"
+    );
+    assert!(
+        (direct_ratio - 1.0).abs() < 0.03,
+        "energy ratio {direct_ratio:.3} with the first bounce at the hits not within ±3 %"
+    );
 }
