@@ -71,6 +71,7 @@ pub(crate) fn load(path: &str, args: &LoadArgs) -> PyResult<illume_scene::Scene>
     let options = illume_scene::LoadOptions {
         strict: args.strict,
         units,
+        ..Default::default()
     };
     let mut scene =
         illume_scene::load_scene_with(std::path::Path::new(path), &options).map_err(value_error)?;

@@ -225,6 +225,7 @@ impl SetupArgs {
         illume_scene::LoadOptions {
             strict: self.strict,
             units: self.units.load(),
+            ..Default::default()
         }
     }
 

@@ -114,6 +114,11 @@ impl SceneBuilder {
         MeshId(self.scene.meshes.len() as u32 - 1)
     }
 
+    /// Memory of the textures added so far \[bytes\] ([`Texture::memory_bytes`]).
+    pub fn texture_bytes(&self) -> u64 {
+        self.scene.textures.iter().map(|t| t.memory_bytes()).sum()
+    }
+
     /// Adds a texture.
     pub fn texture(&mut self, t: Texture) -> TextureId {
         self.scene.textures.push(std::sync::Arc::new(t));

@@ -33,8 +33,8 @@ pub use animation::{
 pub use change::{Edit, SceneChange};
 pub use cutout::MeshCutout;
 pub use load::{
-    EXCERPT_CHARS, LUMENS_PER_WATT, LoadError, LoadOptions, Units, excerpt, load_envmap,
-    load_scene, load_scene_with,
+    EXCERPT_CHARS, LUMENS_PER_WATT, LoadError, LoadOptions, MAX_SCENE_TEXTURE_BYTES, Units,
+    excerpt, load_envmap, load_scene, load_scene_with,
 };
 pub use model::*;
 pub use timeline::{Timeline, TimelineError};

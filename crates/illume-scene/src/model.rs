@@ -222,6 +222,11 @@ pub struct Texture {
 }
 
 impl Texture {
+    /// Memory of the texels \[bytes\]: 12 a texel (linear RGB) plus the alpha bytes.
+    pub fn memory_bytes(&self) -> u64 {
+        (self.texels.len() * std::mem::size_of::<Rgb>() + self.alpha.len()) as u64
+    }
+
     /// An opaque `width`×`height` texture, repeating in both directions, whose texel
     /// `(x, y)` (row `y` from the top) is `f(x, y)`.
     pub fn from_fn(name: &str, width: u32, height: u32, f: impl Fn(u32, u32) -> Rgb) -> Self {

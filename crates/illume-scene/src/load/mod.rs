@@ -127,6 +127,38 @@ pub struct LoadOptions {
     pub strict: bool,
     /// How a glTF file's light intensities and emission are read.
     pub units: Units,
+    /// Most memory the scene's textures may take once decoded \[bytes\] (12 a texel, as
+    /// linear RGB, plus 1 for an alpha channel); `None`: [`MAX_SCENE_TEXTURE_BYTES`]. A
+    /// texture that would pass it is an error naming the file, strict or not.
+    pub max_texture_bytes: Option<u64>,
+}
+
+/// Most memory a scene's decoded textures may take by default \[bytes\]: 8 GiB. Each
+/// image is also checked on its header against
+/// [`illume_core::image::MAX_DECODED_IMAGE_BYTES`] (1 GiB) before it is decoded, so a
+/// load stops within 1 GiB of this. The renderer adds ⅓ for mip levels and small
+/// copies for photons: ≈ 11 GiB at the limit, within the 24 GiB machines the project
+/// runs on with room for the frame; a scene beyond it gets a clear error instead of an
+/// allocation failure that aborts the process.
+pub const MAX_SCENE_TEXTURE_BYTES: u64 = 8 << 30;
+
+/// `Ok` when `texture` fits beside the `used` bytes of the textures loaded before it
+/// within `limit` ([`LoadOptions::max_texture_bytes`]); otherwise the message, with
+/// both sizes and the limit.
+pub(crate) fn check_texture_budget(used: u64, texture: &Texture, limit: u64) -> Result<(), String> {
+    let bytes = texture.memory_bytes();
+    if used.saturating_add(bytes) > limit {
+        return Err(format!(
+            "the scene's textures would take {} MiB with this one ({} MiB, {}×{} texels), \
+             more than the {} MiB illume keeps for a scene's textures",
+            (used + bytes) >> 20,
+            bytes >> 20,
+            texture.width,
+            texture.height,
+            limit >> 20
+        ));
+    }
+    Ok(())
 }
 
 /// How glTF light intensities and emission strengths are read.
@@ -193,15 +225,16 @@ pub fn load_scene_with(path: &Path, options: &LoadOptions) -> Result<Scene, Load
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
+    let texture_limit = options.max_texture_bytes.unwrap_or(MAX_SCENE_TEXTURE_BYTES);
     let mut scene = match ext.as_str() {
         "gltf" | "glb" => {
-            let mut scene = gltf::load(path, options.strict)?;
+            let mut scene = gltf::load(path, options.strict, texture_limit)?;
             if options.units == Units::Photometric {
                 photometric_to_radiometric(&mut scene);
             }
             scene
         }
-        "obj" => obj::load(path, options.strict)?,
+        "obj" => obj::load(path, options.strict, texture_limit)?,
         "ply" => ply::load(path)?,
         _ => return Err(LoadError::UnknownFormat { path: path.into() }),
     };

@@ -45,8 +45,8 @@
 //! ignored with a warning. Line continuations (`\`) are not supported.
 
 use super::{
-    LoadError, decode_coverage_texture, decode_texture, default_camera_for_bounds, excerpt,
-    normal_map_from_height, read_file, read_referenced_file,
+    LoadError, check_texture_budget, decode_coverage_texture, decode_texture,
+    default_camera_for_bounds, excerpt, normal_map_from_height, read_file, read_referenced_file,
 };
 use crate::animation::Trs;
 use crate::builtin::SceneBuilder;
@@ -80,13 +80,15 @@ struct ObjReader<'a> {
     textures: HashMap<(PathBuf, TextureUse), TextureId>,
     /// Missing or undecodable textures are errors rather than warnings.
     strict: bool,
+    /// [`crate::LoadOptions::max_texture_bytes`], resolved.
+    texture_limit: u64,
     default_material: Option<MaterialId>,
     current: Option<MaterialId>,
     ignored: BTreeSet<String>,
     unknown_materials: BTreeSet<String>,
 }
 
-pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
+pub(super) fn load(path: &Path, strict: bool, texture_limit: u64) -> Result<Scene, LoadError> {
     let bytes = read_file(path)?;
     if let Some((place, message)) = binary_data(&bytes, "OBJ") {
         return Err(LoadError::malformed(path, place, message));
@@ -103,6 +105,7 @@ pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
         materials: HashMap::new(),
         textures: HashMap::new(),
         strict,
+        texture_limit,
         default_material: None,
         current: None,
         ignored: BTreeSet::new(),
@@ -552,6 +555,15 @@ impl ObjReader<'_> {
         };
         match decoded {
             Ok(texture) => {
+                // Memory is not the file's fault: an error strict or not.
+                check_texture_budget(self.builder.texture_bytes(), &texture, self.texture_limit)
+                    .map_err(|m| {
+                        LoadError::malformed(
+                            self.path,
+                            place.clone(),
+                            format!("texture '{}': {m}", tex_path.display()),
+                        )
+                    })?;
                 let id = self.builder.texture(texture);
                 self.textures.insert((tex_path.into(), usage), id);
                 Ok(Some(id))

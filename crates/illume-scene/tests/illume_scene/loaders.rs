@@ -2405,3 +2405,68 @@ fn gltf_texture_coordinate_sets_and_transforms_on_every_slot() {
     let msg = load_err(&write_json(&dir, "bad_transform.gltf", &d));
     assert_contains(&msg, &["material 1", "normalTexture"]);
 }
+
+/// The scene's textures are capped in total (issue 38 goal 3): the texture that would
+/// pass `max_texture_bytes` is an error naming the file, its place, both sizes and the
+/// limit — strict or not (memory is not the file's fault) — in OBJ and glTF alike; the
+/// same scene under a limit that holds it loads.
+#[test]
+fn a_scenes_textures_are_capped_in_total() {
+    // Two 64×64 PNGs: 49 152 bytes each as linear RGB.
+    let (dir, doc) = cube_copy("texture_budget");
+    let png = |name: &str, v: u8| {
+        image::RgbImage::from_pixel(64, 64, image::Rgb([v, v, v]))
+            .save(dir.join(name))
+            .unwrap();
+    };
+    png("a.png", 200);
+    png("b.png", 100);
+    let limit = |bytes: u64| illume_scene::LoadOptions {
+        max_texture_bytes: Some(bytes),
+        ..Default::default()
+    };
+
+    std::fs::write(
+        dir.join("two.mtl"),
+        "newmtl a\nKd 1 1 1\nmap_Kd a.png\nnewmtl b\nKd 1 1 1\nmap_Kd b.png\n",
+    )
+    .unwrap();
+    let obj = dir.join("two.obj");
+    std::fs::write(
+        &obj,
+        "mtllib two.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+         usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 3/3 2/2 1/1\n",
+    )
+    .unwrap();
+    let s =
+        illume_scene::load_scene_with(&obj, &limit(2 * 49_152)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.textures.len(), 2);
+    let msg = illume_scene::load_scene_with(&obj, &limit(2 * 49_152 - 1))
+        .expect_err("the second texture passes the limit")
+        .to_string();
+    assert_contains(
+        &msg,
+        &[
+            "two.mtl line 6 (map_Kd)",
+            "b.png",
+            "(0 MiB, 64×64 texels)",
+            "illume keeps for a scene's textures",
+        ],
+    );
+    assert!(!msg.contains("a.png"), "{msg}");
+
+    let mut d = doc.clone();
+    d["images"] = json!([{"uri": "a.png"}, {"uri": "b.png"}]);
+    d["textures"] = json!([{"source": 0}, {"source": 1}]);
+    d["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 0});
+    d["materials"][1]["pbrMetallicRoughness"]["baseColorTexture"] = json!({"index": 1});
+    let gltf = write_json(&dir, "two.gltf", &d);
+    let s =
+        illume_scene::load_scene_with(&gltf, &limit(2 * 49_152)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.textures.len(), 2);
+    let msg = illume_scene::load_scene_with(&gltf, &limit(49_152))
+        .expect_err("the second image passes the limit")
+        .to_string();
+    assert_contains(&msg, &["b.png", "64×64 texels", "more than the 0 MiB"]);
+    assert_eq!(illume_scene::MAX_SCENE_TEXTURE_BYTES, 8 << 30);
+}

@@ -4,7 +4,7 @@
 
 use super::Ctx;
 use super::buffers::{decode_data_uri, decode_uri_path};
-use crate::load::{LoadError, decode_texture, excerpt, read_referenced_file};
+use crate::load::{LoadError, check_texture_budget, decode_texture, excerpt, read_referenced_file};
 use crate::model::{Material, MaterialId, TextureId, UvTransform, WrapMode};
 use ::gltf::json;
 use illume_core::{Rgb, Vec2};
@@ -419,6 +419,10 @@ impl Ctx<'_> {
         let tex = decode_texture(&bytes, name.clone(), wrap_u, wrap_v, srgb).map_err(|e| {
             ImageFailure::Image(self.malformed(&place, format!("cannot decode '{shown}': {e}")))
         })?;
+        // Memory is not the file's fault: an error strict or not.
+        check_texture_budget(self.builder.texture_bytes(), &tex, self.texture_limit).map_err(
+            |m| ImageFailure::Document(self.malformed(&place, format!("'{shown}': {m}"))),
+        )?;
         let id = self.builder.texture(tex);
         self.textures
             .insert((image_index, wrap_u as u8, wrap_v as u8, srgb), id);

@@ -113,6 +113,8 @@ struct Ctx<'a> {
     textures: HashMap<(usize, u8, u8, bool), TextureId>,
     /// Missing or undecodable images are errors rather than warnings.
     strict: bool,
+    /// [`crate::LoadOptions::max_texture_bytes`], resolved.
+    texture_limit: u64,
     /// The texture coordinate set each material (by glTF index) reads, for those with
     /// textures.
     uv_sets: HashMap<usize, u32>,
@@ -127,7 +129,7 @@ struct Ctx<'a> {
 
 /// Loads the glTF document (`.gltf` or `.glb`) at `path` (see the module docs); with
 /// `strict`, a missing or undecodable image is an error instead of a warning.
-pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
+pub(super) fn load(path: &Path, strict: bool, texture_limit: u64) -> Result<Scene, LoadError> {
     let bytes = read_file(path)?;
     let is_glb = bytes.starts_with(b"glTF");
     if is_glb {
@@ -158,6 +160,7 @@ pub(super) fn load(path: &Path, strict: bool) -> Result<Scene, LoadError> {
         default_material: None,
         textures: HashMap::new(),
         strict,
+        texture_limit,
         uv_sets: HashMap::new(),
         meshes: HashMap::new(),
         camera_set: false,
