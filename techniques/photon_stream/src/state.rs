@@ -34,6 +34,36 @@ pub struct PhotonStream {
     impacts_at_advance: Option<u64>,
     /// Photons the last [`Technique::advance`] traced to keep the turnover.
     topped_up: u64,
+    /// The VSL powers the last frame showed ([`PhotonStreamSettings::smooth_frames`]).
+    shown: Option<Shown>,
+}
+
+/// What [`PhotonStream::smooth`] carries from one frame to the next.
+#[derive(Debug)]
+struct Shown {
+    front_w: Vec<Rgb>,
+    back_w: Vec<Rgb>,
+    /// The relative change still owed after this frame.
+    lag: f64,
+}
+
+/// How far `field`'s powers are from `shown`'s: Σ|ΔΦ| over every VSL side and channel
+/// over the larger of the two totals (0 for equal powers, at most 2, 1 from darkness).
+fn relative_change(shown: &Shown, field: &VslField) -> f64 {
+    let (mut diff, mut a, mut b) = (0.0f64, 0.0f64, 0.0f64);
+    let sides = [
+        (&shown.front_w, &field.front_w),
+        (&shown.back_w, &field.back_w),
+    ];
+    for (was, now) in sides {
+        for (w, x) in was.iter().zip(now.iter()) {
+            diff += f64::from((*x - *w).abs().element_sum());
+            a += f64::from(w.element_sum());
+            b += f64::from(x.element_sum());
+        }
+    }
+    let total = a.max(b);
+    if total > 0.0 { diff / total } else { 0.0 }
 }
 
 /// VSL fluxes \[W\] from a pool snapshot: front and back side of each VSL.
@@ -131,6 +161,7 @@ impl PhotonStream {
             pushed_at_indirect: None,
             impacts_at_advance: None,
             topped_up: 0,
+            shown: None,
         })
     }
 
@@ -217,6 +248,58 @@ impl PhotonStream {
             area_m2,
             inverse_square: self.settings.falloff == crate::settings::VslFalloff::InverseSquare,
         }
+    }
+
+    /// The powers to show this frame ([`PhotonStreamSettings::smooth_frames`]): the pool's
+    /// `field`, or, when it differs from the last frame's powers by more than
+    /// 1/`smooth_frames` (relative L1 over every VSL side), the last frame's powers moved
+    /// that far towards it. Streaming mode only.
+    fn smooth(&mut self, mut field: VslField) -> VslField {
+        let n = self.settings.smooth_frames;
+        if n == 0 || self.thread.is_none() {
+            return field;
+        }
+        let mut lag = 0.0;
+        if let Some(prev) = self
+            .shown
+            .take()
+            .filter(|p| p.front_w.len() == field.front_w.len())
+        {
+            let gap = relative_change(&prev, &field);
+            let step = 1.0 / f64::from(n);
+            if gap > step {
+                let a = (step / gap) as f32;
+                let ramp = |shown: &mut [Rgb], was: &[Rgb]| {
+                    for (x, w) in shown.iter_mut().zip(was) {
+                        *x = *w + (*x - *w) * a;
+                    }
+                };
+                ramp(&mut field.front_w, &prev.front_w);
+                ramp(&mut field.back_w, &prev.back_w);
+                lag = gap - step;
+            }
+        }
+        self.shown = Some(Shown {
+            front_w: field.front_w.clone(),
+            back_w: field.back_w.clone(),
+            lag,
+        });
+        field
+    }
+
+    /// The change the displayed powers still owe (relative L1; 0 when they show the
+    /// pool).
+    fn display_lag(&self) -> f64 {
+        self.shown.as_ref().map_or(0.0, |s| s.lag)
+    }
+
+    /// The VSL powers \[W\] (front, back) the last frame showed: the pool's, or on their
+    /// way to them ([`PhotonStreamSettings::smooth_frames`]). `None` before the first
+    /// frame, in deterministic mode and with smoothing off.
+    pub fn shown_powers(&self) -> Option<(&[Rgb], &[Rgb])> {
+        self.shown
+            .as_ref()
+            .map(|s| (s.front_w.as_slice(), s.back_w.as_slice()))
     }
 
     /// Pauses the simulation thread (no effect in deterministic mode).
@@ -313,6 +396,7 @@ impl Technique for PhotonStream {
         // false for one more frame, never true too early.
         self.pushed_at_indirect = Some(self.shared.lock().pool.photons_pushed());
         let field = self.field(world);
+        let field = self.smooth(field);
         let (img, stats) = shade(
             world,
             gbuffer,
@@ -369,6 +453,7 @@ impl Technique for PhotonStream {
             ("fallback_pixels", self.last_shade.fallbacks as f64),
             ("paused", if self.shared.is_paused() { 1.0 } else { 0.0 }),
             ("topped_up_photons", self.topped_up as f64),
+            ("display_lag", self.display_lag()),
         ] {
             c.set(name, x);
         }
@@ -381,6 +466,7 @@ impl Technique for PhotonStream {
     /// same VSL powers. False in deterministic mode (every frame shoots photons).
     fn settled(&self) -> bool {
         self.thread.is_some()
+            && self.display_lag() == 0.0
             && self.shared.is_resting()
             && self.pushed_at_indirect == Some(self.shared.lock().pool.photons_pushed())
     }
@@ -396,6 +482,7 @@ impl Technique for PhotonStream {
         self.pushed_at_indirect = None;
         self.impacts_at_advance = None;
         self.topped_up = 0;
+        self.shown = None;
         self.frames = 0;
         self.last_shade = ShadeStats::default();
     }

@@ -1,11 +1,11 @@
 //! Dynamic scenes: after the sphere moves, the VSL field converges to the new steady
 //! state, with the latency the FIFO pool predicts; flush; the streaming thread.
 
-use illume_core::{Affine3A, Vec3};
+use illume_core::{Affine3A, Rgb, Vec3};
 use illume_photon_stream::state::fluxes;
 use illume_photon_stream::{ChangePolicy, PhotonStream, PhotonStreamSettings, StreamPriority};
 use illume_scene::{Edit, InstanceId};
-use illume_transport::{Budget, GBuffer, Technique, World};
+use illume_transport::{Budget, GBuffer, SharedWorld, Technique, World};
 
 /// Relative L1 distance between two VSL fields (front + back fluxes).
 fn field_distance(a: &PhotonStream, b: &PhotonStream) -> f64 {
@@ -454,4 +454,118 @@ fn frames_turn_the_pool_over_within_turnover_frames() {
         "traced with no stale photon left"
     );
     ps.validate().unwrap();
+}
+
+/// `smooth_frames` (issue 33 goal 5, pops): when the whole pool turns over between two
+/// frames — the streaming thread catching up in a burst — the powers shown change by at
+/// most 1/`smooth_frames` of their total (relative L1) a frame, reach the pool's exactly
+/// within the frames that takes, and a frame rendered once they got there shows the
+/// pool's image. Without it (0, the paper) the first frame after the burst is the pool's.
+#[test]
+fn a_burst_of_turnover_is_shown_as_a_ramp_over_smooth_frames() {
+    const N: u32 = 10;
+    // Σ|a − b| and Σ a over every VSL side and channel.
+    let diff = |a: (&[Rgb], &[Rgb]), b: (&[Rgb], &[Rgb])| -> f64 {
+        a.0.iter()
+            .chain(a.1)
+            .zip(b.0.iter().chain(b.1))
+            .map(|(x, y)| f64::from((*x - *y).abs().element_sum()))
+            .sum()
+    };
+    let total = |a: (&[Rgb], &[Rgb])| -> f64 {
+        a.0.iter()
+            .chain(a.1)
+            .map(|x| f64::from(x.element_sum()))
+            .sum()
+    };
+    let l1 = |a: (&[Rgb], &[Rgb]), b: (&[Rgb], &[Rgb])| diff(a, b) / total(a).max(total(b));
+    let run = |smooth_frames: u32| {
+        let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
+        let settings = PhotonStreamSettings {
+            vsl_count: 30,
+            pool_size: 20_000,
+            turnover_frames: 0,
+            smooth_frames,
+            start_paused: true,
+            ..PhotonStreamSettings::default()
+        };
+        let mut ps = PhotonStream::new(&world, settings).unwrap();
+        ps.advance(&world.read().unwrap(), &Budget::default()); // the warm-up
+        indirect_mean(&world, &mut ps);
+        let before = ps.shown_powers().map(|(f, b)| (f.to_vec(), b.to_vec()));
+        ps.before_world_write();
+        let changes = world.write().unwrap().set_time(0.5);
+        ps.scene_changed(&world.read().unwrap(), &changes);
+        // The burst: enough photons at once to push every stale impact out.
+        ps.shoot(&world.read().unwrap(), 40_000);
+        assert_eq!(
+            stat(&ps, "stale_fraction"),
+            0.0,
+            "the burst left stale photons"
+        );
+        (world, ps, before)
+    };
+
+    let (world, mut ps, before) = run(N);
+    let mean = |ps: &mut PhotonStream| indirect_mean(&world, ps);
+    let (pool_front, pool_back) = fluxes(&ps.snapshot());
+    let pool = (pool_front.as_slice(), pool_back.as_slice());
+    let step = 1.0 / f64::from(N);
+    let mut shown: Vec<(Vec<Rgb>, Vec<Rgb>)> = vec![before.expect("the first frame showed powers")];
+    let mut means = Vec::new();
+    for _ in 0..3 * N {
+        means.push(mean(&mut ps));
+        let (f, b) = ps
+            .shown_powers()
+            .expect("streaming with smoothing shows powers");
+        shown.push((f.to_vec(), b.to_vec()));
+        if stat(&ps, "display_lag") == 0.0 {
+            break;
+        }
+    }
+    let gaps: Vec<f64> = shown.iter().map(|s| l1((&s.0, &s.1), pool)).collect();
+    eprintln!("gap to the pool, frame by frame: {gaps:.3?}");
+    assert!(
+        gaps[0] > 0.2,
+        "the light change moved the powers only {:.3}",
+        gaps[0]
+    );
+    assert_eq!(
+        *gaps.last().unwrap(),
+        0.0,
+        "never reached the pool in {} frames",
+        3 * N
+    );
+    // Each frame moves the powers by at most `step` of the larger total, the one shown
+    // before or the pool's.
+    for k in 1..shown.len() {
+        let was = (shown[k - 1].0.as_slice(), shown[k - 1].1.as_slice());
+        let change = diff((&shown[k].0, &shown[k].1), was) / total(was).max(total(pool));
+        assert!(
+            change <= step * 1.001,
+            "frame {k} changed the powers by {change:.4}"
+        );
+    }
+    let last = *means.last().unwrap();
+    assert!(
+        (means[0] - last).abs() > 0.05 * last,
+        "the first frame after the burst already showed the pool's light ({} vs {last})",
+        means[0]
+    );
+
+    let (world, mut ps, _) = run(0);
+    let mean = |ps: &mut PhotonStream| indirect_mean(&world, ps);
+    let (first, later) = (mean(&mut ps), mean(&mut ps));
+    assert!(ps.shown_powers().is_none());
+    assert_eq!(
+        first, later,
+        "without smoothing the first frame is the pool's"
+    );
+}
+
+/// The mean of `ps`'s indirect light in a 32×24 frame of `world`.
+fn indirect_mean(world: &SharedWorld, ps: &mut PhotonStream) -> f64 {
+    let w = world.read().unwrap();
+    let g = GBuffer::render(&w, 32, 24, illume_core::Vec2::splat(0.5));
+    f64::from(ps.indirect(&w, &g).mean().element_sum())
 }

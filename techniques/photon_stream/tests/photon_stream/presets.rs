@@ -27,6 +27,7 @@ fn paper_values(s: &PhotonStreamSettings) -> Vec<(&'static str, bool)> {
         ("rest_when_settled", !s.rest_when_settled),
         ("turnover_frames", s.turnover_frames == 0),
         ("gather_direct", !s.gather_direct),
+        ("smooth_frames", s.smooth_frames == 0),
     ]
 }
 
