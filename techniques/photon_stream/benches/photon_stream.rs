@@ -9,7 +9,9 @@
 //!   1280×1024 for 10/50/100/200 VSLs on the Cornell box, Cornell dragon, Dabrovic Sponza
 //!   and the Sibenik cathedral (`../shared/scenes`, or `ILLUME_SCENES`),
 //!   with the streaming thread running. As in the paper, each scene is lit by one spot
-//!   light (file emitters are switched off).
+//!   light (file emitters are switched off). `ILLUME_BENCH_PRESET=paper`: the paper's
+//!   estimator (`--preset paper`: point-light VSLs, nearest-VSL cells, every pixel
+//!   shaded) instead of the defaults.
 //! * `priority` — frames per second and photon rate with the streaming thread at normal
 //!   and at low OS priority (800×600, 100 VSLs, static and moving camera).
 //! * `rate` — photon impacts per second of the streaming thread (alone) against the
@@ -158,7 +160,14 @@ fn run_frames(
 }
 
 fn fps_table() {
-    println!("\n### Frames per second (whole frame, streaming thread running)\n");
+    let (preset, base) = match std::env::var("ILLUME_BENCH_PRESET").as_deref() {
+        Err(_) | Ok("default") => ("default", PhotonStreamSettings::default()),
+        Ok("paper") => ("paper", PhotonStreamSettings::paper()),
+        Ok(other) => panic!("ILLUME_BENCH_PRESET is `default` or `paper`, not `{other}`"),
+    };
+    println!(
+        "\n### Frames per second (whole frame, streaming thread running; preset `{preset}`)\n"
+    );
     println!(
         "`static`: fixed camera (the renderer keeps the G-buffer pixels of static geometry); `moving`: the camera turns every frame (every pixel rebuilt).\n"
     );
@@ -175,7 +184,7 @@ fn fps_table() {
                     let settings = PhotonStreamSettings {
                         vsl_count: n,
                         rest_when_settled: false,
-                        ..Default::default()
+                        ..base.clone()
                     };
                     let r = run_frames(&world, (w, h), settings, moving);
                     row += &format!(" {:.1} |", r.fps);
