@@ -100,6 +100,20 @@ pub struct LightSample {
     pub pdf: f32,
 }
 
+impl LightSample {
+    /// The shadow ray of this sample from `origin` (a point just off the surface): to
+    /// just short of the light point, or to infinity for a directional sample.
+    #[inline]
+    pub fn shadow_ray(&self, origin: Vec3) -> Ray {
+        let t_max = if self.distance.is_finite() {
+            (self.distance - 2e-4 * (1.0 + self.distance)).max(0.0)
+        } else {
+            f32::INFINITY
+        };
+        Ray::segment(origin, self.wi, t_max)
+    }
+}
+
 /// A photon leaving a light.
 #[derive(Clone, Copy, Debug)]
 pub struct EmissionSample {

@@ -253,14 +253,8 @@ impl World {
     /// point of `sample` (the shadow ray leaves from just off the surface and stops just
     /// short of the light; directional samples reach to infinity).
     pub fn unoccluded(&self, hit: &SurfaceHit, sample: &LightSample) -> bool {
-        let origin = hit.spawn_origin(sample.wi);
-        let t_max = if sample.distance.is_finite() {
-            (sample.distance - 2e-4 * (1.0 + sample.distance)).max(0.0)
-        } else {
-            f32::INFINITY
-        };
         !self.tracer.occluded(
-            &Ray::segment(origin, sample.wi, t_max),
+            &sample.shadow_ray(hit.spawn_origin(sample.wi)),
             illume_scene::MASK_DEFAULT,
         )
     }

@@ -103,12 +103,7 @@ fn near_gather(
         if w >= 1.0 {
             continue;
         }
-        let phi = if front_face {
-            field.front_w[s]
-        } else {
-            field.back_w[s]
-        };
-        sum += phi * ((1.0 - w) / area.max(1e-12));
+        sum += side_flux(field, s, front_face) * ((1.0 - w) / area.max(1e-12));
     }
     sum * inv_n
 }
@@ -138,12 +133,7 @@ fn exitance_with_direct(
         .nearest_on(y.instance, y.triangle, y.position_object)
     {
         let s = s as usize;
-        let phi = if y.front_face {
-            field.front_w[s]
-        } else {
-            field.back_w[s]
-        };
-        m += phi / field.area_m2[s].max(1e-12);
+        m += side_flux(field, s, y.front_face) / field.area_m2[s].max(1e-12);
     }
     let (n, ng) = (y.facing_normal(), y.facing_geometric_normal());
     let mut irradiance = Rgb::ZERO;
@@ -159,16 +149,19 @@ fn exitance_with_direct(
         if cos <= 0.0 || sample.wi.dot(ng) <= 0.0 {
             continue;
         }
-        // As `World::unoccluded`: from just off the surface to just short of the light.
-        let t_max = if sample.distance.is_finite() {
-            (sample.distance - 2e-4 * (1.0 + sample.distance)).max(0.0)
-        } else {
-            f32::INFINITY
-        };
-        let shadow = Ray::segment(y.spawn_origin(sample.wi), sample.wi, t_max);
-        if !tracer.occluded(&shadow, mask) {
+        if !tracer.occluded(&sample.shadow_ray(y.spawn_origin(sample.wi)), mask) {
             irradiance += sample.weight * cos;
         }
     }
     m + y.albedo * irradiance
+}
+
+/// The flux leaving VSL `s` on the side a hit arrived from (`front_face`).
+#[inline]
+fn side_flux(field: &VslField, s: usize, front_face: bool) -> Rgb {
+    if front_face {
+        field.front_w[s]
+    } else {
+        field.back_w[s]
+    }
 }
