@@ -28,12 +28,28 @@ pub struct BenchArgs {
     /// them all in the cache (scripts/slurm/bench_refs.sbatch).
     #[arg(long, value_name = "K/N", conflicts_with = "save_frames")]
     pub shard: Option<Shard>,
+    /// Run the scenario at toy sizes instead (at most 32 pixels wide, 4-spp references,
+    /// the first, last and edited frames only; each technique's work that does not scale with the pixels cut, e.g. rays per radiance record): a check
+    /// that its command runs end to end in seconds, whose numbers mean nothing. CI runs
+    /// every shipped scenario this way.
+    #[arg(long)]
+    pub miniature: bool,
 }
 
 /// Runs `illume bench`.
 pub fn run_bench(a: BenchArgs) -> Result<()> {
     let t0 = Instant::now();
-    let scenario = Scenario::load(&a.scenario)?;
+    let mut scenario = Scenario::load(&a.scenario)?;
+    if a.miniature {
+        scenario = scenario.miniature();
+        eprintln!(
+            "miniature: {}×{}, {} frames, references at {} spp — a check that the scenario runs; its numbers mean nothing",
+            scenario.width,
+            scenario.height,
+            scenario.frame_times().len(),
+            scenario.reference.spp
+        );
+    }
     let mut options = RunOptions::for_scenario(&scenario);
     if let Some(o) = a.output {
         options.output_dir = o;
@@ -60,6 +76,11 @@ pub fn run_bench(a: BenchArgs) -> Result<()> {
     options
         .notes
         .push(format!("Command: `{}`", command.join(" ")));
+    if a.miniature {
+        options.notes.push(
+            "**Miniature run** (`--miniature`): toy sizes, a check that the scenario runs; its numbers mean nothing.".into(),
+        );
+    }
     let mut bars = progress::Bars::default();
     let outcome = run(&scenario, &options, &mut bars)
         .with_context(|| format!("running {}", a.scenario.display()))?;

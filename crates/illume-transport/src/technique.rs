@@ -188,6 +188,12 @@ pub trait TechniqueSettings:
     fn adapt_to_interactive(&mut self) -> Option<String> {
         None
     }
+
+    /// Cuts the work of a smoke run (`illume bench --miniature`, which CI runs on every
+    /// shipped scenario to check that it still runs): e.g. fewer rays per record, so a
+    /// toy-sized image costs seconds. Only what does not scale with the image's pixels
+    /// needs cutting; the result must still be valid settings. Default: nothing.
+    fn miniature(&mut self) {}
 }
 
 /// How a technique's frame depends on the frames before it in one run

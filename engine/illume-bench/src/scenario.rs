@@ -40,6 +40,12 @@ pub const MAX_FRAMES: usize = 1_000_000;
 /// Largest `budget_ms` of a technique \[ms\]: an hour per frame.
 pub const MAX_BUDGET_MS: f64 = 3_600_000.0;
 
+/// Longest image side of a [`Scenario::miniature`] \[pixels\].
+pub const MINIATURE_SIDE: u32 = 32;
+
+/// Most samples per pixel of a [`Scenario::miniature`]'s converged references.
+pub const MINIATURE_SPP: u32 = 4;
+
 /// A benchmark scenario (one `.toml` file). Every field but `scene` and `[[technique]]`
 /// has a default.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -153,6 +159,10 @@ pub struct Scenario {
     /// The scenario's TOML text, echoed in the report.
     #[serde(skip)]
     pub text: String,
+    /// A smoke run ([`Scenario::miniature`]): every technique's settings also get
+    /// [`TechniqueSettings::miniature`](illume_transport::TechniqueSettings::miniature).
+    #[serde(skip)]
+    pub miniature: bool,
 }
 
 impl Default for Scenario {
@@ -187,6 +197,7 @@ impl Default for Scenario {
             spheres: Vec::new(),
             file: PathBuf::new(),
             text: String::new(),
+            miniature: false,
         }
     }
 }
@@ -777,7 +788,7 @@ impl Scenario {
         }
         // A value of the wrong type is named by its key in the scenario: the entry's
         // `settings` (or preset) table, or the scenario's `[render]` table.
-        let config: Config =
+        let mut config: Config =
             toml::Value::Table(table.clone())
                 .try_into()
                 .map_err(|e: toml::de::Error| {
@@ -794,6 +805,9 @@ impl Scenario {
                         e.message()
                     ))
                 })?;
+        if self.miniature {
+            config.technique_settings_mut().miniature();
+        }
         config
             .check()
             .map_err(|m| error(format!("settings: {m}")))?;
@@ -954,6 +968,48 @@ impl Scenario {
         let mut order: Vec<usize> = (0..self.edits.len()).collect();
         order.sort_by(|&a, &b| self.edits[a].at_s.total_cmp(&self.edits[b].at_s));
         order
+    }
+
+    /// The same scenario at toy sizes (`illume bench --miniature`; CI runs every shipped
+    /// scenario this way so that the commands behind `docs/reproductions.md` cannot rot):
+    /// the image at most [`MINIATURE_SIDE`] pixels on its longer side, the converged
+    /// references at most [`MINIATURE_SPP`] samples per pixel, own converged images of at
+    /// most 2 frames, and only a few of the frames — the first and the last, the first
+    /// and the last measured one, and the first frame at or after each edit (where the
+    /// edit shows) — at their own times, so every edit and event still happens — and each
+    /// technique's settings cut by its own
+    /// [`TechniqueSettings::miniature`](illume_transport::TechniqueSettings::miniature)
+    /// (work that does not scale with the pixels). The scene stays. Its numbers mean
+    /// nothing; it shows that the scenario runs end to end.
+    pub fn miniature(&self) -> Scenario {
+        let times = self.frame_times();
+        let measured = self.measured_frames(times.len());
+        let last = times.len().saturating_sub(1);
+        let mut keep = vec![0, last];
+        keep.extend(measured.iter().position(|&m| m));
+        keep.extend(measured.iter().rposition(|&m| m));
+        for e in &self.edits {
+            keep.extend(times.iter().position(|&t| t >= e.at_s));
+        }
+        keep.sort_unstable();
+        keep.dedup();
+        let mut mini = self.clone();
+        let scale = (MINIATURE_SIDE as f64 / self.width.max(self.height) as f64).min(1.0);
+        mini.width = ((self.width as f64 * scale).round() as u32).max(1);
+        mini.height = ((self.height as f64 * scale).round() as u32).max(1);
+        mini.times_s = Some(keep.iter().map(|&i| times[i]).collect());
+        mini.duration_s = None;
+        mini.fps = None;
+        mini.reference_frames = self.reference_frames.as_ref().map(|_| {
+            (0..keep.len())
+                .filter(|&j| measured[keep[j]])
+                .collect::<Vec<usize>>()
+        });
+        mini.reference.spp = self.reference.spp.min(MINIATURE_SPP);
+        mini.own_converged_frames = self.own_converged_frames.min(2);
+        mini.name = format!("{} (miniature)", self.name);
+        mini.miniature = true;
+        mini
     }
 
     /// The event name of edit `index`: its `label`, or `edit N (TARGET)`.

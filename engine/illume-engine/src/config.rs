@@ -93,6 +93,8 @@ pub trait AnySettings {
     fn set_samples_per_pixel(&mut self, spp: u32) -> bool;
     /// See [`TechniqueSettings::adapt_to_interactive`].
     fn adapt_to_interactive(&mut self) -> Option<String>;
+    /// See [`TechniqueSettings::miniature`].
+    fn miniature(&mut self);
 }
 
 impl<T: TechniqueSettings> AnySettings for T {
@@ -116,6 +118,9 @@ impl<T: TechniqueSettings> AnySettings for T {
     }
     fn adapt_to_interactive(&mut self) -> Option<String> {
         TechniqueSettings::adapt_to_interactive(self)
+    }
+    fn miniature(&mut self) {
+        TechniqueSettings::miniature(self);
     }
 }
 

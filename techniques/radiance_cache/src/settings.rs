@@ -287,6 +287,14 @@ impl TechniqueSettings for RadianceCacheSettings {
     /// `extrapolated` and `interpolated` reproject records into frames known in advance:
     /// records are reused in their place (`reuse`, the same lifespans without temporal
     /// gradients).
+    /// 8×8 rays per record and 2 traced glossy rays: a record's cost does not fall with
+    /// the image size, and a toy image still places hundreds of them.
+    fn miniature(&mut self) {
+        self.theta_strata = self.theta_strata.min(8);
+        self.phi_strata = self.phi_strata.min(8);
+        self.traced_rays = self.traced_rays.min(2);
+    }
+
     fn adapt_to_interactive(&mut self) -> Option<String> {
         matches!(
             self.temporal,

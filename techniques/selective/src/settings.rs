@@ -429,6 +429,14 @@ impl TechniqueSettings for SelectiveSettings {
         }
     }
 
+    /// N_p at most 16 and one photon per element at least: the pool (≈ 1.2 M photons on
+    /// a real model, traced again by every fresh build) does not fall with the image
+    /// size.
+    fn miniature(&mut self) {
+        self.pilots_per_group = self.pilots_per_group.min(16);
+        self.min_photons_per_element = self.min_photons_per_element.min(1);
+    }
+
     fn set_seed(&mut self, seed: u64) {
         self.seed = seed;
     }

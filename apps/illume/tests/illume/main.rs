@@ -9,5 +9,6 @@ mod cli;
 mod common;
 mod corpus;
 mod exposure;
+mod reproductions;
 mod robust;
 mod shards;

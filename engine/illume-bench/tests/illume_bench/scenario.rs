@@ -399,3 +399,52 @@ fn spheres_are_added_and_checked() {
     let e = taken.load_scene().unwrap_err().to_string();
     assert!(e.contains("sphere[0]") && e.contains("already"), "{e}");
 }
+
+/// `--miniature` keeps the first and last frames, the first and last measured ones and
+/// the frame where each edit shows, at their own times; remaps `reference_frames`; cuts
+/// the size and the references' samples; and marks the scenario so each technique's
+/// settings are cut too (radiance_cache: 8×8 rays per record).
+#[test]
+fn a_miniature_keeps_the_edited_and_measured_frames_at_toy_sizes() {
+    let s = parse(
+        r#"
+scene = "builtin:cornell-spot"
+width = 640
+height = 480
+duration_s = 2.0
+fps = 10.0
+reference_frames = [3, 5, 10, 17]
+own_converged_frames = 3
+[reference]
+spp = 512
+[[technique]]
+name = "radiance_cache"
+[[edit]]
+at_s = 1.05
+light = "spot"
+translation = [0.0, 1.5, 0.0]
+"#,
+    )
+    .unwrap();
+    let m = s.miniature();
+    let times = m.frame_times();
+    let kept = [0, 3, 11, 17, 19];
+    assert_eq!(times.len(), kept.len(), "{times:?}");
+    for (t, i) in times.iter().zip(kept) {
+        assert!((t - i as f64 / 10.0).abs() < 1e-12, "{times:?}");
+    }
+    // Frames 3 and 17 were measured; 0, 11 (the edit's) and 19 were not.
+    assert_eq!(m.reference_frames, Some(vec![1, 3]));
+    assert_eq!((m.width, m.height), (32, 24));
+    assert_eq!(m.reference.spp, 4);
+    assert_eq!(m.own_converged_frames, 2);
+    // The technique's own cut, through the same configuration the run uses.
+    let full = s.technique_config(0).unwrap();
+    let mini = m.technique_config(0).unwrap();
+    let rays = |c: &illume_engine::Config| {
+        let t = toml::Value::try_from(c).unwrap();
+        let r = &t["radiance_cache"];
+        r["theta_strata"].as_integer().unwrap() * r["phi_strata"].as_integer().unwrap()
+    };
+    assert_eq!((rays(&full), rays(&mini)), (64 * 64, 8 * 8));
+}
