@@ -77,6 +77,26 @@ pub(crate) fn shading_point(p: &GBufferPixel) -> Option<(Vec3, Vec3)> {
     Some((hit.position, n))
 }
 
+/// Least cosine between the view direction and the normal a glossy pixel's specular
+/// part is evaluated about ([`facing_view`]).
+const MIN_VIEW_COS: f32 = 0.05;
+
+/// `n` (unit, on the side the camera sees) bent towards the unit direction to the camera
+/// `wo` just enough that the camera sees its front (cosine ≥ [`MIN_VIEW_COS`] before
+/// normalising); `n` itself where it already does. At the silhouette of a smooth-shaded
+/// mesh the interpolated normal can face away from a camera that sees the triangle's
+/// front: the BRDF is zero for such a view, and a metal (no diffuse part, no direct
+/// light there either) came out as a black pixel — 4 at 320×240 on `builtin:glossy-box`'s
+/// gold sphere (issue 35 goal 5). Bending the normal is the usual repair (as Blender
+/// Cycles' "ensure valid reflection" does for its reflections).
+pub(crate) fn facing_view(n: Vec3, wo: Vec3) -> Vec3 {
+    let c = n.dot(wo);
+    if c >= MIN_VIEW_COS {
+        return n;
+    }
+    (n + (MIN_VIEW_COS - c) * wo).normalize()
+}
+
 /// The albedo a non-Lambertian surface shaded as Lambertian gets: ρ_d plus the
 /// specular lobe's normal-incidence reflectance, (1 − m)·F0 + m·base.
 pub(crate) fn lambertian_albedo(brdf: &MetalRough) -> Rgb {
@@ -222,6 +242,9 @@ impl RadianceCache {
                 }
             }
         });
+        // The specular part is seen from `to_camera`: at a silhouette the interpolated
+        // normal may face away from it (`facing_view`).
+        let n_view = facing_view(n, px.to_camera);
         let specular = match surface {
             Surface::Diffuse(_) => Some(Rgb::ZERO),
             Surface::Glossy {
@@ -229,7 +252,7 @@ impl RadianceCache {
             } => Some(GlossyShading::traced(
                 world,
                 p,
-                n,
+                n_view,
                 &brdf,
                 px.to_camera,
                 self.settings.traced_rays,
@@ -241,7 +264,7 @@ impl RadianceCache {
                 brdf,
                 traced: false,
                 ..
-            } => self.specular_from_records(p, n, &brdf, px.to_camera, frame),
+            } => self.specular_from_records(p, n_view, &brdf, px.to_camera, frame),
         };
         Some(ShadedPixel {
             surface,

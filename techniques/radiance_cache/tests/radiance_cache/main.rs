@@ -17,5 +17,6 @@ mod record;
 mod reproject;
 mod settings;
 mod settling;
+mod silhouettes;
 mod technique;
 mod temporal;
