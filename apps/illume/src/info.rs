@@ -63,8 +63,9 @@ pub fn run(a: InfoArgs) -> Result<()> {
             specular.join(", ")
         );
         println!(
-            "             note: photon_stream carries indirect light on the Lambertian albedo only \
-             (glossy interreflections are approximated); the reference renders them"
+            "             note: photons (photon_stream, selective) scatter by these BRDFs, but their \
+             indirect light leaves a glossy surface as from a Lambertian one (glossy reflections \
+             of indirect light are approximated); radiance_cache and the reference render them"
         );
     }
     let cut: Vec<String> = scene
