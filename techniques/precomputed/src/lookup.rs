@@ -26,16 +26,57 @@ pub(crate) enum Lookup {
 
 impl Precomputed {
     /// Each pixel's indirect light (and sky light) at clock time `hours`, the sky at
-    /// scale `sky_scale`, through the domain's lookup.
-    pub(crate) fn pixels(&mut self, hours: f64, sky_scale: f32, gbuffer: &GBuffer) -> Vec<Rgb> {
+    /// scale `sky_scale`, through the domain's lookup; and the direct share of it (the
+    /// sky's direct light, [`crate::precompute::Sky::direct`]) when the file has one and
+    /// the sky is up.
+    pub(crate) fn pixels(
+        &mut self,
+        hours: f64,
+        sky_scale: f32,
+        gbuffer: &GBuffer,
+    ) -> (Vec<Rgb>, Option<Vec<Rgb>>) {
         match &self.lookup {
-            Lookup::Screen => self.screen_pixels(hours, sky_scale, gbuffer),
+            Lookup::Screen => {
+                let share = self.screen_share(sky_scale, gbuffer);
+                (self.screen_pixels(hours, sky_scale, gbuffer), share)
+            }
             Lookup::Cube { face, position } => {
                 let (face, position) = (*face, *position);
                 self.cube_pixels(face, position, hours, sky_scale, gbuffer)
             }
-            Lookup::Atlas { .. } => self.atlas_pixels(hours, sky_scale, gbuffer),
+            Lookup::Atlas { .. } => {
+                let share = self
+                    .sky_direct
+                    .as_ref()
+                    .filter(|_| sky_scale > 0.0)
+                    .map(|d| {
+                        let mut share = self.shade(d, gbuffer);
+                        share.par_iter_mut().for_each(|p| *p *= sky_scale);
+                        share
+                    });
+                (self.atlas_pixels(hours, sky_scale, gbuffer), share)
+            }
         }
+    }
+
+    /// `screen`: the sky's direct light at scale `sky_scale` under each pixel that sees
+    /// something.
+    fn screen_share(&self, sky_scale: f32, gbuffer: &GBuffer) -> Option<Vec<Rgb>> {
+        let direct = self.sky_direct.as_ref().filter(|_| sky_scale > 0.0)?;
+        ((gbuffer.width, gbuffer.height) == (self.width, self.height)).then(|| {
+            direct
+                .par_iter()
+                .zip(&gbuffer.pixels)
+                .with_min_len(4096)
+                .map(|(d, px)| {
+                    if px.is_some() {
+                        *d * sky_scale
+                    } else {
+                        Rgb::ZERO
+                    }
+                })
+                .collect()
+        })
     }
 
     /// `screen`: the file's pixel under each pixel.
@@ -64,7 +105,7 @@ impl Precomputed {
         hours: f64,
         sky_scale: f32,
         gbuffer: &GBuffer,
-    ) -> Vec<Rgb> {
+    ) -> (Vec<Rgb>, Option<Vec<Rgb>>) {
         // Only the runs of texels the pixels read: a cube holds ~9× the image's
         // pixels, a camera sees a fraction of it.
         let taps: Vec<[(usize, f32); 4]> = gbuffer
@@ -98,7 +139,21 @@ impl Precomputed {
             })
             .collect();
         self.runs = buffer;
-        out
+        let share = self
+            .sky_direct
+            .as_ref()
+            .filter(|_| sky_scale > 0.0)
+            .map(|d| {
+                taps.par_iter()
+                    .with_min_len(1024)
+                    .map(|tap| {
+                        tap.iter()
+                            .map(|&(t, w)| d[t] * (w * sky_scale))
+                            .fold(Rgb::ZERO, |a, b| a + b)
+                    })
+                    .collect()
+            });
+        (out, share)
     }
 
     /// `atlas`: the domain image reconstructed when the clock time changes, read per
