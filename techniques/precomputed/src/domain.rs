@@ -376,6 +376,9 @@ fn buried(world: &World, origin: Vec3, normal: Option<Vec3>, reach: f32, index: 
     back * 2 > RAYS
 }
 
+/// A valid lightmap texel's guide and, per part, (all samples' mean, first half's mean).
+type Gathered = (GuideTexel, Vec<(Rgb, Rgb)>);
+
 /// Renders the atlas, one image per part of `parts`: lightmap texels (valid ones
 /// gathered and `denoise`d within their chart, buried ones then copied from the nearest
 /// valid texel of their chart), then the probes (never filtered: six directions of one
@@ -391,8 +394,7 @@ fn render_atlas(
     let (w, h) = atlas.image_size();
     let texels = atlas.lightmap_texels();
     let reach = 2.0 / atlas.density;
-    // Per valid texel: its guide and, per part, (all samples' mean, first half's mean).
-    let gathered: Vec<Option<(GuideTexel, Vec<(Rgb, Rgb)>)>> = (0..texels)
+    let gathered: Vec<Option<Gathered>> = (0..texels)
         .into_par_iter()
         .with_min_len(64)
         .map(|i| {
