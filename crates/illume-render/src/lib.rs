@@ -381,12 +381,13 @@ impl Renderer {
         drop(state);
         let t2 = Instant::now();
         let mut indirect = technique.indirect(world, &gbuffer);
-        let t3 = Instant::now();
-        let full = add_par(&direct, &indirect);
         let mut direct = direct;
-        if let Some(share) = technique.direct_share() {
-            move_share(&mut direct, &mut indirect, &share);
-        }
+        let share = technique.direct_share();
+        let t3 = Instant::now();
+        let full = match share {
+            Some(share) => add_moving_share(&mut direct, &mut indirect, &share),
+            None => add_par(&direct, &indirect),
+        };
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         let timings = FrameTimings {
             gbuffer_ms: ms(t0, t1),
@@ -447,24 +448,29 @@ fn add_par(a: &RgbImage, b: &RgbImage) -> RgbImage {
     RgbImage::from_vec(a.width(), a.height(), pixels).expect("one value per pixel")
 }
 
-/// Moves `share` (a technique's [`Technique::direct_share`]) from `indirect` to `direct`,
-/// pixel by pixel, in parallel; the caller took `full` before. A share of another size
-/// than the images is left out (the split stays as the technique gave it).
-fn move_share(direct: &mut RgbImage, indirect: &mut RgbImage, share: &RgbImage) {
+/// `direct + indirect` (as [`add_par`]), and in the same pass `share` (a technique's
+/// [`Technique::direct_share`]) moved from `indirect` to `direct`. A share of another
+/// size than the images is left out (the split stays as the technique gave it).
+fn add_moving_share(direct: &mut RgbImage, indirect: &mut RgbImage, share: &RgbImage) -> RgbImage {
     let size = (share.width(), share.height());
     if size != (direct.width(), direct.height()) || size != (indirect.width(), indirect.height()) {
-        return;
+        return add_par(direct, indirect);
     }
-    direct
+    let (width, height) = size;
+    let pixels = direct
         .pixels_mut()
         .par_iter_mut()
         .zip(indirect.pixels_mut().par_iter_mut())
         .zip(share.pixels().par_iter())
         .with_min_len(4096)
-        .for_each(|((d, i), s)| {
+        .map(|((d, i), s)| {
+            let full = *d + *i;
             *d += *s;
             *i -= *s;
-        });
+            full
+        })
+        .collect();
+    RgbImage::from_vec(width, height, pixels).expect("one value per pixel")
 }
 
 /// [`direct_light_with`], with the sky's light at surface points only when `sky` (a

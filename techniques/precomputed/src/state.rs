@@ -41,7 +41,7 @@ pub struct Precomputed {
     pub(crate) height: u32,
     pub(crate) lookup: Lookup,
     /// Reconstructed texels of `atlas` and the (hours, sky scale) they are for.
-    pub(crate) cache: Option<((f64, f32), Vec<Rgb>)>,
+    pub(crate) cache: Option<((f64, f32), crate::lookup::AtlasTexels)>,
     /// `cube`: the texels reconstructed this frame (runs the pixels read).
     pub(crate) runs: Vec<Rgb>,
     /// Linear interpolation: the key pair (N, N+1) around the last frame's time and their
