@@ -233,5 +233,39 @@ fn a_file_without_the_skys_direct_light_renders_it_all_indirect_with_a_warning()
         !warnings.iter().any(|w| w.contains(&new_name)),
         "a new file is not warned about: {warnings:?}"
     );
+
+    // A bad sky.direct is refused, naming the file, the section and the value.
+    let load = |file: PcFile| {
+        illume_precomputed::Precomputed::from_file(
+            &world,
+            s.clone(),
+            &new_path,
+            file,
+            SIZE.0,
+            SIZE.1,
+            std::time::Instant::now(),
+        )
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default()
+    };
+    let mut negative = new.clone();
+    let at = negative
+        .sections
+        .iter()
+        .position(|s| s.name == SKY_DIRECT)
+        .unwrap();
+    negative.sections[at].values[7] = -1.0;
+    let e = load(negative.clone());
+    assert!(
+        e.contains(&new_name) && e.contains("section sky.direct value 7") && e.contains("-1"),
+        "{e}"
+    );
+    negative.sections[at].values.pop();
+    let e = load(negative);
+    assert!(
+        e.contains(&new_name) && e.contains("length of section sky.direct"),
+        "{e}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
