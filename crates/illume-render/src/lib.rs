@@ -261,9 +261,11 @@ pub struct FrameTimings {
 
 /// A rendered frame: `full = direct + indirect`, all linear radiance.
 pub struct Frame {
-    /// Emission seen directly plus direct light (one bounce).
+    /// Emission seen directly plus direct light (one bounce): the renderer's, and the
+    /// technique's [`Technique::direct_share`] when it hands one over.
     pub direct: RgbImage,
-    /// The technique's indirect light (two or more bounces).
+    /// The technique's indirect light (two or more bounces): its image less its direct
+    /// share.
     pub indirect: RgbImage,
     /// The sum.
     pub full: RgbImage,
@@ -378,9 +380,14 @@ impl Renderer {
         );
         drop(state);
         let t2 = Instant::now();
-        let indirect = technique.indirect(world, &gbuffer);
+        let mut indirect = technique.indirect(world, &gbuffer);
+        let mut direct = direct;
+        let share = technique.direct_share();
         let t3 = Instant::now();
-        let full = add_par(&direct, &indirect);
+        let full = match share {
+            Some(share) => add_moving_share(&mut direct, &mut indirect, &share),
+            None => add_par(&direct, &indirect),
+        };
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         let timings = FrameTimings {
             gbuffer_ms: ms(t0, t1),
@@ -439,6 +446,31 @@ fn add_par(a: &RgbImage, b: &RgbImage) -> RgbImage {
         .map(|(x, y)| *x + *y)
         .collect();
     RgbImage::from_vec(a.width(), a.height(), pixels).expect("one value per pixel")
+}
+
+/// `direct + indirect` (as [`add_par`]), and in the same pass `share` (a technique's
+/// [`Technique::direct_share`]) moved from `indirect` to `direct`. A share of another
+/// size than the images is left out (the split stays as the technique gave it).
+fn add_moving_share(direct: &mut RgbImage, indirect: &mut RgbImage, share: &RgbImage) -> RgbImage {
+    let size = (share.width(), share.height());
+    if size != (direct.width(), direct.height()) || size != (indirect.width(), indirect.height()) {
+        return add_par(direct, indirect);
+    }
+    let (width, height) = size;
+    let pixels = direct
+        .pixels_mut()
+        .par_iter_mut()
+        .zip(indirect.pixels_mut().par_iter_mut())
+        .zip(share.pixels().par_iter())
+        .with_min_len(4096)
+        .map(|((d, i), s)| {
+            let full = *d + *i;
+            *d += *s;
+            *i -= *s;
+            full
+        })
+        .collect();
+    RgbImage::from_vec(width, height, pixels).expect("one value per pixel")
 }
 
 /// [`direct_light_with`], with the sky's light at surface points only when `sky` (a
@@ -608,6 +640,78 @@ mod tests {
             illume_core::Counters::default()
         }
         fn reset(&mut self) {}
+    }
+
+    /// A constant indirect image of 0.25 of which `direct` is direct light.
+    struct Shared {
+        direct: Option<Rgb>,
+        size: (u32, u32),
+    }
+
+    impl Technique for Shared {
+        fn name(&self) -> &'static str {
+            "shared"
+        }
+        fn scene_changed(
+            &mut self,
+            _: &World,
+            _: &[illume_scene::SceneChange],
+        ) -> illume_transport::ChangeResponse {
+            illume_transport::ChangeResponse::Updated
+        }
+        fn advance(&mut self, _: &World, _: &illume_transport::Budget) {}
+        fn indirect(&mut self, _: &World, g: &GBuffer) -> RgbImage {
+            RgbImage::filled(g.width, g.height, Rgb::splat(0.25))
+        }
+        fn stats(&self) -> illume_core::Counters {
+            illume_core::Counters::default()
+        }
+        fn reset(&mut self) {}
+        fn direct_share(&mut self) -> Option<RgbImage> {
+            self.direct
+                .map(|d| RgbImage::filled(self.size.0, self.size.1, d))
+        }
+    }
+
+    #[test]
+    fn a_direct_share_moves_from_indirect_to_direct_and_full_stays() {
+        let world = World::new(illume_scene::builtin::load("cornell-spot").expect("builtin"));
+        let settings = RenderSettings {
+            width: 16,
+            height: 12,
+            ..Default::default()
+        };
+        let renderer = Renderer::new(settings);
+        let mut none = Shared {
+            direct: None,
+            size: (16, 12),
+        };
+        let base = renderer.render(&world, &mut none, 0);
+        assert!(
+            base.indirect
+                .pixels()
+                .iter()
+                .all(|p| *p == Rgb::splat(0.25))
+        );
+        let share = Rgb::new(0.125, 0.0625, 0.25);
+        let mut shared = Shared {
+            direct: Some(share),
+            size: (16, 12),
+        };
+        let split = renderer.render(&world, &mut shared, 0);
+        assert_eq!(split.full, base.full, "full unchanged");
+        for i in 0..base.full.pixels().len() {
+            assert_eq!(split.direct.pixels()[i], base.direct.pixels()[i] + share);
+            assert_eq!(split.indirect.pixels()[i], Rgb::splat(0.25) - share);
+        }
+        // A share of another size is left out, not a panic.
+        let mut odd = Shared {
+            direct: Some(share),
+            size: (3, 2),
+        };
+        let kept = renderer.render(&world, &mut odd, 0);
+        assert_eq!(kept.direct, base.direct);
+        assert_eq!(kept.indirect, base.indirect);
     }
 
     #[test]

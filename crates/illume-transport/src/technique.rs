@@ -3,6 +3,10 @@
 //! The renderer owns direct light (with shadows) and emission; a technique owns the
 //! indirect light: radiance leaving each G-buffer point towards the camera after at
 //! least two bounces from a light (light → surface → surface → eye and longer paths).
+//! A technique whose image holds some direct light as well (precomputed's sky image)
+//! says so ([`Technique::supplies_sky_light`]: the renderer skips its own sky term) and
+//! hands that share back ([`Technique::direct_share`]: the renderer files it under the
+//! frame's direct light), so a frame splits as the reference path tracer splits light.
 //!
 //! **Life of a technique.** It is built from the world and its settings (a
 //! [`TechniqueSettings`] struct, one TOML table). Techniques that need the future
@@ -131,6 +135,19 @@ pub trait Technique: Send {
     /// see nothing still show the sky. Default false.
     fn supplies_sky_light(&self) -> bool {
         false
+    }
+
+    /// The part of the image the last [`Technique::indirect`] returned that is direct
+    /// light (light reflected once, as the reference path tracer splits it), one value per
+    /// pixel of that image, or None when all of it is indirect. The renderer moves it
+    /// from the frame's `indirect` to its `direct` image (`full` unchanged), so that a
+    /// technique whose image holds some direct light (precomputed's sky image, which the
+    /// renderer's own sky term leaves to it, [`Technique::supplies_sky_light`]) splits a
+    /// frame as the reference does. Called once after each [`Technique::indirect`]; the
+    /// image is the technique's to hand over (taken, not kept). Default None: the whole
+    /// image is indirect light.
+    fn direct_share(&mut self) -> Option<RgbImage> {
+        None
     }
 }
 

@@ -332,7 +332,7 @@ fn runtime(world: &World, sun: &illume_scene::sun::SunSettings, dir: &std::path:
             base_header(&world, &s, (fw, fh)).unwrap(),
             &s,
             &synthetic,
-            &sky,
+            &sky.into(),
         )
         .unwrap();
         let pca_s = start.elapsed().as_secs_f64();

@@ -107,6 +107,20 @@ impl ProbeGrid {
     }
 }
 
+/// What a lightmap or probe lookup interpolates: a texel's value, or several values
+/// read with one set of weights (the run time reads the sky's direct share beside the
+/// light, [`crate::lookup`]).
+pub trait Texel:
+    Copy + std::ops::Add<Output = Self> + std::ops::AddAssign + std::ops::Mul<f32, Output = Self>
+{
+    /// No light.
+    const ZERO: Self;
+}
+
+impl Texel for Rgb {
+    const ZERO: Self = Rgb::ZERO;
+}
+
 /// The six normals of a probe, in the order its values are stored.
 pub const PROBE_AXES: [Vec3; 6] = [
     Vec3::X,
@@ -408,7 +422,7 @@ impl Atlas {
 
     /// Bilinear lookup of `values` (the lightmap's texels, row-major) at barycentrics
     /// `b` of `slot`, clamped to the slot's chart.
-    pub fn lookup(&self, values: &[Rgb], slot: &Slot, b: Vec2) -> Rgb {
+    pub fn lookup<T: Texel>(&self, values: &[T], slot: &Slot, b: Vec2) -> T {
         let uv = slot.uv[0] * (1.0 - b.x - b.y) + slot.uv[1] * b.x + slot.uv[2] * b.y;
         let [x0, y0, x1, y1] = slot.rect.map(|v| v as f32);
         let x = uv.x.clamp(x0 + 0.5, x1 - 0.5) - 0.5;
@@ -427,13 +441,13 @@ impl Atlas {
     /// The probes' interpolated albedo-free radiance at `position` for unit normal
     /// `normal`: `probe_values` holds 6 per probe, `valid` one flag per probe. Black when
     /// no probe around `position` is valid.
-    pub fn probe_lookup(
+    pub fn probe_lookup<T: Texel>(
         &self,
-        probe_values: &[Rgb],
+        probe_values: &[T],
         valid: &[f32],
         position: Vec3,
         normal: Vec3,
-    ) -> Rgb {
+    ) -> T {
         let g = &self.probes;
         let local = (position - g.origin) / g.spacing;
         let max = Vec3::new(
@@ -456,7 +470,7 @@ impl Atlas {
             if normal.z > 0.0 { n2.z } else { 0.0 },
             if normal.z < 0.0 { n2.z } else { 0.0 },
         ];
-        let mut sum = Rgb::ZERO;
+        let mut sum = T::ZERO;
         let mut weight = 0.0;
         for corner in 0..8 {
             let (dx, dy, dz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
@@ -467,7 +481,7 @@ impl Atlas {
             if w <= 0.0 || valid.get(p).copied().unwrap_or(0.0) < 0.5 {
                 continue;
             }
-            let mut v = Rgb::ZERO;
+            let mut v = T::ZERO;
             for (a, aw) in axis_w.iter().enumerate() {
                 v += probe_values[6 * p + a] * *aw;
             }
@@ -477,7 +491,7 @@ impl Atlas {
         if weight > 0.0 {
             sum * (1.0 / weight)
         } else {
-            Rgb::ZERO
+            T::ZERO
         }
     }
 }

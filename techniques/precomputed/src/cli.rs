@@ -193,7 +193,7 @@ struct MergeArgs {
 struct InfoArgs {
     /// The .illumepc file.
     file: PathBuf,
-    /// Write each key as restored from the file (and the sky image) as EXR into DIR.
+    /// Write each key as restored from the file, and the sky images, as EXR into DIR.
     #[arg(long)]
     dump: Option<PathBuf>,
     /// Also measure the mean HDR-FLIP between neighbouring lit keys as restored (noise
@@ -617,7 +617,7 @@ fn flip_between_keys(file: &PcFile) -> Result<Option<(f64, f64, usize)>> {
     Ok(Some((mean, max, flips.len())))
 }
 
-/// Restored keys ([`restored_key`]) and the sky as EXR.
+/// Restored keys ([`restored_key`]) and the sky (and its direct share) as EXR.
 fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
     use illume_core::Rgb;
     use illume_core::image::RgbImage;
@@ -628,14 +628,20 @@ fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
         let path = dir.join(format!("key_{t:03}_{:05.2}h.exr", h.keys[t].hours));
         img.write(&path, &Default::default())?;
     }
-    if let Some(sky) = file.section("sky") {
+    for (name, out) in [
+        ("sky", "sky.exr"),
+        (crate::precompute::SKY_DIRECT, "sky_direct.exr"),
+    ] {
+        let Some(sky) = file.section(name) else {
+            continue;
+        };
         let px = sky
             .values
             .chunks_exact(3)
             .map(|c| Rgb::new(c[0], c[1], c[2]))
             .collect();
         let img = RgbImage::from_vec(h.width, h.height, px).ok_or("image size")?;
-        img.write(&dir.join("sky.exr"), &Default::default())?;
+        img.write(&dir.join(out), &Default::default())?;
     }
     eprintln!(
         "wrote {} keys and the sky into {}",

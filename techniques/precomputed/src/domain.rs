@@ -44,6 +44,28 @@ pub enum Layout {
     Atlas(Box<Atlas>),
 }
 
+/// Which light a rendered image holds, as the reference path tracer splits it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// Light reflected ≥ 2 times (a key).
+    Indirect,
+    /// All reflected light (the sky image).
+    All,
+    /// Light reflected once (the sky image's direct share, section `sky.direct`).
+    Direct,
+}
+
+impl Part {
+    /// This part of a path's radiance.
+    fn of(self, out: &PathRadiance) -> Rgb {
+        match self {
+            Self::Indirect => out.indirect,
+            Self::All => out.direct + out.indirect,
+            Self::Direct => out.direct,
+        }
+    }
+}
+
 /// The cube faces' axes: (forward, up) of each face's camera.
 pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
     (Vec3::X, Vec3::Y),
@@ -113,12 +135,28 @@ impl Layout {
         indirect: bool,
         denoise: Denoise,
     ) -> RgbImage {
+        let part = if indirect { Part::Indirect } else { Part::All };
+        let mut images = self.render_parts(world, spp, seed, &[part], denoise);
+        images.pop().expect("one image a part")
+    }
+
+    /// As [`Layout::render`], one image per part of `parts`, all from the same paths
+    /// (so [`Part::Direct`] and [`Part::All`] of one call differ by exactly the light
+    /// reflected ≥ 2 times, never by noise), each `denoise`d alike.
+    pub fn render_parts(
+        &self,
+        world: &World,
+        spp: u32,
+        seed: u64,
+        parts: &[Part],
+        denoise: Denoise,
+    ) -> Vec<RgbImage> {
         match self {
             Self::Screen { width, height } => {
-                render_camera(world, (*width, *height), spp, seed, indirect, denoise)
+                render_camera(world, (*width, *height), spp, seed, parts, denoise)
             }
             Self::Cube { face } => {
-                let mut pixels = Vec::with_capacity(6 * (*face as usize).pow(2));
+                let mut pixels = vec![Vec::with_capacity(6 * (*face as usize).pow(2)); parts.len()];
                 for f in 0..6 {
                     let mut camera = world.scene.camera.clone();
                     camera.world_from_camera = Affine3A::from_mat3_translation(
@@ -130,12 +168,17 @@ impl Layout {
                     let mut scene = world.scene.clone();
                     scene.camera = camera;
                     let w = world.with_scene(scene);
-                    let image = render_camera(&w, (*face, *face), spp, seed, indirect, denoise);
-                    pixels.extend_from_slice(image.pixels());
+                    let images = render_camera(&w, (*face, *face), spp, seed, parts, denoise);
+                    for (p, image) in pixels.iter_mut().zip(&images) {
+                        p.extend_from_slice(image.pixels());
+                    }
                 }
-                RgbImage::from_vec(*face, 6 * face, pixels).expect("six faces")
+                pixels
+                    .into_iter()
+                    .map(|p| RgbImage::from_vec(*face, 6 * face, p).expect("six faces"))
+                    .collect()
             }
-            Self::Atlas(atlas) => render_atlas(world, atlas, spp, seed, indirect, denoise),
+            Self::Atlas(atlas) => render_atlas(world, atlas, spp, seed, parts, denoise),
         }
     }
 }
@@ -173,18 +216,18 @@ pub fn cube_face(asked: u32, height: u32, yfov: f32) -> Result<u32, PrecomputedE
     Ok((side as u32).max(1))
 }
 
-/// The reference path tracer's image of `world`'s camera: light reflected ≥ 2 times, or
-/// (`!indirect`) everything; `denoise`d under the camera's guide, the variance from the
-/// first half of the samples (the samples and their sum are those of one call: the
-/// undenoised image is the same bit for bit).
+/// The reference path tracer's images of `world`'s camera, one per part of `parts`;
+/// `denoise`d under the camera's guide, the variance from the first half of the samples
+/// (the samples and their sum are those of one call: the undenoised image is the same
+/// bit for bit).
 fn render_camera(
     world: &World,
     size: (u32, u32),
     spp: u32,
     seed: u64,
-    indirect: bool,
+    parts: &[Part],
     denoise: Denoise,
-) -> RgbImage {
+) -> Vec<RgbImage> {
     let mut r = ReferenceRenderer::new(
         ReferenceSettings {
             spp,
@@ -194,13 +237,16 @@ fn render_camera(
         size.0,
         size.1,
     );
-    let pick = |r: &ReferenceRenderer| {
+    let pick = |r: &ReferenceRenderer| -> Vec<RgbImage> {
         let images = r.images();
-        if indirect {
-            images.indirect
-        } else {
-            images.full
-        }
+        parts
+            .iter()
+            .map(|part| match part {
+                Part::Indirect => images.indirect.clone(),
+                Part::All => images.full.clone(),
+                Part::Direct => images.direct.clone(),
+            })
+            .collect()
     };
     let filtering = denoise == Denoise::Atrous;
     let half = (filtering && spp >= 2).then(|| {
@@ -208,12 +254,18 @@ fn render_camera(
         pick(&r)
     });
     r.add_samples(world, spp - r.samples());
-    let image = pick(&r);
+    let images = pick(&r);
     if !filtering {
-        return image;
+        return images;
     }
     let guide = illume_render::denoise::Guide::camera(world, size.0, size.1, 0);
-    illume_render::denoise::atrous(&image, half.as_ref(), &guide)
+    images
+        .iter()
+        .enumerate()
+        .map(|(i, image)| {
+            illume_render::denoise::atrous(image, half.as_ref().map(|h| &h[i]), &guide)
+        })
+        .collect()
 }
 
 /// A white Lambertian version of `hit` (albedo 1, no emission): what a lightmap texel
@@ -257,34 +309,33 @@ fn texel_hit(world: &World, p: &crate::atlas::TexelPoint) -> SurfaceHit {
     white(world.surface(&ray, &hit))
 }
 
-/// Mean of `spp` gathers from `hit` (seeded per sample and texel `index`), and the mean
-/// of the first half of them (for the denoiser's variance).
+/// Per part of `parts`: the mean of `spp` gathers from `hit` (seeded per sample and
+/// texel `index`; the same paths for every part), and the mean of the first half of them
+/// (for the denoiser's variance).
 fn gather(
     world: &World,
     hit: SurfaceHit,
     spp: u32,
     seed: u64,
     index: u64,
-    indirect: bool,
-) -> (Rgb, Rgb) {
+    parts: &[Part],
+) -> Vec<(Rgb, Rgb)> {
     let path = PathSettings::default();
     let wo = hit.facing_normal();
-    let mut sum = [0f64; 3];
-    let mut half = [0f64; 3];
+    let mut sum = vec![[0f64; 3]; parts.len()];
+    let mut half = sum.clone();
     for s in 0..spp {
         if s == spp / 2 {
-            half = sum;
+            half.clone_from(&sum);
         }
         let mut rng = Pcg32::new(mix64(seed.wrapping_add(s as u64)), index);
         let mut out = PathRadiance::default();
         continue_path(world, hit, wo, &mut rng, &path, &mut out);
-        let v = if indirect {
-            out.indirect
-        } else {
-            out.direct + out.indirect
-        };
-        for c in 0..3 {
-            sum[c] += v[c] as f64;
+        for (part, sum) in parts.iter().zip(sum.iter_mut()) {
+            let v = part.of(&out);
+            for c in 0..3 {
+                sum[c] += v[c] as f64;
+            }
         }
     }
     let mean = |sum: [f64; 3], n: u32| {
@@ -295,7 +346,10 @@ fn gather(
             (sum[2] / n) as f32,
         )
     };
-    (mean(sum, spp), mean(half, spp / 2))
+    sum.into_iter()
+        .zip(half)
+        .map(|(s, h)| (mean(s, spp), mean(h, spp / 2)))
+        .collect()
 }
 
 /// Whether most of a few rays from `origin` about `normal` hit back faces within
@@ -322,21 +376,25 @@ fn buried(world: &World, origin: Vec3, normal: Option<Vec3>, reach: f32, index: 
     back * 2 > RAYS
 }
 
-/// Renders the atlas: lightmap texels (valid ones gathered and `denoise`d within their
-/// chart, buried ones then copied from the nearest valid texel of their chart), then the
-/// probes (never filtered: six directions of one point are not neighbours).
+/// A valid lightmap texel's guide and, per part, (all samples' mean, first half's mean).
+type Gathered = (GuideTexel, Vec<(Rgb, Rgb)>);
+
+/// Renders the atlas, one image per part of `parts`: lightmap texels (valid ones
+/// gathered and `denoise`d within their chart, buried ones then copied from the nearest
+/// valid texel of their chart), then the probes (never filtered: six directions of one
+/// point are not neighbours).
 fn render_atlas(
     world: &World,
     atlas: &Atlas,
     spp: u32,
     seed: u64,
-    indirect: bool,
+    parts: &[Part],
     denoise: Denoise,
-) -> RgbImage {
+) -> Vec<RgbImage> {
     let (w, h) = atlas.image_size();
     let texels = atlas.lightmap_texels();
     let reach = 2.0 / atlas.density;
-    let gathered: Vec<Option<(GuideTexel, Rgb, Rgb)>> = (0..texels)
+    let gathered: Vec<Option<Gathered>> = (0..texels)
         .into_par_iter()
         .with_min_len(64)
         .map(|i| {
@@ -346,7 +404,7 @@ fn render_atlas(
             if buried(world, origin, Some(hit.facing_normal()), reach, i as u64) {
                 return None;
             }
-            let (all, half) = gather(world, hit, spp, seed, i as u64, indirect);
+            let means = gather(world, hit, spp, seed, i as u64, parts);
             let rect = atlas
                 .slot(p.instance, p.triangle, p.side == 1)
                 .map_or([0; 4], |s| s.rect);
@@ -358,53 +416,31 @@ fn render_atlas(
                 // A chart's top-left texel names it (charts never overlap).
                 region: rect[1].wrapping_mul(atlas.width).wrapping_add(rect[0]),
             };
-            Some((guide, all, half))
+            Some((guide, means))
         })
         .collect();
-    let mut values: Vec<Option<Rgb>> = gathered.iter().map(|g| g.map(|g| g.1)).collect();
-    if denoise == Denoise::Atrous && texels > 0 {
-        let lightmap = |f: fn(&(GuideTexel, Rgb, Rgb)) -> Rgb| {
-            RgbImage::from_vec(
-                atlas.width,
-                atlas.height,
-                gathered
-                    .iter()
-                    .map(|g| g.as_ref().map_or(Rgb::ZERO, f))
-                    .collect(),
-            )
-            .expect("lightmap size")
-        };
-        let guide = Guide {
-            width: atlas.width,
-            height: atlas.height,
-            texels: gathered.iter().map(|g| g.map(|g| g.0)).collect(),
-        };
-        let half = (spp >= 2).then(|| lightmap(|g| g.2));
-        let filtered = illume_render::denoise::atrous(&lightmap(|g| g.1), half.as_ref(), &guide);
-        for (v, f) in values.iter_mut().zip(filtered.pixels()) {
-            if v.is_some() {
-                *v = Some(*f);
-            }
-        }
-    }
-    dilate(atlas, &mut values);
-    let mut pixels: Vec<Rgb> = values.into_iter().map(|v| v.unwrap_or(Rgb::ZERO)).collect();
+    let guide = (denoise == Denoise::Atrous && texels > 0).then(|| Guide {
+        width: atlas.width,
+        height: atlas.height,
+        texels: gathered.iter().map(|g| g.as_ref().map(|g| g.0)).collect(),
+    });
     // Probes: six white gathers each; buried probes black (their flag says so).
     let template = (0..texels)
         .find_map(|i| atlas.point(i))
         .map(|p| texel_hit(world, &p));
     let flags = probe_flags(world, atlas);
-    let probe_values: Vec<Rgb> = (0..6 * atlas.probes.count())
+    let probe_values: Vec<Vec<Rgb>> = (0..6 * atlas.probes.count())
         .into_par_iter()
         .with_min_len(6)
         .map(|j| {
+            let black = vec![Rgb::ZERO; parts.len()];
             let Some(template) = template else {
-                return Rgb::ZERO;
+                return black;
             };
             let (probe, axis) = (j / 6, j % 6);
             let position = atlas.probes.position(probe);
             if flags[probe] < 0.5 {
-                return Rgb::ZERO;
+                return black;
             }
             let n = PROBE_AXES[axis];
             let hit = SurfaceHit {
@@ -414,12 +450,47 @@ fn render_atlas(
                 front_face: true,
                 ..template
             };
-            gather(world, hit, spp, seed, (texels + j) as u64, indirect).0
+            gather(world, hit, spp, seed, (texels + j) as u64, parts)
+                .into_iter()
+                .map(|m| m.0)
+                .collect()
         })
         .collect();
-    pixels.extend(probe_values);
-    pixels.resize(w as usize * h as usize, Rgb::ZERO);
-    RgbImage::from_vec(w, h, pixels).expect("atlas image size")
+    (0..parts.len())
+        .map(|k| {
+            let mut values: Vec<Option<Rgb>> = gathered
+                .iter()
+                .map(|g| g.as_ref().map(|g| g.1[k].0))
+                .collect();
+            if let Some(guide) = &guide {
+                let lightmap = |half: bool| {
+                    let pick = |m: &(Rgb, Rgb)| if half { m.1 } else { m.0 };
+                    RgbImage::from_vec(
+                        atlas.width,
+                        atlas.height,
+                        gathered
+                            .iter()
+                            .map(|g| g.as_ref().map_or(Rgb::ZERO, |g| pick(&g.1[k])))
+                            .collect(),
+                    )
+                    .expect("lightmap size")
+                };
+                let half = (spp >= 2).then(|| lightmap(true));
+                let filtered =
+                    illume_render::denoise::atrous(&lightmap(false), half.as_ref(), guide);
+                for (v, f) in values.iter_mut().zip(filtered.pixels()) {
+                    if v.is_some() {
+                        *v = Some(*f);
+                    }
+                }
+            }
+            dilate(atlas, &mut values);
+            let mut pixels: Vec<Rgb> = values.into_iter().map(|v| v.unwrap_or(Rgb::ZERO)).collect();
+            pixels.extend(probe_values.iter().map(|p| p[k]));
+            pixels.resize(w as usize * h as usize, Rgb::ZERO);
+            RgbImage::from_vec(w, h, pixels).expect("atlas image size")
+        })
+        .collect()
 }
 
 /// Whether probe `i` is inside geometry (left out of lookups).

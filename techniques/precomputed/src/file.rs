@@ -18,6 +18,10 @@
 //! ([`scene_fingerprint`]). A reader checks, in this order: magic, version, header
 //! checksum, header, total length, each section's checksum; each failure is its own
 //! [`FileError`] naming the file. Files are written to a temporary sibling and renamed.
+//!
+//! New sections extend the format without a new version: a reader looks sections up by
+//! name, so a file without one that came later (`sky.direct`, the sky's direct light,
+//! [`crate::precompute::SKY_DIRECT`]) still loads, its feature off (warned).
 
 use illume_scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -219,7 +223,7 @@ pub enum SectionFormat {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SectionInfo {
-    /// Name (`mean.r`, `temporal.r`, `images.r`, `key.12`, `sky`, …).
+    /// Name (`mean.r`, `temporal.r`, `images.r`, `key.12`, `sky`, `sky.direct`, …).
     pub name: String,
     /// Storage.
     pub format: SectionFormat,

@@ -6,6 +6,7 @@ use crate::PrecomputedError;
 use crate::atlas::Atlas;
 use crate::file::{FileError, PcFile};
 use crate::lookup::Lookup;
+use crate::precompute::SKY_DIRECT;
 use crate::reconstruct::Group;
 use crate::settings::PrecomputedSettings;
 use crate::state::Precomputed;
@@ -98,30 +99,12 @@ impl Precomputed {
         let rows = if joint { 3 * pixels } else { pixels };
         let k = h.components as usize;
         let groups = read_groups(&file, path, names, rows)?;
-        let sky_values = file
-            .section("sky")
-            .map(|s| s.values.clone())
-            .unwrap_or_default();
-        if sky_values.len() != 3 * pixels {
-            return Err(mismatch(
-                "length of section sky",
-                (3 * pixels).to_string(),
-                sky_values.len().to_string(),
-            ));
+        let sky = sky_section(&file, path, "sky", pixels)?
+            .ok_or_else(|| mismatch("section sky", "present".into(), "missing".into()))?;
+        let sky_direct = sky_section(&file, path, SKY_DIRECT, pixels)?;
+        if sky_direct.is_none() && sky.iter().any(|p| p.max_element() > 0.0) {
+            log::warn!("{}", old_sky_warning(path));
         }
-        // The sky image is radiance: a negative value would light the scene negatively.
-        if let Some(i) = sky_values.iter().position(|v| *v < 0.0) {
-            return Err(PrecomputedError::File(FileError::Invalid {
-                path: path.to_path_buf(),
-                field: format!("section sky value {i}"),
-                value: sky_values[i].to_string(),
-                reason: "sky radiance must be ≥ 0".into(),
-            }));
-        }
-        let sky = sky_values
-            .chunks_exact(3)
-            .map(|c| Rgb::new(c[0], c[1], c[2]))
-            .collect();
         Ok(Self {
             settings,
             file: path.to_path_buf(),
@@ -131,6 +114,8 @@ impl Precomputed {
             groups,
             joint,
             sky,
+            sky_direct,
+            share: None,
             width,
             height,
             lookup,
@@ -275,6 +260,55 @@ fn read_groups(
         });
     }
     Ok(groups)
+}
+
+/// The warning for a file whose sky light has no direct share (section [`SKY_DIRECT`],
+/// stored since the split): a split frame (`illume render --split`) then holds all of
+/// it in its indirect image.
+pub fn old_sky_warning(path: &Path) -> String {
+    format!(
+        "precomputed: {} has no section {SKY_DIRECT} (written before the sky's direct light \
+         was stored): its sky light is all in the indirect image (render --split puts it in \
+         _indirect, none in _direct); precompute the file again to split it as the reference does",
+        path.display()
+    )
+}
+
+/// Section `name` of `file` as `pixels` sky radiances (None when the file has no such
+/// section): its length checked, every value finite (the reader's check) and ≥ 0.
+fn sky_section(
+    file: &PcFile,
+    path: &Path,
+    name: &str,
+    pixels: usize,
+) -> Result<Option<Vec<Rgb>>, PrecomputedError> {
+    let Some(section) = file.section(name) else {
+        return Ok(None);
+    };
+    let values = &section.values;
+    if values.len() != 3 * pixels {
+        return Err(mismatch(
+            path,
+            &format!("length of section {name}"),
+            (3 * pixels).to_string(),
+            values.len().to_string(),
+        ));
+    }
+    // The sky image is radiance: a negative value would light the scene negatively.
+    if let Some(i) = values.iter().position(|v| *v < 0.0) {
+        return Err(PrecomputedError::File(FileError::Invalid {
+            path: path.to_path_buf(),
+            field: format!("section {name} value {i}"),
+            value: values[i].to_string(),
+            reason: "sky radiance must be ≥ 0".into(),
+        }));
+    }
+    Ok(Some(
+        values
+            .chunks_exact(3)
+            .map(|c| Rgb::new(c[0], c[1], c[2]))
+            .collect(),
+    ))
 }
 
 /// The error for a file that does not match what the run time needs.

@@ -17,7 +17,7 @@
 //!   machine renders the same key.
 
 use crate::PrecomputedError;
-use crate::domain::Layout;
+use crate::domain::{Layout, Part};
 use crate::file::{AtlasInfo, Header, KeyInfo, PcFile, Section, SectionFormat, scene_fingerprint};
 use crate::pca::{self, Components, Precision};
 use crate::schedule::KeyTime;
@@ -117,15 +117,52 @@ pub fn render_key_in(
     })
 }
 
+/// The sky's images at sky scale 1, in the layout of the keys.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sky {
+    /// All the sky's reflected light, direct and indirect (section `sky`).
+    pub all: RgbImage,
+    /// Its direct share, light reflected once (section [`SKY_DIRECT`]); None for files
+    /// written before it was stored: their sky light is all indirect in a split frame.
+    pub direct: Option<RgbImage>,
+}
+
+/// The name of the sky's direct share's section.
+pub const SKY_DIRECT: &str = "sky.direct";
+
+impl From<RgbImage> for Sky {
+    /// A sky image without its direct share (as in files written before it was stored).
+    fn from(all: RgbImage) -> Self {
+        Self { all, direct: None }
+    }
+}
+
+impl Sky {
+    /// Its file sections: `sky`, then [`SKY_DIRECT`] when there is one.
+    pub fn sections(&self) -> Vec<Section> {
+        let section = |name: &str, image: &RgbImage| Section {
+            name: name.into(),
+            format: SectionFormat::F32,
+            values: image.pixels().iter().flat_map(|p| p.to_array()).collect(),
+        };
+        let mut out = vec![section("sky", &self.all)];
+        out.extend(self.direct.as_ref().map(|d| section(SKY_DIRECT, d)));
+        out
+    }
+}
+
 /// Renders the sky's whole light (direct and indirect, Bahnsen et al. §2 "the skylight
 /// … precomputed … which we scale") at sky scale 1, sun off, dynamic instances masked,
 /// emission off (the renderer adds emission): at run time it is multiplied by s(t) and
 /// the renderer skips its own sky term ([`illume_transport::Technique::supplies_sky_light`]).
+/// Its direct share (light reflected once) comes from the same paths, at no extra
+/// tracing: at run time the renderer files it under a frame's direct light
+/// ([`illume_transport::Technique::direct_share`]), as the reference splits light.
 pub fn render_sky(
     world: &World,
     settings: &PrecomputedSettings,
     size: (u32, u32),
-) -> Result<RgbImage, PrecomputedError> {
+) -> Result<Sky, PrecomputedError> {
     render_sky_in(world, settings, &Layout::new(world, settings, size)?)
 }
 
@@ -134,7 +171,7 @@ pub fn render_sky_in(
     world: &World,
     settings: &PrecomputedSettings,
     layout: &Layout,
-) -> Result<RgbImage, PrecomputedError> {
+) -> Result<Sky, PrecomputedError> {
     let size = layout.image_size();
     let mut scene = static_scene(&world.scene);
     let path = scene
@@ -152,15 +189,22 @@ pub fn render_sky_in(
         m.emissive_texture = None;
     }
     if scene.sky.is_none() {
-        return Ok(RgbImage::filled(size.0, size.1, illume_core::Rgb::ZERO));
+        let black = RgbImage::filled(size.0, size.1, illume_core::Rgb::ZERO);
+        return Ok(Sky {
+            all: black.clone(),
+            direct: Some(black),
+        });
     }
-    Ok(layout.render(
+    let mut images = layout.render_parts(
         &world.with_scene(scene),
         settings.spp,
         mix64(settings.seed ^ 0x0073_6b79),
-        false,
+        &[Part::All, Part::Direct],
         crate::settings::Denoise::None,
-    ))
+    );
+    let direct = images.pop();
+    let all = images.pop().expect("two parts");
+    Ok(Sky { all, direct })
 }
 
 /// The 8-bit sRGB encoding (clamped, no tone curve) of an image at `exposure` (for the Yee metric).
@@ -240,7 +284,7 @@ pub fn compress(
     base: Header,
     settings: &PrecomputedSettings,
     keys: &[Key],
-    sky: &RgbImage,
+    sky: &Sky,
 ) -> Result<PcFile, PrecomputedError> {
     let bright: Vec<usize> = (0..keys.len()).filter(|&i| !keys[i].dark).collect();
     let channel =
@@ -325,11 +369,7 @@ pub fn compress(
         });
         eigenvalues.push(eig);
     }
-    sections.push(Section {
-        name: "sky".into(),
-        format: SectionFormat::F32,
-        values: sky.pixels().iter().flat_map(|p| p.to_array()).collect(),
-    });
+    sections.extend(sky.sections());
     Ok(PcFile {
         header: Header {
             kind: "pca".into(),

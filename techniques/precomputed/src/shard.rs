@@ -35,8 +35,8 @@ use crate::PrecomputedError;
 use crate::file::{FileError, PcFile, Section, SectionFormat};
 use crate::file::{Header, KeyInfo};
 use crate::precompute::{
-    Key, base_header, compress, daylight_floor, differs_visibly, lerp, render_key, render_sky,
-    sun_of,
+    Key, SKY_DIRECT, Sky, base_header, compress, daylight_floor, differs_visibly, lerp, render_key,
+    render_sky, sun_of,
 };
 use crate::schedule::{Criterion, KeyTime, Middle, adaptive_start, keeps_middle, level_middles};
 use crate::settings::{PrecomputedSettings, ScheduleKind};
@@ -100,12 +100,7 @@ pub fn precompute_shard(
         })
         .collect();
     if shard.index == 0 {
-        let sky = render_sky(world, settings, size)?;
-        sections.push(Section {
-            name: "sky".into(),
-            format: SectionFormat::F32,
-            values: sky.pixels().iter().flat_map(|p| p.to_array()).collect(),
-        });
+        sections.extend(render_sky(world, settings, size)?.sections());
     }
     Ok(PcFile { header, sections })
 }
@@ -283,12 +278,31 @@ fn shard_file(parts: &[(PathBuf, PcFile)], k: u32) -> &(PathBuf, PcFile) {
         .unwrap_or(&parts[0])
 }
 
-/// The sky image of a file (shard 0 of level 0, a `levels` file), or an error naming it.
-fn sky_of(path: &Path, file: &PcFile) -> Result<RgbImage, PrecomputedError> {
+/// The sky images of a file (shard 0 of level 0, a `levels` file), or an error naming
+/// it. Its direct share is carried when the file has one (shards of an older build have
+/// none: the merged file then has none either).
+fn sky_of(path: &Path, file: &PcFile) -> Result<Sky, PrecomputedError> {
     let size = (file.header.width, file.header.height);
-    file.section("sky")
+    let all = file
+        .section("sky")
         .and_then(|s| image(&s.values, size))
-        .ok_or_else(|| unusable(path, "it has no sky image (shard 0 renders it)".into()))
+        .ok_or_else(|| unusable(path, "it has no sky image (shard 0 renders it)".into()))?;
+    let direct = match file.section(SKY_DIRECT) {
+        None => None,
+        Some(s) => Some(image(&s.values, size).ok_or_else(|| {
+            unusable(
+                path,
+                format!(
+                    "its section {SKY_DIRECT} holds {} values, not the {} of a {}×{} image",
+                    s.values.len(),
+                    3 * size.0 as u64 * size.1 as u64,
+                    size.0,
+                    size.1
+                ),
+            )
+        })?),
+    };
+    Ok(Sky { all, direct })
 }
 
 /// Key `i` of `file`'s header as an image: its `key.i` section, or black when it has none
@@ -388,7 +402,7 @@ fn read_levels(
     file: &PcFile,
     like: &Header,
     like_name: &str,
-) -> Result<(Vec<(KeyTime, RgbImage)>, RgbImage, u32), PrecomputedError> {
+) -> Result<(Vec<(KeyTime, RgbImage)>, Sky, u32), PrecomputedError> {
     let h = &file.header;
     match h.kind.as_str() {
         "levels" => {}
@@ -573,7 +587,7 @@ fn levels_file(
     base: Header,
     keys: &[(KeyTime, RgbImage)],
     infos: Vec<KeyInfo>,
-    sky: &RgbImage,
+    sky: &Sky,
 ) -> PcFile {
     let mut sections: Vec<Section> = keys
         .iter()
@@ -582,7 +596,7 @@ fn levels_file(
         .filter(|(_, (_, info))| !info.dark)
         .map(|(i, ((_, image), _))| key_section(i, image))
         .collect();
-    sections.push(sky_section(sky));
+    sections.extend(sky.sections());
     PcFile {
         header: Header {
             kind: "levels".into(),
@@ -599,14 +613,6 @@ fn key_section(i: usize, image: &RgbImage) -> Section {
         name: format!("key.{i}"),
         format: SectionFormat::F32,
         values: image.pixels().iter().flat_map(|p| p.to_array()).collect(),
-    }
-}
-
-fn sky_section(sky: &RgbImage) -> Section {
-    Section {
-        name: "sky".into(),
-        format: SectionFormat::F32,
-        values: sky.pixels().iter().flat_map(|p| p.to_array()).collect(),
     }
 }
 
@@ -729,7 +735,7 @@ pub fn precompute_level(
         })
         .collect();
     if level == 0 && shard.index == 0 {
-        sections.push(sky_section(&render_sky(world, settings, size)?));
+        sections.extend(render_sky(world, settings, size)?.sections());
     }
     Ok(PcFile { header, sections })
 }

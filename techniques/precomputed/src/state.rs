@@ -29,13 +29,19 @@ pub struct Precomputed {
     pub(crate) groups: Vec<Group>,
     pub(crate) joint: bool,
     pub(crate) sky: Vec<Rgb>,
+    /// The sky image's direct share (light reflected once), per texel; None for a file
+    /// written before it was stored.
+    pub(crate) sky_direct: Option<Vec<Rgb>>,
+    /// The direct share of the last [`Technique::indirect`] image, until the renderer
+    /// takes it ([`Technique::direct_share`]).
+    pub(crate) share: Option<RgbImage>,
     /// The key image's size (screen: the image's; cube: face × 6·face; atlas: lightmap
     /// and probe rows).
     pub(crate) width: u32,
     pub(crate) height: u32,
     pub(crate) lookup: Lookup,
     /// Reconstructed texels of `atlas` and the (hours, sky scale) they are for.
-    pub(crate) cache: Option<((f64, f32), Vec<Rgb>)>,
+    pub(crate) cache: Option<((f64, f32), crate::lookup::AtlasTexels)>,
     /// `cube`: the texels reconstructed this frame (runs the pixels read).
     pub(crate) runs: Vec<Rgb>,
     /// Linear interpolation: the key pair (N, N+1) around the last frame's time and their
@@ -72,6 +78,8 @@ impl Precomputed {
             groups: Vec::new(),
             joint: false,
             sky: Vec::new(),
+            sky_direct: None,
+            share: None,
             width,
             height,
             lookup: Lookup::Screen,
@@ -128,6 +136,7 @@ impl Technique for Precomputed {
     fn advance(&mut self, _world: &World, _budget: &Budget) {}
 
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
+        self.share = None;
         if self.pending || self.times.is_empty() {
             let n = gbuffer.width as usize * gbuffer.height as usize;
             return RgbImage::from_vec(gbuffer.width, gbuffer.height, vec![Rgb::ZERO; n])
@@ -139,7 +148,8 @@ impl Technique for Precomputed {
             .map(|p| p.elevation_deg)
             .unwrap_or(-90.0);
         let sky_scale = illume_scene::sun::sky_scale(elevation);
-        let out = self.pixels(hours, sky_scale, gbuffer);
+        let (out, share) = self.pixels(hours, sky_scale, gbuffer);
+        self.share = share.and_then(|s| RgbImage::from_vec(gbuffer.width, gbuffer.height, s));
         self.last_ms = start.elapsed().as_secs_f64() * 1e3;
         RgbImage::from_vec(gbuffer.width, gbuffer.height, out).expect("one value per pixel")
     }
@@ -170,5 +180,14 @@ impl Technique for Precomputed {
     /// The precomputed sky image holds the sky's direct light too (Eq. 2's s(t)·L_sky).
     fn supplies_sky_light(&self) -> bool {
         true
+    }
+
+    /// The sky's direct light in the last image (the file's `sky.direct` image at the
+    /// frame's sky scale, through the domain's lookup): a split frame then holds the
+    /// sky's light reflected once in its direct image, as the reference's does. None for
+    /// a file written before that image was stored (warned at load), at night and before
+    /// the precompute.
+    fn direct_share(&mut self) -> Option<RgbImage> {
+        self.share.take()
     }
 }

@@ -188,7 +188,7 @@ fn cubic_interpolation_is_spaced_by_time() {
         .collect();
     let base = base_header(&world, &s, size).unwrap();
     let sky = RgbImage::filled(size.0, size.1, Rgb::ZERO);
-    let file = compress(base, &s, &keys, &sky).unwrap();
+    let file = compress(base, &s, &keys, &sky.into()).unwrap();
     let technique = Precomputed::from_file(
         &world,
         s,

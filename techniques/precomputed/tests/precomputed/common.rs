@@ -24,27 +24,36 @@ pub fn reference_with_sky_direct(
     spp: u32,
     seeds: (u64, u64),
 ) -> RgbImage {
-    let render = |scene: Scene, seed: u64| {
-        let mut r = ReferenceRenderer::new(
-            ReferenceSettings {
-                spp,
-                seed,
-                ..Default::default()
-            },
-            SIZE.0,
-            SIZE.1,
-        );
-        r.add_samples(&world.with_scene(scene), spp);
-        r
-    };
-    let mut sky_only = scene.clone();
+    let r = render(world, scene.clone(), spp, seeds.0);
+    r.images()
+        .indirect
+        .add(&sky_direct(world, scene, spp, seeds.1))
+}
+
+/// The reference's direct light of `scene`'s sky alone (`spp` samples, `seed`): what a
+/// precomputed frame hands the renderer as its direct share.
+pub fn sky_direct(world: &World, scene: Scene, spp: u32, seed: u64) -> RgbImage {
+    let mut sky_only = scene;
     let sun_light = sky_only.sun.take().unwrap().light;
     sky_only.lights[sun_light.index()].kind = illume_scene::LightKind::Directional {
         irradiance: Rgb::ZERO,
     };
-    let r = render(scene, seeds.0);
-    let rs = render(sky_only, seeds.1);
-    r.images().indirect.add(&rs.images().direct)
+    render(world, sky_only, spp, seed).images().direct
+}
+
+/// The reference path tracer after `spp` samples of `scene` (seen in `world`'s BVHs).
+fn render(world: &World, scene: Scene, spp: u32, seed: u64) -> ReferenceRenderer {
+    let mut r = ReferenceRenderer::new(
+        ReferenceSettings {
+            spp,
+            seed,
+            ..Default::default()
+        },
+        SIZE.0,
+        SIZE.1,
+    );
+    r.add_samples(&world.with_scene(scene), spp);
+    r
 }
 
 /// Mean of each 8×8 block of a [`SIZE`] image (channel average), row by row.

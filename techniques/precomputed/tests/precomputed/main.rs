@@ -11,4 +11,5 @@ mod file;
 mod pca_paper_size;
 mod presets;
 mod shards;
+mod split;
 mod sun_room;

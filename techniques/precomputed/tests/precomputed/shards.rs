@@ -2,7 +2,7 @@
 //! refused with an error naming the file.
 
 use illume_precomputed::file::PcFile;
-use illume_precomputed::precompute::precompute;
+use illume_precomputed::precompute::{SKY_DIRECT, precompute};
 use illume_precomputed::settings::{PrecomputedSettings, ScheduleKind};
 use illume_precomputed::shard::{Shard, merge, merge_level, precompute_level, precompute_shard};
 use illume_transport::World;
@@ -47,6 +47,21 @@ fn three_merged_shards_equal_the_unsharded_file() {
     assert!(
         merged.to_bytes() == whole.to_bytes(),
         "merged shards differ from the unsharded file"
+    );
+    assert!(
+        merged.section(SKY_DIRECT).is_some(),
+        "the sky's direct light survives the merge"
+    );
+    // Shards of an older build (no sky.direct in shard 0) merge into a file without it,
+    // which the run time reads with its sky light all indirect.
+    let mut old_zero = parts[0].clone();
+    old_zero.1.sections.retain(|s| s.name != SKY_DIRECT);
+    let old = merge(&[old_zero, parts[1].clone(), parts[2].clone()]).unwrap();
+    let mut expected = whole.clone();
+    expected.sections.retain(|s| s.name != SKY_DIRECT);
+    assert!(
+        old.to_bytes() == expected.to_bytes(),
+        "old shards merge into the file without sky.direct"
     );
 
     // A missing shard, a duplicate, another seed.
@@ -186,6 +201,11 @@ fn adaptive_levels_in_shards_equal_the_unsharded_file() {
         assert!(
             merged.to_bytes() == whole.to_bytes(),
             "verify_midpoint {verify_midpoint}: sharded levels differ from the unsharded file"
+        );
+        assert!(
+            merged.section(SKY_DIRECT).is_some()
+                && levels.iter().all(|l| l.section(SKY_DIRECT).is_some()),
+            "the sky's direct light is carried through every levels file"
         );
     }
 }
