@@ -102,6 +102,24 @@ impl Precomputed {
         let sky = sky_section(&file, path, "sky", pixels)?
             .ok_or_else(|| mismatch("section sky", "present".into(), "missing".into()))?;
         let sky_direct = sky_section(&file, path, SKY_DIRECT, pixels)?;
+        // The direct share is part of the sky's light (both come from the same samples):
+        // more than the whole would leave the split frame's indirect image negative.
+        if let Some(direct) = &sky_direct
+            && let Some(i) = direct
+                .iter()
+                .zip(&sky)
+                .position(|(d, a)| (*d - *a * (1.0 + 1e-5)).max_element() > 1e-12)
+        {
+            return Err(PrecomputedError::File(FileError::Invalid {
+                path: path.to_path_buf(),
+                field: format!("section {SKY_DIRECT} texel {i}"),
+                value: format!("{:?}", direct[i]),
+                reason: format!(
+                    "the sky's direct share exceeds the sky's whole light there ({:?})",
+                    sky[i]
+                ),
+            }));
+        }
         if sky_direct.is_none() && sky.iter().any(|p| p.max_element() > 0.0) {
             log::warn!("{}", old_sky_warning(path));
         }

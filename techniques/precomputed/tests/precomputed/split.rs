@@ -261,6 +261,22 @@ fn a_file_without_the_skys_direct_light_renders_it_all_indirect_with_a_warning()
         e.contains(&new_name) && e.contains("section sky.direct value 7") && e.contains("-1"),
         "{e}"
     );
+    // A direct share above the sky's whole light would leave the indirect image negative.
+    let mut above = new.clone();
+    let sky_at = above.sections.iter().position(|s| s.name == "sky").unwrap();
+    let i = above.sections[sky_at]
+        .values
+        .iter()
+        .position(|v| *v > 0.0)
+        .expect("a lit sky texel");
+    above.sections[at].values[i] = 2.0 * above.sections[sky_at].values[i];
+    let e = load(above);
+    assert!(
+        e.contains(&new_name)
+            && e.contains(&format!("section sky.direct texel {}", i / 3))
+            && e.contains("exceeds the sky's whole light"),
+        "{e}"
+    );
     negative.sections[at].values.pop();
     let e = load(negative);
     assert!(
