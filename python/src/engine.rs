@@ -374,6 +374,7 @@ impl Engine {
             return Err(value_error(format!("time={t}: not a finite number")));
         }
         let out = self.with(py, move |engine| {
+            engine.set_split(split);
             match time {
                 Some(t) => engine.step(t),
                 None => engine.step_held(),

@@ -289,6 +289,11 @@ pub struct Renderer {
     /// The shadow maps, re-rendered each frame into the same allocations, and the
     /// per-light choice of `shadows = "auto"`.
     shadow_maps: Mutex<(ShadowMaps, ShadowChooser)>,
+    /// Frames split as the reference splits light: the technique's
+    /// [`Technique::direct_share`] is asked for and moved into the direct image. False
+    /// (the default): a technique's image is all indirect, and it may skip its share's
+    /// work ([`Technique::want_direct_share`]); `full` is the same either way.
+    pub split: bool,
 }
 
 impl Renderer {
@@ -298,6 +303,7 @@ impl Renderer {
             settings,
             previous: Mutex::new(None),
             shadow_maps: Mutex::new((ShadowMaps::default(), ShadowChooser::default())),
+            split: false,
         }
     }
 
@@ -380,9 +386,14 @@ impl Renderer {
         );
         drop(state);
         let t2 = Instant::now();
+        technique.want_direct_share(self.split);
         let mut indirect = technique.indirect(world, &gbuffer);
         let mut direct = direct;
-        let share = technique.direct_share();
+        let share = if self.split {
+            technique.direct_share()
+        } else {
+            None
+        };
         let t3 = Instant::now();
         let full = match share {
             Some(share) => add_moving_share(&mut direct, &mut indirect, &share),
@@ -681,7 +692,8 @@ mod tests {
             height: 12,
             ..Default::default()
         };
-        let renderer = Renderer::new(settings);
+        let mut renderer = Renderer::new(settings);
+        renderer.split = true;
         let mut none = Shared {
             direct: None,
             size: (16, 12),
@@ -712,6 +724,13 @@ mod tests {
         let kept = renderer.render(&world, &mut odd, 0);
         assert_eq!(kept.direct, base.direct);
         assert_eq!(kept.indirect, base.indirect);
+        // Frames not split (the default: animations, the window) leave the share where
+        // the technique put it.
+        renderer.split = false;
+        let whole = renderer.render(&world, &mut shared, 0);
+        assert_eq!(whole.full, base.full);
+        assert_eq!(whole.direct, base.direct);
+        assert_eq!(whole.indirect, base.indirect);
     }
 
     #[test]

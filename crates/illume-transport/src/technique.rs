@@ -149,6 +149,16 @@ pub trait Technique: Send {
     fn direct_share(&mut self) -> Option<RgbImage> {
         None
     }
+
+    /// Whether the renderer will ask for [`Technique::direct_share`] after the next
+    /// [`Technique::indirect`] calls: true for a frame split into direct and indirect
+    /// light (`illume render --split`, a still, Python's `step(split=True)`), false for
+    /// frames shown or written whole (animations, the window, benchmarks), where a
+    /// technique may skip the work of its share. Called before every `indirect`.
+    /// Default: ignored.
+    fn want_direct_share(&mut self, wanted: bool) {
+        let _ = wanted;
+    }
 }
 
 /// A technique's settings: one serde struct, one TOML table named

@@ -267,6 +267,13 @@ impl Engine {
         self.kind
     }
 
+    /// Whether the next frames are split as the reference splits light (a technique's
+    /// direct share moved into `direct`: [`illume_render::Renderer::split`]). Off by
+    /// default (frames shown or written whole); stills ([`render_still`]) turn it on.
+    pub fn set_split(&mut self, split: bool) {
+        self.renderer.split = split;
+    }
+
     /// One frame at scene time `t` \[s\]: advance time, propagate changes, advance the
     /// technique within its budget, render, collect counters. Fails only when the
     /// technique's precompute (first frame) or a rebuild fails.

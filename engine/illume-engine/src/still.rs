@@ -33,6 +33,7 @@ pub fn render_still(
     }
     let t = scene.time;
     let mut engine = Engine::new(scene, config)?;
+    engine.set_split(true);
     let precompute_ms = engine.precompute(progress)?;
     let out = engine.step(t)?;
     Ok(Still {

@@ -134,6 +134,7 @@ impl Precomputed {
             sky,
             sky_direct,
             share: None,
+            share_wanted: false,
             width,
             height,
             lookup,

@@ -47,6 +47,9 @@ impl Precomputed {
 
     /// The sky's direct texels and the scale of this frame, when a share is handed over.
     fn direct_texels(&self, sky_scale: f32) -> Option<(&[Rgb], f32)> {
+        if !self.share_wanted {
+            return None;
+        }
         let direct = self.sky_direct.as_deref()?;
         (sky_scale > 0.0).then_some((direct, sky_scale))
     }
@@ -136,7 +139,11 @@ impl Precomputed {
         gbuffer: &GBuffer,
     ) -> (Vec<Rgb>, Option<Vec<Rgb>>) {
         let key = (hours, sky_scale);
-        if self.cache.as_ref().is_none_or(|(k, _)| *k != key) {
+        // The cached texels carry the direct share exactly when it is wanted now.
+        let with_share = self.direct_texels(sky_scale).is_some();
+        if self.cache.as_ref().is_none_or(|(k, texels)| {
+            *k != key || matches!(texels, AtlasTexels::WithShare(_)) != with_share
+        }) {
             let values = self.values(hours, sky_scale);
             let texels = match self.direct_texels(sky_scale) {
                 None => AtlasTexels::Light(values),

@@ -35,6 +35,9 @@ pub struct Precomputed {
     /// The direct share of the last [`Technique::indirect`] image, until the renderer
     /// takes it ([`Technique::direct_share`]).
     pub(crate) share: Option<RgbImage>,
+    /// Whether the renderer asks for the share ([`Technique::want_direct_share`]): the
+    /// share's lookup is skipped when not (frames shown whole).
+    pub(crate) share_wanted: bool,
     /// The key image's size (screen: the image's; cube: face × 6·face; atlas: lightmap
     /// and probe rows).
     pub(crate) width: u32,
@@ -80,6 +83,7 @@ impl Precomputed {
             sky: Vec::new(),
             sky_direct: None,
             share: None,
+            share_wanted: false,
             width,
             height,
             lookup: Lookup::Screen,
@@ -189,5 +193,9 @@ impl Technique for Precomputed {
     /// the precompute.
     fn direct_share(&mut self) -> Option<RgbImage> {
         self.share.take()
+    }
+
+    fn want_direct_share(&mut self, wanted: bool) {
+        self.share_wanted = wanted;
     }
 }

@@ -73,6 +73,8 @@ fn technique_image(
         .zip(&g.pixels)
         .map(|(e, p)| if p.is_some() { *e } else { Rgb::ZERO })
         .collect();
+    // As the renderer does for a split frame: the direct share is asked for.
+    technique.want_direct_share(true);
     (
         technique.indirect(&w, &g),
         RgbImage::from_vec(SIZE.0, SIZE.1, seen).unwrap(),
@@ -90,12 +92,8 @@ fn check_share(
     domain: &str,
     tolerance: f32,
 ) {
-    let g = GBuffer::render(
-        &world.with_scene(scene.clone()),
-        SIZE.0,
-        SIZE.1,
-        illume_core::Vec2::splat(0.5),
-    );
+    let ws = world.with_scene(scene.clone());
+    let g = GBuffer::render(&ws, SIZE.0, SIZE.1, illume_core::Vec2::splat(0.5));
     let share = technique
         .direct_share()
         .expect("a new file hands over the sky's direct light");
@@ -116,6 +114,13 @@ fn check_share(
         "{domain}: direct share {m_ours} vs reference {m_ref} (±{tolerance})"
     );
     assert!(technique.direct_share().is_none(), "taken, not kept");
+    // Frames shown whole do not ask for it, and the technique skips its work.
+    technique.want_direct_share(false);
+    let _ = technique.indirect(&ws, &g);
+    assert!(
+        technique.direct_share().is_none(),
+        "not asked for, not made"
+    );
 }
 
 fn mean(v: &[Rgb]) -> f32 {
