@@ -629,34 +629,21 @@ fn direct_at_sky(
 mod tests {
     use super::*;
 
-    /// A technique with no indirect light.
-    struct Black;
-
-    impl Technique for Black {
-        fn name(&self) -> &'static str {
-            "black"
-        }
-        fn scene_changed(
-            &mut self,
-            _: &World,
-            _: &[illume_scene::SceneChange],
-        ) -> illume_transport::ChangeResponse {
-            illume_transport::ChangeResponse::Updated
-        }
-        fn advance(&mut self, _: &World, _: &illume_transport::Budget) {}
-        fn indirect(&mut self, _: &World, g: &GBuffer) -> RgbImage {
-            RgbImage::black(g.width, g.height)
-        }
-        fn stats(&self) -> illume_core::Counters {
-            illume_core::Counters::default()
-        }
-        fn reset(&mut self) {}
-    }
-
-    /// A constant indirect image of 0.25 of which `direct` is direct light.
+    /// A constant indirect image of `value` of which `direct` (an image of `size`) is
+    /// direct light.
     struct Shared {
+        value: Rgb,
         direct: Option<Rgb>,
         size: (u32, u32),
+    }
+
+    /// A technique with no indirect light.
+    fn black() -> Shared {
+        Shared {
+            value: Rgb::ZERO,
+            direct: None,
+            size: (0, 0),
+        }
     }
 
     impl Technique for Shared {
@@ -672,7 +659,7 @@ mod tests {
         }
         fn advance(&mut self, _: &World, _: &illume_transport::Budget) {}
         fn indirect(&mut self, _: &World, g: &GBuffer) -> RgbImage {
-            RgbImage::filled(g.width, g.height, Rgb::splat(0.25))
+            RgbImage::filled(g.width, g.height, self.value)
         }
         fn stats(&self) -> illume_core::Counters {
             illume_core::Counters::default()
@@ -695,6 +682,7 @@ mod tests {
         let mut renderer = Renderer::new(settings);
         renderer.split = true;
         let mut none = Shared {
+            value: Rgb::splat(0.25),
             direct: None,
             size: (16, 12),
         };
@@ -707,6 +695,7 @@ mod tests {
         );
         let share = Rgb::new(0.125, 0.0625, 0.25);
         let mut shared = Shared {
+            value: Rgb::splat(0.25),
             direct: Some(share),
             size: (16, 12),
         };
@@ -718,6 +707,7 @@ mod tests {
         }
         // A share of another size is left out, not a panic.
         let mut odd = Shared {
+            value: Rgb::splat(0.25),
             direct: Some(share),
             size: (3, 2),
         };
@@ -742,22 +732,22 @@ mod tests {
             ..Default::default()
         };
         let renderer = Renderer::new(settings.clone());
-        let first = renderer.render(&world, &mut Black, 0);
+        let first = renderer.render(&world, &mut black(), 0);
         let address = first.gbuffer.pixels.as_ptr();
         // While the caller holds a frame, the next one gets its own G-buffer.
-        let held = renderer.render(&world, &mut Black, 1);
+        let held = renderer.render(&world, &mut black(), 1);
         let held_address = held.gbuffer.pixels.as_ptr();
         assert_ne!(held_address, address);
         drop(first);
         drop(held);
         world.set_time(1.0); // the sphere and the light move
-        let reused = renderer.render(&world, &mut Black, 2);
+        let reused = renderer.render(&world, &mut black(), 2);
         assert_eq!(
             reused.gbuffer.pixels.as_ptr(),
             held_address,
             "the last frame's allocation is reused"
         );
-        let fresh = Renderer::new(settings).render(&world, &mut Black, 2);
+        let fresh = Renderer::new(settings).render(&world, &mut black(), 2);
         assert_eq!(
             reused.full, fresh.full,
             "a recycled G-buffer renders exactly like a new one"
@@ -811,10 +801,10 @@ mod tests {
             ..Default::default()
         };
         let renderer = Renderer::new(settings.clone());
-        drop(renderer.render(&world, &mut Black, 0));
+        drop(renderer.render(&world, &mut black(), 0));
         // The light and the sphere move: the renderer's maps must follow.
         world.set_time(1.0);
-        let frame = renderer.render(&world, &mut Black, 1);
+        let frame = renderer.render(&world, &mut black(), 1);
         let maps = ShadowMaps::build(&world, &settings.shadow_maps).expect("valid");
         let expected = direct_light_with(
             &world,
@@ -850,7 +840,7 @@ mod tests {
             no_samples.validate(),
             Err(RenderSettingsError::NoAreaLightSamples)
         ));
-        let fallback = Renderer::new(bad).render(&world, &mut Black, 1);
+        let fallback = Renderer::new(bad).render(&world, &mut black(), 1);
         let rays = direct_light(
             &world,
             &fallback.gbuffer,
