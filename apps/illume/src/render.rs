@@ -50,6 +50,15 @@ pub struct RenderArgs {
     /// the tests take their references unfiltered.
     #[arg(long)]
     pub denoise: bool,
+    /// Anti-alias the still: render it at K times the width and height and average each
+    /// K×K block (a box filter, as the reference path tracer's pixels are). An
+    /// interactive technique's G-buffer takes one sample at each pixel centre, so its
+    /// edges are jagged against the reference; 2 removes most of that (HDR-FLIP 0.066 →
+    /// 0.058 for photon_stream's still of `builtin:cornell-spot` at 320×240,
+    /// docs/benchmarks/renderer.md). Costs about K² times the time and memory. 1–4,
+    /// default 1 (off).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4))]
+    pub supersample: u32,
 }
 
 /// Loads a scene given on the command line (file or builtin:NAME) with `options`
@@ -153,6 +162,15 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if let Some(s) = a.seed {
         config.set_seed(s);
     }
+    let size = (config.render.width, config.render.height);
+    let k = a.supersample;
+    if k > 1 {
+        config.render.width = size.0.saturating_mul(k);
+        config.render.height = size.1.saturating_mul(k);
+        config
+            .check()
+            .map_err(|e| anyhow::anyhow!("--supersample {k}: {e}"))?;
+    }
     let scene = a
         .setup
         .load_scene(&a.scene, a.animation.as_deref(), a.time)?;
@@ -165,7 +183,13 @@ pub fn run(a: RenderArgs) -> Result<()> {
     }
     .map_err(anyhow::Error::from);
     bars.finish();
-    let still = still?;
+    let mut still = still?;
+    if k > 1 {
+        still.full = still.full.box_downsample(k);
+        still.direct = still.direct.box_downsample(k);
+        still.indirect = still.indirect.box_downsample(k);
+        (config.render.width, config.render.height) = size;
+    }
     let secs = t0.elapsed().as_secs_f64();
     let m = still.full.mean();
     eprintln!(

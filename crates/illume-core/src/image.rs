@@ -135,6 +135,39 @@ impl RgbImage {
         Rgb::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
     }
 
+    /// The image shrunk by `k` in each direction, each pixel the mean of its k×k block
+    /// (a box filter: a still rendered at k times the size and shrunk has its edges
+    /// anti-aliased as a path tracer's box-filtered pixels are). Panics unless `k` ≥ 1
+    /// divides both sides (a programming error, not input).
+    pub fn box_downsample(&self, k: u32) -> RgbImage {
+        assert!(
+            k >= 1 && self.width % k == 0 && self.height % k == 0,
+            "{k} must divide {}×{}",
+            self.width,
+            self.height
+        );
+        let (w, h) = (self.width / k, self.height / k);
+        let inv = 1.0 / (k * k) as f32;
+        let data = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let mut sum = Rgb::ZERO;
+                for dy in 0..k {
+                    let row = ((y * k + dy) * self.width + x * k) as usize;
+                    for p in &self.data[row..row + k as usize] {
+                        sum += *p;
+                    }
+                }
+                sum * inv
+            })
+            .collect();
+        Image {
+            width: w,
+            height: h,
+            data,
+        }
+    }
+
     /// Pixel-wise sum; panics if sizes differ (a programming error, not input).
     pub fn add(&self, other: &RgbImage) -> RgbImage {
         assert_eq!(
@@ -704,6 +737,25 @@ pub fn read_ldr(path: &Path) -> Result<RgbImage, ImageError> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn box_downsample_averages_blocks_and_keeps_the_mean() {
+        // 4×2 → 2×1 with k = 2: each output pixel the mean of its 2×2 block.
+        let img = RgbImage::from_vec(
+            4,
+            2,
+            [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]
+                .map(Rgb::splat)
+                .to_vec(),
+        )
+        .unwrap();
+        let d = img.box_downsample(2);
+        assert_eq!((d.width(), d.height()), (2, 1));
+        assert_eq!(d.pixels(), &[Rgb::splat(3.5), Rgb::splat(5.5)]);
+        assert_eq!(d.mean(), img.mean());
+        // k = 1 is the image itself.
+        assert_eq!(img.box_downsample(1), img);
+    }
 
     #[test]
     fn auto_exposure_maps_the_log_average_to_middle_grey() {

@@ -1087,3 +1087,59 @@ fn a_closed_pipe_ends_the_output_without_a_panic() {
         );
     }
 }
+
+/// `render --supersample 2` at W×H is the same technique rendered at 2W×2H with each 2×2
+/// block averaged (a box filter), for every image it writes (photon_stream's `still`
+/// preset: the same image every run). A size past the renderer's limit once multiplied is
+/// refused naming the flag.
+#[test]
+fn supersample_renders_larger_and_averages_blocks() {
+    let dir = common::scratch("cli", "supersample");
+    let (small, big) = (dir.join("ss.exr"), dir.join("big.exr"));
+    for (out, size, k) in [(&small, ("32", "24"), "2"), (&big, ("64", "48"), "1")] {
+        ok(&illume(&[
+            "render",
+            "builtin:cornell-spot",
+            "--width",
+            size.0,
+            "--height",
+            size.1,
+            "--supersample",
+            k,
+            "--split",
+            "-o",
+            path(out),
+        ]));
+    }
+    for suffix in ["", "_direct", "_indirect"] {
+        let read = |p: &Path| {
+            let name = format!("{}{suffix}.exr", p.file_stem().unwrap().to_str().unwrap());
+            RgbImage::read(&dir.join(name)).unwrap()
+        };
+        let (a, b) = (read(&small), read(&big).box_downsample(2));
+        assert_eq!((a.width(), a.height()), (32, 24), "{suffix}");
+        for (x, y) in a.pixels().iter().zip(b.pixels()) {
+            assert!(
+                (*x - *y).abs().max_element() <= 1e-6 * (1.0 + y.max_element()),
+                "{suffix}"
+            );
+        }
+    }
+    let out = illume(&[
+        "render",
+        "builtin:cornell-spot",
+        "--width",
+        "5000",
+        "--height",
+        "4000",
+        "--supersample",
+        "4",
+        "-o",
+        path(&dir.join("x.exr")),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("--supersample 4") && stderr.contains("16384"),
+        "{stderr}"
+    );
+}
