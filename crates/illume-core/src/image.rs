@@ -141,7 +141,7 @@ impl RgbImage {
     /// divides both sides (a programming error, not input).
     pub fn box_downsample(&self, k: u32) -> RgbImage {
         assert!(
-            k >= 1 && self.width % k == 0 && self.height % k == 0,
+            k >= 1 && self.width.is_multiple_of(k) && self.height.is_multiple_of(k),
             "{k} must divide {}×{}",
             self.width,
             self.height
