@@ -146,21 +146,23 @@ impl SharedPool {
     /// Applies a traced batch unless a flush happened since `epoch`. Returns whether it
     /// was applied.
     pub fn apply(&self, batch: &PhotonBatch, epoch: u64) -> bool {
-        self.apply_then(batch, epoch, |_| {})
+        self.apply_then(batch, epoch, || true, |_| {})
     }
 
-    /// [`SharedPool::apply`], then `after` on the pool state under the same lock (the
-    /// streaming thread's staleness and rest bookkeeping: one lock per batch).
+    /// [`SharedPool::apply`] when `current()` also holds under the pool's lock, then
+    /// `after` on the pool state under the same lock (the streaming thread's rest
+    /// bookkeeping: one lock per batch).
     fn apply_then(
         &self,
         batch: &PhotonBatch,
         epoch: u64,
+        current: impl FnOnce() -> bool,
         after: impl FnOnce(&mut PoolState),
     ) -> bool {
         let now = Instant::now();
         let t = self.now_s();
         let mut s = self.lock();
-        if s.epoch == epoch {
+        if s.epoch == epoch && current() {
             s.pool.stamp(t);
             for path in batch.paths() {
                 s.pool.push_photon(path);
@@ -357,18 +359,24 @@ pub fn spawn(
                 };
                 let batch = emitter.trace_until(&w, first, config.batch_photons, wanted);
                 drop(w);
-                // Photon indices reserved but not traced are simply skipped.
-                shared.apply_then(&batch, epoch, |s| {
-                    if shared.world_generation.load(Ordering::Acquire) != generation {
-                        // Cut short by a lighting change: traced in the world before it,
-                        // so as stale as the photons pooled before the change (whichever
-                        // of this and the change's own record comes first).
-                        s.mark_stale();
-                    }
-                    if config.rest_when_settled {
-                        shared.rest_if_settled(s);
-                    }
-                });
+                // Photon indices reserved but not traced are simply skipped. A batch cut
+                // short by a lighting change was traced in the world before it: it is
+                // dropped, checked under the pool's lock (a change records its stale
+                // photons under that lock, after publishing its world). It used to be
+                // pooled and everything pooled so far marked stale, which also marked the
+                // frame loop's top-ups traced after the change: under load such a late
+                // batch undid them (`turnover_frames` missed, 0.13–0.79 of the pool
+                // still stale after 5 frames).
+                shared.apply_then(
+                    &batch,
+                    epoch,
+                    || shared.world_generation.load(Ordering::Acquire) == generation,
+                    |s| {
+                        if config.rest_when_settled {
+                            shared.rest_if_settled(s);
+                        }
+                    },
+                );
             }
         })
 }
