@@ -170,6 +170,14 @@ pub fn run(a: RenderArgs) -> Result<()> {
         config
             .check()
             .map_err(|e| anyhow::anyhow!("--supersample {k}: {e}"))?;
+        // Said up front: the cost is K² times the pixels, whatever the technique (a path
+        // tracer's samples per pixel multiply by K² too).
+        eprintln!(
+            "--supersample {k}: rendering {}×{} ({} times the pixels), then averaging {k}×{k} blocks",
+            config.render.width,
+            config.render.height,
+            k * k
+        );
     }
     let scene = a
         .setup

@@ -281,8 +281,23 @@ fn streaming_thread_checks(stream_priority: StreamPriority) {
         w.set_time(1.0);
     }
     ps.pause();
-    std::thread::sleep(std::time::Duration::from_millis(50)); // let a batch in flight land
-    let shot = stat(&ps, "photons_shot");
+    // Let a batch in flight land: wait until two reads 100 ms apart agree (a fixed 50 ms
+    // was too short for a nice-19 thread beside busy loops). A thread that kept
+    // shooting never settles and times out here.
+    let mut shot = stat(&ps, "photons_shot");
+    let settle = std::time::Instant::now();
+    loop {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        let now = stat(&ps, "photons_shot");
+        if now == shot {
+            break;
+        }
+        assert!(
+            settle.elapsed().as_secs() < 10,
+            "paused thread kept shooting"
+        );
+        shot = now;
+    }
     std::thread::sleep(std::time::Duration::from_millis(200));
     assert_eq!(
         stat(&ps, "photons_shot"),
