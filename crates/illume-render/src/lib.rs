@@ -538,8 +538,10 @@ pub fn direct_at(
 }
 
 /// [`direct_at`] with analytic lights' visibility from `shadows` (a fraction in [0, 1]
-/// with maps). Surfaces facing away from a light, and points outside a spot cone, get
-/// nothing from it before any visibility test.
+/// with maps). Surfaces whose shading normal faces away from a light, and points outside
+/// a spot cone, get nothing from it before any visibility test; light from below the
+/// facet that the shading normal faces takes [`World::shadow_ray`]'s terminator ray,
+/// whatever `shadows` says.
 pub fn direct_at_with(
     world: &World,
     px: &GBufferPixel,
@@ -576,10 +578,14 @@ fn direct_at_sky(
     // `analytic`: the analytic light the sample came from (a map may decide), or None.
     let shade = |s: illume_transport::LightSample, analytic: Option<usize>| -> Rgb {
         let cos = n.dot(s.wi);
-        if cos <= 0.0 || ng.dot(s.wi) <= 0.0 {
+        if cos <= 0.0 {
             return Rgb::ZERO;
         }
         let map_visibility = match (shadows, analytic) {
+            // Light from below the facet (a shadow terminator): only the shared shadow
+            // ray from the smooth surface decides (`World::shadow_ray`); a map cannot
+            // tell the facet's own shadow from the object's.
+            _ if ng.dot(s.wi) <= 0.0 => None,
             (Shadows::Maps(maps), Some(i)) => maps.visibility(i, hit, &s),
             (Shadows::Off, Some(_)) => Some(1.0),
             _ => None,

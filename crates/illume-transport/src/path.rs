@@ -120,7 +120,10 @@ pub fn continue_path(
         // MIS against BSDF sampling (delta lights, pdf 0, get weight 1).
         let shade = |ls: crate::LightSample, out: &mut PathRadiance| {
             let cos = n.dot(ls.wi);
-            if cos > 0.0 && ng.dot(ls.wi) > 0.0 && world.unoccluded(&hit, &ls) {
+            // Light from below the facet reaches the shading normal only at a shadow
+            // terminator (`World::shadow_ray`); BSDF sampling never goes there (below),
+            // so next-event estimation alone carries it, at MIS weight 1.
+            if cos > 0.0 && world.unoccluded(&hit, &ls) {
                 let (f, bsdf_pdf) = match &frame {
                     None => (f_lambert, lambert_pdf(n, ls.wi)),
                     Some(fr) => {
@@ -128,7 +131,7 @@ pub fn continue_path(
                         (brdf.eval(lo, li), brdf.pdf(lo, li))
                     }
                 };
-                let w = if ls.pdf > 0.0 {
+                let w = if ls.pdf > 0.0 && ng.dot(ls.wi) > 0.0 {
                     power_heuristic(ls.pdf, bsdf_pdf)
                 } else {
                     1.0

@@ -198,6 +198,19 @@ impl SurfaceHit {
     pub fn spawn_origin(&self, dir: Vec3) -> Vec3 {
         offset_ray_origin(self.position, self.geometric_normal, dir)
     }
+
+    /// The hit moved out to the smooth surface its triangle's vertex normals describe
+    /// ([`smooth_point`]); `scene` must be the one the hit was made in.
+    pub fn smooth_point(&self, scene: &Scene) -> Vec3 {
+        smooth_point(
+            scene,
+            self.instance,
+            self.triangle,
+            self.barycentrics,
+            self.position,
+            self.facing_geometric_normal(),
+        )
+    }
 }
 
 /// What photon tracing needs of a hit, and no more: a [`SurfaceHit`] without the
@@ -403,6 +416,56 @@ impl PhotonHit {
     pub fn spawn_origin(&self, dir: Vec3) -> Vec3 {
         offset_ray_origin(self.position, self.geometric_normal, dir)
     }
+
+    /// The hit moved out to the smooth surface its triangle's vertex normals describe
+    /// ([`smooth_point`]); `scene` must be the one the hit was made in.
+    pub fn smooth_point(&self, scene: &Scene) -> Vec3 {
+        smooth_point(
+            scene,
+            self.instance,
+            self.triangle,
+            self.barycentrics,
+            self.position,
+            self.facing_geometric_normal(),
+        )
+    }
+}
+
+/// `position` (on `triangle` of `instance` at `barycentrics`, facing side `ng`) moved
+/// out to the smooth surface the triangle's vertex normals describe (Hanika 2021,
+/// "Hacking the shadow terminator", Ray Tracing Gems II ch. 4): the point projected
+/// onto each corner's tangent plane where it lies below that plane, the projections
+/// weighted by the barycentrics. On a faceted curved mesh this lifts the point above the
+/// neighbouring facets, so a shadow ray towards a light the shading normal faces but the
+/// facet does not can leave the object; on a flat region (corner normals equal to the
+/// facet's), or a mesh without normals, it is `position` itself.
+pub fn smooth_point(
+    scene: &Scene,
+    instance: InstanceId,
+    triangle: u32,
+    barycentrics: Vec2,
+    position: Vec3,
+    ng: Vec3,
+) -> Vec3 {
+    let inst = &scene.instances[instance.index()];
+    let mesh = &scene.meshes[inst.mesh.index()];
+    if mesh.normals.is_empty() {
+        return position;
+    }
+    let m = &inst.world_from_object;
+    let corners = mesh.indices[triangle as usize].map(|i| i as usize);
+    let (b1, b2) = (barycentrics.x, barycentrics.y);
+    let weights = [1.0 - b1 - b2, b1, b2];
+    let mut lift = Vec3::ZERO;
+    for (i, w) in corners.into_iter().zip(weights) {
+        let n = transform_normal(m, mesh.normals[i]);
+        // The corner's normal on the side the hit faces (a corner normal turned against
+        // its facet would pull the point inwards).
+        let n = if n.dot(ng) < 0.0 { -n } else { n };
+        let below = (position - m.transform_point3(mesh.positions[i])).dot(n);
+        lift -= n * (w * below.min(0.0));
+    }
+    position + lift
 }
 
 /// [`HitGeometry`] of `hit` computed from the scene's mesh (when no tracer query gave

@@ -4,7 +4,7 @@ use crate::hit_tables::HitTables;
 use crate::lights::{LightSample, LightSet};
 use crate::surface::{PhotonHit, SurfaceHit, mesh_hit_geometry};
 use illume_accel::{Hit, ScopedTracer, Tracer};
-use illume_core::Ray;
+use illume_core::{Ray, Vec3};
 use illume_scene::change::EditError;
 use illume_scene::{Edit, Scene, SceneChange};
 use std::sync::{Arc, RwLock};
@@ -250,12 +250,55 @@ impl World {
     }
 
     /// True when nothing visible to the default mask lies between `hit` and the light
-    /// point of `sample` (the shadow ray leaves from just off the surface and stops just
-    /// short of the light; directional samples reach to infinity).
+    /// point of `sample` along [`World::shadow_ray`] (false when there is no such ray).
     pub fn unoccluded(&self, hit: &SurfaceHit, sample: &LightSample) -> bool {
-        !self.tracer.occluded(
-            &sample.shadow_ray(hit.spawn_origin(sample.wi)),
-            illume_scene::MASK_DEFAULT,
-        )
+        self.shadow_ray(hit, sample)
+            .is_some_and(|ray| !self.tracer.occluded(&ray, illume_scene::MASK_DEFAULT))
     }
+
+    /// The shadow ray of `sample` at `hit`, which every technique's next-event
+    /// estimation and the reference share: from just off the surface to just short of
+    /// the light (directional samples reach to infinity).
+    ///
+    /// Light arriving from below the hit's facet (behind its geometric normal, where the
+    /// caller's shading normal still faces it) is the shadow terminator of a faceted
+    /// curved mesh: the ray then leaves from [`SurfaceHit::smooth_point`], lifted off the
+    /// facet, and meets the object itself only where the smooth surface would shadow the
+    /// point too. `None` when that point is not lifted (a flat region, or normals that
+    /// only a normal map tilts): the facet itself hides the light, as a ray from just
+    /// above it would find. Without this the lit side ended in steps, one facet at a time.
+    pub fn shadow_ray(&self, hit: &SurfaceHit, sample: &LightSample) -> Option<Ray> {
+        let ng = hit.facing_geometric_normal();
+        if ng.dot(sample.wi) > 0.0 {
+            return Some(sample.shadow_ray(hit.spawn_origin(sample.wi)));
+        }
+        terminator_ray(hit.position, ng, hit.smooth_point(&self.scene), sample)
+    }
+
+    /// [`World::shadow_ray`] at a photon or gather hit.
+    pub fn photon_shadow_ray(&self, hit: &PhotonHit, sample: &LightSample) -> Option<Ray> {
+        let ng = hit.facing_geometric_normal();
+        if ng.dot(sample.wi) > 0.0 {
+            return Some(sample.shadow_ray(hit.spawn_origin(sample.wi)));
+        }
+        terminator_ray(hit.position, ng, hit.smooth_point(&self.scene), sample)
+    }
+}
+
+/// The shadow ray of `sample` (from below the facet at `position`, facing side `ng`)
+/// leaving from `smooth`, the point lifted to the smooth surface; `None` when it is not
+/// lifted ([`World::shadow_ray`]).
+fn terminator_ray(position: Vec3, ng: Vec3, smooth: Vec3, sample: &LightSample) -> Option<Ray> {
+    // A tenth of a spawned ray's offset: below it the lift is rounding.
+    let rounding = 1e-5 * (1.0 + position.abs().max_element());
+    if (smooth - position).dot(ng) <= rounding {
+        return None;
+    }
+    let origin = illume_core::offset_ray_origin(smooth, ng, ng);
+    let mut ray = sample.shadow_ray(origin);
+    if ray.t_max.is_finite() {
+        // The light point stays where the sample put it.
+        ray.t_max = (ray.t_max - (origin - position).dot(sample.wi)).max(0.0);
+    }
+    Some(ray)
 }

@@ -135,7 +135,7 @@ fn exitance_with_direct(
         let s = s as usize;
         m += side_flux(field, s, y.front_face) / field.area_m2[s].max(1e-12);
     }
-    let (n, ng) = (y.facing_normal(), y.facing_geometric_normal());
+    let n = y.facing_normal();
     let mut irradiance = Rgb::ZERO;
     let lights = &world.lights;
     for sample in [
@@ -146,10 +146,14 @@ fn exitance_with_direct(
     .flatten()
     {
         let cos = sample.wi.dot(n);
-        if cos <= 0.0 || sample.wi.dot(ng) <= 0.0 {
+        if cos <= 0.0 {
             continue;
         }
-        if !tracer.occluded(&sample.shadow_ray(y.spawn_origin(sample.wi)), mask) {
+        // The shared shadow ray (a shadow terminator's too, as the reference's).
+        if world
+            .photon_shadow_ray(&y, &sample)
+            .is_some_and(|ray| !tracer.occluded(&ray, mask))
+        {
             irradiance += sample.weight * cos;
         }
     }

@@ -7,3 +7,4 @@
 mod glossy;
 mod shadow_maps;
 mod sky;
+mod terminator;

@@ -10,3 +10,4 @@ mod mirror;
 mod normal_map;
 mod raster;
 mod second_world;
+mod terminator;
