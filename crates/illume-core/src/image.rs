@@ -66,6 +66,11 @@ impl<T> Image<T> {
         })
     }
 
+    /// The row-major pixels, without a copy (the inverse of [`Image::from_vec`]).
+    pub fn into_pixels(self) -> Vec<T> {
+        self.data
+    }
+
     /// Width in pixels.
     pub fn width(&self) -> u32 {
         self.width

@@ -24,8 +24,10 @@ fn main() {
         name: "sun".into(),
         width: w,
         height: h,
-        texels,
+        texels: texels.into(),
+        scale: 1.0,
         rotation_deg: 0.0,
+        sampling: Default::default(),
     };
     let scene = Scene {
         sky: Some(Sky::Equirect(Arc::new(map.clone()))),

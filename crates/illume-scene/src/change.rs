@@ -161,11 +161,11 @@ fn scaled_sky(sky: &Sky, scale: f32) -> Sky {
         Sky::Uniform { radiance } => Sky::Uniform {
             radiance: *radiance * scale,
         },
-        Sky::Equirect(map) => {
-            let mut map = (**map).clone();
-            map.texels.iter_mut().for_each(|t| *t *= scale);
-            Sky::Equirect(std::sync::Arc::new(map))
-        }
+        // The texels are shared, only the factor changes.
+        Sky::Equirect(map) => Sky::Equirect(std::sync::Arc::new(crate::EnvMap {
+            scale: map.scale * scale,
+            ..(**map).clone()
+        })),
     }
 }
 

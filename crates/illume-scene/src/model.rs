@@ -666,10 +666,49 @@ pub struct EnvMap {
     pub width: u32,
     /// Height in texels.
     pub height: u32,
-    /// Row-major radiance, row 0 at the top (+Y).
-    pub texels: Vec<Rgb>,
+    /// Row-major texels, row 0 at the top (+Y); the radiance is `scale` × texel. Shared:
+    /// the sun's scaled skies of a day are one image (issue 38: a deep copy per time of
+    /// day held 400 MB more for an 8192 × 4096 map).
+    pub texels: std::sync::Arc<Vec<Rgb>>,
+    /// Factor on every texel (the sun's sky scale; 1 as loaded).
+    pub scale: f32,
     /// Rotation about +Y \[degrees\].
     pub rotation_deg: f32,
+    /// The texels' importance-sampling table, built by the first light set that needs it
+    /// and shared with `texels` (`Default::default()` when making a map).
+    pub sampling: EnvSampling,
+}
+
+/// The importance-sampling table of an [`EnvMap`]'s texels (over texels, so the same for
+/// any positive `scale`): built once, by the first light set that needs it, and shared by
+/// every copy of the map — the sun's scaled skies and every light set (a world's refresh
+/// and its snapshots). Issue 38: a table per light set (12 bytes a texel) held several
+/// at once. The texels of a map are never changed after it is made, so the cache cannot
+/// go stale; as a cache it takes no part in comparisons and prints as its state only.
+#[derive(Clone, Default)]
+pub struct EnvSampling(Arc<std::sync::OnceLock<Option<illume_core::sampling::AliasTable>>>);
+
+impl EnvSampling {
+    /// The table, built by `build` on first use (`None`: nothing to sample, e.g. black).
+    pub fn get_or_build(
+        &self,
+        build: impl FnOnce() -> Option<illume_core::sampling::AliasTable>,
+    ) -> Option<&illume_core::sampling::AliasTable> {
+        self.0.get_or_init(build).as_ref()
+    }
+}
+
+impl PartialEq for EnvSampling {
+    /// Always equal: a cache derived from the texels, which are compared.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for EnvSampling {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("EnvSampling")
+    }
 }
 
 impl EnvMap {
@@ -707,7 +746,7 @@ impl EnvMap {
         let (ix, iy) = (x0 as i64, y0 as i64);
         let top = texel(ix, iy) * (1.0 - fx) + texel(ix + 1, iy) * fx;
         let bottom = texel(ix, iy + 1) * (1.0 - fx) + texel(ix + 1, iy + 1) * fx;
-        top * (1.0 - fy) + bottom * fy
+        (top * (1.0 - fy) + bottom * fy) * self.scale
     }
 
     /// Solid angle of a texel of row `j` \[sr\]: (2π/W)·(π/H)·sin θ at the row centre.
@@ -724,7 +763,7 @@ impl EnvMap {
             let row = &self.texels[(j * self.width) as usize..((j + 1) * self.width) as usize];
             sum += row.iter().copied().sum::<Rgb>() * self.texel_solid_angle(j);
         }
-        sum
+        sum * self.scale
     }
 
     /// Checks size and values; the message names the map.
@@ -752,6 +791,12 @@ impl EnvMap {
             return Err(format!(
                 "environment map {}: rotation is not finite",
                 self.name
+            ));
+        }
+        if !self.scale.is_finite() || self.scale < 0.0 {
+            return Err(format!(
+                "environment map {}: scale {} must be finite and ≥ 0",
+                self.name, self.scale
             ));
         }
         Ok(())

@@ -147,8 +147,6 @@ pub struct LightSet {
     /// Photon-emission selection over the emitters then the sky (only with a sky; the
     /// NEE table serves emission otherwise).
     emission_table: Option<AliasTable>,
-    /// Texel selection of an environment map, by filtered luminance × sinθ.
-    env_table: Option<AliasTable>,
 }
 
 /// Texel weights of `map` for importance sampling: the mean luminance of the bilinear
@@ -177,6 +175,18 @@ fn env_weights(map: &illume_scene::EnvMap) -> Vec<f32> {
         }
     }
     out
+}
+
+/// Texel selection of an environment map, by filtered luminance × sinθ ([`env_weights`]):
+/// built in place ([`AliasTable::from_vec`]; a map at the size cap has tens of millions of
+/// texels) once per image and shared by every light set and scaled copy of it
+/// ([`illume_scene::EnvSampling`]). `None` for a black map or a zero scale (night).
+fn env_table(map: &illume_scene::EnvMap) -> Option<&AliasTable> {
+    if map.scale <= 0.0 {
+        return None;
+    }
+    map.sampling
+        .get_or_build(|| AliasTable::from_vec(env_weights(map)))
 }
 
 impl LightSet {
@@ -313,6 +323,10 @@ impl LightSet {
                 })
             })
             .collect();
+        // Built now rather than by the first sample (once per image: see `env_table`).
+        if let Some(illume_scene::Sky::Equirect(map)) = &scene.sky {
+            env_table(map);
+        }
         Self {
             emission_frames,
             emitters,
@@ -324,10 +338,6 @@ impl LightSet {
             total_power,
             analytic_count,
             area_table,
-            env_table: match &scene.sky {
-                Some(illume_scene::Sky::Equirect(map)) => AliasTable::new(&env_weights(map)),
-                _ => None,
-            },
             sky: scene.sky.clone(),
             sky_power,
             emission_table,
@@ -342,7 +352,7 @@ impl LightSet {
         u_texel: f32,
         u: illume_core::Vec2,
     ) -> Option<(Vec3, f32)> {
-        let (k, _) = self.env_table.as_ref()?.sample(u_texel);
+        let (k, _) = env_table(map)?.sample(u_texel);
         let (i, j) = (k as u32 % map.width, k as u32 / map.width);
         let uv = illume_core::Vec2::new(
             (i as f32 + u.x) / map.width as f32,
@@ -356,7 +366,7 @@ impl LightSet {
 
     /// Solid-angle pdf of [`LightSet::sample_env`] for `wi`.
     fn env_pdf(&self, map: &illume_scene::EnvMap, wi: Vec3) -> f32 {
-        let Some(table) = &self.env_table else {
+        let Some(table) = env_table(map) else {
             return 0.0;
         };
         // Clamped at the poles, where the Jacobian sinθ vanishes: the density there is
@@ -905,6 +915,57 @@ mod tests {
             }
         }
         chi2
+    }
+
+    #[test]
+    fn a_days_skies_and_light_sets_share_one_map_and_one_table() {
+        // Issue 38: the sun's sky at each time of day was a deep copy of the map, and
+        // every light set built its own sampling table (12 bytes a texel each).
+        let (w, h) = (64u32, 32u32);
+        let texels: Vec<Rgb> = (0..w * h)
+            .map(|i| Rgb::splat(0.1 + (i % 7) as f32))
+            .collect();
+        let map = illume_scene::EnvMap {
+            name: "test".into(),
+            width: w,
+            height: h,
+            texels: texels.into(),
+            scale: 1.0,
+            rotation_deg: 0.0,
+            sampling: Default::default(),
+        };
+        let mut scene = illume_scene::load_scene(std::path::Path::new("builtin:sun-room")).unwrap();
+        scene.replace_sky(illume_scene::Sky::Equirect(std::sync::Arc::new(map)));
+        let mut skies = Vec::new();
+        let mut sets = Vec::new();
+        for hours in [9.0, 12.0, 16.0] {
+            scene.set_time(hours * 3600.0);
+            let Some(illume_scene::Sky::Equirect(sky)) = &scene.sky else {
+                panic!("an environment map at {hours} h");
+            };
+            skies.push(sky.clone());
+            sets.push(LightSet::new(&scene));
+        }
+        assert!(skies[0].scale > 0.0 && skies[0].scale != skies[1].scale);
+        let table = |i: usize| env_table(&skies[i]).expect("a daytime sky has a table");
+        for i in 1..3 {
+            assert!(std::sync::Arc::ptr_eq(&skies[0].texels, &skies[i].texels));
+            assert!(
+                std::ptr::eq(table(0), table(i)),
+                "sky {i} built its own table"
+            );
+        }
+        // Each light set samples by that one table, at its own sky's radiance.
+        let mut g = Pcg32::new(9, 9);
+        for (set, sky) in sets.iter().zip(&skies) {
+            let s = set
+                .sample_sky(Vec3::Y, &mut g)
+                .expect("a sample of the sky");
+            let radiance = sky.lookup(sky.uv(s.wi));
+            assert!(
+                (s.weight * s.pdf - radiance).abs().max_element() < 1e-4 * radiance.max_element()
+            );
+        }
     }
 
     #[test]

@@ -119,8 +119,10 @@ fn env(w: u32, h: u32, base: Rgb, bright: Option<(u32, u32, Rgb)>, rotation_deg:
         name: "test".into(),
         width: w,
         height: h,
-        texels,
+        texels: texels.into(),
+        scale: 1.0,
         rotation_deg,
+        sampling: Default::default(),
     }))
 }
 

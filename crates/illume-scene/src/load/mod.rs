@@ -284,12 +284,21 @@ pub fn load_envmap(path: &Path, scale: f32, rotation_deg: f32) -> Result<crate::
         };
         LoadError::malformed(path, "environment map", message)
     })?;
+    // Scaled in place: the decoded image becomes the map's texels (a copy would hold
+    // twice the decoded size, 800 MiB for an 8192 × 4096 map, while it is made).
+    let (width, height) = (image.width(), image.height());
+    let mut texels = image.into_pixels();
+    for t in &mut texels {
+        *t *= scale;
+    }
     let map = crate::EnvMap {
         name: path.display().to_string(),
-        width: image.width(),
-        height: image.height(),
-        texels: image.pixels().iter().map(|t| *t * scale).collect(),
+        width,
+        height,
+        texels: texels.into(),
+        scale: 1.0,
         rotation_deg,
+        sampling: Default::default(),
     };
     map.validate()
         .map_err(|m| LoadError::malformed(path, "environment map", m))?;
