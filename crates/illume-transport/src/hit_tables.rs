@@ -4,7 +4,7 @@
 
 use crate::mip::{MipChain, UvFootprint};
 use illume_core::{Affine3A, Mat3A, Rgb, Vec2, Vec3, Vec3A};
-use illume_scene::{InstanceId, Scene, Texture, TextureId, WrapMode};
+use illume_scene::{InstanceId, MeshId, Scene, Texture, TextureId, WrapMode};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -69,6 +69,34 @@ pub struct HitTables {
     /// textures some material uses as base colour or normal map; `None` for the others
     /// and for one-texel textures (lookups then read the texture itself).
     mips: Vec<Option<Arc<MipChain>>>,
+    /// Per mesh, one bit a triangle, set where a corner's normal is not the facet's: the
+    /// curved regions, where [`SurfaceHit::smooth_point`](crate::SurfaceHit::smooth_point)
+    /// can lift a point ([`World::shadow_ray`](crate::World::shadow_ray) skips the
+    /// others without reading their corners: normal-mapped walls are flat).
+    curved: Vec<Arc<Vec<u64>>>,
+}
+
+/// [`HitTables::curved`]'s bits of `mesh`: a triangle is flat when each corner's normal
+/// is its facet's normal (either side) to within 1e-6 in cosine; degenerate triangles
+/// count as curved.
+fn curved_bits(mesh: &illume_scene::Mesh) -> Vec<u64> {
+    let mut bits = vec![0u64; mesh.indices.len().div_ceil(64)];
+    if mesh.normals.is_empty() {
+        return bits;
+    }
+    for (t, corners) in mesh.indices.iter().enumerate() {
+        let [p0, p1, p2] = corners.map(|i| mesh.positions[i as usize]);
+        let facet = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+        let flat = facet != Vec3::ZERO
+            && corners.iter().all(|&i| {
+                let n = mesh.normals[i as usize].normalize_or_zero();
+                n.dot(facet).abs() >= 1.0 - 1e-6
+            });
+        if !flat {
+            bits[t / 64] |= 1 << (t % 64);
+        }
+    }
+    bits
 }
 
 /// Longest side, in texels, of the texture copies photons read with
@@ -127,6 +155,14 @@ impl HitTables {
     /// Brings the instance frames up to date with the scene's transforms and packs
     /// textures added since the last call (textures never change in place).
     pub fn update(&mut self, scene: &Scene) {
+        // Meshes, like textures, are only ever added, never changed in place.
+        let meshes = self.curved.len().min(scene.meshes.len());
+        self.curved.truncate(meshes);
+        self.curved.extend(
+            scene.meshes[meshes..]
+                .iter()
+                .map(|m| Arc::new(curved_bits(m))),
+        );
         self.frames.clear();
         self.frames.extend(
             scene
@@ -190,6 +226,18 @@ impl HitTables {
             Some(f) => *f,
             None => InstanceFrame::new(world_from_object),
         }
+    }
+
+    /// False when `triangle` of `mesh` is flat (its corners' normals are the facet's:
+    /// no point of it can be lifted to a smooth surface); true otherwise, and for a mesh
+    /// the tables do not know.
+    #[inline]
+    pub fn is_curved(&self, mesh: MeshId, triangle: u32) -> bool {
+        let t = triangle as usize;
+        self.curved
+            .get(mesh.index())
+            .and_then(|bits| bits.get(t / 64))
+            .is_none_or(|word| word >> (t % 64) & 1 == 1)
     }
 
     /// Bilinear lookup of scene texture `texture` at `uv`, equal bit for bit to

@@ -251,6 +251,7 @@ impl World {
 
     /// True when nothing visible to the default mask lies between `hit` and the light
     /// point of `sample` along [`World::shadow_ray`] (false when there is no such ray).
+    #[inline]
     pub fn unoccluded(&self, hit: &SurfaceHit, sample: &LightSample) -> bool {
         self.shadow_ray(hit, sample)
             .is_some_and(|ray| !self.tracer.occluded(&ray, illume_scene::MASK_DEFAULT))
@@ -267,11 +268,23 @@ impl World {
     /// point too. `None` when that point is not lifted (a flat region, or normals that
     /// only a normal map tilts): the facet itself hides the light, as a ray from just
     /// above it would find. Without this the lit side ended in steps, one facet at a time.
+    #[inline]
     pub fn shadow_ray(&self, hit: &SurfaceHit, sample: &LightSample) -> Option<Ray> {
         let ng = hit.facing_geometric_normal();
         if ng.dot(sample.wi) > 0.0 {
             return Some(sample.shadow_ray(hit.spawn_origin(sample.wi)));
         }
+        self.terminator_ray(hit, sample)
+    }
+
+    /// [`World::shadow_ray`] from below the facet: out of line, as it is rare.
+    #[cold]
+    #[inline(never)]
+    fn terminator_ray(&self, hit: &SurfaceHit, sample: &LightSample) -> Option<Ray> {
+        if !self.hit_tables.is_curved(hit.mesh, hit.triangle) {
+            return None;
+        }
+        let ng = hit.facing_geometric_normal();
         terminator_ray(hit.position, ng, hit.smooth_point(&self.scene), sample)
     }
 
@@ -280,6 +293,10 @@ impl World {
         let ng = hit.facing_geometric_normal();
         if ng.dot(sample.wi) > 0.0 {
             return Some(sample.shadow_ray(hit.spawn_origin(sample.wi)));
+        }
+        let mesh = self.scene.instances[hit.instance.index()].mesh;
+        if !self.hit_tables.is_curved(mesh, hit.triangle) {
+            return None;
         }
         terminator_ray(hit.position, ng, hit.smooth_point(&self.scene), sample)
     }
