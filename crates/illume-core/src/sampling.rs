@@ -303,17 +303,24 @@ pub struct AliasTable {
     total: f64,
 }
 
+/// The sum of `weights` in f64 when a table can be built over them: some, all finite and
+/// non-negative, with a positive finite sum.
+fn weights_total(weights: &[f32]) -> Option<f64> {
+    let total: f64 = weights.iter().map(|&w| w as f64).sum();
+    if weights.is_empty()
+        || total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+        || !total.is_finite()
+        || weights.iter().any(|w| *w < 0.0)
+    {
+        return None;
+    }
+    Some(total)
+}
+
 impl AliasTable {
     /// Table over non-negative `weights`; `None` when they sum to zero or any is not finite.
     pub fn new(weights: &[f32]) -> Option<Self> {
-        let total: f64 = weights.iter().map(|&w| w as f64).sum();
-        if weights.is_empty()
-            || total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
-            || !total.is_finite()
-            || weights.iter().any(|w| *w < 0.0)
-        {
-            return None;
-        }
+        let total = weights_total(weights)?;
         let n = weights.len();
         let pmf: Vec<f32> = weights.iter().map(|&w| (w as f64 / total) as f32).collect();
         let mut scaled: Vec<f64> = weights
@@ -351,14 +358,7 @@ impl AliasTable {
     /// computes it) and decreased by what each small entry gives it as stored (`1 − prob`
     /// in f32), so the table's implied probabilities add up as `new`'s do.
     pub fn from_vec(mut weights: Vec<f32>) -> Option<Self> {
-        let total: f64 = weights.iter().map(|&w| w as f64).sum();
-        if weights.is_empty()
-            || total.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
-            || !total.is_finite()
-            || weights.iter().any(|w| *w < 0.0)
-        {
-            return None;
-        }
+        let total = weights_total(&weights)?;
         let n = weights.len();
         // Scaled weights w·n/total: < 1 small, ≥ 1 large; a small entry's is final.
         let mut prob: Vec<f32> = weights

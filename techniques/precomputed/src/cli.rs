@@ -224,8 +224,9 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
         .output
         .clone()
         .ok_or("illume precompute: give --output FILE")?;
-    // Before hours of rendering: the output must be new or an earlier .illumepc.
-    crate::file::check_overwritable(&output)?;
+    // Before hours of rendering: the output must be new or an earlier .illumepc, in a
+    // folder that exists (created here if need be).
+    crate::file::prepare_output(&output)?;
     let configured = host.settings(&a.sets)?;
     let (render_width, render_height) = configured.image_size;
     let mut s: PrecomputedSettings = *configured
@@ -372,7 +373,7 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
 }
 
 fn run_merge(m: MergeArgs, host: &dyn OfflineHost) -> Result<()> {
-    crate::file::check_overwritable(&m.output)?;
+    crate::file::prepare_output(&m.output)?;
     let parts = m
         .parts
         .iter()

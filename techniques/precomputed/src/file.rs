@@ -406,6 +406,21 @@ fn encode(section: &Section) -> Vec<u8> {
     }
 }
 
+/// [`check_overwritable`], then the output's folder created if need be (as `render -o`
+/// creates its own): both before hours of rendering.
+pub fn prepare_output(path: &Path) -> Result<(), FileError> {
+    check_overwritable(path)?;
+    if let Some(parent) = path.parent()
+        && !parent.as_os_str().is_empty()
+    {
+        std::fs::create_dir_all(parent).map_err(|source| FileError::Io {
+            path: parent.to_path_buf(),
+            source,
+        })?;
+    }
+    Ok(())
+}
+
 /// Whether `path` may be written: it does not exist, or it is a regular file that starts
 /// with [`MAGIC`] (an earlier `.illumepc` file). Anything else — a user's file, a folder,
 /// a link — is refused, untouched. Call it before the work that makes the file, too.

@@ -992,7 +992,8 @@ fn data_flag_reads_a_precomputed_file_like_the_set_key() {
     // A tiny day of sun-room (the Slurm test's settings), then one frame between two keys
     // through `--data FILE` and through `--set precomputed.data=FILE`: the same image.
     let dir = scratch("data-flag");
-    let day = dir.join("day.illumepc");
+    // In folders that do not exist yet: `precompute` makes them, as `render -o` does.
+    let day = dir.join("new/folder/day.illumepc");
     let size = ["--width", "24", "--height", "16"];
     let mut args = vec!["precompute", "builtin:sun-room", "--schedule", "uniform"];
     args.extend([
