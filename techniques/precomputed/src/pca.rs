@@ -19,6 +19,10 @@
 //! EISPACK `tred2`/`tql2` pair). faer did both before, but its x86 product reserved twice
 //! the L3 size read from `/sys` (600 MiB on a 300 MiB-L3 Xeon) in every thread that
 //! multiplied, which aborted the PCA under an address-space limit (`prlimit --as`).
+//! Written here rather than taken from another linear-algebra crate (nalgebra's
+//! `SymmetricEigen` would do): the problem is one dense symmetric matrix of at most a few
+//! hundred rows, solved once per precompute, and a whole crate for one textbook routine
+//! would add to every cold build of a CI run that is already over its time budget.
 
 use rayon::prelude::*;
 
