@@ -416,6 +416,11 @@ impl AliasTable {
 
     /// Index drawn with probability proportional to its weight, and that probability.
     /// `u` in `[0, 1)`.
+    ///
+    /// One f32 holds 24 random bits, shared by the column and the coin: exact enough for
+    /// light lists, not for tables of millions of entries, where the coin is left with
+    /// a few bits (1/8 steps at 2²¹ entries) and above 2²⁴ entries some columns are never
+    /// drawn. Those use [`AliasTable::sample_fine`].
     #[inline]
     pub fn sample(&self, u: f32) -> (usize, f32) {
         let n = self.prob.len();
@@ -428,6 +433,28 @@ impl AliasTable {
             self.alias[i] as usize
         };
         (idx, self.pmf[idx])
+    }
+
+    /// [`AliasTable::sample`] for tables of millions of entries (an environment map's
+    /// texels): the index is drawn from a 48-bit uniform made of `u.x` and `u.y` (24
+    /// bits each, as [`Sampler::next_1d`] gives them), so every column is drawn with its
+    /// share and the coin keeps 48 − log₂ n bits. Also returns what is left of the
+    /// coin's uniform, rescaled to `[0, 1)` and independent of the index, so that a
+    /// caller needs no third number (an environment map places its point in the texel
+    /// with it).
+    #[inline]
+    pub fn sample_fine(&self, u: Vec2) -> (usize, f32, f32) {
+        let n = self.prob.len();
+        let x = (u.x as f64 + u.y as f64 * (1.0 / (1u32 << 24) as f64)) * n as f64;
+        let i = (x as usize).min(n - 1);
+        let frac = (x - i as f64).clamp(0.0, 1.0);
+        let p = self.prob[i] as f64;
+        let (idx, rest) = if frac < p {
+            (i, frac / p)
+        } else {
+            (self.alias[i] as usize, (frac - p) / (1.0 - p))
+        };
+        (idx, self.pmf[idx], (rest as f32).min(ONE_MINUS_EPSILON))
     }
 
     /// Probability of index `i`.
@@ -542,6 +569,56 @@ mod tests {
         }
         assert!(AliasTable::new(&[0.0, 0.0]).is_none());
         assert!(AliasTable::new(&[f32::NAN]).is_none());
+    }
+
+    /// A table of millions of entries (an environment map's size), light and heavy
+    /// entries alternating: drawn with one f32, the coin has 3·2²⁰/2²⁴ = 3/16 steps and the
+    /// light entries (scaled weight ≈ 0.095) are drawn about twice too often; drawn with
+    /// two, each class within sampling noise of its probability, and the leftover uniform
+    /// is uniform in each class.
+    #[test]
+    fn a_table_of_millions_is_drawn_in_proportion_with_two_numbers() {
+        let n = 3 << 20;
+        let w: Vec<f32> = (0..n)
+            .map(|i| if i % 2 == 0 { 1.0 } else { 0.05 })
+            .collect();
+        let t = AliasTable::new(&w).unwrap();
+        let light: f64 = 0.05 / 1.05;
+        let draws = 2_000_000;
+        let mut g = Pcg32::new(11, 0);
+        let (mut coarse, mut fine) = (0u32, 0u32);
+        let mut rest_mean = [0f64; 2];
+        let mut rest_count = [0u32; 2];
+        for _ in 0..draws {
+            coarse += (t.sample(g.next_1d()).0 % 2) as u32;
+            let (i, pmf, rest) = t.sample_fine(g.next_2d());
+            assert_eq!(pmf, t.pmf(i));
+            assert!((0.0..1.0).contains(&rest));
+            fine += (i % 2) as u32;
+            rest_mean[i % 2] += rest as f64;
+            rest_count[i % 2] += 1;
+        }
+        // 4 standard deviations of a binomial share.
+        let tolerance = 4.0 * (light * (1.0 - light) / draws as f64).sqrt();
+        let share = |k: u32| k as f64 / draws as f64;
+        assert!(
+            (share(fine) - light).abs() < tolerance,
+            "two numbers: light share {} against {light}",
+            share(fine)
+        );
+        assert!(
+            share(coarse) > 1.5 * light,
+            "one number: light share {} (the coin's steps are what this test must see)",
+            share(coarse)
+        );
+        for k in 0..2 {
+            let mean = rest_mean[k] / rest_count[k] as f64;
+            let sd = (1.0 / 12.0 / rest_count[k] as f64).sqrt();
+            assert!(
+                (mean - 0.5).abs() < 4.0 * sd,
+                "class {k}: leftover mean {mean}"
+            );
+        }
     }
 
     /// The probability of each index the table implies (its own column's `prob` plus what

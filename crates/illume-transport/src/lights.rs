@@ -345,17 +345,19 @@ impl LightSet {
     }
 
     /// An environment map's sample: a direction from the texel table and a uniform
-    /// position in the texel; `None` for a degenerate (polar) direction or a black map.
+    /// position in the texel (three numbers in all); `None` for a degenerate (polar) direction or a black map.
     fn sample_env(
         &self,
         map: &illume_scene::EnvMap,
         u_texel: f32,
         u: illume_core::Vec2,
     ) -> Option<(Vec3, f32)> {
-        let (k, _) = env_table(map)?.sample(u_texel);
+        // Millions of texels: the texel from two numbers (`u_texel`, `u.x`), and the
+        // point's x in the texel from what the table leaves of them.
+        let (k, _, x) = env_table(map)?.sample_fine(illume_core::Vec2::new(u_texel, u.x));
         let (i, j) = (k as u32 % map.width, k as u32 / map.width);
         let uv = illume_core::Vec2::new(
-            (i as f32 + u.x) / map.width as f32,
+            (i as f32 + x) / map.width as f32,
             (j as f32 + u.y) / map.height as f32,
         );
         let wi = map.direction(uv);

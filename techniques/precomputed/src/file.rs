@@ -338,10 +338,10 @@ fn truncated(path: &Path, bytes: &[u8], what: &str, needed: u64) -> FileError {
 }
 
 /// FNV-1a 64 (as `illume-bench`'s cache keys).
-pub fn fnv1a64(bytes: &[u8]) -> u64 {
+pub fn fnv1a64(bytes: impl IntoIterator<Item = impl std::borrow::Borrow<u8>>) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= b as u64;
+    for b in bytes {
+        h ^= *b.borrow() as u64;
         h = h.wrapping_mul(0x0100_0000_01b3);
     }
     h
@@ -386,7 +386,30 @@ pub fn scene_fingerprint(scene: &Scene) -> (String, String) {
     }
     // The sky at scale 1: a sun path scales the scene's sky with the time of day.
     let sky = scene.sun.as_ref().map_or(&scene.sky, |sun| &sun.sky_base);
-    let _ = writeln!(text, "sky {sky:?}");
+    match sky {
+        // An environment map by its texels' hash: its Debug text would print every texel
+        // (a string of about 1 GB for an 8192 × 4096 map).
+        Some(illume_scene::Sky::Equirect(map)) => {
+            let bytes = map
+                .texels
+                .iter()
+                .flat_map(|t| t.to_array())
+                .flat_map(f32::to_le_bytes);
+            let _ = writeln!(
+                text,
+                "sky map {:?} {}x{} scale {:?} rotation {:?} texels {:016x}",
+                map.name,
+                map.width,
+                map.height,
+                map.scale,
+                map.rotation_deg,
+                fnv1a64(bytes)
+            );
+        }
+        _ => {
+            let _ = writeln!(text, "sky {sky:?}");
+        }
+    }
     let hash = format!("{:016x}", fnv1a64(text.as_bytes()));
     (text, hash)
 }

@@ -299,3 +299,40 @@ fn header_fields_and_values_are_checked_on_read() {
     // The sample itself is fine.
     PcFile::from_bytes(path, &sample(&scene()).to_bytes()).unwrap();
 }
+
+/// An environment map enters the fingerprint by its texels' hash, not their text (which
+/// was about 1 GB for an 8192 × 4096 map): one texel changed changes the fingerprint,
+/// and the text stays short however large the map.
+#[test]
+fn an_environment_maps_texels_enter_the_fingerprint_as_a_hash() {
+    let with_map = |width: u32, height: u32, changed: bool| {
+        let mut texels = vec![illume_core::Rgb::new(0.2, 0.3, 0.4); (width * height) as usize];
+        if changed {
+            texels[7].y = 0.31;
+        }
+        let mut s = scene();
+        s.sky = Some(illume_scene::Sky::Equirect(std::sync::Arc::new(
+            illume_scene::EnvMap {
+                name: "sky.exr".into(),
+                width,
+                height,
+                texels: texels.into(),
+                scale: 1.0,
+                rotation_deg: 0.0,
+                sampling: Default::default(),
+            },
+        )));
+        scene_fingerprint(&s)
+    };
+    let (small_text, small) = with_map(8, 4, false);
+    let (_, changed) = with_map(8, 4, true);
+    let (large_text, _) = with_map(1024, 512, false);
+    assert_ne!(small, changed, "one texel changed");
+    assert_eq!(small, with_map(8, 4, false).1, "the same map");
+    assert!(
+        large_text.len() < small_text.len() + 16,
+        "{} bytes of text for 1024 × 512 texels against {} for 8 × 4",
+        large_text.len(),
+        small_text.len()
+    );
+}
