@@ -223,7 +223,7 @@ pub fn run(
     if let Some(out) = &out {
         for (i, r) in references.per_frame().enumerate() {
             if let Some(r) = r {
-                save_frame(out, "reference", i, r)?;
+                save_frame(out, CONVERGED_FRAMES, i, r)?;
             }
         }
     }
@@ -958,6 +958,11 @@ pub fn median(mut values: Vec<f64>) -> f64 {
         0.5 * (values[n / 2 - 1] + values[n / 2])
     }
 }
+
+/// The folder under `frames/` of the converged reference's frames. Its space is a
+/// character [`file_safe`] never leaves, so no series' folder can be it (a series
+/// labelled `reference` once wrote its frames over the converged ones).
+pub const CONVERGED_FRAMES: &str = "converged reference";
 
 /// `text` with every character outside `[A-Za-z0-9._-]` replaced by `_`.
 pub fn file_safe(text: &str) -> String {

@@ -617,6 +617,18 @@ impl Scenario {
                     format!("`{}` is used twice; give each entry a `label`", t.label()),
                 ));
             }
+            // `--save-frames` writes each series under `frames/` by its file-safe label.
+            let folder = crate::run::file_safe(t.label());
+            if let Some(other) = labels.iter().find(|l| crate::run::file_safe(l) == folder) {
+                return Err(self.invalid(
+                    format!("technique[{i}].label"),
+                    format!(
+                        "`{}` and `{other}` would share the frames folder `frames/{folder}`; \
+                         give one of them another `label`",
+                        t.label()
+                    ),
+                ));
+            }
             labels.push(t.label());
             if let Some(b) = t.budget_ms
                 && !(b.is_finite() && b > 0.0 && b <= MAX_BUDGET_MS)

@@ -77,18 +77,23 @@ fn tiny_scenario_runs_end_to_end_and_reuses_its_references() {
         assert!(svg.contains("<svg"), "{name} is not an SVG");
     }
     assert_eq!(files.plots.len(), 6, "{:?}", files.plots);
-    assert!(
-        options
-            .output_dir
-            .join("frames/reference/0002.png")
-            .is_file()
-    );
-    assert!(
-        options
-            .output_dir
-            .join("frames/reference/0000.png")
-            .is_file()
-    );
+    // The converged reference and the series labelled `reference` (1 spp) in folders of
+    // their own: the series once wrote over the converged frames.
+    let exr = |folder: &str, i: usize| {
+        RgbImage::read(
+            &options
+                .output_dir
+                .join(format!("frames/{folder}/{i:04}.exr")),
+        )
+        .unwrap_or_else(|e| panic!("frames/{folder}/{i:04}.exr: {e}"))
+    };
+    for i in [0, 2] {
+        let (converged, series) = (exr("converged reference", i), exr("reference", i));
+        assert!(
+            illume_metrics::block_error(&converged, &series, 8).unwrap() > 0.0,
+            "frame {i}: the 1-spp series equals the converged reference"
+        );
+    }
 
     // results.csv: one row per frame per series, finite metrics, and the technique
     // (1 spp of indirect light per frame) measurably away from the converged reference.

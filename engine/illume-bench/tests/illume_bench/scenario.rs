@@ -138,6 +138,20 @@ fn duplicate_labels_are_rejected() {
 }
 
 #[test]
+fn labels_that_share_a_frames_folder_are_rejected() {
+    let e = error(&format!(
+        "{MINIMAL}[[technique]]\nname = \"reference\"\nlabel = \"a b\"\n\
+         [[technique]]\nname = \"reference\"\nlabel = \"a_b\"\n"
+    ));
+    assert!(
+        e.contains("technique[2].label")
+            && e.contains("`a_b` and `a b`")
+            && e.contains("frames/a_b"),
+        "{e}"
+    );
+}
+
+#[test]
 fn bad_frame_times_are_rejected_with_the_field() {
     let base = "scene = \"builtin:furnace\"\n[[technique]]\nname = \"reference\"\n";
     for (times, needle) in [
