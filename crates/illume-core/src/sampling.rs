@@ -437,7 +437,7 @@ impl AliasTable {
 
     /// [`AliasTable::sample`] for tables of millions of entries (an environment map's
     /// texels): the index is drawn from a 48-bit uniform made of `u.x` and `u.y` (24
-    /// bits each, as [`Sampler::next_1d`] gives them), so every column is drawn with its
+    /// bits each, as [`Pcg32`]'s `next_1d` gives them), so every column is drawn with its
     /// share and the coin keeps 48 − log₂ n bits. Also returns what is left of the
     /// coin's uniform, rescaled to `[0, 1)` and independent of the index, so that a
     /// caller needs no third number (an environment map places its point in the texel

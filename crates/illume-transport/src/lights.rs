@@ -345,7 +345,8 @@ impl LightSet {
     }
 
     /// An environment map's sample: a direction from the texel table and a uniform
-    /// position in the texel (three numbers in all); `None` for a degenerate (polar) direction or a black map.
+    /// position in the texel (three numbers in all); `None` for a degenerate (polar)
+    /// direction or a black map.
     fn sample_env(
         &self,
         map: &illume_scene::EnvMap,
