@@ -21,7 +21,7 @@
 
 use illume_core::image::RgbImage;
 use illume_core::sampling::{Pcg32, mix64};
-use illume_core::{INV_PI, Rgb, Vec2};
+use illume_core::{INV_PI, Progress, Rgb, Silent, Vec2};
 use illume_transport::{GBuffer, GBufferPixel, Technique, TextureFilter, World};
 use rayon::prelude::*;
 use std::sync::{Arc, Mutex};
@@ -327,6 +327,18 @@ impl Renderer {
     /// Renders one frame of `world` with `technique`'s indirect light. `frame_index`
     /// decorrelates the random numbers of successive frames.
     pub fn render(&self, world: &World, technique: &mut dyn Technique, frame_index: u64) -> Frame {
+        self.render_with_progress(world, technique, frame_index, &mut Silent)
+    }
+
+    /// [`Renderer::render`], the technique's long work in the frame reported to
+    /// `progress` ([`Technique::indirect_with_progress`]): a still's one frame.
+    pub fn render_with_progress(
+        &self,
+        world: &World,
+        technique: &mut dyn Technique,
+        frame_index: u64,
+        progress: &mut dyn Progress,
+    ) -> Frame {
         let t0 = Instant::now();
         let s = &self.settings;
         let gbuffer = Arc::new(match s.primary_visibility {
@@ -387,7 +399,7 @@ impl Renderer {
         drop(state);
         let t2 = Instant::now();
         technique.want_direct_share(self.split);
-        let mut indirect = technique.indirect(world, &gbuffer);
+        let mut indirect = technique.indirect_with_progress(world, &gbuffer, progress);
         let mut direct = direct;
         let share = if self.split {
             technique.direct_share()

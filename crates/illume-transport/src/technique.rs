@@ -16,8 +16,8 @@
 //! 1. [`Technique::precompute`] once, before the first frame (with progress);
 //! 2. each frame: [`Technique::before_world_write`] before the world changes,
 //!    [`Technique::scene_changed`] after it changed, [`Technique::advance`] with the
-//!    frame's [`Budget`], [`Technique::indirect`] for the frame's G-buffer, and
-//!    [`Technique::stats`].
+//!    frame's [`Budget`], [`Technique::indirect`] for the frame's G-buffer (a still's
+//!    frame: [`Technique::indirect_with_progress`]), and [`Technique::stats`].
 //!
 //! Interactive techniques must not look at future scene states.
 
@@ -100,6 +100,21 @@ pub trait Technique: Send {
     /// Indirect radiance [W/(m²·sr)] leaving each G-buffer point towards the camera
     /// (black where the pixel sees nothing).
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage;
+
+    /// [`Technique::indirect`] for a frame that may take long (a still's only frame),
+    /// reporting its progress: the same image, bit for bit. A technique whose frame
+    /// does its own long work (radiance_cache's records, made where the G-buffer says)
+    /// reports it here; `progress` gets whole phases (`begin` … `end`). Default:
+    /// [`Technique::indirect`], nothing reported.
+    fn indirect_with_progress(
+        &mut self,
+        world: &World,
+        gbuffer: &GBuffer,
+        progress: &mut dyn Progress,
+    ) -> RgbImage {
+        let _ = progress;
+        self.indirect(world, gbuffer)
+    }
 
     /// Current counters, unprefixed (`photons_per_s`, in the unit the name says); the
     /// engine files them under the technique's name.

@@ -278,17 +278,31 @@ impl Engine {
     /// technique within its budget, render, collect counters. Fails only when the
     /// technique's precompute (first frame) or a rebuild fails.
     pub fn step(&mut self, t: f64) -> Result<StepOutput, EngineError> {
-        self.step_inner(Some(t))
+        self.step_inner(Some(t), &mut Silent)
+    }
+
+    /// [`Engine::step`], the frame's long work reported to `progress` (radiance_cache
+    /// makes its records inside the frame): a still's one frame ([`render_still`]).
+    pub fn step_with_progress(
+        &mut self,
+        t: f64,
+        progress: &mut dyn Progress,
+    ) -> Result<StepOutput, EngineError> {
+        self.step_inner(Some(t), progress)
     }
 
     /// One frame at the scene's current time, which is not evaluated again: edits made
     /// since the last step (to animated nodes too) stay as they are. For viewers whose
     /// animation is paused.
     pub fn step_held(&mut self) -> Result<StepOutput, EngineError> {
-        self.step_inner(None)
+        self.step_inner(None, &mut Silent)
     }
 
-    fn step_inner(&mut self, t: Option<f64>) -> Result<StepOutput, EngineError> {
+    fn step_inner(
+        &mut self,
+        t: Option<f64>,
+        progress: &mut dyn Progress,
+    ) -> Result<StepOutput, EngineError> {
         let mut precompute_ms = self.precompute(&mut Silent)?;
         let t0 = Instant::now();
         let changes = match t {
@@ -304,9 +318,12 @@ impl Engine {
         let t1 = Instant::now();
         self.technique.advance(&world, &self.budget);
         let t2 = Instant::now();
-        let frame = self
-            .renderer
-            .render(&world, self.technique.as_mut(), self.frame_index);
+        let frame = self.renderer.render_with_progress(
+            &world,
+            self.technique.as_mut(),
+            self.frame_index,
+            progress,
+        );
         drop(world);
         self.frame_index += 1;
         let mut stats = self.technique.stats().prefixed(self.kind.name());

@@ -21,7 +21,7 @@ pub struct Still {
 /// size. A technique with its own route to a still ([`TechniqueKind::has_own_still`](crate::TechniqueKind::has_own_still):
 /// the reference renders the whole image by path tracing, `[reference] spp` samples per
 /// pixel) takes it, its settings checked first (`spp` 0 is an error, not one sample); any
-/// other technique runs its precompute (with progress) and one frame.
+/// other technique runs its precompute and one frame, both with progress.
 pub fn render_still(
     scene: Scene,
     config: &Config,
@@ -35,7 +35,7 @@ pub fn render_still(
     let mut engine = Engine::new(scene, config)?;
     engine.set_split(true);
     let precompute_ms = engine.precompute(progress)?;
-    let out = engine.step(t)?;
+    let out = engine.step_with_progress(t, progress)?;
     Ok(Still {
         full: out.frame.full,
         direct: out.frame.direct,

@@ -283,6 +283,17 @@ impl RadianceCache {
 
     /// One frame: expiry (or the plan's admissions), placement, shading.
     pub(crate) fn frame_step(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
+        self.frame_step_reporting(world, gbuffer, None)
+    }
+
+    /// [`RadianceCache::frame_step`], the records' making reported to `progress` (a
+    /// phase per placement pass that makes any): the same cache and image.
+    pub(crate) fn frame_step_reporting(
+        &mut self,
+        world: &World,
+        gbuffer: &GBuffer,
+        progress: Option<&mut dyn Progress>,
+    ) -> RgbImage {
         let t0 = Instant::now();
         let before = self.octree.len() as u64;
         let keep_total = (
@@ -318,7 +329,7 @@ impl RadianceCache {
         self.counters.reused = before - self.counters.expired;
         self.admit_planned();
         let t1 = Instant::now();
-        self.place(world, gbuffer);
+        self.place(world, gbuffer, progress);
         let (made, gather_ms) = (
             self.counters.created + self.counters.replaced,
             self.counters.gather_ms,
@@ -406,6 +417,17 @@ impl Technique for RadianceCache {
 
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
         self.frame_step(world, gbuffer)
+    }
+
+    /// The frame's records (most of a still's time: 64×64 rays each) reported pass by
+    /// pass ([`crate::placement`]).
+    fn indirect_with_progress(
+        &mut self,
+        world: &World,
+        gbuffer: &GBuffer,
+        progress: &mut dyn Progress,
+    ) -> RgbImage {
+        self.frame_step_reporting(world, gbuffer, Some(progress))
     }
 
     fn stats(&self) -> Counters {
