@@ -1,7 +1,7 @@
 //! `illume animate` and `illume demo`: render an animation frame by frame with a
 //! technique, write numbered frames, an animated preview and a per-frame CSV.
 
-use crate::frames::{Frame, FrameWriter};
+use crate::frames::{Frame, FrameWriter, WriterPriority};
 use crate::progress;
 use crate::setup::ExposureMode;
 use anyhow::{Context, Result, bail};
@@ -158,7 +158,12 @@ pub fn run(a: AnimateArgs) -> Result<()> {
         progress::bar(planned, "frames")
     };
     let mut csv = FramesCsv::default();
-    let mut writer = FrameWriter::start(&out_dir, w, h)?;
+    let priority = if a.realtime {
+        WriterPriority::Idle
+    } else {
+        WriterPriority::Low
+    };
+    let mut writer = FrameWriter::start(&out_dir, w, h, priority)?;
     let start = Instant::now();
     let mut render_s = 0.0;
     let mut index = 0u64;
@@ -484,7 +489,7 @@ fn collect(a: &AnimateArgs, n: u32, planned: u64, w: u32, h: u32) -> Result<()> 
         ExposureMode::Fixed => Some(a.exposure),
         ExposureMode::Auto => None,
     };
-    let mut writer = FrameWriter::start(&out_dir, w, h)?;
+    let mut writer = FrameWriter::start(&out_dir, w, h, WriterPriority::Low)?;
     let pb = progress::bar(planned, "frames");
     for i in 0..planned {
         let frame = illume_core::image::RgbImage::read(&exr(i))?;

@@ -4,9 +4,10 @@
 //! after 10 s of `illume demo`).
 //!
 //! The frame loop hands each frame over through a queue bounded in bytes
-//! ([`QUEUE_BYTES`]); the writer runs at the lowest OS priority so that in real time it
-//! takes the CPU the renderer leaves, and the loop waits only when the queue is full (a
-//! disk slower than the renderer for a long stretch).
+//! ([`QUEUE_BYTES`]); the writer runs at the lowest OS priority so that it takes the CPU
+//! the renderer leaves (in real time below every normal thread: [`WriterPriority`]), and
+//! the loop waits only when the queue is full (a disk slower than the renderer for a long
+//! stretch).
 
 use anyhow::{Context, Result};
 use illume_core::image::RgbImage;
@@ -105,6 +106,43 @@ struct Budget {
     freed: Condvar,
 }
 
+/// How far below the frame loop the writer thread runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WriterPriority {
+    /// The lowest nice value (19): a small fair share of a busy core, so that an offline
+    /// sequence on a node that other jobs fill still drains its queue.
+    Low,
+    /// Real time (`--realtime`, `demo`): on Linux `SCHED_IDLE`, which any normal thread
+    /// preempts at once, so the writer only runs on a core that the renderer, the
+    /// photon stream and the frame loop leave idle. At nice 19 the writer, which encodes
+    /// a PNG and a GIF frame per frame, took 17 % of both cores during `illume demo`,
+    /// whose median frame was 36.3 ms against 32.3 ms (docs/benchmarks/viewer.md, "The
+    /// frame writer below every thread"). Elsewhere, or where refused: as
+    /// [`WriterPriority::Low`].
+    Idle,
+}
+
+impl WriterPriority {
+    /// Applies this priority to the calling thread. Lowering one's own priority needs no
+    /// privilege on Linux; where it is refused the writer simply competes at normal
+    /// priority.
+    fn apply(self) {
+        #[cfg(target_os = "linux")]
+        if self == Self::Idle {
+            use thread_priority::{
+                NormalThreadSchedulePolicy, ThreadPriority, ThreadSchedulePolicy,
+                set_thread_priority_and_policy, thread_native_id,
+            };
+            let idle = ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Idle);
+            if set_thread_priority_and_policy(thread_native_id(), ThreadPriority::Min, idle).is_ok()
+            {
+                return;
+            }
+        }
+        let _ = thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min);
+    }
+}
+
 /// The background writer.
 pub struct FrameWriter {
     out: OutputDir,
@@ -119,8 +157,8 @@ pub struct FrameWriter {
 
 impl FrameWriter {
     /// Starts a writer of `w × h` frames into `out` (each file recorded in its
-    /// manifest).
-    pub fn start(out: &OutputDir, w: u32, h: u32) -> Result<Self> {
+    /// manifest), its thread at `priority`.
+    pub fn start(out: &OutputDir, w: u32, h: u32, priority: WriterPriority) -> Result<Self> {
         let dir = out.dir();
         let preview = if ffmpeg_available() {
             Preview::Mp4
@@ -137,11 +175,7 @@ impl FrameWriter {
             std::thread::Builder::new()
                 .name("frame writer".into())
                 .spawn(move || {
-                    // Lowering one's own priority needs no privilege on Linux; where it is
-                    // refused the writer simply competes at normal priority.
-                    let _ = thread_priority::set_current_thread_priority(
-                        thread_priority::ThreadPriority::Min,
-                    );
+                    priority.apply();
                     write_all(&out, w, h, gif, rx, &budget)
                 })
                 .context("cannot start the frame writer thread")?

@@ -1144,3 +1144,77 @@ fn supersample_renders_larger_and_averages_blocks() {
         "{stderr}"
     );
 }
+
+/// In real time the frame writer runs below every normal thread (`SCHED_IDLE`), so that
+/// encoding the frames never takes a core from the renderer; offline it keeps nice 19
+/// (`frames::WriterPriority`). Read from the kernel while the run goes on: the policy in
+/// field 41 of `/proc/PID/task/TID/stat` (5: `SCHED_IDLE`, 0: `SCHED_OTHER`) and the
+/// nice value in field 19.
+#[cfg(target_os = "linux")]
+#[test]
+fn the_frame_writer_runs_below_every_thread_in_real_time() {
+    // The last (policy, nice) seen of the writer thread within 10 s, polled until it is
+    // `want` (the thread may be seen before it lowered itself).
+    let policy_and_nice = |realtime: bool, want: (u32, i32)| -> Option<(u32, i32)> {
+        let out = scratch(if realtime {
+            "writer-realtime"
+        } else {
+            "writer-offline"
+        });
+        let mut args = vec![
+            "animate",
+            "builtin:cornell-spot",
+            "--technique",
+            "photon_stream",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--duration",
+            "3",
+            "--output",
+            path(&out),
+        ];
+        if realtime {
+            args.push("--realtime");
+        } else {
+            args.extend(["--fps", "100"]);
+        }
+        let mut child = Command::new(env!("CARGO_BIN_EXE_illume"))
+            .args(&args)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let tasks = PathBuf::from(format!("/proc/{}/task", child.id()));
+        let read = || -> Option<(u32, i32)> {
+            let writer = std::fs::read_dir(&tasks).ok()?.flatten().find(|t| {
+                std::fs::read_to_string(t.path().join("comm"))
+                    .is_ok_and(|c| c.trim() == "frame writer")
+            })?;
+            let stat = std::fs::read_to_string(writer.path().join("stat")).ok()?;
+            // Field 2 (the name) is in parentheses; fields 3, 4, … follow, split on
+            // spaces: field n is rest[n − 3].
+            let rest: Vec<&str> = stat.rsplit_once(") ")?.1.split(' ').collect();
+            Some((rest[41 - 3].parse().ok()?, rest[19 - 3].parse().ok()?))
+        };
+        let mut seen = None;
+        for _ in 0..1000 {
+            seen = read().or(seen);
+            if seen == Some(want) {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+        seen
+    };
+    let seen = policy_and_nice(true, (5, 0));
+    assert!(
+        seen.is_some_and(|(policy, _)| policy == 5),
+        "real time: the writer is not SCHED_IDLE (policy, nice: {seen:?})"
+    );
+    let seen = policy_and_nice(false, (0, 19));
+    assert_eq!(seen, Some((0, 19)), "offline: not SCHED_OTHER at nice 19");
+}
