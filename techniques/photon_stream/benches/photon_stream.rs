@@ -1,8 +1,8 @@
 //! Photon streaming benchmarks (the paper's Tables 2–3 in kind, photon rate, latency).
 //!
 //! `cargo bench -p illume-photon-stream --bench photon_stream [-- SECTION...]` with
-//! SECTION among `fps`, `priority`, `rate`, `latency`, `visibility` (default: all). Prints
-//! Markdown tables.
+//! SECTION among `fps`, `priority`, `rate`, `latency`, `visibility`, `target`, `passes`
+//! (default: all). Prints Markdown tables.
 //!
 //! * `fps` — frames per second of whole frames (G-buffer + direct light + VSL indirect),
 //!   with a static camera and with the camera turning every frame, at 800×600 and
@@ -28,6 +28,10 @@
 //!
 //! Every other section keeps the thread streaming (`rest_when_settled = false`): they
 //! measure it, or frames beside it, as in the paper.
+//! * `passes` — issue 33 goal 4: each pass of a moving-camera frame (visibility, surface
+//!   and textures, direct light, VSL indirect, output) in ns per pixel with one thread and
+//!   with two (rayon pools of that size), the streaming thread paused; Cornell box, Sponza
+//!   and Sibenik at 800×600, 100 VSLs, medians of five rounds.
 //! * `latency` — time until no photon from before a change is left in the pool,
 //!   against pool size / impact rate, on `builtin:cornell-spot`.
 
@@ -37,7 +41,7 @@ use illume_photon_stream::{PhotonStream, PhotonStreamSettings, StreamPriority, V
 use illume_render::{RenderSettings, Renderer};
 use illume_scene::{Edit, InstanceId, Scene};
 use illume_transport::photon::{PhotonPath, PhotonPathSettings};
-use illume_transport::{SharedWorld, Technique, World};
+use illume_transport::{SharedWorld, Technique, VisibilityBuffer, World};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -97,6 +101,9 @@ struct FrameRun {
     gbuffer_ms: f64,
     direct_ms: f64,
     indirect_ms: f64,
+    /// The renderer's frame time less its G-buffer, direct and indirect passes: the
+    /// frame's sum of direct and indirect light (and the split, when on).
+    output_ms: f64,
     vsls_per_tile: f64,
     impacts_per_s: f64,
 }
@@ -123,7 +130,8 @@ fn run_frames(
         let _ = renderer.render(&guard, &mut ps, 0);
     }
     let t0 = Instant::now();
-    let (mut frames, mut indirect_ms, mut gbuffer_ms, mut direct_ms) = (0u32, 0.0, 0.0, 0.0);
+    let (mut frames, mut indirect_ms, mut gbuffer_ms, mut direct_ms, mut output_ms) =
+        (0u32, 0.0, 0.0, 0.0, 0.0);
     while frames < 3 || (t0.elapsed() < Duration::from_secs(2) && frames < 60) {
         if moving {
             let yaw = 0.02 * ((frames % 7) as f32 - 3.0).to_radians();
@@ -139,6 +147,8 @@ fn run_frames(
         indirect_ms += f.timings.indirect_ms;
         gbuffer_ms += f.timings.gbuffer_ms;
         direct_ms += f.timings.direct_ms;
+        output_ms +=
+            f.timings.total_ms - f.timings.gbuffer_ms - f.timings.direct_ms - f.timings.indirect_ms;
         frames += 1;
     }
     let fps = frames as f64 / t0.elapsed().as_secs_f64();
@@ -148,6 +158,7 @@ fn run_frames(
         gbuffer_ms: gbuffer_ms / k,
         direct_ms: direct_ms / k,
         indirect_ms: indirect_ms / k,
+        output_ms: output_ms / k,
         vsls_per_tile: ps.last_shade().vsls_per_tile(),
         impacts_per_s: ps.impacts_per_s(),
     };
@@ -257,6 +268,109 @@ fn target_table() {
                 m(|r| r.indirect_ms)
             );
         }
+    }
+}
+
+/// The rasterizer alone ([`VisibilityBuffer::render_into`]) over `frames` frames of a
+/// camera turning as [`run_frames`] turns it; mean ms a frame (the camera's edits not
+/// counted).
+fn visibility_ms(world: &SharedWorld, (w, h): (u32, u32), frames: u32) -> f64 {
+    let mut scene = world.read().unwrap().scene.clone();
+    let home = scene.camera.world_from_camera;
+    let mut buffer = VisibilityBuffer::render(&scene, w, h);
+    let mut total = Duration::ZERO;
+    for frame in 0..frames {
+        let yaw = 0.02 * ((frame % 7) as f32 - 3.0).to_radians();
+        scene
+            .apply_edit(&Edit::SetCameraTransform {
+                world_from_camera: home * Affine3A::from_rotation_y(yaw),
+            })
+            .expect("edit");
+        let t0 = Instant::now();
+        buffer.render_into(&scene);
+        total += t0.elapsed();
+    }
+    total.as_secs_f64() * 1e3 / f64::from(frames)
+}
+
+/// Issue 33 goal 4: each pass of a moving-camera frame in ns per pixel, on rayon pools
+/// of one and of two threads, the streaming thread paused (the frame alone). Passes:
+/// visibility (the rasterizer alone, measured apart), surface and textures (the
+/// G-buffer's time less that), direct light, VSL indirect, output (the frame's time
+/// less the others).
+fn passes_table() {
+    const PASSES: [&str; 5] = [
+        "visibility",
+        "surface and textures",
+        "direct light",
+        "VSL indirect",
+        "output",
+    ];
+    let (w, h) = (800u32, 600u32);
+    println!(
+        "\n### Passes of a moving-camera frame, ns per pixel ({w}×{h}, 100 VSLs, streaming thread paused; medians of 5 rounds)\n"
+    );
+    println!("| scene | pass | 1 thread | 2 threads | 2 threads ÷ 1 |");
+    println!("|---|---|---:|---:|---:|");
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let ns = |ms: f64| ms * 1e6 / f64::from(w * h);
+    for (label, file) in [SCENES[0], SCENES[2], SCENES[3]] {
+        let world: SharedWorld = World::new(load(file)).shared();
+        let mut by_threads: Vec<[f64; 5]> = Vec::new();
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a rayon pool");
+            let rounds: Vec<[f64; 5]> = (0..5)
+                .map(|_| {
+                    pool.install(|| {
+                        let vis = visibility_ms(&world, (w, h), 20);
+                        let r = run_frames(
+                            &world,
+                            (w, h),
+                            PhotonStreamSettings {
+                                start_paused: true,
+                                ..Default::default()
+                            },
+                            true,
+                        );
+                        [
+                            vis,
+                            r.gbuffer_ms - vis,
+                            r.direct_ms,
+                            r.indirect_ms,
+                            r.output_ms,
+                        ]
+                    })
+                })
+                .collect();
+            by_threads.push(std::array::from_fn(|i| {
+                median(rounds.iter().map(|r| r[i]).collect())
+            }));
+        }
+        for (i, pass) in PASSES.into_iter().enumerate() {
+            let (one, two) = (by_threads[0][i], by_threads[1][i]);
+            println!(
+                "| {label} | {pass} | {:.1} | {:.1} | {:.2}× |",
+                ns(one),
+                ns(two),
+                one / two
+            );
+        }
+        let (one, two) = (
+            by_threads[0].iter().sum::<f64>(),
+            by_threads[1].iter().sum::<f64>(),
+        );
+        println!(
+            "| {label} | **frame** | {:.1} | {:.1} | {:.2}× |",
+            ns(one),
+            ns(two),
+            one / two
+        );
     }
 }
 
@@ -555,5 +669,8 @@ fn main() {
     }
     if want("target") {
         target_table();
+    }
+    if want("passes") {
+        passes_table();
     }
 }
