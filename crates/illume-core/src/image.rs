@@ -585,6 +585,11 @@ pub const MAX_DECODED_IMAGE_BYTES: u64 = 1 << 30;
 /// (a 16 384-pixel-wide image in 256-line DWAB blocks with 16 float channels is 256 MiB).
 pub const MAX_EXR_BLOCK_BYTES: u64 = 256 << 20;
 
+/// The fewest bytes of an OpenEXR file that one block of pixel data takes: its 8-byte
+/// offset-table entry, then its 4-byte position (scan line, or tile coordinates: more)
+/// and 4-byte data size (OpenEXR file layout, "Chunk layout").
+const MIN_EXR_BLOCK_FILE_BYTES: u64 = 16;
+
 /// Reads the first RGB(A) layer of an OpenEXR file as linear RGB. The header's size is
 /// checked against [`MAX_DECODED_IMAGE_BYTES`] before the pixels are allocated.
 pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
@@ -645,15 +650,77 @@ pub fn read_exr(path: &Path) -> Result<RgbImage, ImageError> {
             )));
         }
     }
+    // Every block of pixel data takes at least 16 bytes of the file (its offset-table
+    // entry, its position and its size), whatever its compression: a file too short for
+    // the blocks its header claims is refused here, before the image is allocated (found
+    // by fuzzing: 1 063 bytes claiming 1 281 rows of a 1 GB image took 1 GB and 2 s to
+    // be refused by the decoder).
+    let blocks: u64 = meta.headers.iter().map(|h| h.chunk_count as u64).sum();
+    let size = std::fs::metadata(path).map_or(0, |m| m.len());
+    if blocks.saturating_mul(MIN_EXR_BLOCK_FILE_BYTES) > size {
+        return Err(read_error(format!(
+            "truncated: its header claims {blocks} blocks of pixel data, which take at least {} bytes, but the file has {size}",
+            blocks.saturating_mul(MIN_EXR_BLOCK_FILE_BYTES)
+        )));
+    }
+    check_exr_block_positions(path).map_err(explain)?;
+    // The pixels, allocated here where a refused allocation (a process under a memory
+    // limit: `ulimit -v`, a batch job's cgroup) is an error naming the file, rather than
+    // an abort inside the decoder; handed to the decoder's first call below (it makes one
+    // image, the first layer with RGB channels: each layer was checked above).
+    let mut storage: Vec<Rgb> = Vec::new();
+    let largest = meta
+        .headers
+        .iter()
+        .map(|h| h.layer_size.width() * h.layer_size.height())
+        .max()
+        .unwrap_or(0);
+    storage.try_reserve_exact(largest).map_err(|_| {
+        read_error(format!(
+            "cannot allocate {} MiB for its pixels (a memory limit?)",
+            (largest as u64 * std::mem::size_of::<Rgb>() as u64) >> 20
+        ))
+    })?;
+    let storage = std::cell::RefCell::new(Some(storage));
     let img = exr::prelude::read_first_rgba_layer_from_file(
         path,
-        |res, _| Image::<Rgb>::black(res.width() as u32, res.height() as u32),
+        move |res, _| {
+            let (w, h) = (res.width() as u32, res.height() as u32);
+            match storage.borrow_mut().take() {
+                Some(mut data) => {
+                    data.resize(res.width() * res.height(), Rgb::ZERO);
+                    Image::from_vec(w, h, data).unwrap_or_else(|| Image::black(w, h))
+                }
+                None => Image::<Rgb>::black(w, h),
+            }
+        },
         |img, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
             *img.get_mut(pos.x() as u32, pos.y() as u32) = Rgb::new(r, g, b);
         },
     )
     .map_err(explain)?;
     Ok(img.layer_data.channel_data.pixels)
+}
+
+/// Reads every block of the OpenEXR file `path` as stored (not decompressed) and checks
+/// that each lies inside the layer its header describes, so that a file whose blocks do
+/// not belong to the image it claims is refused before that image is allocated (found by
+/// fuzzing: 1.7 KB files claiming 1 GB images, refused by the decoder only at their first
+/// block, after the allocation). Costs one more read of the file's compressed bytes.
+fn check_exr_block_positions(path: &Path) -> exr::error::Result<()> {
+    use exr::block::reader::ChunksReader as _;
+    let file = std::io::BufReader::new(std::fs::File::open(path)?);
+    let chunks = exr::block::read(file, false)?.all_chunks(false)?;
+    let headers = chunks.meta_data().headers.clone();
+    for chunk in chunks {
+        let chunk = chunk?;
+        let header = headers.get(chunk.layer_index).ok_or_else(|| {
+            exr::error::Error::Invalid("block of a layer the header lacks".into())
+        })?;
+        let tile = header.get_block_data_indices(&chunk.compressed_block)?;
+        header.get_absolute_block_pixel_coordinates(tile)?;
+    }
+    Ok(())
 }
 
 /// Writes tone-mapped, sRGB-encoded 8-bit PNG.

@@ -319,3 +319,43 @@ fn info_names_the_files_own_format() {
         );
     }
 }
+
+/// Small OpenEXR files found by fuzzing (`read_exr`, 2026-11-28) whose headers claim
+/// images of about 1 GB: the decoder allocated that much before finding their blocks
+/// wrong, so under a memory limit (`ulimit -v`, as batch jobs have) `convert` aborted
+/// (exit 134, "memory allocation failed"). Now each is refused before the allocation,
+/// exit 1 with the file named, under a 512 MiB address-space limit.
+#[cfg(target_os = "linux")]
+#[test]
+fn exr_files_claiming_a_gigabyte_are_refused_under_a_memory_limit() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../crates/illume-core/tests/data");
+    let out_dir = scratch("exr-limit");
+    for name in [
+        "exr_short_of_its_blocks.exr",
+        "exr_blocks_outside_the_image.exr",
+    ] {
+        let input = data.join(name);
+        let script = format!(
+            "ulimit -v 524288; exec '{}' convert '{}' '{}'",
+            env!("CARGO_BIN_EXE_illume"),
+            path(&input),
+            path(&out_dir.join("out.png"))
+        );
+        let out = std::process::Command::new("sh")
+            .args(["-c", &script])
+            .output()
+            .expect("sh runs");
+        let err = stderr(&out);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{name}: {:?}\n{err}",
+            out.status
+        );
+        assert!(err.contains(name), "{name}: {err}");
+        assert!(
+            !out_dir.join("out.png").exists(),
+            "{name}: an image was written"
+        );
+    }
+}
