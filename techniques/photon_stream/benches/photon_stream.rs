@@ -235,10 +235,6 @@ fn target_table() {
     );
     println!("| scene | camera | fps | G-buffer [ms] | direct [ms] | VSL indirect [ms] |");
     println!("|---|---|---:|---:|---:|---:|");
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
     for (label, file) in [SCENES[0], SCENES[2], SCENES[3]] {
         let world: SharedWorld = World::new(load(file)).shared();
         let mut runs: [Vec<FrameRun>; 2] = [Vec::new(), Vec::new()];
@@ -269,6 +265,12 @@ fn target_table() {
             );
         }
     }
+}
+
+/// The median of `v` (the upper one of an even count).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }
 
 /// The rasterizer alone ([`VisibilityBuffer::render_into`]) over `frames` frames of a
@@ -312,10 +314,6 @@ fn passes_table() {
     );
     println!("| scene | pass | 1 thread | 2 threads | 2 threads ÷ 1 |");
     println!("|---|---|---:|---:|---:|");
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
     let ns = |ms: f64| ms * 1e6 / f64::from(w * h);
     for (label, file) in [SCENES[0], SCENES[2], SCENES[3]] {
         let world: SharedWorld = World::new(load(file)).shared();
