@@ -36,6 +36,22 @@ pub struct GBufferPixel {
     pub to_camera: Vec3,
 }
 
+impl GBufferPixel {
+    /// The albedo an irradiance-storing technique displays this pixel's indirect light
+    /// with, `A/π · E`: with `directional`, the surface's directional albedo towards the
+    /// camera ([`SurfaceHit::uniform_albedo`]: exact for light arriving uniformly, beyond
+    /// the papers); without, the base colour ρ (the papers' ρ/π · E on every surface).
+    /// The two are the same bits on a Lambertian surface.
+    #[inline]
+    pub fn display_albedo(&self, directional: bool) -> Rgb {
+        if directional {
+            self.hit.uniform_albedo(self.to_camera)
+        } else {
+            self.hit.albedo
+        }
+    }
+}
+
 /// Primary hits of a `width × height` image (row-major, row 0 at the top); `None` where
 /// the pixel sees nothing.
 #[derive(Clone, Debug)]

@@ -25,6 +25,7 @@
 
 pub mod bsdf;
 pub mod camera;
+pub mod directional_albedo;
 pub mod flux;
 pub mod gbuffer;
 pub mod hit_tables;

@@ -180,6 +180,19 @@ impl SurfaceHit {
         self.brdf().eval(frame.to_local(wo), frame.to_local(wi))
     }
 
+    /// The directional albedo towards world direction `wo` (leaving the surface): the
+    /// radiance reflected towards `wo` per unit uniform incident radiance, so that
+    /// `A/π · E` is what an irradiance E arriving uniformly leaves with
+    /// ([`MetalRough::directional_albedo`]). Exactly `albedo` for a Lambertian surface.
+    #[inline]
+    pub fn uniform_albedo(&self, wo: Vec3) -> Rgb {
+        if self.is_lambertian() {
+            return self.albedo;
+        }
+        self.brdf()
+            .directional_albedo(self.facing_normal().dot(wo).max(0.0))
+    }
+
     /// The normal on the side the ray arrived from (shading normal, flipped for back-face
     /// hits of double-sided materials).
     #[inline]

@@ -149,7 +149,12 @@ fn scene(lighting: Lighting) -> illume_scene::Scene {
 
 /// The indirect image of `config` under `lighting` after `frames` frames at t = 0.
 pub fn indirect(lighting: Lighting, config: &Config, frames: u32) -> RgbImage {
-    let scene = scene(lighting);
+    indirect_of(scene(lighting), config, frames)
+}
+
+/// The indirect image of `config` in `scene` (any scene: a technique's own checks beyond
+/// the shared lightings) after `frames` frames at t = 0.
+pub fn indirect_of(scene: illume_scene::Scene, config: &Config, frames: u32) -> RgbImage {
     let mut engine = Engine::new(scene, config).unwrap_or_else(|e| panic!("{e}"));
     engine
         .precompute(&mut Silent)
@@ -241,6 +246,58 @@ where
         }
     }
     paper
+}
+
+/// Glossy receivers (issue 34 goal 4): the mean indirect radiance (sum of channels) over
+/// the metal pixels of `builtin:metal-box` — a white room whose sphere (roughness 0.3)
+/// and tall box (0.6) are white metals — in `config`'s image after `frames` frames, over
+/// the reference's at the same pixels (512 spp, seed 1, rendered once per process). An
+/// irradiance-storing technique that lights a metal as Lambertian shows it ≈ 10–20 % too
+/// bright there, one that reflects by the BRDF's directional albedo within a few
+/// percent.
+pub fn metal_box_metals_ratio(config: &Config, frames: u32) -> f64 {
+    static REFERENCE: OnceLock<f64> = OnceLock::new();
+    let scene = || illume_scene::builtin::load("metal-box").expect("built-in scene");
+    let metals: &'static [bool] = {
+        static MASK: OnceLock<Vec<bool>> = OnceLock::new();
+        MASK.get_or_init(|| {
+            let world = illume_transport::World::new(scene());
+            illume_transport::GBuffer::rasterize(&world, WIDTH, HEIGHT)
+                .pixels
+                .iter()
+                .map(|p| p.is_some_and(|p| p.hit.metallic > 0.5))
+                .collect()
+        })
+    };
+    let mean = |img: &RgbImage| {
+        let (sum, n) = img
+            .pixels()
+            .iter()
+            .zip(metals)
+            .filter(|(_, m)| **m)
+            .fold((0.0, 0u32), |(s, n), (p, _)| {
+                (s + p.element_sum() as f64, n + 1)
+            });
+        assert!(n > 100, "metal-box shows {n} metal pixels");
+        sum / n as f64
+    };
+    let reference = *REFERENCE.get_or_init(|| {
+        let reference = Agreement {
+            technique: "reference".into(),
+            preset: None,
+            sets: vec![
+                "reference.spp_per_frame=256".into(),
+                "reference.seed=1".into(),
+            ],
+            frames: 2,
+            max_energy_error: 0.0,
+            max_block_error: 0.0,
+            why: "the ground truth".into(),
+        };
+        mean(&indirect_of(scene(), &reference.config(), reference.frames))
+    });
+    assert!(reference > 0.0, "the reference lights the metals");
+    mean(&indirect_of(scene(), config, frames)) / reference
 }
 
 /// Relative L1 error of block means (shared metric, `illume_metrics::block_error`).

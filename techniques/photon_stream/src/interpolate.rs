@@ -25,11 +25,14 @@ struct Anchor {
 /// neighbour's point within `stride` pixel footprints of the pixel's tangent plane
 /// (depth discontinuities fail). Returns the image, how many pixels were interpolated,
 /// and the pixels no neighbour could fill (left black, to be shaded exactly).
+/// `directional`: glossy pixels take their directional albedo
+/// ([`illume_transport::GBufferPixel::display_albedo`]).
 pub(crate) fn interpolate(
     gbuffer: &GBuffer,
     on_grid: &[Rgb],
     stride: u32,
     yfov_rad: f32,
+    directional: bool,
 ) -> (RgbImage, u64, Vec<u32>) {
     let (w, h) = (gbuffer.width, gbuffer.height);
     // World size of one pixel at unit distance (the camera's vertical field of view
@@ -71,7 +74,7 @@ pub(crate) fn interpolate(
                 let Some(p) = gbuffer.pixels[i as usize].as_ref().filter(|p| shades(p)) else {
                     continue;
                 };
-                let f = p.hit.albedo * INV_PI;
+                let f = p.display_albedo(directional) * INV_PI;
                 if on_row && x.is_multiple_of(stride) {
                     *out = f * on_grid[(ay * aw + x / stride) as usize];
                     continue;

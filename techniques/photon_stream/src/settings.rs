@@ -175,6 +175,15 @@ pub struct PhotonStreamSettings {
     /// light spots), at the cost of leaving triangle borders uncovered.
     #[setting(default = 0.8, range = "(0, 1]")]
     pub triangle_scale: f32,
+    /// Beyond the paper (issue 34 goal 4): indirect light leaves a glossy receiver by
+    /// the BRDF's directional albedo towards the camera, A(wo)/π · E, exact when the
+    /// light arrives uniformly over the hemisphere (`illume_transport::directional_albedo`).
+    /// Off: ρ/π · E on every surface, the paper's display, too bright on rough metals (a
+    /// white metal of roughness 0.6 reflects ≈ 0.82 of uniform light, not 1) and blind to
+    /// a dielectric's specular layer. Lambertian surfaces show the same bits either way;
+    /// the cost is a table lookup per glossy pixel. Default true.
+    #[setting(default = true)]
+    pub directional_albedo: bool,
     /// The shading denominator: `disk` (π r² + A_s, bounded next to a VSL; beyond the
     /// paper) or `inverse_square` (the paper's π r²).
     #[setting(default = VslFalloff::Disk)]
@@ -377,7 +386,8 @@ impl PhotonStreamSettings {
     /// The paper's estimator and pipeline, every deviation of this implementation
     /// switched off: VSLs as point lights (`falloff = inverse_square`), impacts to the
     /// nearest VSL (`cells = nearest`), every pixel shaded (`shading_stride = 1`), no
-    /// near-field gather, no VSL shadows, photons on full-resolution textures and a stream
+    /// near-field gather, no VSL shadows, the base colour on glossy receivers
+    /// (`directional_albedo = false`), photons on full-resolution textures and a stream
     /// that never rests nor is topped up by the frame loop. 100 VSLs as Tables 2–3; the pool keeps the default's 100 000
     /// impacts, a size the paper does not give. The synchronous warm-up stays on: it
     /// changes no estimate, only fills the pool before the first frame (the state the
@@ -395,6 +405,7 @@ impl PhotonStreamSettings {
             rest_when_settled: false,
             turnover_frames: 0,
             smooth_frames: 0,
+            directional_albedo: false,
             ..Self::default()
         }
     }

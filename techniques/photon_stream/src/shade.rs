@@ -1,6 +1,8 @@
 //! Shading with VSLs (§0.4.1, §0.6, §0.7.3).
 //!
-//! Indirect radiance at a G-buffer point x with albedo ρ(x) and normal n:
+//! Indirect radiance at a G-buffer point x with albedo ρ(x) and normal n (ρ is the
+//! directional albedo towards the camera on glossy receivers with `directional_albedo`,
+//! beyond the paper: [`illume_transport::GBufferPixel::display_albedo`]):
 //!
 //! ```text
 //! L(x) = ρ(x)/π · Σ_s Φ_s · cosθ_i · cosθ' / (π r² + A_s)
@@ -371,7 +373,10 @@ pub fn shade(
     if stride == 1 {
         let mut gathered = zeros(n);
         let stats = run(&grid, &mut |i, c| gathered[i as usize] = c);
-        return (radiance(gbuffer, &gathered), stats);
+        return (
+            radiance(gbuffer, &gathered, settings.directional_albedo),
+            stats,
+        );
     }
     // One entry per grid cell (a quarter of the image's at stride 2): the pass writes and
     // the interpolation reads a buffer that stays in cache.
@@ -381,8 +386,13 @@ pub fn shade(
         let (x, y) = (i % w, i / w);
         on_grid[((y / stride) * aw + x / stride) as usize] = c;
     });
-    let (mut img, interpolated, missing) =
-        interpolate(gbuffer, &on_grid, stride, world.scene.camera.yfov_rad);
+    let (mut img, interpolated, missing) = interpolate(
+        gbuffer,
+        &on_grid,
+        stride,
+        world.scene.camera.yfov_rad,
+        settings.directional_albedo,
+    );
     stats.interpolated = interpolated;
     stats.fallbacks = missing.len() as u64;
     if !missing.is_empty() {
@@ -393,7 +403,7 @@ pub fn shade(
         let pixels = img.pixels_mut();
         let rest = run(&Include::Mask(&mask), &mut |i, c| {
             if let Some(p) = &gbuffer.pixels[i as usize] {
-                pixels[i as usize] = p.hit.albedo * INV_PI * c;
+                pixels[i as usize] = p.display_albedo(settings.directional_albedo) * INV_PI * c;
             }
         });
         stats = stats.merge(ShadeStats { tiles: 0, ..rest });
@@ -411,8 +421,8 @@ pub(crate) fn zeros(n: usize) -> Vec<Rgb> {
         .collect()
 }
 
-/// Radiance ρ/π · Σ Φ·G of every pixel.
-fn radiance(gbuffer: &GBuffer, gathered: &[Rgb]) -> RgbImage {
+/// Radiance ρ/π · Σ Φ·G of every pixel (ρ: the display albedo, directional or not).
+fn radiance(gbuffer: &GBuffer, gathered: &[Rgb], directional: bool) -> RgbImage {
     let pixels = gbuffer
         .pixels
         .par_iter()
@@ -420,7 +430,7 @@ fn radiance(gbuffer: &GBuffer, gathered: &[Rgb]) -> RgbImage {
         .with_min_len(1024)
         .map(|(px, e)| {
             px.as_ref()
-                .map_or(Rgb::ZERO, |p| p.hit.albedo * INV_PI * *e)
+                .map_or(Rgb::ZERO, |p| p.display_albedo(directional) * INV_PI * *e)
         })
         .collect();
     RgbImage::from_vec(gbuffer.width, gbuffer.height, pixels).expect("one value per pixel")
@@ -497,7 +507,12 @@ fn shade_tile(
     tile: &mut TilePixels,
 ) -> (Vec<(u32, Rgb)>, ShadeStats) {
     let mut stats = ShadeStats::default();
-    let Some((bounds, max_albedo)) = tile.collect(pass.gbuffer, rect, include) else {
+    let Some((bounds, max_albedo)) = tile.collect(
+        pass.gbuffer,
+        rect,
+        include,
+        pass.settings.directional_albedo,
+    ) else {
         return (Vec::new(), stats);
     };
     let m = tile.index.len();
@@ -534,13 +549,14 @@ fn shade_tile(
 
 impl TilePixels {
     /// Gathers the pixels of `rect` that `include` selects and that receive indirect
-    /// light; returns their world box and largest albedo channel, `None` when there is
-    /// none.
+    /// light; returns their world box and largest display albedo channel (`directional`
+    /// as [`GBufferPixel::display_albedo`]), `None` when there is none.
     fn collect(
         &mut self,
         gbuffer: &GBuffer,
         rect: TileRect,
         include: &Include,
+        directional: bool,
     ) -> Option<(Aabb, f32)> {
         let tp = self;
         for v in [
@@ -580,7 +596,7 @@ impl TilePixels {
                 tp.ny.push(n.y);
                 tp.nz.push(n.z);
                 bounds = bounds.grow(p);
-                max_albedo = max_albedo.max(px.hit.albedo.max_element());
+                max_albedo = max_albedo.max(px.display_albedo(directional).max_element());
             }
         }
         (!tp.index.is_empty()).then_some((bounds, max_albedo))

@@ -317,6 +317,12 @@ impl PhotonStream {
         self.shared.is_paused()
     }
 
+    /// True while the simulation thread blocks (paused or resting): the batch it was
+    /// tracing when paused has landed, and no other starts until it is woken.
+    pub fn is_thread_waiting(&self) -> bool {
+        self.shared.is_thread_waiting()
+    }
+
     /// Checks the pool's invariants (power conservation, K); see
     /// [`PhotonPool::validate`].
     pub fn validate(&self) -> Result<(), String> {

@@ -99,6 +99,9 @@ pub struct SharedPool {
     /// False while the thread rests with a settled pool ([`SharedPool::settled`]); set
     /// under the pool lock, with the settling test or with the change that unsettles it.
     wanted: AtomicBool,
+    /// True while the thread blocks in [`SharedPool::wait_running`] (paused or resting):
+    /// no batch is in flight.
+    waiting: AtomicBool,
 }
 
 impl SharedPool {
@@ -122,6 +125,7 @@ impl SharedPool {
             world: Mutex::new(world),
             world_generation: AtomicU64::new(0),
             next_seq: AtomicU64::new(0),
+            waiting: AtomicBool::new(false),
             start: Instant::now(),
             wanted: AtomicBool::new(true),
         }
@@ -291,9 +295,17 @@ impl SharedPool {
         while (*paused || !self.wanted.load(Ordering::Acquire))
             && !self.stop.load(Ordering::Acquire)
         {
+            self.waiting.store(true, Ordering::Release);
             paused = self.wake.wait(paused).unwrap_or_else(|e| e.into_inner());
         }
+        self.waiting.store(false, Ordering::Release);
         !self.stop.load(Ordering::Acquire)
+    }
+
+    /// True while the simulation thread blocks, paused or resting: no batch is in flight,
+    /// so the pool changes no more until it is woken.
+    pub fn is_thread_waiting(&self) -> bool {
+        self.waiting.load(Ordering::Acquire)
     }
 }
 

@@ -38,8 +38,9 @@
 //! emission direction are coherent within a group, so objects lit only indirectly are
 //! found late (N_g = 10 080 keeps the first bounce, Fig. 5). (4) N_g grows with the
 //! number of lights. (5) Light changes that carry much of the power restart the
-//! solution. (6) Lambertian only: glossy surfaces get their base colour's diffuse
-//! share. (7) Texture masking (Δp/T_e, §5.3) is a simpler model than the paper's VDP:
+//! solution. (6) Irradiance keeps no direction: a glossy surface shows what its BRDF
+//! reflects of uniform light (its directional albedo, `directional_albedo`), no
+//! highlight. (7) Texture masking (Δp/T_e, §5.3) is a simpler model than the paper's VDP:
 //! per texture and MIP level, the mean of Daly's contrast-masking function over the
 //! Peli band contrast of a box pyramid of luminance, frequencies finer than an element
 //! removed, one contrast sensitivity for every frequency (no CSF, no orientation or

@@ -149,6 +149,15 @@ pub struct SelectiveSettings {
     /// ≥ 0, default 2.
     #[setting(default = 2.0, range = "[0, inf)")]
     pub temporal_sigmas: f32,
+    /// Beyond the paper (issue 34 goal 4): indirect light leaves a glossy receiver by
+    /// the BRDF's directional albedo towards the camera, A(wo)/π · E, exact when the
+    /// light arrives uniformly over the hemisphere (`illume_transport::directional_albedo`).
+    /// Off: ρ/π · E on every surface, the paper's display, too bright on rough metals (a
+    /// white metal of roughness 0.6 reflects ≈ 0.82 of uniform light, not 1) and blind to
+    /// a dielectric's specular layer. Lambertian surfaces show the same bits either way;
+    /// the cost is a table lookup per glossy pixel. Default true.
+    #[setting(default = true)]
+    pub directional_albedo: bool,
     /// Element-grid vertices of one object within this angle of each other's face
     /// normal \[degrees\] are one display vertex (Gouraud smoothing across triangles,
     /// §6). Higher: smoother across creases, at the cost of light bleeding around
@@ -281,6 +290,7 @@ impl SelectiveSettings {
             max_photons: 0,
             filtered_textures: false,
             restart_fraction: 1.0,
+            directional_albedo: false,
             ..Self::default()
         }
     }

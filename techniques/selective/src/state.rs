@@ -348,7 +348,13 @@ impl Technique for Selective {
         let t0 = Instant::now();
         self.set_aspect(gbuffer.width, gbuffer.height);
         let display = self.frame_display(world);
-        let img = shade::shade(world, gbuffer, &self.elements, &display);
+        let img = shade::shade(
+            world,
+            gbuffer,
+            &self.elements,
+            &display,
+            self.settings.directional_albedo,
+        );
         self.last_shade_ms = t0.elapsed().as_secs_f64() * 1e3;
         img
     }

@@ -245,14 +245,17 @@ impl Technique for Streaming {
     /// The display values are copied under the solution's lock; shading runs outside it.
     fn indirect(&mut self, world: &World, gbuffer: &GBuffer) -> RgbImage {
         let t0 = Instant::now();
-        let display = {
+        let (display, directional) = {
             let mut solution = self.shared.lock_for_frame();
             solution.set_aspect(gbuffer.width, gbuffer.height);
             // Steps are counted under this lock: the count matches the values copied.
             self.steps_at_indirect = Some(self.shared.steps.load(Ordering::Acquire));
-            solution.frame_display(world)
+            (
+                solution.frame_display(world),
+                solution.settings.directional_albedo,
+            )
         };
-        let img = shade::shade(world, gbuffer, &self.elements, &display);
+        let img = shade::shade(world, gbuffer, &self.elements, &display, directional);
         self.last_shade_ms = t0.elapsed().as_secs_f64() * 1e3;
         img
     }

@@ -28,6 +28,7 @@ fn paper_values(s: &PhotonStreamSettings) -> Vec<(&'static str, bool)> {
         ("turnover_frames", s.turnover_frames == 0),
         ("gather_direct", !s.gather_direct),
         ("smooth_frames", s.smooth_frames == 0),
+        ("directional_albedo", !s.directional_albedo),
     ]
 }
 

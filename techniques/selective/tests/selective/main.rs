@@ -10,6 +10,7 @@ mod detection;
 mod elements;
 mod energy;
 mod gather;
+mod glossy;
 mod masking;
 mod presets;
 mod qmc;

@@ -17,6 +17,7 @@ fn paper_values(s: &SelectiveSettings) -> Vec<(&'static str, bool)> {
         ("max_photons", s.max_photons == 0),
         ("filtered_textures", !s.filtered_textures),
         ("restart_fraction", s.restart_fraction == 1.0),
+        ("directional_albedo", !s.directional_albedo),
     ]
 }
 
