@@ -39,6 +39,12 @@
 //!   below the ceiling, standing in for the paper's four goniometric lights (the loader
 //!   has no measured light profiles). The table and the chairs are dynamic (furniture
 //!   to move); animation `move_table` (0–1 s) pushes the table 0.6 m along +x.
+//! * `house` — selective photon tracing's HOUSE in kind (§7): three rooms in a row
+//!   (x∈[−5,5], y∈\[0,2.8\], z∈[−3,3]) behind partitions with doorways — a living room
+//!   (table and two chairs, dynamic; a sofa), a hall (bookcase, cabinet) that only
+//!   indirect light reaches, and a bedroom (bed, wardrobe) — lit by **two spot lights**
+//!   below the ceilings of the end rooms (for the paper's two goniometric lights).
+//!   Animation `move_table` (0–1 s) pushes the table 0.6 m along +x.
 //!
 //! [`SceneBuilder`] is the same construction kit the loaders use.
 
@@ -47,7 +53,7 @@ use crate::model::*;
 use illume_core::{Affine3A, PI, Quat, Rgb, Vec2, Vec3};
 
 /// Names accepted by [`load`].
-pub const NAMES: [&str; 9] = [
+pub const NAMES: [&str; 10] = [
     "furnace",
     "cornell-spot",
     "cube-in-box",
@@ -57,6 +63,7 @@ pub const NAMES: [&str; 9] = [
     "sun-room",
     "room",
     "metal-box",
+    "house",
 ];
 
 /// A built-in scene name that does not exist.
@@ -79,6 +86,7 @@ pub fn load(name: &str) -> Result<Scene, UnknownBuiltin> {
         "sun-room" => sun_room(),
         "room" => room(),
         "metal-box" => metal_box(),
+        "house" => house(),
         _ => {
             return Err(UnknownBuiltin {
                 name: name.to_owned(),
@@ -958,6 +966,178 @@ fn room() -> Scene {
         properties: Vec::new(),
     });
     b.finish("builtin:room")
+}
+
+/// Where `builtin:house`'s table stands (the centre of its footprint, on the floor).
+pub const HOUSE_TABLE_AT: Vec3 = Vec3::new(-3.3, 0.0, -0.8);
+
+/// The HOUSE of `builtin:house` (see the module doc): the ROOM's materials and furniture
+/// in three rooms, two lights.
+fn house() -> Scene {
+    let mut b = SceneBuilder::new();
+    let wall = b.material(lambert("wall", [0.72, 0.7, 0.64], false));
+    let ceiling = b.material(lambert("ceiling", [0.8, 0.8, 0.8], false));
+    let floor = b.material(lambert("floor", [0.5, 0.36, 0.22], false));
+    let wood = b.material(lambert("wood", [0.55, 0.38, 0.2], false));
+    let red = b.material(lambert("sofa", [0.7, 0.1, 0.08], false));
+    let blue = b.material(lambert("chair", [0.15, 0.25, 0.65], false));
+    let green = b.material(lambert("cabinet", [0.2, 0.5, 0.25], false));
+    let linen = b.material(lambert("bed", [0.85, 0.82, 0.75], false));
+    let (w, hgt, d) = (5.0f32, 2.8f32, 3.0f32);
+    let v = Vec3::new;
+    // The shell: inward quads (floor, ceiling, four walls), as the ROOM's.
+    let mut shell = Mesh {
+        name: "house".into(),
+        ..Default::default()
+    };
+    let half_h = hgt / 2.0;
+    for (centre, u, w_, material) in [
+        (Vec3::ZERO, Vec3::Z * d, Vec3::X * w, floor),
+        (v(0.0, hgt, 0.0), Vec3::X * w, Vec3::Z * d, ceiling),
+        (v(0.0, half_h, -d), Vec3::X * w, Vec3::Y * half_h, wall),
+        (v(0.0, half_h, d), Vec3::Y * half_h, Vec3::X * w, wall),
+        (v(-w, half_h, 0.0), Vec3::Y * half_h, Vec3::Z * d, wall),
+        (v(w, half_h, 0.0), Vec3::Z * d, Vec3::Y * half_h, wall),
+    ] {
+        append_quad(&mut shell, centre, u, w_, material);
+    }
+    let shell = b.mesh(shell);
+    b.placed("house", shell, Trs::IDENTITY, false);
+    // Two partitions 0.1 m thick across the house, each with a doorway 1 m wide and
+    // 2.1 m high (the hall's light comes through them).
+    let (door_half, door_h) = (0.5f32, 2.1f32);
+    let mut partitions = Vec::new();
+    for (x, door_z) in [(-1.5f32, 1.0f32), (1.5, -1.0)] {
+        let (z0, z1) = (door_z - door_half, door_z + door_half);
+        partitions.push((
+            v(x, half_h, (-d + z0) / 2.0),
+            v(0.05, half_h, (z0 + d) / 2.0),
+            wall,
+        ));
+        partitions.push((
+            v(x, half_h, (z1 + d) / 2.0),
+            v(0.05, half_h, (d - z1) / 2.0),
+            wall,
+        ));
+        let lintel = (hgt - door_h) / 2.0;
+        partitions.push((
+            v(x, door_h + lintel, door_z),
+            v(0.05, lintel, door_half),
+            wall,
+        ));
+    }
+    let partitions = b.mesh(boxes("partitions", &partitions));
+    b.placed("partitions", partitions, Trs::IDENTITY, false);
+    // Living room: the ROOM's table and chairs (dynamic), a sofa against the end wall.
+    let mut table_parts = vec![(v(0.0, 0.73, 0.0), v(0.8, 0.025, 0.45), wood)];
+    for (x, z) in [(-0.74, -0.39), (0.74, -0.39), (-0.74, 0.39), (0.74, 0.39)] {
+        table_parts.push((v(x, 0.355, z), v(0.03, 0.355, 0.03), wood));
+    }
+    let table = b.mesh(boxes("table", &table_parts));
+    let table = b.placed("table", table, Trs::from_translation(HOUSE_TABLE_AT), true);
+    let table_node = b.scene().instances[table.index()].node;
+    let mut chair_parts = vec![
+        (v(0.0, 0.45, 0.0), v(0.22, 0.025, 0.22), blue),
+        (v(0.0, 0.72, -0.2), v(0.22, 0.25, 0.02), blue),
+    ];
+    for (x, z) in [(-0.19, -0.19), (0.19, -0.19), (-0.19, 0.19), (0.19, 0.19)] {
+        chair_parts.push((v(x, 0.21, z), v(0.02, 0.21, 0.02), blue));
+    }
+    let chair = b.mesh(boxes("chair", &chair_parts));
+    b.placed(
+        "chair_1",
+        chair,
+        Trs::from_translation(HOUSE_TABLE_AT + v(-0.4, 0.0, -0.75)),
+        true,
+    );
+    b.placed(
+        "chair_2",
+        chair,
+        Trs {
+            rotation: Quat::from_rotation_y(PI),
+            ..Trs::from_translation(HOUSE_TABLE_AT + v(0.4, 0.0, 0.75))
+        },
+        true,
+    );
+    let pieces: [(&str, Vec<BoxPart>, Vec3); 5] = [
+        (
+            "sofa",
+            vec![
+                (v(0.0, 0.22, 0.0), v(0.45, 0.22, 1.0), red),
+                (v(-0.35, 0.6, 0.0), v(0.1, 0.38, 1.0), red),
+                (v(0.05, 0.32, -0.92), v(0.4, 0.1, 0.08), red),
+                (v(0.05, 0.32, 0.92), v(0.4, 0.1, 0.08), red),
+            ],
+            v(-4.5, 0.0, 1.2),
+        ),
+        (
+            "bookcase",
+            vec![(v(0.0, 1.0, 0.0), v(0.6, 1.0, 0.2), wood)],
+            v(0.0, 0.0, -2.75),
+        ),
+        (
+            "cabinet",
+            vec![(v(0.0, 0.45, 0.0), v(0.25, 0.45, 0.7), green)],
+            v(1.15, 0.0, 1.6),
+        ),
+        (
+            "bed",
+            vec![
+                (v(0.0, 0.25, 0.0), v(1.0, 0.25, 0.8), linen),
+                (v(1.0, 0.5, 0.0), v(0.05, 0.5, 0.8), wood),
+            ],
+            v(3.8, 0.0, 1.9),
+        ),
+        (
+            "wardrobe",
+            vec![(v(0.0, 1.0, 0.0), v(0.6, 1.0, 0.3), wood)],
+            v(3.5, 0.0, -2.65),
+        ),
+    ];
+    for (name, parts, at) in pieces {
+        let mesh = b.mesh(boxes(name, &parts));
+        b.placed(name, mesh, Trs::from_translation(at), false);
+    }
+    // Two spot lights below the end rooms' ceilings, pointing down.
+    for (i, x) in [-3.3f32, 3.3].into_iter().enumerate() {
+        let node = b.node(
+            &format!("spot_{i}"),
+            None,
+            Trs {
+                rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+                ..Trs::from_translation(v(x, hgt - 0.1, 0.0))
+            },
+        );
+        b.light(
+            &format!("spot_{i}"),
+            LightKind::Spot {
+                intensity: Rgb::new(9.0, 8.4, 7.5),
+                inner_cone_rad: 40f32.to_radians(),
+                outer_cone_rad: 60f32.to_radians(),
+            },
+            node,
+        );
+    }
+    // In the living room's front corner, looking past the table at the partition.
+    let cam = b.node(
+        "camera",
+        None,
+        Trs {
+            rotation: Quat::from_rotation_y(-0.698) * Quat::from_rotation_x(-0.266),
+            ..Trs::from_translation(v(-4.6, 1.7, 2.6))
+        },
+    );
+    b.camera("camera", 65f32.to_radians(), cam);
+    b.animation(Animation {
+        name: "move_table".into(),
+        channels: vec![linear_translation(
+            table_node,
+            &[0.0, 1.0],
+            &[HOUSE_TABLE_AT, HOUSE_TABLE_AT + v(0.6, 0.0, 0.0)],
+        )],
+        properties: Vec::new(),
+    });
+    b.finish("builtin:house")
 }
 
 /// Where the Cube in a Box's cube starts (its centre; half size 0.2 m).

@@ -343,3 +343,28 @@ fn builtin_room_gets_the_papers_room_layout() {
     let n = sel.elements().len() as f64;
     assert!((n / 12_400.0 - 1.0).abs() < 0.1, "{n} elements");
 }
+
+/// Issue 34 goal 3: `scenarios/selective_house.toml`'s settings lay out the paper's HOUSE
+/// configuration on `builtin:house` (§7: two lights, N_g = 2^4·3^2 = 144, 1 728 000
+/// photons, about 377 900 mesh elements). The settings are read from the scenario file
+/// itself, so the scenario cannot drift from what this test pins.
+#[test]
+fn builtin_house_with_its_scenario_gets_the_papers_house_layout() {
+    let world = World::new(illume_scene::builtin::load("house").unwrap());
+    assert_eq!(world.scene.lights.len(), 2);
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenarios/selective_house.toml"
+    ))
+    .unwrap();
+    let scenario: toml::Table = toml::from_str(&text).unwrap();
+    let technique = &scenario["technique"].as_array().unwrap()[0];
+    assert_eq!(technique["name"].as_str(), Some("selective"));
+    let mut settings: SelectiveSettings = technique["settings"].clone().try_into().unwrap();
+    settings.warm_up = false;
+    let sel = Selective::for_world(&world, settings).unwrap();
+    assert_eq!(sel.factors().factors(), &[(2, 4), (3, 2)]);
+    assert_eq!(sel.layout().pool(), 1_728_000);
+    let n = sel.elements().len() as f64;
+    assert!((n / 377_900.0 - 1.0).abs() < 0.1, "{n} elements");
+}
