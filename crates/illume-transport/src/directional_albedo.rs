@@ -18,7 +18,7 @@
 //!   layer `F0·I₀ + (1 − F0)·I₁`;
 //! * `K = ∫ s cosθᵢ/π dωᵢ`: the dielectric's diffuse layer reflects `ρ·(1 − F0)·(1 − K)`.
 //!
-//! They are tabulated once per process ([`TABLE`], 32 × 32 entries, ≈ 10 ms) by
+//! They are tabulated once per process, on first use ([`TABLE`], 32 × 32 entries), by
 //! stratified sampling — the specular integrals by GGX's visible normals, whose weight
 //! `G₂/G₁` is bounded, the diffuse one by the cosine — and read bilinearly.
 

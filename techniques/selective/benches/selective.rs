@@ -9,6 +9,8 @@
 //! * `room` — Fig. 5 (N_g = 288 and 10 080) and Fig. 7 (R = 8 … 64) on `builtin:room`
 //!   (ROOM in kind: four spot lights, ≈ 12 400 elements) with the paper's pool of
 //!   1 152 000 photons, the table pushed 0.6 m (issue 34 goal 3);
+//! * `house` — the same on `builtin:house` (HOUSE in kind: three rooms, two spot lights,
+//!   ≈ 377 900 elements) with its pool of 1 728 000 photons and N_g = 144 (2^4·3^2);
 //! * `pool` — recovery against pool size (N_p = 125 … 2000 at N_g = 72, R = 16);
 //! * `costs` — pool fill, full update after the move, restart vs re-trace after a light
 //!   move, memory per element;
@@ -18,7 +20,7 @@
 //!   grid sides, hanging vertices, the scaled pool, memory and the display's cost per
 //!   element (issue 34).
 //!
-//! `cargo bench -p illume-selective [-- fig5|fig7|room|pool|costs|elements]`
+//! `cargo bench -p illume-selective [-- fig5|fig7|room|house|pool|costs|elements]`
 
 use illume_core::{Affine3A, Vec3};
 use illume_scene::{Edit, InstanceId, LightId};
@@ -241,12 +243,29 @@ fn fig7() {
     );
 }
 
-/// Fig. 5 and Fig. 7 on ROOM in kind (`builtin:room`: four spot lights, ≈ 12 400
-/// elements), the table pushed 0.6 m, with the paper's pool of 1 152 000 photons and its
-/// N_g = 288 (2^5·3^2) beside 10 080.
-fn room() {
+/// A paper scene in kind for Fig. 5 and Fig. 7: the scene and its mover, the paper's
+/// factorisation and pool, and the element count the paper gives.
+struct PaperScene {
+    /// Section name and plot prefix (`room`, `house`).
+    name: &'static str,
+    /// What the section's title says the scene is.
+    title: &'static str,
+    mover: Mover,
+    /// The paper's N_g factorisation and its name.
+    factors: &'static [[u32; 2]],
+    groups_label: &'static str,
+    /// The paper's pool N = N_g·N_p·16.
+    pool: u64,
+    /// Mesh elements (`element_count`).
+    elements: u32,
+}
+
+/// Fig. 5 and Fig. 7 on `scene` (the table pushed 0.6 m), with the paper's pool and its
+/// N_g beside 10 080 (Fig. 5), and R = 8 … 64 at that N_g and an equal pool (Fig. 7).
+fn paper_figures(scene: &PaperScene) {
     println!(
-        "\n## room: Fig. 5 and Fig. 7 on builtin:room (four spot lights), the table pushed 0.6 m"
+        "\n## {}: Fig. 5 and Fig. 7 on builtin:{} ({}), the table pushed 0.6 m",
+        scene.name, scene.mover.scene, scene.title
     );
     println!(
         "| N_g | R | N_p | pool | order | found @10 % | @25 % | @50 % of groups | s to 90 % | all groups [s] | relevant |"
@@ -254,8 +273,13 @@ fn room() {
     println!("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|");
     let to = Vec3::new(0.6, 0.0, 0.0);
     let run = |name: &str, factors: Vec<[u32; 2]>, pilots: u32, ratio: u32, order| {
-        let s = base(factors, pilots, ratio, order);
-        let r = recovery_of(TABLE, &s, Vec3::ZERO, to);
+        let s = SelectiveSettings {
+            element_count: scene.elements,
+            // The paper's pool, not one grown to 16 photons an element.
+            min_photons_per_element: 0,
+            ..base(factors, pilots, ratio, order)
+        };
+        let r = recovery_of(scene.mover, &s, Vec3::ZERO, to);
         let groups: u64 = s
             .group_factors
             .iter()
@@ -273,46 +297,89 @@ fn room() {
         );
         r.curve
     };
-    // Fig. 5: N_g = 288 (N_p = 250) and 10 080 (N_p = 7: 1 128 960 photons, the nearest
-    // whole N_p to the paper's 1 152 000), priority and random order.
+    let groups: u64 = scene
+        .factors
+        .iter()
+        .map(|f| (f[0] as u64).pow(f[1]))
+        .product();
+    // N_p for `g` groups at R: the whole number that keeps the pool at most the paper's
+    // (ROOM: 10 080 groups N_p = 7, 1 128 960 photons; R = 64 N_p = 62, 1 142 784).
+    let pilots = |g: u64, ratio: u32| (scene.pool / (g * ratio as u64)) as u32;
+    // Fig. 5: the paper's N_g and 10 080 (2^5·3^2·5·7), priority and random order.
     let mut series = Vec::new();
-    for (name, factors, pilots) in [
-        ("288 (2^5·3^2)", vec![[2, 5], [3, 2]], 250),
-        ("10 080", vec![[2, 5], [3, 2], [5, 1], [7, 1]], 7),
+    for (name, factors) in [
+        (scene.groups_label, scene.factors.to_vec()),
+        ("10 080", vec![[2, 5], [3, 2], [5, 1], [7, 1]]),
     ] {
+        let g: u64 = factors.iter().map(|f| (f[0] as u64).pow(f[1])).product();
         for order in [GroupOrder::Priority, GroupOrder::Random] {
             series.push(illume_metrics::report::Series {
                 name: format!("N_g = {name}, {order:?}"),
-                points: run(name, factors.clone(), pilots, 16, order),
+                points: run(name, factors.clone(), pilots(g, 16), 16, order),
             });
         }
     }
     plot(
-        "room_fig5.svg",
-        "Fig. 5 on ROOM in kind: the table pushed 0.6 m (N = 1 152 000)",
+        &format!("{}_fig5.svg", scene.name),
+        &format!(
+            "Fig. 5 on {} in kind: the table pushed 0.6 m (N = {})",
+            scene.name.to_uppercase(),
+            scene.pool
+        ),
         series,
     );
-    // Fig. 7: R = 8 … 64 at N_g = 288 and an equal pool (R = 64: N_p = 62, 1 142 784).
+    // Fig. 7: R = 8 … 64 at the paper's N_g and an equal pool.
     let mut series = Vec::new();
     for ratio in [8u32, 16, 32, 64] {
-        let pilots = 4000 / ratio;
         series.push(illume_metrics::report::Series {
             name: format!("R = {ratio} ({:.2} % pilots)", 100.0 / ratio as f64),
             points: run(
-                "288",
-                vec![[2, 5], [3, 2]],
-                pilots,
+                scene.groups_label,
+                scene.factors.to_vec(),
+                pilots(groups, ratio),
                 ratio,
                 GroupOrder::Priority,
             ),
         });
     }
     plot(
-        "room_fig7.svg",
-        "Fig. 7 on ROOM in kind: pilot ratio at N_g = 288 (N = 1 152 000)",
+        &format!("{}_fig7.svg", scene.name),
+        &format!(
+            "Fig. 7 on {} in kind: pilot ratio at N_g = {} (N = {})",
+            scene.name.to_uppercase(),
+            scene.groups_label,
+            scene.pool
+        ),
         series,
     );
 }
+
+/// ROOM in kind (`builtin:room`: four spot lights, ≈ 12 400 elements, N_g = 2^5·3^2,
+/// 1 152 000 photons).
+const ROOM: PaperScene = PaperScene {
+    name: "room",
+    title: "four spot lights",
+    mover: TABLE,
+    factors: &[[2, 5], [3, 2]],
+    groups_label: "288 (2^5·3^2)",
+    pool: 1_152_000,
+    elements: 12_400,
+};
+
+/// HOUSE in kind (`builtin:house`: three rooms, two spot lights, ≈ 377 900 elements,
+/// N_g = 2^4·3^2, 1 728 000 photons).
+const HOUSE: PaperScene = PaperScene {
+    name: "house",
+    title: "three rooms, two spot lights",
+    mover: Mover {
+        scene: "house",
+        instance: "table",
+    },
+    factors: &[[2, 4], [3, 2]],
+    groups_label: "144 (2^4·3^2)",
+    pool: 1_728_000,
+    elements: 377_900,
+};
 
 fn pool() {
     println!(
@@ -429,7 +496,10 @@ fn main() {
         fig7();
     }
     if want("room") {
-        room();
+        paper_figures(&ROOM);
+    }
+    if want("house") {
+        paper_figures(&HOUSE);
     }
     if want("pool") {
         pool();
