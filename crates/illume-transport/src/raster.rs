@@ -23,7 +23,8 @@
 //!    exact 64-bit integer functions with the top-left fill rule, so triangles sharing an
 //!    edge cover each pixel centre exactly once.
 //! 3. Binning: each screen triangle is listed in every strip of [`STRIP_ROWS`] full-width
-//!    rows it overlaps, in scene order (instance, then triangle).
+//!    rows it overlaps, in scene order (instance, then triangle); each setup job bins its
+//!    own triangles, and a strip reads the jobs' lists in job order.
 //! 4. Strips are rasterized in parallel (rayon), each into its own rows of the buffer:
 //!    the nearer `1/w` wins, the first drawn on an exact tie.
 //!
@@ -145,9 +146,6 @@ impl VisibilityBuffer {
         }
         let viewport = Viewport::for_camera(scene, width, height);
         let setup = setup_scene(scene, &viewport);
-        let triangles = &setup.triangles;
-        let strips = height.div_ceil(STRIP_ROWS) as usize;
-        let bins = bin_by_strip(triangles, strips);
         self.pixels
             .par_chunks_mut((width * STRIP_ROWS) as usize)
             .enumerate()
@@ -155,8 +153,7 @@ impl VisibilityBuffer {
                 let rows = strip as i32 * STRIP_ROWS as i32
                     ..((strip as i32 + 1) * STRIP_ROWS as i32).min(height as i32);
                 out.fill(VisibilitySample::EMPTY);
-                for &t in bins.strip(strip) {
-                    let tri = &triangles[t as usize];
+                for tri in setup.strip(strip) {
                     tri.rasterize(rows.clone(), |x, y, z| {
                         let px = &mut out[((y - rows.start) as u32 * width + x as u32) as usize];
                         if z > px.inverse_depth && (!tri.cut || setup.keeps(tri, x, y)) {
@@ -467,10 +464,13 @@ impl ScreenTriangle {
     }
 }
 
-/// Every screen triangle of a view, and what testing alpha-mask holes needs.
+/// Every screen triangle of a view, binned by strip, and what testing alpha-mask holes
+/// needs.
 struct SceneSetup<'s> {
-    /// Screen triangles in scene order (instance, then triangle).
-    triangles: Vec<ScreenTriangle>,
+    /// Screen triangles in scene order (instance, then triangle), as the parallel setup
+    /// jobs made them, each job's binned by strip on its own thread (no serial binning
+    /// or concatenation of the whole list).
+    jobs: Vec<SetupJob>,
     /// The scene.
     scene: &'s Scene,
     /// Clip points `(x, y, w, z)` of each scene instance's vertices (empty when the
@@ -483,7 +483,24 @@ struct SceneSetup<'s> {
     height: f64,
 }
 
+/// One setup job's screen triangles (in scene order) and their strip bins.
+struct SetupJob {
+    triangles: Vec<ScreenTriangle>,
+    bins: StripBins,
+}
+
 impl SceneSetup<'_> {
+    /// The screen triangles overlapping strip `s`, in scene order (jobs in order, each
+    /// job's triangles in order): the order the depth test breaks exact ties by.
+    fn strip(&self, s: usize) -> impl Iterator<Item = &ScreenTriangle> {
+        self.jobs.iter().flat_map(move |job| {
+            job.bins
+                .strip(s)
+                .iter()
+                .map(|&t| &job.triangles[t as usize])
+        })
+    }
+
     /// True when the surface of cut triangle `tri` is there at the centre of pixel
     /// (x, y): the point of the (unclipped) triangle that projects there, found by solving
     /// for its barycentrics in clip space (`x − sx·w = 0`, `y − sy·w = 0` hold for the
@@ -516,6 +533,7 @@ impl SceneSetup<'_> {
 /// Clip-space corners of every triangle of `scene`'s default-mask instances, set up for
 /// rasterization, in scene order.
 fn setup_scene<'s>(scene: &'s Scene, viewport: &Viewport) -> SceneSetup<'s> {
+    let strips = viewport.height.div_ceil(STRIP_ROWS) as usize;
     let cutouts = MeshCutout::all(scene);
     let instances: Vec<(usize, Vec<Vec4>)> = scene
         .instances
@@ -559,7 +577,7 @@ fn setup_scene<'s>(scene: &'s Scene, viewport: &Viewport) -> SceneSetup<'s> {
                 .map(move |c| (k, c * SETUP_CHUNK..((c + 1) * SETUP_CHUNK).min(n)))
         })
         .collect();
-    let per_job: Vec<Vec<ScreenTriangle>> = jobs
+    let per_job: Vec<SetupJob> = jobs
         .par_iter()
         .map(|(k, range)| {
             let (i, clip) = &instances[*k];
@@ -577,7 +595,11 @@ fn setup_scene<'s>(scene: &'s Scene, viewport: &Viewport) -> SceneSetup<'s> {
                     }
                 }
             }
-            out
+            let bins = bin_by_strip(&out, strips);
+            SetupJob {
+                triangles: out,
+                bins,
+            }
         })
         .collect();
     let mut clip_of_instance = vec![Vec::new(); scene.instances.len()];
@@ -587,7 +609,7 @@ fn setup_scene<'s>(scene: &'s Scene, viewport: &Viewport) -> SceneSetup<'s> {
         }
     }
     SceneSetup {
-        triangles: per_job.concat(),
+        jobs: per_job,
         scene,
         clip_of_instance,
         cutouts,
@@ -776,9 +798,6 @@ pub fn rasterize_depth(
         return;
     }
     let setup = setup_scene(scene, viewport);
-    let triangles = &setup.triangles;
-    let strips = height.div_ceil(STRIP_ROWS) as usize;
-    let bins = bin_by_strip(triangles, strips);
     depth
         .par_chunks_mut((width * STRIP_ROWS) as usize)
         .enumerate()
@@ -786,8 +805,7 @@ pub fn rasterize_depth(
             out.fill(f32::NEG_INFINITY);
             let rows = strip as i32 * STRIP_ROWS as i32
                 ..((strip as i32 + 1) * STRIP_ROWS as i32).min(height as i32);
-            for &t in bins.strip(strip) {
-                let tri = &triangles[t as usize];
+            for tri in setup.strip(strip) {
                 tri.rasterize_runs(rows.clone(), |y, xs, z_row| {
                     let row = (y - rows.start) as usize * width as usize;
                     let (start, end) = (*xs.start() as usize, *xs.end() as usize);
