@@ -804,74 +804,72 @@ fn boxes(name: &str, parts: &[BoxPart]) -> Mesh {
     m
 }
 
-/// Where `builtin:room`'s table stands (the centre of its footprint, on the floor).
-pub const ROOM_TABLE_AT: Vec3 = Vec3::new(0.2, 0.0, -0.6);
+/// The ROOM's and the HOUSE's materials, made in this order.
+struct Furnishings {
+    wall: MaterialId,
+    ceiling: MaterialId,
+    floor: MaterialId,
+    wood: MaterialId,
+    red: MaterialId,
+    blue: MaterialId,
+    green: MaterialId,
+}
 
-/// The ROOM of `builtin:room` (see the module doc).
-fn room() -> Scene {
-    let mut b = SceneBuilder::new();
-    let wall = b.material(lambert("wall", [0.72, 0.7, 0.64], false));
-    let ceiling = b.material(lambert("ceiling", [0.8, 0.8, 0.8], false));
-    let floor = b.material(lambert("floor", [0.5, 0.36, 0.22], false));
-    let wood = b.material(lambert("wood", [0.55, 0.38, 0.2], false));
-    let red = b.material(lambert("sofa", [0.7, 0.1, 0.08], false));
-    let blue = b.material(lambert("chair", [0.15, 0.25, 0.65], false));
-    let green = b.material(lambert("cabinet", [0.2, 0.5, 0.25], false));
-    let (w, hgt, d) = (3.0f32, 2.8f32, 2.5f32);
-    // The shell: one mesh of inward quads (floor, ceiling, four walls).
+impl Furnishings {
+    fn new(b: &mut SceneBuilder) -> Self {
+        Self {
+            wall: b.material(lambert("wall", [0.72, 0.7, 0.64], false)),
+            ceiling: b.material(lambert("ceiling", [0.8, 0.8, 0.8], false)),
+            floor: b.material(lambert("floor", [0.5, 0.36, 0.22], false)),
+            wood: b.material(lambert("wood", [0.55, 0.38, 0.2], false)),
+            red: b.material(lambert("sofa", [0.7, 0.1, 0.08], false)),
+            blue: b.material(lambert("chair", [0.15, 0.25, 0.65], false)),
+            green: b.material(lambert("cabinet", [0.2, 0.5, 0.25], false)),
+        }
+    }
+}
+
+/// A closed box x∈[−w, w], y∈[0, hgt], z∈[−d, d] of inward quads named `name`: the floor,
+/// the ceiling and four walls in `[floor, ceiling, wall]` materials.
+fn closed_shell(
+    name: &str,
+    w: f32,
+    hgt: f32,
+    d: f32,
+    [floor, ceiling, wall]: [MaterialId; 3],
+) -> Mesh {
     let mut shell = Mesh {
-        name: "room".into(),
+        name: name.into(),
         ..Default::default()
     };
-    append_quad(&mut shell, Vec3::ZERO, Vec3::Z * d, Vec3::X * w, floor);
-    append_quad(
-        &mut shell,
-        Vec3::new(0.0, hgt, 0.0),
-        Vec3::X * w,
-        Vec3::Z * d,
-        ceiling,
-    );
-    let half_h = hgt / 2.0;
-    append_quad(
-        &mut shell,
-        Vec3::new(0.0, half_h, -d),
-        Vec3::X * w,
-        Vec3::Y * half_h,
-        wall,
-    ); // back, faces +z
-    append_quad(
-        &mut shell,
-        Vec3::new(0.0, half_h, d),
-        Vec3::Y * half_h,
-        Vec3::X * w,
-        wall,
-    ); // front, faces −z
-    append_quad(
-        &mut shell,
-        Vec3::new(-w, half_h, 0.0),
-        Vec3::Y * half_h,
-        Vec3::Z * d,
-        wall,
-    ); // left, faces +x
-    append_quad(
-        &mut shell,
-        Vec3::new(w, half_h, 0.0),
-        Vec3::Z * d,
-        Vec3::Y * half_h,
-        wall,
-    ); // right, faces −x
-    let shell = b.mesh(shell);
-    b.placed("room", shell, Trs::IDENTITY, false);
     let v = Vec3::new;
-    // Table: a 1.6 × 0.9 m top at 0.75 m on four legs (object space: footprint centre).
+    let half_h = hgt / 2.0;
+    for (centre, u, w_, material) in [
+        (Vec3::ZERO, Vec3::Z * d, Vec3::X * w, floor),
+        (v(0.0, hgt, 0.0), Vec3::X * w, Vec3::Z * d, ceiling),
+        (v(0.0, half_h, -d), Vec3::X * w, Vec3::Y * half_h, wall), // back, faces +z
+        (v(0.0, half_h, d), Vec3::Y * half_h, Vec3::X * w, wall),  // front, faces −z
+        (v(-w, half_h, 0.0), Vec3::Y * half_h, Vec3::Z * d, wall), // left, faces +x
+        (v(w, half_h, 0.0), Vec3::Z * d, Vec3::Y * half_h, wall),  // right, faces −x
+    ] {
+        append_quad(&mut shell, centre, u, w_, material);
+    }
+    shell
+}
+
+/// The ROOM's dining set with the table's footprint centre at `at`: a 1.6 × 0.9 m table
+/// top at 0.75 m on four legs and two chairs (a seat at 0.45 m, a back, four legs), all
+/// dynamic (furniture to move). Returns the table's node.
+fn dining_set(b: &mut SceneBuilder, at: Vec3, wood: MaterialId, blue: MaterialId) -> NodeId {
+    let v = Vec3::new;
     let mut table_parts = vec![(v(0.0, 0.73, 0.0), v(0.8, 0.025, 0.45), wood)];
     for (x, z) in [(-0.74, -0.39), (0.74, -0.39), (-0.74, 0.39), (0.74, 0.39)] {
         table_parts.push((v(x, 0.355, z), v(0.03, 0.355, 0.03), wood));
     }
     let table = b.mesh(boxes("table", &table_parts));
-    let table = b.placed("table", table, Trs::from_translation(ROOM_TABLE_AT), true);
+    let table = b.placed("table", table, Trs::from_translation(at), true);
     let table_node = b.scene().instances[table.index()].node;
-    // Chairs: a seat at 0.45 m, a back, four legs; the back towards −z in object space.
+    // The chairs' backs towards −z in object space.
     let mut chair_parts = vec![
         (v(0.0, 0.45, 0.0), v(0.22, 0.025, 0.22), blue),
         (v(0.0, 0.72, -0.2), v(0.22, 0.25, 0.02), blue),
@@ -883,7 +881,7 @@ fn room() -> Scene {
     b.placed(
         "chair_1",
         chair,
-        Trs::from_translation(ROOM_TABLE_AT + v(-0.4, 0.0, -0.75)),
+        Trs::from_translation(at + v(-0.4, 0.0, -0.75)),
         true,
     );
     b.placed(
@@ -891,23 +889,49 @@ fn room() -> Scene {
         chair,
         Trs {
             rotation: Quat::from_rotation_y(PI),
-            ..Trs::from_translation(ROOM_TABLE_AT + v(0.4, 0.0, 0.75))
+            ..Trs::from_translation(at + v(0.4, 0.0, 0.75))
         },
         true,
     );
+    table_node
+}
+
+/// The ROOM's red sofa (seat, back, two arms), facing +x.
+fn sofa(red: MaterialId) -> Vec<BoxPart> {
+    let v = Vec3::new;
+    vec![
+        (v(0.0, 0.22, 0.0), v(0.45, 0.22, 1.0), red),
+        (v(-0.35, 0.6, 0.0), v(0.1, 0.38, 1.0), red),
+        (v(0.05, 0.32, -0.92), v(0.4, 0.1, 0.08), red),
+        (v(0.05, 0.32, 0.92), v(0.4, 0.1, 0.08), red),
+    ]
+}
+
+/// Where `builtin:room`'s table stands (the centre of its footprint, on the floor).
+pub const ROOM_TABLE_AT: Vec3 = Vec3::new(0.2, 0.0, -0.6);
+
+/// The ROOM of `builtin:room` (see the module doc).
+fn room() -> Scene {
+    let mut b = SceneBuilder::new();
+    let Furnishings {
+        wall,
+        ceiling,
+        floor,
+        wood,
+        red,
+        blue,
+        green,
+    } = Furnishings::new(&mut b);
+    let (w, hgt, d) = (3.0f32, 2.8f32, 2.5f32);
+    // The shell: one mesh of inward quads (floor, ceiling, four walls).
+    let shell = b.mesh(closed_shell("room", w, hgt, d, [floor, ceiling, wall]));
+    b.placed("room", shell, Trs::IDENTITY, false);
+    let v = Vec3::new;
+    let table_node = dining_set(&mut b, ROOM_TABLE_AT, wood, blue);
     // Static pieces: a red sofa against the left wall (facing +x), a tall bookcase
     // against the back wall, a low green cabinet against the right one.
     let pieces: [(&str, Vec<BoxPart>, Vec3); 3] = [
-        (
-            "sofa",
-            vec![
-                (v(0.0, 0.22, 0.0), v(0.45, 0.22, 1.0), red),
-                (v(-0.35, 0.6, 0.0), v(0.1, 0.38, 1.0), red),
-                (v(0.05, 0.32, -0.92), v(0.4, 0.1, 0.08), red),
-                (v(0.05, 0.32, 0.92), v(0.4, 0.1, 0.08), red),
-            ],
-            v(-2.5, 0.0, 0.2),
-        ),
+        ("sofa", sofa(red), v(-2.5, 0.0, 0.2)),
         (
             "bookcase",
             vec![(v(0.0, 1.0, 0.0), v(0.6, 1.0, 0.2), wood)],
@@ -975,33 +999,20 @@ pub const HOUSE_TABLE_AT: Vec3 = Vec3::new(-3.3, 0.0, -0.8);
 /// in three rooms, two lights.
 fn house() -> Scene {
     let mut b = SceneBuilder::new();
-    let wall = b.material(lambert("wall", [0.72, 0.7, 0.64], false));
-    let ceiling = b.material(lambert("ceiling", [0.8, 0.8, 0.8], false));
-    let floor = b.material(lambert("floor", [0.5, 0.36, 0.22], false));
-    let wood = b.material(lambert("wood", [0.55, 0.38, 0.2], false));
-    let red = b.material(lambert("sofa", [0.7, 0.1, 0.08], false));
-    let blue = b.material(lambert("chair", [0.15, 0.25, 0.65], false));
-    let green = b.material(lambert("cabinet", [0.2, 0.5, 0.25], false));
+    let Furnishings {
+        wall,
+        ceiling,
+        floor,
+        wood,
+        red,
+        blue,
+        green,
+    } = Furnishings::new(&mut b);
     let linen = b.material(lambert("bed", [0.85, 0.82, 0.75], false));
     let (w, hgt, d) = (5.0f32, 2.8f32, 3.0f32);
     let v = Vec3::new;
-    // The shell: inward quads (floor, ceiling, four walls), as the ROOM's.
-    let mut shell = Mesh {
-        name: "house".into(),
-        ..Default::default()
-    };
     let half_h = hgt / 2.0;
-    for (centre, u, w_, material) in [
-        (Vec3::ZERO, Vec3::Z * d, Vec3::X * w, floor),
-        (v(0.0, hgt, 0.0), Vec3::X * w, Vec3::Z * d, ceiling),
-        (v(0.0, half_h, -d), Vec3::X * w, Vec3::Y * half_h, wall),
-        (v(0.0, half_h, d), Vec3::Y * half_h, Vec3::X * w, wall),
-        (v(-w, half_h, 0.0), Vec3::Y * half_h, Vec3::Z * d, wall),
-        (v(w, half_h, 0.0), Vec3::Z * d, Vec3::Y * half_h, wall),
-    ] {
-        append_quad(&mut shell, centre, u, w_, material);
-    }
-    let shell = b.mesh(shell);
+    let shell = b.mesh(closed_shell("house", w, hgt, d, [floor, ceiling, wall]));
     b.placed("house", shell, Trs::IDENTITY, false);
     // Two partitions 0.1 m thick across the house, each with a doorway 1 m wide and
     // 2.1 m high (the hall's light comes through them).
@@ -1029,47 +1040,9 @@ fn house() -> Scene {
     let partitions = b.mesh(boxes("partitions", &partitions));
     b.placed("partitions", partitions, Trs::IDENTITY, false);
     // Living room: the ROOM's table and chairs (dynamic), a sofa against the end wall.
-    let mut table_parts = vec![(v(0.0, 0.73, 0.0), v(0.8, 0.025, 0.45), wood)];
-    for (x, z) in [(-0.74, -0.39), (0.74, -0.39), (-0.74, 0.39), (0.74, 0.39)] {
-        table_parts.push((v(x, 0.355, z), v(0.03, 0.355, 0.03), wood));
-    }
-    let table = b.mesh(boxes("table", &table_parts));
-    let table = b.placed("table", table, Trs::from_translation(HOUSE_TABLE_AT), true);
-    let table_node = b.scene().instances[table.index()].node;
-    let mut chair_parts = vec![
-        (v(0.0, 0.45, 0.0), v(0.22, 0.025, 0.22), blue),
-        (v(0.0, 0.72, -0.2), v(0.22, 0.25, 0.02), blue),
-    ];
-    for (x, z) in [(-0.19, -0.19), (0.19, -0.19), (-0.19, 0.19), (0.19, 0.19)] {
-        chair_parts.push((v(x, 0.21, z), v(0.02, 0.21, 0.02), blue));
-    }
-    let chair = b.mesh(boxes("chair", &chair_parts));
-    b.placed(
-        "chair_1",
-        chair,
-        Trs::from_translation(HOUSE_TABLE_AT + v(-0.4, 0.0, -0.75)),
-        true,
-    );
-    b.placed(
-        "chair_2",
-        chair,
-        Trs {
-            rotation: Quat::from_rotation_y(PI),
-            ..Trs::from_translation(HOUSE_TABLE_AT + v(0.4, 0.0, 0.75))
-        },
-        true,
-    );
+    let table_node = dining_set(&mut b, HOUSE_TABLE_AT, wood, blue);
     let pieces: [(&str, Vec<BoxPart>, Vec3); 5] = [
-        (
-            "sofa",
-            vec![
-                (v(0.0, 0.22, 0.0), v(0.45, 0.22, 1.0), red),
-                (v(-0.35, 0.6, 0.0), v(0.1, 0.38, 1.0), red),
-                (v(0.05, 0.32, -0.92), v(0.4, 0.1, 0.08), red),
-                (v(0.05, 0.32, 0.92), v(0.4, 0.1, 0.08), red),
-            ],
-            v(-4.5, 0.0, 1.2),
-        ),
+        ("sofa", sofa(red), v(-4.5, 0.0, 1.2)),
         (
             "bookcase",
             vec![(v(0.0, 1.0, 0.0), v(0.6, 1.0, 0.2), wood)],

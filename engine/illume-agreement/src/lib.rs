@@ -114,6 +114,25 @@ impl Agreement {
     }
 }
 
+impl Agreement {
+    /// The reference path tracer as the ground truth: 512 spp (two frames of 256),
+    /// seed 1.
+    fn ground_truth() -> Self {
+        Self {
+            technique: "reference".into(),
+            preset: None,
+            sets: vec![
+                "reference.spp_per_frame=256".into(),
+                "reference.seed=1".into(),
+            ],
+            frames: 2,
+            max_energy_error: 0.0,
+            max_block_error: 0.0,
+            why: "the ground truth".into(),
+        }
+    }
+}
+
 /// The scenes every technique is compared on: `builtin:cornell-spot` as it is, and with
 /// a uniform sky (light entering through the open front; sky photons, sky NEE).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -181,18 +200,7 @@ pub fn reference(lighting: Lighting) -> &'static RgbImage {
     static SPOT: OnceLock<RgbImage> = OnceLock::new();
     static SKY: OnceLock<RgbImage> = OnceLock::new();
     let render = || {
-        let reference = Agreement {
-            technique: "reference".into(),
-            preset: None,
-            sets: vec![
-                "reference.spp_per_frame=256".into(),
-                "reference.seed=1".into(),
-            ],
-            frames: 2,
-            max_energy_error: 0.0,
-            max_block_error: 0.0,
-            why: "the ground truth".into(),
-        };
+        let reference = Agreement::ground_truth();
         indirect(lighting, &reference.config(), reference.frames)
     };
     match lighting {
@@ -282,18 +290,7 @@ pub fn metal_box_metals_ratio(config: &Config, frames: u32) -> f64 {
         sum / n as f64
     };
     let reference = *REFERENCE.get_or_init(|| {
-        let reference = Agreement {
-            technique: "reference".into(),
-            preset: None,
-            sets: vec![
-                "reference.spp_per_frame=256".into(),
-                "reference.seed=1".into(),
-            ],
-            frames: 2,
-            max_energy_error: 0.0,
-            max_block_error: 0.0,
-            why: "the ground truth".into(),
-        };
+        let reference = Agreement::ground_truth();
         mean(&indirect_of(scene(), &reference.config(), reference.frames))
     });
     assert!(reference > 0.0, "the reference lights the metals");
