@@ -185,7 +185,8 @@ mod tests {
     }
 
     /// A white metal loses energy as it roughens (single scattering) and a near-mirror
-    /// reflects almost everything: the ρ/π display was right only at roughness → 0.
+    /// reflects almost everything: the ρ/π display was right only at roughness → 0. At
+    /// roughness 1 the integral has a closed form.
     #[test]
     fn a_white_metal_reflects_less_as_it_roughens() {
         let white = |roughness| MetalRough {
@@ -196,6 +197,14 @@ mod tests {
         let at_normal = |r| white(r).directional_albedo(1.0).x;
         assert!(at_normal(0.0) > 0.99, "{}", at_normal(0.0));
         assert!((at_normal(0.6) - 0.82).abs() < 0.015, "{}", at_normal(0.6));
+        // α = 1: D = 1/π and V = 1/(2(cosθᵢ + 1)) at normal view, so
+        // A = ∫₀¹ μ/(μ + 1) dμ = 1 − ln 2 exactly.
+        let analytic = 1.0 - std::f32::consts::LN_2;
+        assert!(
+            (at_normal(1.0) - analytic).abs() < 0.005,
+            "{}",
+            at_normal(1.0)
+        );
         assert!(at_normal(1.0) < at_normal(0.6) && at_normal(0.6) < at_normal(0.3));
     }
 }
