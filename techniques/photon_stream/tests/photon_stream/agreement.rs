@@ -40,8 +40,9 @@ fn still_preset_agrees_within_the_tightened_tolerance() {
 /// Glossy receivers (issue 34 goal 4, shared with selective): the metals of
 /// `builtin:metal-box` against the path tracer's, VSL light displayed with the paper's
 /// ρ/π and with the directional albedo towards the camera (`directional_albedo`).
-/// Measured when written: ρ/π +22.5 %, the directional albedo +5.7 % (the rest is the
-/// direction the light comes from, which a VSL sum of irradiance does not keep).
+/// Measured when written: ρ/π +22.5 %, the directional albedo +5.7 % (the rest most
+/// likely the direction the light comes from, which a VSL sum of irradiance does not
+/// keep).
 #[test]
 fn metals_reflect_what_their_brdf_reflects_of_the_vsls_irradiance() {
     let ratio = |directional: bool| {

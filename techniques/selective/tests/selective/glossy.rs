@@ -8,9 +8,9 @@ use illume_agreement::{Agreement, metal_box_metals_ratio};
 /// paper's ρ/π display (`directional_albedo = false`) shows them 26 % too bright (white
 /// metals reflect less of uniform light than their base colour says: ≈ 0.82 at
 /// roughness 0.6); the directional albedo removes more than half of that. What is left
-/// (+8.5 % when written) is the direction the light comes from, which an element's
-/// irradiance does not keep: the roughness-0.3 sphere mirrors the bright walls near the
-/// light more than a uniform sky would.
+/// (+8.5 % when written) is most likely the direction the light comes from, which an
+/// element's irradiance does not keep (the roughness-0.3 sphere mirrors the bright walls
+/// near the light more than a uniform sky would; not measured apart).
 #[test]
 fn metals_reflect_what_their_brdf_reflects_of_the_elements_irradiance() {
     let ratio = |directional: bool| {
