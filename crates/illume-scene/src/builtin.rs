@@ -907,6 +907,43 @@ fn sofa(red: MaterialId) -> Vec<BoxPart> {
     ]
 }
 
+/// Spot lights 0.1 m below a ceiling at height `hgt`, one at each `(x, z)`, pointing down
+/// (−z of the light is its axis; outer cone 60°), named `spot_0`, `spot_1`, ….
+fn ceiling_spots(b: &mut SceneBuilder, hgt: f32, at: &[(f32, f32)], intensity: Rgb) {
+    for (i, &(x, z)) in at.iter().enumerate() {
+        let node = b.node(
+            &format!("spot_{i}"),
+            None,
+            Trs {
+                rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+                ..Trs::from_translation(Vec3::new(x, hgt - 0.1, z))
+            },
+        );
+        b.light(
+            &format!("spot_{i}"),
+            LightKind::Spot {
+                intensity,
+                inner_cone_rad: 40f32.to_radians(),
+                outer_cone_rad: 60f32.to_radians(),
+            },
+            node,
+        );
+    }
+}
+
+/// Animation `move_table`: the table's node from `at` 0.6 m along +x over 0–1 s.
+fn push_table(b: &mut SceneBuilder, table_node: NodeId, at: Vec3) {
+    b.animation(Animation {
+        name: "move_table".into(),
+        channels: vec![linear_translation(
+            table_node,
+            &[0.0, 1.0],
+            &[at, at + Vec3::new(0.6, 0.0, 0.0)],
+        )],
+        properties: Vec::new(),
+    });
+}
+
 /// Where `builtin:room`'s table stands (the centre of its footprint, on the floor).
 pub const ROOM_TABLE_AT: Vec3 = Vec3::new(0.2, 0.0, -0.6);
 
@@ -947,30 +984,13 @@ fn room() -> Scene {
         let mesh = b.mesh(boxes(name, &parts));
         b.placed(name, mesh, Trs::from_translation(at), false);
     }
-    // Four spot lights 0.1 m below the ceiling, pointing down (−z of the light is its
-    // axis): the stand-ins for the paper's goniometric lights.
-    for (i, (x, z)) in [(-1.5, -1.25), (1.5, -1.25), (-1.5, 1.25), (1.5, 1.25)]
-        .into_iter()
-        .enumerate()
-    {
-        let node = b.node(
-            &format!("spot_{i}"),
-            None,
-            Trs {
-                rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-                ..Trs::from_translation(v(x, hgt - 0.1, z))
-            },
-        );
-        b.light(
-            &format!("spot_{i}"),
-            LightKind::Spot {
-                intensity: Rgb::new(6.0, 5.6, 5.0),
-                inner_cone_rad: 40f32.to_radians(),
-                outer_cone_rad: 60f32.to_radians(),
-            },
-            node,
-        );
-    }
+    // Four spot lights below the ceiling: the stand-ins for the paper's goniometric lights.
+    ceiling_spots(
+        &mut b,
+        hgt,
+        &[(-1.5, -1.25), (1.5, -1.25), (-1.5, 1.25), (1.5, 1.25)],
+        Rgb::new(6.0, 5.6, 5.0),
+    );
     let cam = b.node(
         "camera",
         None,
@@ -980,15 +1000,7 @@ fn room() -> Scene {
         },
     );
     b.camera("camera", 65f32.to_radians(), cam);
-    b.animation(Animation {
-        name: "move_table".into(),
-        channels: vec![linear_translation(
-            table_node,
-            &[0.0, 1.0],
-            &[ROOM_TABLE_AT, ROOM_TABLE_AT + v(0.6, 0.0, 0.0)],
-        )],
-        properties: Vec::new(),
-    });
+    push_table(&mut b, table_node, ROOM_TABLE_AT);
     b.finish("builtin:room")
 }
 
@@ -1071,26 +1083,13 @@ fn house() -> Scene {
         let mesh = b.mesh(boxes(name, &parts));
         b.placed(name, mesh, Trs::from_translation(at), false);
     }
-    // Two spot lights below the end rooms' ceilings, pointing down.
-    for (i, x) in [-3.3f32, 3.3].into_iter().enumerate() {
-        let node = b.node(
-            &format!("spot_{i}"),
-            None,
-            Trs {
-                rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
-                ..Trs::from_translation(v(x, hgt - 0.1, 0.0))
-            },
-        );
-        b.light(
-            &format!("spot_{i}"),
-            LightKind::Spot {
-                intensity: Rgb::new(9.0, 8.4, 7.5),
-                inner_cone_rad: 40f32.to_radians(),
-                outer_cone_rad: 60f32.to_radians(),
-            },
-            node,
-        );
-    }
+    // Two spot lights below the end rooms' ceilings.
+    ceiling_spots(
+        &mut b,
+        hgt,
+        &[(-3.3, 0.0), (3.3, 0.0)],
+        Rgb::new(9.0, 8.4, 7.5),
+    );
     // In the living room's front corner, looking past the table at the partition.
     let cam = b.node(
         "camera",
@@ -1101,15 +1100,7 @@ fn house() -> Scene {
         },
     );
     b.camera("camera", 65f32.to_radians(), cam);
-    b.animation(Animation {
-        name: "move_table".into(),
-        channels: vec![linear_translation(
-            table_node,
-            &[0.0, 1.0],
-            &[HOUSE_TABLE_AT, HOUSE_TABLE_AT + v(0.6, 0.0, 0.0)],
-        )],
-        properties: Vec::new(),
-    });
+    push_table(&mut b, table_node, HOUSE_TABLE_AT);
     b.finish("builtin:house")
 }
 
