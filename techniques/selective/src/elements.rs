@@ -544,6 +544,11 @@ impl Elements {
         } else {
             0.0
         };
+        // The noise of an element without impacts is that of one impact, not zero: else
+        // a vertex whose elements lost their one or two impacts would pass as a real
+        // change and drop to black at once, while the same impacts arriving were held
+        // back as noise (a one-sided gate that flickers and darkens).
+        let one_impact = counts.map_or(0.0, |c| mean_impact(accumulators, c) * scale);
         for (ii, inst) in scene.instances.iter().enumerate().take(self.instances()) {
             if inst.mask == 0 {
                 continue;
@@ -561,8 +566,13 @@ impl Elements {
                     let acc = &accumulators[index];
                     let element_var = counts.map(|c| {
                         [0, 1].map(|s| {
-                            let y = luminance_f64(acc[s].0) * scale;
-                            y * y / c[index][s].max(1) as f64
+                            let n = c[index][s];
+                            if n <= 0 {
+                                one_impact * one_impact
+                            } else {
+                                let y = luminance_f64(acc[s].0) * scale;
+                                y * y / n as f64
+                            }
                         })
                     });
                     for (a, b) in element_corners(k, e) {
@@ -793,4 +803,23 @@ pub struct Display {
     /// \[W/m²\] from the impacts per element ([`Elements::display_with_noise`]); empty
     /// from [`Elements::display`].
     pub noise: Vec<[f32; 2]>,
+}
+/// The mean luminance an impact carries (photon-energy units, before the display's
+/// scale): the luminance of every side's accumulated energy over its impacts, for sides
+/// with impacts; 0 when there are none.
+fn mean_impact(accumulators: &[[Quanta; 2]], counts: &[[i64; 2]]) -> f64 {
+    let (mut energy, mut impacts) = (0.0f64, 0i64);
+    for (acc, c) in accumulators.iter().zip(counts) {
+        for s in 0..2 {
+            if c[s] > 0 {
+                energy += luminance_f64(acc[s].0).max(0.0);
+                impacts += c[s];
+            }
+        }
+    }
+    if impacts > 0 {
+        energy / impacts as f64
+    } else {
+        0.0
+    }
 }

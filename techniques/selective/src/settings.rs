@@ -140,14 +140,22 @@ pub struct SelectiveSettings {
     /// photons move whole impacts between elements, and the static parts of an animated
     /// scene boiled). Lower: steadier static parts, at the cost of a lag of small real
     /// changes (≈ 1/alpha frames) while objects move; once nothing is stale frames show
-    /// the solution exactly. In (0, 1]; 1 turns the filter off. Default 0.2.
-    #[setting(default = 0.2, range = "(0, 1]")]
+    /// the solution exactly. In (0, 1]; 1 turns the filter off. Default 0.1 (with
+    /// `temporal_sigmas` 16: under a light that keeps moving, frame-to-frame flicker at
+    /// photon_stream's, 0.96–0.98e-3 against 0.99–1.02e-3 in
+    /// `scenarios/selective_moving.toml`, where 0.2 and 2 gave 2.4e-3; the cost is the
+    /// lag: back at its own image 0.38 s after the sphere's push in
+    /// `scenarios/selective_sphere.toml` against 0.25 s, 0.48 s against 0.34 s in
+    /// `selective_cube.toml`).
+    #[setting(default = 0.1, range = "(0, 1]")]
     pub temporal_alpha: f32,
     /// Changes of a display vertex up to this many standard deviations of its impact
     /// noise count as noise for `temporal_alpha`; beyond, the vertex follows with gain
     /// 1 − (kσ/δ)². Higher: steadier, at the cost of lagging real changes of that size.
-    /// ≥ 0, default 2.
-    #[setting(default = 2.0, range = "[0, inf)")]
+    /// The noise is Poisson's, whose tail a few impacts an element reach often (a vertex
+    /// of one or two impacts jumps 3σ at no change at all), hence a wide band. ≥ 0,
+    /// default 16.
+    #[setting(default = 16.0, range = "[0, inf)")]
     pub temporal_sigmas: f32,
     /// Beyond the paper (issue 34 goal 4): indirect light leaves a glossy receiver by
     /// the BRDF's directional albedo towards the camera, A(wo)/π · E, exact when the

@@ -140,3 +140,60 @@ fn the_gather_keeps_the_energy_cuts_the_noise_and_stops_at_creases() {
         "constant field shown as {flat_mean} ± {flat_noise} (exact {exact})"
     );
 }
+
+/// Issue 34 goal 7: the temporal filter's noise estimate gives an element side without
+/// impacts the noise of one impact, not zero. Before, a vertex whose elements lost their
+/// single impacts (a light that moved a little; a prefix of the pool shown after a
+/// restart) counted as a real change and dropped to black in one frame, while impacts
+/// arriving were held back as noise: the static parts boiled, and dimly.
+#[test]
+fn an_element_without_impacts_is_as_noisy_as_one_with_one() {
+    let scene = floor_and_wall();
+    let el = Elements::new(&scene, 10, 45.0);
+    let floor = 2 * (N * N) as usize;
+    let q = 1_000_000i64;
+    // One impact of q on every element; then the floor's impacts gone (the wall keeps its own).
+    let one: Vec<[Quanta; 2]> = (0..el.len())
+        .map(|_| [Quanta([q; 3]), Quanta::ZERO])
+        .collect();
+    let ones = vec![[1i64, 0]; el.len()];
+    let mut gone = one.clone();
+    let mut counts = ones.clone();
+    for e in 0..floor {
+        gone[e] = [Quanta::ZERO; 2];
+        counts[e] = [0, 0];
+    }
+    let before = el.display_with_noise(&scene, &one, &ones, 1.0, 1);
+    let after = el.display_with_noise(&scene, &gone, &counts, 1.0, 1);
+    // A floor vertex away from the wall: (x, z) = (2, 2) m is the floor's vertex
+    // (N/2, N/2), shared by elements that all lost their impact.
+    let floor_vertex = |d: &illume_selective::elements::Display| {
+        let t = 2 * ((N / 2) * N + N / 2) as usize; // the quad at (N/2, N/2): its corner
+        el.irradiance(d, 0, 0, t, Vec2::new(0.0, 0.0), true).x
+    };
+    assert!(floor_vertex(&before) > 0.0 && floor_vertex(&after) == 0.0);
+    // The least noise of any vertex's front side: with one impact per element
+    // everywhere it is positive; it must stay so once the floor's impacts are gone.
+    let least = |noise: &[[f32; 2]]| noise.iter().map(|n| n[0]).fold(f32::INFINITY, f32::min);
+    assert!(
+        least(&after.noise) > 0.5 * least(&before.noise),
+        "the empty floor's least noise {} against {} with one impact each",
+        least(&after.noise),
+        least(&before.noise)
+    );
+    // The filter moves such a vertex by alpha towards black, not all the way: the vertex
+    // averages six elements, so its noise is 1/√6 of its value and a drop to zero lies
+    // within 4σ (with σ = 0 it would pass in full).
+    let mut shown = before.irradiance.clone();
+    illume_selective::temporal::blend(&mut shown, &after, 0.2, 4.0);
+    let shown_display = illume_selective::elements::Display {
+        irradiance: shown,
+        noise: after.noise.clone(),
+    };
+    let v = floor_vertex(&shown_display);
+    let b = floor_vertex(&before);
+    assert!(
+        (v / b - 0.8).abs() < 1e-4,
+        "the floor vertex shows {v} after losing its impacts ({b} before): expected 0.8 of it"
+    );
+}
