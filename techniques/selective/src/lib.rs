@@ -70,6 +70,7 @@
 //! ```
 
 pub mod elements;
+pub mod emission;
 pub mod error;
 pub mod fill;
 pub mod groups;

@@ -131,6 +131,8 @@ pub struct LightCells {
     units: Vec<LightUnit>,
     /// Owner unit of every cell.
     owner: Vec<u32>,
+    /// Emission maps by emitter index ([`crate::emission`]); empty: uniform emission.
+    maps: Vec<(u32, std::sync::Arc<crate::emission::EmissionMap>)>,
 }
 
 fn weight(power: Rgb) -> f64 {
@@ -295,7 +297,26 @@ impl LightCells {
             u.first_cell = owner.len() as u32;
             owner.extend(std::iter::repeat_n(i as u32, u.cells as usize));
         }
-        Self { units, owner }
+        Self {
+            units,
+            owner,
+            maps: Vec::new(),
+        }
+    }
+
+    /// These cells with emission maps `maps` (emitter index, map): photons of those
+    /// emitters start by the map ([`crate::emission`]).
+    pub fn with_maps(
+        mut self,
+        maps: Vec<(u32, std::sync::Arc<crate::emission::EmissionMap>)>,
+    ) -> Self {
+        self.maps = maps;
+        self
+    }
+
+    /// The emission maps (emitter index, map).
+    pub fn maps(&self) -> &[(u32, std::sync::Arc<crate::emission::EmissionMap>)] {
+        &self.maps
     }
 
     /// The units.
@@ -369,6 +390,17 @@ pub fn emit(
         (true, false) => (Vec2::new(first, s.next_1d()), Vec2::splat(0.5)),
         _ => (Vec2::splat(0.5), Vec2::new(first, s.next_1d())),
     };
-    let e = lights.emit_from(emitter as usize, pmf, u_pos, u_dir, s)?;
+    // An emission map moves the start and divides the flux by its density (unbiased).
+    let map = uses_pos
+        .then(|| cells.maps.iter().find(|(e, _)| *e == emitter))
+        .flatten();
+    let (u_pos, density) = match map {
+        Some((_, m)) => m.warp(u_pos),
+        None => (u_pos, 1.0),
+    };
+    let mut e = lights.emit_from(emitter as usize, pmf, u_pos, u_dir, s)?;
+    if density != 1.0 {
+        e.flux /= density;
+    }
     Some((PhotonPath::emitted(e), unit))
 }

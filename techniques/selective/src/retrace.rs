@@ -58,6 +58,19 @@ pub struct Snapshot {
 }
 
 impl Snapshot {
+    /// The state of `world`; light cells over `2^k2` cells, with emission maps `maps`
+    /// ([`crate::emission`]; empty: uniform emission).
+    pub fn with_maps(
+        world: &World,
+        id: u64,
+        k2: u32,
+        maps: Vec<(u32, std::sync::Arc<crate::emission::EmissionMap>)>,
+    ) -> Self {
+        let mut s = Self::of(world, id, k2);
+        s.cells = s.cells.with_maps(maps);
+        s
+    }
+
     /// The state of `world`; light cells over `2^k2` cells.
     pub fn of(world: &World, id: u64, k2: u32) -> Self {
         let scene = &world.scene;

@@ -192,6 +192,17 @@ pub struct SelectiveSettings {
     /// restarts. Default 0.5: moving the only light restarts.
     #[setting(default = 0.5, range = "[0, 1]")]
     pub restart_fraction: f32,
+    /// Beyond the paper (issue 34 goal 2): a directional light's photons start where
+    /// pilot photons found they are stored ([`crate::emission`]: 32² cells over the
+    /// light's disk, 16 pilots each before the first photon; a cell's density ∝ the
+    /// energy its pilots stored + 10 % of the mean; flux divided by the density, so the
+    /// estimate stays unbiased). In an open model under the sun most of the disk lies
+    /// over roofs whose photons are never stored. Cost: 16 384 pilot photons per
+    /// directional light at construction; photons from cells that stored nothing are
+    /// rarer and heavier. Off: the sun's photons start uniformly over its disk, as
+    /// photon_stream's do. Default true.
+    #[setting(default = true)]
+    pub emission_map: bool,
     /// Pacing: a background thread, a wall-clock budget per frame, or photons per
     /// frame. Default [`SelectiveMode::Streaming`] (`animate --realtime` also picks it;
     /// `--work-per-frame` picks [`SelectiveMode::Deterministic`]).
@@ -299,6 +310,7 @@ impl SelectiveSettings {
             filtered_textures: false,
             restart_fraction: 1.0,
             directional_albedo: false,
+            emission_map: false,
             ..Self::default()
         }
     }

@@ -125,7 +125,13 @@ impl Selective {
             pilots: scaled_pilots(&settings, factors.groups(), elements.len() as u64),
             ratio: settings.ratio as u64,
         };
-        let current = Arc::new(Snapshot::of(world, 0, factors.exponent(2)));
+        let scramble = HaltonScramble::new(settings.seed);
+        let maps = if settings.emission_map {
+            crate::emission::build_maps(world, &settings.photon_path(), &scramble)
+        } else {
+            Vec::new()
+        };
+        let current = Arc::new(Snapshot::with_maps(world, 0, factors.exponent(2), maps));
         // 2^24 quanta per photon of the scene's whole power (as photon_stream's pool).
         let power = world.lights.total_power().max_element() as f64
             + world.lights.sky_power().max_element() as f64;
@@ -149,7 +155,7 @@ impl Selective {
             accumulators: vec![[Quanta::ZERO; 2]; elements.len()],
             counts: vec![[0; 2]; elements.len()],
             shown: None,
-            scramble: HaltonScramble::new(settings.seed),
+            scramble,
             rng: Pcg32::new(settings.seed, 0x5e1ec7),
             settings,
             factors,

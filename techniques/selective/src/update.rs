@@ -89,10 +89,12 @@ impl Selective {
                 ChangeResponse::Updated
             }
             Invalidation::Lighting => {
-                let next = Arc::new(Snapshot::of(
+                // The emission maps stay for the pool's life (crate::emission).
+                let next = Arc::new(Snapshot::with_maps(
                     world,
                     self.next_snapshot,
                     self.factors.exponent(2),
+                    self.current.cells.maps().to_vec(),
                 ));
                 self.next_snapshot += 1;
                 let fraction = changed_light_fraction(&self.current, &next);

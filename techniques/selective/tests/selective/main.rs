@@ -8,6 +8,7 @@ mod agreement;
 mod common;
 mod detection;
 mod elements;
+mod emission;
 mod energy;
 mod gather;
 mod glossy;

@@ -18,6 +18,7 @@ fn paper_values(s: &SelectiveSettings) -> Vec<(&'static str, bool)> {
         ("filtered_textures", !s.filtered_textures),
         ("restart_fraction", s.restart_fraction == 1.0),
         ("directional_albedo", !s.directional_albedo),
+        ("emission_map", !s.emission_map),
     ]
 }
 
