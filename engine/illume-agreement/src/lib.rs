@@ -117,7 +117,7 @@ impl Agreement {
 impl Agreement {
     /// The reference path tracer as the ground truth: 512 spp (two frames of 256),
     /// seed 1.
-    fn ground_truth() -> Self {
+    pub fn ground_truth() -> Self {
         Self {
             technique: "reference".into(),
             preset: None,
@@ -174,6 +174,12 @@ pub fn indirect(lighting: Lighting, config: &Config, frames: u32) -> RgbImage {
 /// The indirect image of `config` in `scene` (any scene: a technique's own checks beyond
 /// the shared lightings) after `frames` frames at t = 0.
 pub fn indirect_of(scene: illume_scene::Scene, config: &Config, frames: u32) -> RgbImage {
+    indirect_at(scene, config, frames, 0.0)
+}
+
+/// [`indirect_of`] at scene time `t` \[s\] (e.g. a sunlit hour of `builtin:sun-room`,
+/// whose time is seconds since local midnight).
+pub fn indirect_at(scene: illume_scene::Scene, config: &Config, frames: u32, t: f64) -> RgbImage {
     let mut engine = Engine::new(scene, config).unwrap_or_else(|e| panic!("{e}"));
     engine
         .precompute(&mut Silent)
@@ -182,7 +188,7 @@ pub fn indirect_of(scene: illume_scene::Scene, config: &Config, frames: u32) -> 
     for _ in 0..frames.max(1) {
         image = Some(
             engine
-                .step(0.0)
+                .step(t)
                 .unwrap_or_else(|e| panic!("{e}"))
                 .frame
                 .indirect,

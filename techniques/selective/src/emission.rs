@@ -20,17 +20,19 @@
 //! so a group's photons, which share a tight box of Halton coordinates, still start
 //! close together (the coherence §4.2 relies on).
 //!
-//! The map is built once, in the scene as it stands when the technique starts, and kept
-//! for the life of the pool (every snapshot carries it): re-tracing a photon must start
-//! it where it started before, and a map rebuilt at each change would move every photon.
-//! After the sun or the scene changes it may fit less well; it stays unbiased.
+//! The maps are built when the technique starts and kept by every later snapshot:
+//! re-tracing a photon must start it where it started before, and a map rebuilt at each
+//! change would move every photon. They are rebuilt only when the solution restarts (a
+//! light change that re-traces everything anyway) and a directional light has turned by
+//! more than [`REBUILD_DEG`] since its map was made, or has none (the sun rose). Between
+//! rebuilds a map may fit less well; it stays unbiased.
 
 use crate::qmc::photon_stream;
 use illume_core::sampling::{HaltonScramble, ONE_MINUS_EPSILON, SampleStream};
-use illume_core::{Vec2, luminance};
+use illume_core::{Vec2, Vec3, luminance};
 use illume_scene::MASK_DEFAULT;
 use illume_transport::World;
-use illume_transport::lights::Emitter;
+use illume_transport::lights::{Emitter, LightSet};
 use illume_transport::photon::{PhotonPath, PhotonPathSettings};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -44,6 +46,10 @@ pub const PILOTS_PER_CELL: u32 = 16;
 /// Every cell's density is at least this fraction of the mean importance's (relative):
 /// cells whose pilots stored nothing keep a share.
 pub const FLOOR: f64 = 0.1;
+
+/// A directional light that turned by more than this since its map was made gets a new
+/// one at the next restart \[degrees\].
+pub const REBUILD_DEG: f32 = 2.0;
 
 /// First photon index of the map's pilots: far above any pool (whose indices stay
 /// below `MAX_POOL` = 2³²), so their Halton points are not the pool's.
@@ -138,20 +144,58 @@ fn invert(cdf: &[f64], u: f64) -> (usize, f64) {
     (i, f.clamp(0.0, 1.0))
 }
 
-/// The emission maps of `world`'s directional lights (emitter index and map), from
-/// pilot photons traced with `path` settings; lights whose pilots stored nothing get
-/// none.
+/// The emission maps of a light set's directional lights, and the directions they
+/// were made for (a light whose pilots stored nothing has a direction and no map).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EmissionMaps {
+    /// Emitter index and its map.
+    pub maps: Vec<(u32, Arc<EmissionMap>)>,
+    /// Emitter index and the direction its light travelled in when its map was made.
+    pub built_for: Vec<(u32, Vec3)>,
+}
+
+impl EmissionMaps {
+    /// The map of emitter `i`, if it has one.
+    pub fn of(&self, i: u32) -> Option<&EmissionMap> {
+        self.maps.iter().find(|(e, _)| *e == i).map(|(_, m)| &**m)
+    }
+
+    /// True when every directional light of `lights` with power was mapped in its
+    /// present direction (within [`REBUILD_DEG`]).
+    pub fn fit(&self, lights: &LightSet) -> bool {
+        let cos = REBUILD_DEG.to_radians().cos();
+        lights
+            .emitters()
+            .iter()
+            .zip(lights.powers())
+            .enumerate()
+            .all(|(i, (e, power))| match e {
+                Emitter::Directional { direction, .. } if power.max_element() > 0.0 => self
+                    .built_for
+                    .iter()
+                    .any(|(j, d)| *j == i as u32 && d.dot(*direction) >= cos),
+                _ => true,
+            })
+    }
+}
+
+/// The emission maps of `world`'s directional lights (module docs), from pilot photons
+/// traced with `path` settings.
 pub fn build_maps(
     world: &World,
     path: &PhotonPathSettings,
     scramble: &HaltonScramble,
-) -> Vec<(u32, Arc<EmissionMap>)> {
+) -> EmissionMaps {
     let lights = &world.lights;
-    let mut maps = Vec::new();
+    let mut maps = EmissionMaps::default();
     for (i, e) in lights.emitters().iter().enumerate() {
-        if !matches!(e, Emitter::Directional { .. }) {
+        let Emitter::Directional { direction, .. } = e else {
+            continue;
+        };
+        if lights.powers()[i].max_element() <= 0.0 {
             continue;
         }
+        maps.built_for.push((i as u32, *direction));
         let cells = SIDE * SIDE;
         let importance: Vec<f64> = (0..cells)
             .into_par_iter()
@@ -197,7 +241,7 @@ pub fn build_maps(
             })
             .collect();
         if let Some(map) = EmissionMap::from_importance(&importance) {
-            maps.push((i as u32, Arc::new(map)));
+            maps.maps.push((i as u32, Arc::new(map)));
         }
     }
     maps

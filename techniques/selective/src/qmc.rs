@@ -132,7 +132,7 @@ pub struct LightCells {
     /// Owner unit of every cell.
     owner: Vec<u32>,
     /// Emission maps by emitter index ([`crate::emission`]); empty: uniform emission.
-    maps: Vec<(u32, std::sync::Arc<crate::emission::EmissionMap>)>,
+    maps: crate::emission::EmissionMaps,
 }
 
 fn weight(power: Rgb) -> f64 {
@@ -300,22 +300,19 @@ impl LightCells {
         Self {
             units,
             owner,
-            maps: Vec::new(),
+            maps: Default::default(),
         }
     }
 
     /// These cells with emission maps `maps` (emitter index, map): photons of those
     /// emitters start by the map ([`crate::emission`]).
-    pub fn with_maps(
-        mut self,
-        maps: Vec<(u32, std::sync::Arc<crate::emission::EmissionMap>)>,
-    ) -> Self {
+    pub fn with_maps(mut self, maps: crate::emission::EmissionMaps) -> Self {
         self.maps = maps;
         self
     }
 
-    /// The emission maps (emitter index, map).
-    pub fn maps(&self) -> &[(u32, std::sync::Arc<crate::emission::EmissionMap>)] {
+    /// The emission maps.
+    pub fn maps(&self) -> &crate::emission::EmissionMaps {
         &self.maps
     }
 
@@ -391,11 +388,9 @@ pub fn emit(
         _ => (Vec2::splat(0.5), Vec2::new(first, s.next_1d())),
     };
     // An emission map moves the start and divides the flux by its density (unbiased).
-    let map = uses_pos
-        .then(|| cells.maps.iter().find(|(e, _)| *e == emitter))
-        .flatten();
+    let map = uses_pos.then(|| cells.maps.of(emitter)).flatten();
     let (u_pos, density) = match map {
-        Some((_, m)) => m.warp(u_pos),
+        Some(m) => m.warp(u_pos),
         None => (u_pos, 1.0),
     };
     let mut e = lights.emit_from(emitter as usize, pmf, u_pos, u_dir, s)?;

@@ -60,12 +60,7 @@ pub struct Snapshot {
 impl Snapshot {
     /// The state of `world`; light cells over `2^k2` cells, with emission maps `maps`
     /// ([`crate::emission`]; empty: uniform emission).
-    pub fn with_maps(
-        world: &World,
-        id: u64,
-        k2: u32,
-        maps: Vec<(u32, std::sync::Arc<crate::emission::EmissionMap>)>,
-    ) -> Self {
+    pub fn with_maps(world: &World, id: u64, k2: u32, maps: crate::emission::EmissionMaps) -> Self {
         let mut s = Self::of(world, id, k2);
         s.cells = s.cells.with_maps(maps);
         s

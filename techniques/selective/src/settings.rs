@@ -196,10 +196,12 @@ pub struct SelectiveSettings {
     /// pilot photons found they are stored ([`crate::emission`]: 32² cells over the
     /// light's disk, 16 pilots each before the first photon; a cell's density ∝ the
     /// energy its pilots stored + 10 % of the mean; flux divided by the density, so the
-    /// estimate stays unbiased). In an open model under the sun most of the disk lies
-    /// over roofs whose photons are never stored. Cost: 16 384 pilot photons per
-    /// directional light at construction; photons from cells that stored nothing are
-    /// rarer and heavier. Off: the sun's photons start uniformly over its disk, as
+    /// estimate stays unbiased; rebuilt only at a restart after the light turned by
+    /// more than 2°). In an open model under the sun most of the disk lies over roofs
+    /// whose photons are never stored. Cost: 16 384 pilot photons per directional light
+    /// at construction and at such restarts; photons then bounce inside instead of
+    /// leaving (about half the photons a second in Dabrovic Sponza); photons from cells
+    /// that stored nothing are rarer and heavier. Off: the sun's photons start uniformly over its disk, as
     /// photon_stream's do. Default true.
     #[setting(default = true)]
     pub emission_map: bool,

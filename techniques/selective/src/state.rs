@@ -41,6 +41,9 @@ pub struct SelectiveCounters {
     pub restarts: u64,
     /// Rounds of N_p correctives per group added to the pool (`max_photons`).
     pub growth_rounds: u64,
+    /// Emission maps built after the first ([`crate::emission`]: at restarts, when a
+    /// directional light turned).
+    pub emission_maps_built: u64,
     /// Seconds spent tracing.
     pub trace_s: f64,
 }
@@ -129,7 +132,7 @@ impl Selective {
         let maps = if settings.emission_map {
             crate::emission::build_maps(world, &settings.photon_path(), &scramble)
         } else {
-            Vec::new()
+            Default::default()
         };
         let current = Arc::new(Snapshot::with_maps(world, 0, factors.exponent(2), maps));
         // 2^24 quanta per photon of the scene's whole power (as photon_stream's pool).
@@ -382,6 +385,7 @@ impl Technique for Selective {
             ("groups_retraced", c.groups_retraced as f64),
             ("restarts", c.restarts as f64),
             ("growth_rounds", c.growth_rounds as f64),
+            ("emission_maps_built", c.emission_maps_built as f64),
             (
                 "photons_per_s",
                 if c.trace_s > 0.0 {

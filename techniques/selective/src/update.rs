@@ -89,17 +89,28 @@ impl Selective {
                 ChangeResponse::Updated
             }
             Invalidation::Lighting => {
-                // The emission maps stay for the pool's life (crate::emission).
-                let next = Arc::new(Snapshot::with_maps(
+                // The emission maps stay (crate::emission), unless the solution restarts
+                // and a directional light turned since its map was made.
+                let mut next = Snapshot::with_maps(
                     world,
                     self.next_snapshot,
                     self.factors.exponent(2),
-                    self.current.cells.maps().to_vec(),
-                ));
+                    self.current.cells.maps().clone(),
+                );
                 self.next_snapshot += 1;
                 let fraction = changed_light_fraction(&self.current, &next);
-                self.current = next;
-                if fraction > self.settings.restart_fraction as f64 {
+                let restart = fraction > self.settings.restart_fraction as f64;
+                if restart && self.settings.emission_map && !next.cells.maps().fit(&next.lights) {
+                    let maps = crate::emission::build_maps(
+                        world,
+                        &self.settings.photon_path(),
+                        &self.scramble,
+                    );
+                    next.cells = next.cells.with_maps(maps);
+                    self.counters.emission_maps_built += 1;
+                }
+                self.current = Arc::new(next);
+                if restart {
                     self.restart();
                 } else {
                     self.stale = self
