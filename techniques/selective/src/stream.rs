@@ -92,6 +92,9 @@ pub struct Streaming {
     elements: Arc<Elements>,
     thread: Option<JoinHandle<()>>,
     last_shade_ms: f64,
+    /// How long the last [`Technique::indirect`] waited for the solution's lock (the
+    /// thread finishing its step) \[ms\].
+    last_lock_wait_ms: f64,
     /// The thread's steps when the last [`Technique::indirect`] copied the display values.
     steps_at_indirect: Option<u64>,
 }
@@ -119,6 +122,7 @@ impl Streaming {
             elements,
             thread: Some(thread),
             last_shade_ms: 0.0,
+            last_lock_wait_ms: 0.0,
             steps_at_indirect: None,
         })
     }
@@ -247,6 +251,7 @@ impl Technique for Streaming {
         let t0 = Instant::now();
         let (display, directional) = {
             let mut solution = self.shared.lock_for_frame();
+            self.last_lock_wait_ms = t0.elapsed().as_secs_f64() * 1e3;
             solution.set_aspect(gbuffer.width, gbuffer.height);
             // Steps are counted under this lock: the count matches the values copied.
             self.steps_at_indirect = Some(self.shared.steps.load(Ordering::Acquire));
@@ -263,6 +268,7 @@ impl Technique for Streaming {
     fn stats(&self) -> Counters {
         let mut c = self.shared.lock_for_frame().stats();
         c.set("shading_ms", self.last_shade_ms);
+        c.set("lock_wait_ms", self.last_lock_wait_ms);
         c.set("thread_steps", self.thread_steps() as f64);
         c
     }
