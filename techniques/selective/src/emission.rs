@@ -4,13 +4,14 @@
 //! ([`illume_transport::LightSet`]): in an open model most of that disk lies over roofs
 //! and outer walls whose photons leave the scene after their first hit, and only the
 //! first hit is not stored (the renderer draws direct light). In Dabrovic Sponza under
-//! the noon sun 0.028 impacts were stored per photon traced (0.44 per element at the
-//! default pool): the elements the camera sees were nearly empty.
+//! the 13:00 sun 0.028 impacts were stored per photon traced (0.44 per element at the
+//! default pool): the elements the camera sees were nearly empty. With the map: 0.355.
 //!
 //! An emission map spends the photons where they are stored. The disk's sample square
 //! (the two emission coordinates, mapped to the disk by an area-preserving map) is cut
 //! into [`SIDE`]² cells; before the first photon, [`PILOTS_PER_CELL`] photons per cell
-//! are traced uniformly and each cell's importance is the impacts its photons stored.
+//! are traced uniformly and each cell's importance is the energy its photons stored
+//! (luminance, relative to what each carried at its start).
 //! Photons then start in a cell with density `p` ∝ importance + [`FLOOR`]·mean (never
 //! zero, so every path the uniform emission could take remains possible) and carry
 //! their flux divided by `p` (relative to uniform): the estimate stays unbiased, only
