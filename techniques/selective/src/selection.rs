@@ -4,12 +4,65 @@
 //! one ([`crate::retrace`]), the priorities its pilots raise (Eq. 6), and the pool's
 //! growth by rounds of correctives once everything is current.
 
-use crate::retrace::{Met, PilotHit, Snapshot, TraceOutput, UnionWorld};
+use crate::elements::Elements;
+use crate::groups::GroupLayout;
+use crate::masking::{MaskingView, TextureMasking};
+use crate::retrace::{Frustum, Met, PilotHit, Snapshot, TraceContext, TraceOutput, UnionWorld};
 use crate::settings::GroupOrder;
 use crate::state::{Group, Selective};
+use illume_core::sampling::HaltonScramble;
 use illume_transport::World;
+use illume_transport::photon::PhotonPathSettings;
 use std::sync::Arc;
 use std::time::Instant;
+
+/// A stale group's re-trace taken out of the solution's lock (the streaming thread,
+/// [`crate::stream`]): chosen and set up under the lock ([`Selective::take_work`]),
+/// traced without it ([`RetraceJob::trace`]) so that frames copy the display values
+/// meanwhile, and applied under it again ([`Selective::finish_retrace`]). Owned handles
+/// of everything the trace reads.
+pub struct RetraceJob {
+    g: u64,
+    epoch: Arc<Snapshot>,
+    current: Arc<Snapshot>,
+    union: UnionWorld,
+    indices: Vec<u64>,
+    frustum: Frustum,
+    elements: Arc<Elements>,
+    scramble: Arc<HaltonScramble>,
+    masking: Arc<TextureMasking>,
+    path: PhotonPathSettings,
+    inv_quantum: f64,
+    layout: GroupLayout,
+    pixels_high: u32,
+    started: Instant,
+}
+
+/// What [`Selective::take_work`] did under the lock.
+pub enum Work {
+    /// A group to re-trace outside the lock.
+    Retrace(Box<RetraceJob>),
+    /// A step done under the lock ([`Selective::step`]'s result).
+    Stepped(Option<u64>),
+}
+
+impl RetraceJob {
+    /// The re-trace (in the union of the job's two scene states, which it owns; the
+    /// caller keeps the world read-locked, as for any step).
+    pub fn trace(&self) -> TraceOutput {
+        TraceContext {
+            elements: &self.elements,
+            layout: self.layout,
+            scramble: &self.scramble,
+            path: self.path,
+            inv_quantum: self.inv_quantum,
+            frustum: &self.frustum,
+            masking: &self.masking,
+            view: MaskingView::of(&self.frustum, self.pixels_high),
+        }
+        .retrace(&self.union, &self.epoch, &self.current, &self.indices)
+    }
+}
 
 impl Selective {
     /// One step of work: a stale group, else a fill chunk, else (with
@@ -24,6 +77,73 @@ impl Selective {
             return None;
         }
         Some(self.fill(world, self.layout.per_group().max(4096)))
+    }
+
+    /// The streaming thread's unit of work, under the lock: a stale group whose re-trace
+    /// has something to trace becomes a [`RetraceJob`] for outside the lock; anything
+    /// else (a group with nothing to trace, a fill chunk, growth) is done here as
+    /// [`Selective::step`] does it.
+    pub fn take_work(&mut self, world: &World) -> Work {
+        let Some(g) = self.next_group() else {
+            return Work::Stepped(self.step(world));
+        };
+        let epoch = Arc::clone(&self.groups[g as usize].epoch);
+        let current = Arc::clone(&self.current);
+        let key = (epoch.id, current.id);
+        if self.union.as_ref().is_none_or(|u| u.key != key) {
+            self.union = Some(UnionWorld::new(world, &epoch, &current));
+        }
+        if self.union.as_ref().is_none_or(|u| u.changes.none()) {
+            return Work::Stepped(Some(self.retrace_group(world, g)));
+        }
+        let union = self.union.take().expect("built above");
+        let frustum = crate::retrace::Frustum::of(&world.scene, self.aspect);
+        self.cursor = (g + 1) % self.layout.groups;
+        Work::Retrace(Box::new(RetraceJob {
+            g,
+            indices: self.layout.photons_of(g, self.filled),
+            epoch,
+            current,
+            union,
+            frustum,
+            elements: Arc::clone(&self.elements),
+            scramble: Arc::clone(&self.scramble),
+            masking: Arc::clone(&self.masking),
+            path: self.settings.photon_path(),
+            inv_quantum: 1.0 / self.quantum_w,
+            layout: self.layout,
+            pixels_high: self.pixels_high,
+            started: Instant::now(),
+        }))
+    }
+
+    /// Applies a [`RetraceJob`]'s output under the lock, as [`Selective::retrace_group`]
+    /// would have, unless the group no longer holds the state the job started from: the
+    /// solution restarted meanwhile (a restart moves every group to the new state) or
+    /// someone else brought the group up to date. Its deposits are then dropped: they
+    /// belong to a state the accumulators no longer hold. A group that a newer change
+    /// made stale again moves to the job's state and stays stale. Returns the photons
+    /// traced.
+    pub fn finish_retrace(&mut self, job: RetraceJob, out: TraceOutput) -> u64 {
+        let g = job.g as usize;
+        if self.groups[g].epoch.id != job.epoch.id {
+            return 0;
+        }
+        self.apply(&out);
+        self.record_pilots(&out);
+        self.raise(&out, &job.epoch);
+        let now_current = job.current.id == self.current.id;
+        self.groups[g].epoch = job.current;
+        if now_current {
+            self.stale -= 1;
+        }
+        if self.union.is_none() {
+            self.union = Some(job.union);
+        }
+        self.groups[g].priority.p = 0.0;
+        self.counters.groups_retraced += 1;
+        self.counters.trace_s += job.started.elapsed().as_secs_f64();
+        out.photons
     }
 
     /// The next stale group by the settings' order.

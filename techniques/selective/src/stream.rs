@@ -24,6 +24,7 @@
 //! parallel section has drained (issue 34, goal 6).
 
 use crate::elements::Elements;
+use crate::selection::Work;
 use crate::state::Selective;
 use crate::{SelectiveError, SelectiveSettings, shade};
 use illume_core::image::RgbImage;
@@ -177,21 +178,42 @@ fn spawn(world: SharedWorld, shared: Arc<Shared>, threads: u32) -> std::io::Resu
                 let worked = {
                     let w = world.read().unwrap_or_else(|e| e.into_inner());
                     let w: &World = &w;
-                    let mut guard = shared.lock();
-                    let solution: &mut Selective = &mut guard;
                     // On the thread's own pool when it has one: the renderer's frames keep
                     // the global pool busy, and work queued there waits for them.
-                    let worked = match &pool {
-                        Some(pool) => pool.install(|| solution.step(w)),
-                        None => solution.step(w),
+                    let run = |f: &mut (dyn FnMut() + Send)| match &pool {
+                        Some(pool) => pool.install(f),
+                        None => f(),
+                    };
+                    // Steps are counted under the lock: whoever sees a step's effect sees
+                    // it counted.
+                    let counted = |done: bool| {
+                        if done {
+                            shared.steps.fetch_add(1, Ordering::AcqRel);
+                        }
+                        done
+                    };
+                    // A stale group is traced outside the solution's lock, so that a frame
+                    // copying the display values does not wait for a whole re-trace
+                    // (crate::selection::RetraceJob); other work is done under it.
+                    let mut work = None;
+                    run(&mut || {
+                        let mut guard = shared.lock();
+                        work = Some(match guard.take_work(w) {
+                            Work::Stepped(done) => Err(counted(done.is_some())),
+                            Work::Retrace(job) => Ok(job),
+                        });
+                    });
+                    match work.expect("set above") {
+                        Err(worked) => worked,
+                        Ok(job) => {
+                            let mut out = None;
+                            run(&mut || out = Some(job.trace()));
+                            let out = out.expect("set above");
+                            let mut guard = shared.lock();
+                            guard.finish_retrace(*job, out);
+                            counted(true)
+                        }
                     }
-                    .is_some();
-                    if worked {
-                        // Counted under the lock: whoever sees the step's effect sees it
-                        // counted.
-                        shared.steps.fetch_add(1, Ordering::AcqRel);
-                    }
-                    worked
                 };
                 if !worked {
                     std::thread::park_timeout(IDLE_WAIT);

@@ -237,3 +237,83 @@ fn settled_once_the_thread_is_done_and_a_frame_took_its_values() {
         "the sphere moved and the indirect light did not change"
     );
 }
+
+/// Moves `light` 0 of `world` by `by` (a light change: with one light, a restart).
+fn move_light(world: &SharedWorld, sel: &mut Streaming, by: Vec3) {
+    sel.before_world_write();
+    let mut w = world.write().unwrap();
+    let light = illume_scene::LightId(0);
+    let world_from_light = Affine3A::from_translation(by) * w.scene.lights[0].world_from_light;
+    let changes = w
+        .apply_edit(&Edit::SetLightTransform {
+            light,
+            world_from_light,
+        })
+        .unwrap();
+    drop(w);
+    assert_eq!(
+        sel.scene_changed(&world.read().unwrap(), &changes),
+        ChangeResponse::Updated
+    );
+}
+
+/// The thread traces a stale group outside the solution's lock and applies it under the
+/// lock afterwards. Moves, a restart (the light moved) and a frame thread that brings
+/// the solution up to date itself, all while groups are out being traced, must still end
+/// in exactly a from-scratch trace's accumulators and counts: a re-trace that came back
+/// after a restart or after its group was brought up to date is dropped, one whose group
+/// went stale again moves it one state on.
+#[test]
+fn re_traces_outside_the_lock_end_in_the_exact_solution_whatever_came_between() {
+    // Groups of ≈ 1 600 photons, so that a re-trace is out for a while.
+    let settings = || SelectiveSettings {
+        pilots_per_group: 400,
+        ..settings()
+    };
+    let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
+    let mut sel = Streaming::new(&world, settings()).unwrap();
+    let pool = sel.with_solution(|s| s.layout().pool());
+    wait_for(&sel, "fill the pool", |s| s.filled() == pool);
+    for round in 0..32 {
+        let dx = if round % 2 == 0 { 0.04 } else { -0.03 };
+        move_sphere(&world, &mut sel, Vec3::new(dx, 0.0, 0.01));
+        std::thread::sleep(Duration::from_millis(3));
+        match round % 8 {
+            // A restart while a group may be out.
+            3 => move_light(&world, &mut sel, Vec3::new(0.02, 0.0, 0.0)),
+            // The frame's side brings every group up to date while one may be out.
+            6 => sel.with_solution(|s| s.converge(&world.read().unwrap())),
+            _ => {}
+        }
+    }
+    wait_for(
+        &sel,
+        "bring every group up to date and fill the pool",
+        |s| s.stale_groups() == 0 && s.filled() == pool,
+    );
+    let w = world.read().unwrap();
+    let mut oracle = Selective::for_world(
+        &w,
+        SelectiveSettings {
+            mode: SelectiveMode::Deterministic,
+            ..settings()
+        },
+    )
+    .unwrap();
+    oracle.converge(&w);
+    let (ours, counts) = sel.with_solution(|s| (s.accumulators().to_vec(), s.counts().to_vec()));
+    let differing = ours
+        .iter()
+        .zip(oracle.accumulators())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(
+        differing, 0,
+        "{differing} elements differ from a fresh trace"
+    );
+    assert_eq!(
+        counts,
+        oracle.counts(),
+        "impact counts differ from a fresh trace"
+    );
+}
