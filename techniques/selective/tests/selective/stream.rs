@@ -57,6 +57,37 @@ fn move_sphere(world: &SharedWorld, sel: &mut Streaming, by: Vec3) {
     assert_eq!(r, ChangeResponse::Updated);
 }
 
+/// Asserts that `sel`'s accumulators and impact counts are exactly a from-scratch trace's
+/// of `world` as it stands, with `settings` (traced in deterministic mode).
+fn assert_fresh_trace(world: &SharedWorld, sel: &Streaming, settings: SelectiveSettings) {
+    let w = world.read().unwrap();
+    let mut oracle = Selective::for_world(
+        &w,
+        SelectiveSettings {
+            mode: SelectiveMode::Deterministic,
+            ..settings
+        },
+    )
+    .unwrap();
+    oracle.converge(&w);
+    let (ours, counts) = sel.with_solution(|s| (s.accumulators().to_vec(), s.counts().to_vec()));
+    assert_eq!(ours.len(), oracle.accumulators().len());
+    let differing = ours
+        .iter()
+        .zip(oracle.accumulators())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(
+        differing, 0,
+        "{differing} elements differ from a fresh trace"
+    );
+    assert_eq!(
+        counts,
+        oracle.counts(),
+        "impact counts differ from a fresh trace"
+    );
+}
+
 #[test]
 fn the_thread_fills_the_pool_and_follows_changes_to_the_exact_solution() {
     let world = World::new(illume_scene::builtin::load("cornell-spot").unwrap()).shared();
@@ -89,27 +120,7 @@ fn the_thread_fills_the_pool_and_follows_changes_to_the_exact_solution() {
     );
 
     // Exactly a from-scratch trace of the final scene.
-    let w = world.read().unwrap();
-    let mut oracle = Selective::for_world(
-        &w,
-        SelectiveSettings {
-            mode: SelectiveMode::Deterministic,
-            ..settings()
-        },
-    )
-    .unwrap();
-    oracle.converge(&w);
-    let ours = sel.with_solution(|s| s.accumulators().to_vec());
-    assert_eq!(ours.len(), oracle.accumulators().len());
-    let differing = ours
-        .iter()
-        .zip(oracle.accumulators())
-        .filter(|(a, b)| a != b)
-        .count();
-    assert_eq!(
-        differing, 0,
-        "{differing} elements differ from a fresh trace"
-    );
+    assert_fresh_trace(&world, &sel, settings());
     assert!(sel.with_solution(|s| s.counters().photons_invalid) > 0);
 }
 
@@ -291,29 +302,5 @@ fn re_traces_outside_the_lock_end_in_the_exact_solution_whatever_came_between() 
         "bring every group up to date and fill the pool",
         |s| s.stale_groups() == 0 && s.filled() == pool,
     );
-    let w = world.read().unwrap();
-    let mut oracle = Selective::for_world(
-        &w,
-        SelectiveSettings {
-            mode: SelectiveMode::Deterministic,
-            ..settings()
-        },
-    )
-    .unwrap();
-    oracle.converge(&w);
-    let (ours, counts) = sel.with_solution(|s| (s.accumulators().to_vec(), s.counts().to_vec()));
-    let differing = ours
-        .iter()
-        .zip(oracle.accumulators())
-        .filter(|(a, b)| a != b)
-        .count();
-    assert_eq!(
-        differing, 0,
-        "{differing} elements differ from a fresh trace"
-    );
-    assert_eq!(
-        counts,
-        oracle.counts(),
-        "impact counts differ from a fresh trace"
-    );
+    assert_fresh_trace(&world, &sel, settings());
 }
