@@ -804,6 +804,14 @@ fn boxes(name: &str, parts: &[BoxPart]) -> Mesh {
     m
 }
 
+/// Static furniture: each `(name, boxes, position)` one mesh, placed as an instance.
+fn place_static<const N: usize>(b: &mut SceneBuilder, pieces: [(&str, Vec<BoxPart>, Vec3); N]) {
+    for (name, parts, at) in pieces {
+        let mesh = b.mesh(boxes(name, &parts));
+        b.placed(name, mesh, Trs::from_translation(at), false);
+    }
+}
+
 /// The ROOM's and the HOUSE's materials, made in this order.
 struct Furnishings {
     wall: MaterialId,
@@ -980,10 +988,7 @@ fn room() -> Scene {
             v(2.75, 0.0, -0.8),
         ),
     ];
-    for (name, parts, at) in pieces {
-        let mesh = b.mesh(boxes(name, &parts));
-        b.placed(name, mesh, Trs::from_translation(at), false);
-    }
+    place_static(&mut b, pieces);
     // Four spot lights below the ceiling: the stand-ins for the paper's goniometric lights.
     ceiling_spots(
         &mut b,
@@ -1079,10 +1084,7 @@ fn house() -> Scene {
             v(3.5, 0.0, -2.65),
         ),
     ];
-    for (name, parts, at) in pieces {
-        let mesh = b.mesh(boxes(name, &parts));
-        b.placed(name, mesh, Trs::from_translation(at), false);
-    }
+    place_static(&mut b, pieces);
     // Two spot lights below the end rooms' ceilings.
     ceiling_spots(
         &mut b,

@@ -4,6 +4,7 @@ use illume_core::{Quat, Rgb, Vec3};
 use illume_scene::builtin::{SceneBuilder, quad, unit_box};
 use illume_scene::{LightKind, Material, MaterialId, Trs};
 use illume_transport::World;
+use illume_transport::flux::Quanta;
 
 /// A grey floor (albedo 0.6), a half-metre box 0.6 m above it (dynamic, named "box") with
 /// the material `box_material` makes, a 10 W/sr point light at (0.3, 2.5, 0.2) and a
@@ -67,4 +68,15 @@ pub fn one_mesh_scene(
     let mut scene = b.finish(&format!("test:{name}"));
     scene.set_time(0.0);
     scene
+}
+
+/// Asserts that `ours` equals a from-scratch trace's accumulators `fresh`, element for
+/// element, naming how many differ.
+pub fn assert_same_accumulators(ours: &[[Quanta; 2]], fresh: &[[Quanta; 2]]) {
+    assert_eq!(ours.len(), fresh.len(), "element counts differ");
+    let differing = ours.iter().zip(fresh).filter(|(a, b)| a != b).count();
+    assert_eq!(
+        differing, 0,
+        "{differing} elements differ from a from-scratch trace"
+    );
 }

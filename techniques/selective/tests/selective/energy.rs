@@ -117,16 +117,7 @@ fn run(order: GroupOrder, restart_fraction: f32) -> (u64, u64) {
     assert_eq!(sel.stale_groups(), 0);
     let oracle = from_scratch(&world, &settings);
     assert_eq!(sel.filled(), oracle.filled());
-    let differing = sel
-        .accumulators()
-        .iter()
-        .zip(oracle.accumulators())
-        .filter(|(a, b)| a != b)
-        .count();
-    assert_eq!(
-        differing, 0,
-        "{differing} accumulators differ from a from-scratch trace"
-    );
+    crate::common::assert_same_accumulators(sel.accumulators(), oracle.accumulators());
     let nonzero = oracle
         .accumulators()
         .iter()

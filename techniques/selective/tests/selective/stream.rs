@@ -71,16 +71,7 @@ fn assert_fresh_trace(world: &SharedWorld, sel: &Streaming, settings: SelectiveS
     .unwrap();
     oracle.converge(&w);
     let (ours, counts) = sel.with_solution(|s| (s.accumulators().to_vec(), s.counts().to_vec()));
-    assert_eq!(ours.len(), oracle.accumulators().len());
-    let differing = ours
-        .iter()
-        .zip(oracle.accumulators())
-        .filter(|(a, b)| a != b)
-        .count();
-    assert_eq!(
-        differing, 0,
-        "{differing} elements differ from a fresh trace"
-    );
+    crate::common::assert_same_accumulators(&ours, oracle.accumulators());
     assert_eq!(
         counts,
         oracle.counts(),
