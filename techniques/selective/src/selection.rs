@@ -87,25 +87,44 @@ impl Selective {
         let Some(g) = self.next_group() else {
             return Work::Stepped(self.step(world));
         };
+        match self.prepare_retrace(world, g) {
+            Some(job) => Work::Retrace(job),
+            None => Work::Stepped(Some(0)),
+        }
+    }
+
+    /// Sets up group `g`'s re-trace in `world` (current state): the job, or None when
+    /// there is nothing to trace (the group is current already, or nothing photons see
+    /// changed between its state and the current one), which is then settled here.
+    fn prepare_retrace(&mut self, world: &World, g: u64) -> Option<Box<RetraceJob>> {
+        let started = Instant::now();
         let epoch = Arc::clone(&self.groups[g as usize].epoch);
         let current = Arc::clone(&self.current);
+        self.cursor = (g + 1) % self.layout.groups;
+        if epoch.id == current.id {
+            self.groups[g as usize].priority.p = 0.0;
+            return None;
+        }
         let key = (epoch.id, current.id);
         if self.union.as_ref().is_none_or(|u| u.key != key) {
             self.union = Some(UnionWorld::new(world, &epoch, &current));
         }
         if self.union.as_ref().is_none_or(|u| u.changes.none()) {
-            return Work::Stepped(Some(self.retrace_group(world, g)));
+            // Nothing to trace: the group moves to the current state as it is.
+            self.groups[g as usize].epoch = current;
+            self.groups[g as usize].priority.p = 0.0;
+            self.stale -= 1;
+            self.counters.groups_retraced += 1;
+            self.counters.trace_s += started.elapsed().as_secs_f64();
+            return None;
         }
-        let union = self.union.take().expect("built above");
-        let frustum = crate::retrace::Frustum::of(&world.scene, self.aspect);
-        self.cursor = (g + 1) % self.layout.groups;
-        Work::Retrace(Box::new(RetraceJob {
+        Some(Box::new(RetraceJob {
             g,
             indices: self.layout.photons_of(g, self.filled),
             epoch,
             current,
-            union,
-            frustum,
+            union: self.union.take().expect("built above"),
+            frustum: crate::retrace::Frustum::of(&world.scene, self.aspect),
             elements: Arc::clone(&self.elements),
             scramble: Arc::clone(&self.scramble),
             masking: Arc::clone(&self.masking),
@@ -113,7 +132,7 @@ impl Selective {
             inv_quantum: 1.0 / self.quantum_w,
             layout: self.layout,
             pixels_high: self.pixels_high,
-            started: Instant::now(),
+            started,
         }))
     }
 
@@ -186,36 +205,13 @@ impl Selective {
 
     /// Re-traces stale group `g` in `world` (current state). Returns the photons traced.
     pub fn retrace_group(&mut self, world: &World, g: u64) -> u64 {
-        let t0 = Instant::now();
-        let epoch = Arc::clone(&self.groups[g as usize].epoch);
-        let current = Arc::clone(&self.current);
-        let mut traced = 0;
-        if epoch.id != current.id {
-            let key = (epoch.id, current.id);
-            if self.union.as_ref().is_none_or(|u| u.key != key) {
-                self.union = Some(UnionWorld::new(world, &epoch, &current));
+        match self.prepare_retrace(world, g) {
+            Some(job) => {
+                let out = job.trace();
+                self.finish_retrace(*job, out)
             }
-            let union = self.union.take().expect("built above");
-            if !union.changes.none() {
-                let indices = self.layout.photons_of(g, self.filled);
-                let frustum = crate::retrace::Frustum::of(&world.scene, self.aspect);
-                let out = self
-                    .context(&frustum)
-                    .retrace(&union, &epoch, &current, &indices);
-                self.apply(&out);
-                self.record_pilots(&out);
-                self.raise(&out, &epoch);
-                traced = out.photons;
-            }
-            self.union = Some(union);
-            self.groups[g as usize].epoch = current;
-            self.stale -= 1;
-            self.counters.groups_retraced += 1;
+            None => 0,
         }
-        self.groups[g as usize].priority.p = 0.0;
-        self.cursor = (g + 1) % self.layout.groups;
-        self.counters.trace_s += t0.elapsed().as_secs_f64();
-        traced
     }
 
     pub(crate) fn record_pilots(&mut self, out: &TraceOutput) {
