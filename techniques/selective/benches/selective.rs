@@ -277,6 +277,7 @@ fn paper_figures(scene: &PaperScene) {
             element_count: scene.elements,
             // The paper's pool, not one grown to 16 photons an element.
             min_photons_per_element: 0,
+            min_impacts_per_element: 0,
             ..base(factors, pilots, ratio, order)
         };
         let r = recovery_of(scene.mover, &s, Vec3::ZERO, to);
@@ -538,6 +539,7 @@ fn elements() {
             let settings = SelectiveSettings {
                 element_max_side: max_side,
                 min_photons_per_element: 16,
+                min_impacts_per_element: 0,
                 ..SelectiveSettings::deterministic()
             };
             let t = Instant::now();

@@ -2,10 +2,65 @@
 //! until the pool of N_g groups × (pilots + correctives) is full; `warm_up` fills it
 //! before the first frame.
 
+use crate::qmc::{LightCells, emit, photon_stream};
 use crate::state::Selective;
 use illume_core::Progress;
+use illume_core::sampling::HaltonScramble;
+use illume_scene::MASK_DEFAULT;
 use illume_transport::World;
+use illume_transport::photon::PhotonPathSettings;
+use rayon::prelude::*;
 use std::time::Instant;
+
+/// Photons traced at the start to measure the yield (impacts stored per photon) that
+/// `min_impacts_per_element` sizes the pool by: ±1–2 % on the yield for a scene
+/// storing a few tenths of an impact per photon.
+pub const YIELD_PROBE: u64 = 1 << 14;
+
+/// First photon index of the yield probe: far above the pool's indices (below 2³²)
+/// and the emission map's pilots (from 2⁴⁰).
+const PROBE_INDEX_BASE: u64 = 1 << 41;
+
+/// Impacts stored per photon (reflections after the first, as the pool deposits
+/// them) over [`YIELD_PROBE`] photons emitted as the pool's are (`cells`, with their
+/// emission maps) and traced with `path` in `world`.
+pub fn impacts_per_photon(
+    world: &World,
+    cells: &LightCells,
+    path: &PhotonPathSettings,
+    scramble: &HaltonScramble,
+) -> f64 {
+    const CHUNK: u64 = 256;
+    let stored: u64 = (0..YIELD_PROBE / CHUNK)
+        .into_par_iter()
+        .map(|chunk| {
+            let mut n = 0u64;
+            world.tracer.scoped(|tracer| {
+                for i in chunk * CHUNK..(chunk + 1) * CHUNK {
+                    let mut s = photon_stream(PROBE_INDEX_BASE + i, scramble);
+                    let Some((mut p, _)) = emit(&world.lights, cells, &mut s) else {
+                        continue;
+                    };
+                    while p.alive(path) {
+                        let Some(hit) = p.trace(world, tracer, MASK_DEFAULT, path) else {
+                            break;
+                        };
+                        if !hit.reflects {
+                            break;
+                        }
+                        let (impact, continues) = p.scatter(hit, &mut s, path);
+                        n += u64::from(impact.bounce >= 1);
+                        if !continues {
+                            break;
+                        }
+                    }
+                }
+            });
+            n
+        })
+        .sum();
+    stored as f64 / YIELD_PROBE as f64
+}
 
 impl Selective {
     /// Traces the next `count` photons of the index-order fill in `world` (clamped to

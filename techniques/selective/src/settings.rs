@@ -113,6 +113,19 @@ pub struct SelectiveSettings {
     /// 1 152 000 over 12 400 is 93).
     #[setting(default = 16, range = "0–100 000")]
     pub min_photons_per_element: u32,
+    /// Fewest stored impacts per element, on average (beyond the paper, issue 34 goal
+    /// 2): the pool also grows until `min_impacts_per_element` × elements ÷ the yield
+    /// holds, the yield being the impacts stored per photon, measured at the start on
+    /// [`crate::fill::YIELD_PROBE`] photons of the pool's own emission. A box stores
+    /// about one impact per photon (`builtin:cornell-spot`: 0.91) and keeps its pool; an
+    /// open model under the sun stores far fewer (Dabrovic Sponza at 13:00, with the
+    /// emission map: 0.32; Sibenik's spot: 0.54), and `min_photons_per_element` alone
+    /// would leave Sponza's elements with ≈ 5 impacts each.
+    /// Higher: less noise, at the cost of tracing time after a change (the pool is fixed
+    /// at the start: a sun that rises later does not resize it). 0 turns it off. Default
+    /// 12 (measured on Sponza: docs/benchmarks/selective.md, "Creases and the yield").
+    #[setting(default = 12, range = "0–100 000")]
+    pub min_impacts_per_element: u32,
     /// Beyond the paper (issue 34, goal 2): photon impacts a display vertex's irradiance
     /// should rest on. A vertex whose own elements hold fewer gathers flux and area from
     /// the rings of display vertices around it (on the same object, across edges within
@@ -169,8 +182,11 @@ pub struct SelectiveSettings {
     /// Element-grid vertices of one object within this angle of each other's face
     /// normal \[degrees\] are one display vertex (Gouraud smoothing across triangles,
     /// §6). Higher: smoother across creases, at the cost of light bleeding around
-    /// corners. 0–180, default 45.
-    #[setting(default = 45.0, unit = "degrees", range = "[0, 180]")]
+    /// corners. 0–180, default 40: below 45° so the faces of an octagonal column (45°
+    /// apart, Dabrovic Sponza's pillars) stay apart — their irradiance differs up to 4×
+    /// from face to face, and a welded vertex showed the face the camera sees at 0.6 of
+    /// its own light (docs/benchmarks/selective.md, "Creases and the sun's map").
+    #[setting(default = 40.0, unit = "degrees", range = "[0, 180]")]
     pub smoothing_angle_deg: f32,
     /// Order of re-tracing stale groups (§5.3).
     #[setting(default = GroupOrder::Priority)]
@@ -305,6 +321,7 @@ impl SelectiveSettings {
     pub fn paper() -> Self {
         Self {
             min_photons_per_element: 0,
+            min_impacts_per_element: 0,
             gather_impacts: 0,
             temporal_alpha: 1.0,
             element_max_side: 0.0,
@@ -461,12 +478,13 @@ impl TechniqueSettings for SelectiveSettings {
         }
     }
 
-    /// N_p at most 16 and one photon per element at least: the pool (≈ 1.2 M photons on
+    /// N_p at most 16, one photon per element at least and no yield floor: the pool (≈ 1.2 M photons on
     /// a real model, traced again by every fresh build) does not fall with the image
     /// size.
     fn miniature(&mut self) {
         self.pilots_per_group = self.pilots_per_group.min(16);
         self.min_photons_per_element = self.min_photons_per_element.min(1);
+        self.min_impacts_per_element = 0;
     }
 
     fn set_seed(&mut self, seed: u64) {

@@ -49,11 +49,24 @@ pub struct SelectiveCounters {
 }
 
 /// N_p: `pilots_per_group`, raised until the pool N_g·N_p·R holds
-/// `min_photons_per_element` photons per element (within [`crate::settings::MAX_POOL`]).
-pub fn scaled_pilots(settings: &SelectiveSettings, groups: u64, elements: u64) -> u64 {
+/// `min_photons_per_element` photons per element and, at `impacts_per_photon` stored
+/// per photon traced (0: unknown), `min_impacts_per_element` impacts per element (within
+/// [`crate::settings::MAX_POOL`]).
+pub fn scaled_pilots(
+    settings: &SelectiveSettings,
+    groups: u64,
+    elements: u64,
+    impacts_per_photon: f64,
+) -> u64 {
     let asked = settings.pilots_per_group as u64;
     let per_pilot = groups * settings.ratio as u64;
-    let need = (settings.min_photons_per_element as u64 * elements).div_ceil(per_pilot.max(1));
+    let mut photons = settings.min_photons_per_element as u64 * elements;
+    if impacts_per_photon > 0.0 && settings.min_impacts_per_element > 0 {
+        let by_yield =
+            (settings.min_impacts_per_element as f64 * elements as f64 / impacts_per_photon).ceil();
+        photons = photons.max(by_yield.min(crate::settings::MAX_POOL as f64) as u64);
+    }
+    let need = photons.div_ceil(per_pilot.max(1));
     let cap = crate::settings::MAX_POOL / per_pilot.max(1);
     asked.max(need.min(cap))
 }
@@ -87,6 +100,9 @@ pub struct Selective {
     pub(crate) warmed_up: bool,
     pub(crate) counters: SelectiveCounters,
     pub(crate) last_shade_ms: f64,
+    /// Impacts stored per photon measured at the start (`min_impacts_per_element`; 0
+    /// when not measured).
+    pub(crate) start_yield: f64,
 }
 
 impl Selective {
@@ -123,11 +139,6 @@ impl Selective {
         } else {
             GroupFactors::new(&settings.group_factors)
         };
-        let layout = GroupLayout {
-            groups: factors.groups(),
-            pilots: scaled_pilots(&settings, factors.groups(), elements.len() as u64),
-            ratio: settings.ratio as u64,
-        };
         let scramble = HaltonScramble::new(settings.seed);
         let maps = if settings.emission_map {
             crate::emission::build_maps(world, &settings.photon_path(), &scramble)
@@ -135,6 +146,26 @@ impl Selective {
             Default::default()
         };
         let current = Arc::new(Snapshot::with_maps(world, 0, factors.exponent(2), maps));
+        let impacts_per_photon = if settings.min_impacts_per_element > 0 {
+            crate::fill::impacts_per_photon(
+                world,
+                &current.cells,
+                &settings.photon_path(),
+                &scramble,
+            )
+        } else {
+            0.0
+        };
+        let layout = GroupLayout {
+            groups: factors.groups(),
+            pilots: scaled_pilots(
+                &settings,
+                factors.groups(),
+                elements.len() as u64,
+                impacts_per_photon,
+            ),
+            ratio: settings.ratio as u64,
+        };
         // 2^24 quanta per photon of the scene's whole power (as photon_stream's pool).
         let power = world.lights.total_power().max_element() as f64
             + world.lights.sky_power().max_element() as f64;
@@ -179,6 +210,7 @@ impl Selective {
             warmed_up: false,
             counters: SelectiveCounters::default(),
             last_shade_ms: 0.0,
+            start_yield: impacts_per_photon,
         })
     }
 
@@ -374,6 +406,7 @@ impl Technique for Selective {
         for (name, x) in [
             ("groups", self.layout.groups as f64),
             ("pool_photons", self.layout.pool() as f64),
+            ("impacts_per_photon_at_start", self.start_yield),
             ("elements", self.elements.len() as f64),
             (
                 "filled_fraction",

@@ -403,7 +403,7 @@ equal_time = false
 
 [[technique]]
 name = "selective"
-settings = { mode = "deterministic", pilots_per_group = 8, ratio = 4, element_count = 400, min_photons_per_element = 0, photons_per_frame = 600 }
+settings = { mode = "deterministic", pilots_per_group = 8, ratio = 4, element_count = 400, min_photons_per_element = 0, min_impacts_per_element = 0, photons_per_frame = 600 }
 
 [[edit]]
 at_s = 0.5

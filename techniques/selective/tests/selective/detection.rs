@@ -119,6 +119,7 @@ fn phantoms_follow_m1_m2_m3_and_pilots_raise_the_groups_that_hold_them() {
         visibility_weight: 0.0,
         // The pool as written (N_p not raised for the elements).
         min_photons_per_element: 0,
+        min_impacts_per_element: 0,
         ..SelectiveSettings::deterministic()
     };
     let mut sel = Selective::for_world(&world, settings).unwrap();
@@ -223,6 +224,7 @@ fn a_camera_move_beside_a_light_change_resets_the_view_counters() {
         ratio: 4,
         element_count: 500,
         min_photons_per_element: 0,
+        min_impacts_per_element: 0,
         warm_up: false,
         // A light change never restarts (a restart clears the priorities anyway).
         restart_fraction: 1.0,

@@ -224,6 +224,7 @@ fn energy_per_element_sums_to_the_pools() {
             element_count: 1,
             element_max_side: max_side,
             min_photons_per_element: 0,
+            min_impacts_per_element: 0,
             warm_up: false,
             ..SelectiveSettings::deterministic()
         };
@@ -308,6 +309,7 @@ fn the_pool_grows_with_the_elements() {
         ratio: 4,
         element_count: 3000,
         min_photons_per_element: min,
+        min_impacts_per_element: 0,
         warm_up: false,
         ..SelectiveSettings::deterministic()
     };

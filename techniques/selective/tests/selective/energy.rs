@@ -19,6 +19,7 @@ fn small(order: GroupOrder, restart_fraction: f32) -> SelectiveSettings {
         // The pool as written (N_p not raised for the elements): a grown pool is then
         // a fresh pool of the larger R.
         min_photons_per_element: 0,
+        min_impacts_per_element: 0,
         ..SelectiveSettings::deterministic()
     }
 }

@@ -345,6 +345,7 @@ fn priorities_after_move(mut world: World, texture_masking: bool, steps: usize) 
         ratio: 4,
         element_count: ELEMENTS,
         min_photons_per_element: 0,
+        min_impacts_per_element: 0,
         warm_up: false,
         order: GroupOrder::Index,
         texture_masking,

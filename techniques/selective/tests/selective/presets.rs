@@ -9,6 +9,7 @@ use illume_selective::SelectiveSettings;
 fn paper_values(s: &SelectiveSettings) -> Vec<(&'static str, bool)> {
     vec![
         ("min_photons_per_element", s.min_photons_per_element == 0),
+        ("min_impacts_per_element", s.min_impacts_per_element == 0),
         ("gather_impacts", s.gather_impacts == 0),
         ("gather_rings", s.gather_impacts == 0), // used only by the gather
         ("temporal_alpha", s.temporal_alpha == 1.0),

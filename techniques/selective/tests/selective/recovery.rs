@@ -13,6 +13,7 @@ fn settings(order: GroupOrder) -> SelectiveSettings {
         ratio: 16,
         element_count: 3000,
         min_photons_per_element: 0,
+        min_impacts_per_element: 0,
         warm_up: false,
         restart_fraction: 1.0,
         order,

@@ -15,6 +15,7 @@ fn settings() -> SelectiveSettings {
         ratio: 4,
         element_count: 1500,
         min_photons_per_element: 0,
+        min_impacts_per_element: 0,
         warm_up: false,
         order: GroupOrder::Priority,
         mode: SelectiveMode::Streaming,

@@ -14,6 +14,7 @@ fn settings(temporal_alpha: f32) -> SelectiveSettings {
         ratio: 8,
         element_count: 1500,
         min_photons_per_element: 0,
+        min_impacts_per_element: 0,
         temporal_alpha,
         ..SelectiveSettings::deterministic()
     }
