@@ -326,6 +326,18 @@ pub struct Bar {
     pub value: f64,
 }
 
+/// A line drawn over a bar chart on its own y axis (right), one value per bar at the
+/// bar's centre: e.g. the sun's elevation beside keys per clock hour.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BarLine {
+    /// Legend entry.
+    pub name: String,
+    /// The right axis' description.
+    pub y_label: String,
+    /// One value per bar (non-finite values are left out).
+    pub values: Vec<f64>,
+}
+
 /// Everything a benchmark or comparison run reports.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BenchReport {
@@ -545,6 +557,27 @@ pub fn plot_bars(
     y_label: &str,
     bars: &[Bar],
 ) -> Result<(), MetricsError> {
+    draw_bars(path, title, y_label, bars, None)
+}
+
+/// [`plot_bars`] with `line` over the bars on a second y axis (right).
+pub fn plot_bars_and_line(
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    bars: &[Bar],
+    line: &BarLine,
+) -> Result<(), MetricsError> {
+    draw_bars(path, title, y_label, bars, Some(line))
+}
+
+fn draw_bars(
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    bars: &[Bar],
+    line: Option<&BarLine>,
+) -> Result<(), MetricsError> {
     let plot_error = |e: &dyn fmt::Display| MetricsError::Plot {
         path: path.to_owned(),
         message: e.to_string(),
@@ -553,14 +586,24 @@ pub fn plot_bars(
     let root = SVGBackend::new(path, (900, 540)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_error(&e))?;
     let n = bars.len().max(1);
-    let mut chart = ChartBuilder::on(&root)
+    let mut builder = ChartBuilder::on(&root);
+    builder
         .caption(title, ("sans-serif", 22))
         .margin(12)
         .x_label_area_size(44)
-        .y_label_area_size(70)
-        // Integer ranges are inclusive in plotters: 0..n−1 gives n segments.
+        .y_label_area_size(70);
+    if line.is_some() {
+        builder.right_y_label_area_size(70);
+    }
+    // Integer ranges are inclusive in plotters: 0..n−1 gives n segments.
+    let chart = builder
         .build_cartesian_2d((0..n - 1).into_segmented(), 0.0..y1)
         .map_err(|e| plot_error(&e))?;
+    let (l0, l1) = padded_range(
+        line.into_iter().flat_map(|l| l.values.iter().copied()),
+        true,
+    );
+    let mut chart = chart.set_secondary_coord((0..n - 1).into_segmented(), l0..l1);
     let labels: Vec<String> = bars.iter().map(|b| b.label.clone()).collect();
     chart
         .configure_mesh()
@@ -575,19 +618,44 @@ pub fn plot_bars(
         })
         .draw()
         .map_err(|e| plot_error(&e))?;
-    chart
-        .draw_series(
-            Histogram::vertical(&chart)
-                .style(COLOURS[0].filled())
-                .margin(20)
-                .data(
-                    bars.iter()
-                        .enumerate()
-                        .filter(|(_, b)| b.value.is_finite())
-                        .map(|(i, b)| (i, b.value)),
-                ),
-        )
-        .map_err(|e| plot_error(&e))?;
+    let histogram = Histogram::vertical(&*chart)
+        .style(COLOURS[0].filled())
+        .margin(20)
+        .data(
+            bars.iter()
+                .enumerate()
+                .filter(|(_, b)| b.value.is_finite())
+                .map(|(i, b)| (i, b.value)),
+        );
+    chart.draw_series(histogram).map_err(|e| plot_error(&e))?;
+    if let Some(line) = line {
+        chart
+            .configure_secondary_axes()
+            .y_desc(line.y_label.as_str())
+            .draw()
+            .map_err(|e| plot_error(&e))?;
+        let colour = COLOURS[1];
+        chart
+            .draw_secondary_series(LineSeries::new(
+                line.values
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, v)| v.is_finite())
+                    .map(|(i, &v)| (SegmentValue::CenterOf(i), v)),
+                colour.stroke_width(2),
+            ))
+            .map_err(|e| plot_error(&e))?
+            .label(line.name.as_str())
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+            });
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| plot_error(&e))?;
+    }
     root.present().map_err(|e| plot_error(&e))
 }
 
@@ -642,6 +710,39 @@ mod tests {
             points: vec![(1.0, 2.0), (1.0, f64::NAN)],
         }];
         plot_lines(&dir.join("flat.svg"), "t", "x", "y", &flat).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_line_over_bars_gets_its_own_axis_and_legend() {
+        let dir = std::env::temp_dir().join(format!("illume-barline-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bars: Vec<Bar> = (0..4)
+            .map(|i| Bar {
+                label: format!("{i:02}"),
+                value: i as f64,
+            })
+            .collect();
+        let line = BarLine {
+            name: "sun elevation".into(),
+            y_label: "elevation [degrees]".into(),
+            values: vec![-10.0, 20.0, f64::NAN, 40.0],
+        };
+        plot_bars_and_line(&dir.join("both.svg"), "t", "keys", &bars, &line).unwrap();
+        plot_bars(&dir.join("bars.svg"), "t", "keys", &bars).unwrap();
+        let both = std::fs::read_to_string(dir.join("both.svg")).unwrap();
+        let plain = std::fs::read_to_string(dir.join("bars.svg")).unwrap();
+        // The line in its colour (Tableau orange), its legend and the right axis.
+        for text in ["sun elevation", "elevation [degrees]", "#FF7F0E"] {
+            assert!(both.contains(text), "{text} missing");
+            assert!(!plain.contains(text), "{text} in the plain bar chart");
+        }
+        // The right axis spans the line's values (−10 … 40, padded), the left the bars'
+        // (0 … 3).
+        for tick in ["-10.0", "40.0"] {
+            assert!(both.contains(tick), "tick {tick} missing");
+            assert!(!plain.contains(tick), "tick {tick} in the plain bar chart");
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -545,18 +545,43 @@ fn run_info(i: InfoArgs) -> Result<()> {
                 value: per_hour.get(&hr).copied().unwrap_or(0) as f64,
             })
             .collect();
-        illume_metrics::report::plot_bars(
-            &dir.join("keys_per_hour.svg"),
-            "keys per clock hour",
-            "keys",
-            &bars,
-        )?;
+        // Beside the sun's elevation at each hour's middle (issue 36 goal 2: keys follow
+        // the light), when the file's `[sun]` table is one the sun model reads.
+        let path = dir.join("keys_per_hour.svg");
+        let title = "keys per clock hour";
+        match sun_elevations(&h.sun) {
+            Some(values) => illume_metrics::report::plot_bars_and_line(
+                &path,
+                title,
+                "keys",
+                &bars,
+                &illume_metrics::report::BarLine {
+                    name: "sun elevation".into(),
+                    y_label: "sun elevation [degrees]".into(),
+                    values,
+                },
+            )?,
+            None => illume_metrics::report::plot_bars(&path, title, "keys", &bars)?,
+        }
         eprintln!(
             "wrote variance.svg and keys_per_hour.svg into {}",
             dir.display()
         );
     }
     Ok(())
+}
+
+/// The sun's elevation \[degrees\] at the middle of each clock hour 0–23 for a file's
+/// `[sun]` table; `None` when the table does not describe a sun the model can place.
+fn sun_elevations(sun: &toml::Table) -> Option<Vec<f64>> {
+    let settings: illume_scene::sun::SunSettings = sun.clone().try_into().ok()?;
+    (0..24)
+        .map(|hr| {
+            illume_scene::sun::solar_position(&settings, hr as f64 + 0.5)
+                .ok()
+                .map(|p| p.elevation_deg)
+        })
+        .collect()
 }
 
 /// Key `t` as restored from a `pca` file: mean + Σ images · coefficients, clamped at 0.
@@ -650,4 +675,33 @@ fn dump(file: &PcFile, dir: &std::path::Path) -> Result<()> {
         dir.display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plot's elevation line: the default sun (Koldinghus, 21 June, UTC+2) peaks at
+    /// 90° − 55.49° + 23.44° ≈ 57.9° shortly after 13:00 local time and is below the
+    /// horizon at midnight; a table the sun model does not read gives no line.
+    #[test]
+    fn the_suns_elevation_per_hour_follows_the_files_sun() {
+        let table: toml::Table =
+            toml::Table::try_from(illume_scene::sun::SunSettings::default()).unwrap();
+        let e = sun_elevations(&table).unwrap();
+        assert_eq!(e.len(), 24);
+        let (peak_hour, peak) = e
+            .iter()
+            .enumerate()
+            .fold((0, f64::MIN), |b, (h, &v)| if v > b.1 { (h, v) } else { b });
+        assert_eq!(peak_hour, 13, "{e:?}");
+        assert!((peak - 57.9).abs() < 1.0, "{peak}");
+        assert!(e[0] < 0.0 && e[23] < 0.0, "{e:?}");
+        let mut bad = table.clone();
+        bad.insert("date".into(), toml::Value::String("not a date".into()));
+        assert!(sun_elevations(&bad).is_none());
+        bad = table;
+        bad.insert("no_such_key".into(), toml::Value::Integer(1));
+        assert!(sun_elevations(&bad).is_none());
+    }
 }
