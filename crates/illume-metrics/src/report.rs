@@ -462,6 +462,14 @@ const COLOURS: [RGBColor; 10] = [
     RGBColor(23, 190, 207),
 ];
 
+/// The legend box's fill: white, slightly see-through.
+const LEGEND_BACKGROUND: RGBAColor = RGBAColor(255, 255, 255, 0.85);
+
+/// A line series' legend mark: a 20-pixel stroke in its colour.
+fn legend_mark(colour: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
+}
+
 /// `[lo, hi]` padded so that a flat or empty range still plots.
 fn padded_range(values: impl Iterator<Item = f64>, include_zero: bool) -> (f64, f64) {
     let (mut lo, mut hi) = values
@@ -537,13 +545,11 @@ pub fn plot_lines(
             .draw_series(LineSeries::new(finite, colour.stroke_width(2)))
             .map_err(|e| plot_error(&e))?
             .label(s.name.as_str())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-            });
+            .legend(legend_mark(colour));
     }
     chart
         .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
+        .background_style(LEGEND_BACKGROUND)
         .border_style(BLACK)
         .draw()
         .map_err(|e| plot_error(&e))?;
@@ -646,12 +652,10 @@ fn draw_bars(
             ))
             .map_err(|e| plot_error(&e))?
             .label(line.name.as_str())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
-            });
+            .legend(legend_mark(colour));
         chart
             .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
+            .background_style(LEGEND_BACKGROUND)
             .border_style(BLACK)
             .draw()
             .map_err(|e| plot_error(&e))?;

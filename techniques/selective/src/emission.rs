@@ -29,10 +29,10 @@
 //! more than [`REBUILD_DEG`] since its map was made, or has none (the sun rose). Between
 //! rebuilds a map may fit less well; it stays unbiased.
 
+use crate::fill::run_to_its_end;
 use crate::qmc::photon_stream;
 use illume_core::sampling::{HaltonScramble, ONE_MINUS_EPSILON, SampleStream};
 use illume_core::{Vec2, Vec3, luminance};
-use illume_scene::MASK_DEFAULT;
 use illume_transport::World;
 use illume_transport::lights::{Emitter, LightSet};
 use illume_transport::photon::{PhotonPath, PhotonPathSettings};
@@ -230,23 +230,11 @@ pub fn build_maps(
                             continue;
                         };
                         let flux = luminance(sample.flux).max(f32::MIN_POSITIVE) as f64;
-                        let mut p = PhotonPath::emitted(sample);
-                        while p.alive(path) {
-                            let Some(hit) = p.trace(world, tracer, MASK_DEFAULT, path) else {
-                                break;
-                            };
-                            if !hit.reflects {
-                                break;
-                            }
-                            let (impact, continues) = p.scatter(hit, &mut s, path);
-                            if impact.bounce >= 1 {
-                                // Stored energy relative to the photon's start.
-                                stored += luminance(impact.flux) as f64 / flux;
-                            }
-                            if !continues {
-                                break;
-                            }
-                        }
+                        let p = PhotonPath::emitted(sample);
+                        // Stored energy relative to the photon's start.
+                        run_to_its_end(world, tracer, path, p, &mut s, |f| {
+                            stored += luminance(f) as f64 / flux;
+                        });
                     }
                 });
                 stored

@@ -5,10 +5,11 @@
 use crate::qmc::{LightCells, emit, photon_stream};
 use crate::state::Selective;
 use illume_core::Progress;
-use illume_core::sampling::HaltonScramble;
+use illume_core::Rgb;
+use illume_core::sampling::{HaltonScramble, HaltonStream};
 use illume_scene::MASK_DEFAULT;
 use illume_transport::World;
-use illume_transport::photon::PhotonPathSettings;
+use illume_transport::photon::{PhotonPath, PhotonPathSettings};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -38,21 +39,8 @@ pub fn impacts_per_photon(
             world.tracer.scoped(|tracer| {
                 for i in chunk * CHUNK..(chunk + 1) * CHUNK {
                     let mut s = photon_stream(PROBE_INDEX_BASE + i, scramble);
-                    let Some((mut p, _)) = emit(&world.lights, cells, &mut s) else {
-                        continue;
-                    };
-                    while p.alive(path) {
-                        let Some(hit) = p.trace(world, tracer, MASK_DEFAULT, path) else {
-                            break;
-                        };
-                        if !hit.reflects {
-                            break;
-                        }
-                        let (impact, continues) = p.scatter(hit, &mut s, path);
-                        n += u64::from(impact.bounce >= 1);
-                        if !continues {
-                            break;
-                        }
+                    if let Some((p, _)) = emit(&world.lights, cells, &mut s) {
+                        run_to_its_end(world, tracer, path, p, &mut s, |_| n += 1);
                     }
                 }
             });
@@ -60,6 +48,34 @@ pub fn impacts_per_photon(
         })
         .sum();
     stored as f64 / YIELD_PROBE as f64
+}
+
+/// Traces photon `p` in `world` (mask [`MASK_DEFAULT`], `tracer` being `world`'s) to
+/// the end of its path, calling `stored` with the flux of every impact the pool would
+/// store (reflections after the first: the renderer draws direct light).
+pub(crate) fn run_to_its_end(
+    world: &World,
+    tracer: &mut illume_accel::ScopedTracer<'_>,
+    path: &PhotonPathSettings,
+    mut p: PhotonPath,
+    s: &mut HaltonStream<'_>,
+    mut stored: impl FnMut(Rgb),
+) {
+    while p.alive(path) {
+        let Some(hit) = p.trace(world, tracer, MASK_DEFAULT, path) else {
+            break;
+        };
+        if !hit.reflects {
+            break;
+        }
+        let (impact, continues) = p.scatter(hit, s, path);
+        if impact.bounce >= 1 {
+            stored(impact.flux);
+        }
+        if !continues {
+            break;
+        }
+    }
 }
 
 impl Selective {
