@@ -121,9 +121,12 @@ pub struct SelectiveSettings {
     /// open model under the sun stores far fewer (Dabrovic Sponza at 13:00, with the
     /// emission map: 0.32; Sibenik's spot: 0.54), and `min_photons_per_element` alone
     /// would leave Sponza's elements with ≈ 5 impacts each.
-    /// Higher: less noise, at the cost of tracing time after a change (the pool is fixed
-    /// at the start: a sun that rises later does not resize it). 0 turns it off. Default
-    /// 12 (measured on Sponza: docs/benchmarks/selective.md, "Creases and the yield").
+    /// The growth is bounded at [`crate::state::YIELD_GROWTH_MAX`] (4) times the pool
+    /// without it, so a scene that stores almost nothing does not ask for hours of
+    /// tracing. Higher: less noise, at the cost of tracing time after a change (the pool
+    /// is fixed at the start: a sun that rises later does not resize it). 0 turns it off.
+    /// Default 12 (measured on Sponza: docs/benchmarks/selective.md, "Creases and the
+    /// yield").
     #[setting(default = 12, range = "0–100 000")]
     pub min_impacts_per_element: u32,
     /// Beyond the paper (issue 34, goal 2): photon impacts a display vertex's irradiance

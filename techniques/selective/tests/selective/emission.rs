@@ -73,7 +73,7 @@ fn the_pool_holds_min_impacts_per_element_by_the_measured_yield() {
         min_photons_per_element: 0,
         min_impacts_per_element: min_impacts,
         element_count: 2000,
-        pilots_per_group: 4,
+        pilots_per_group: 8,
         ..SelectiveSettings::deterministic()
     };
     let world = sunlit_room();
@@ -103,6 +103,17 @@ fn the_pool_holds_min_impacts_per_element_by_the_measured_yield() {
     assert!(
         per_element > 8.0 * 0.9 && per_element < (8.0 + step) * 1.1,
         "{per_element:.2} impacts an element (one pilot adds {step:.2})"
+    );
+    // A floor the yield cannot meet grows the pool 4× at most (YIELD_GROWTH_MAX, to
+    // within one pilot's photons): 1 000 impacts an element would need ≈ 60×.
+    let capped = Selective::for_world(&world, settings(1000)).unwrap();
+    let (c, p) = (capped.layout(), plain.layout());
+    assert!(
+        c.pool() <= illume_selective::state::YIELD_GROWTH_MAX * p.pool() + c.groups * c.ratio
+            && c.pool() > (illume_selective::state::YIELD_GROWTH_MAX - 1) * p.pool(),
+        "pool {} against {} without the floor",
+        c.pool(),
+        p.pool()
     );
     // A box stores about one impact a photon (`cornell-spot`, front open: 0.91,
     // measured 2026-11-28): 8 an element need fewer photons than its pool already has.
