@@ -491,7 +491,7 @@ fn run_info(i: InfoArgs) -> Result<()> {
     let stored: f64 = file
         .sections
         .iter()
-        .map(|s| s.values.len() as f64 * 4.0)
+        .map(|s| s.values.len() as f64 * s.format.bytes() as f64)
         .sum();
     if h.kind == "pca" && raw > 0.0 {
         println!(

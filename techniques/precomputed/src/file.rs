@@ -219,6 +219,16 @@ pub enum SectionFormat {
     F16,
 }
 
+impl SectionFormat {
+    /// Bytes per stored number.
+    pub fn bytes(self) -> u64 {
+        match self {
+            SectionFormat::F32 => 4,
+            SectionFormat::F16 => 2,
+        }
+    }
+}
+
 /// One section as listed in the header.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -771,10 +781,7 @@ impl PcFile {
         let mut offset = header_end as u64 + 8;
         let mut sections = Vec::with_capacity(header.sections.len());
         for info in &header.sections {
-            let size = match info.format {
-                SectionFormat::F32 => 4,
-                SectionFormat::F16 => 2,
-            };
+            let size = info.format.bytes();
             let end = info
                 .values
                 .checked_mul(size)

@@ -296,6 +296,19 @@ pub fn compress(
         },
         None => Components::Fixed(settings.components),
     };
+    // Half floats where asked and where every value fits (|v| ≤ 65 504): a brighter
+    // section stays f32 rather than turn into infinities.
+    let image_format = |name: &str, values: &[f32]| {
+        let fits = values.iter().all(|v| v.abs() <= f32::from(half::f16::MAX));
+        match (settings.half_floats, fits) {
+            (true, true) => SectionFormat::F16,
+            (true, false) => {
+                log::warn!("precomputed: section {name} exceeds half floats' range: kept as f32");
+                SectionFormat::F32
+            }
+            _ => SectionFormat::F32,
+        }
+    };
     let mut sections = Vec::new();
     let mut eigenvalues = Vec::new();
     let mut k_kept = 0;
@@ -364,12 +377,15 @@ pub fn compress(
         });
         sections.push(Section {
             name: format!("images.{name}"),
-            format: SectionFormat::F32,
+            format: image_format(&format!("images.{name}"), &images),
             values: images,
         });
         eigenvalues.push(eig);
     }
-    sections.extend(sky.sections());
+    sections.extend(sky.sections().into_iter().map(|s| Section {
+        format: image_format(&s.name, &s.values),
+        ..s
+    }));
     Ok(PcFile {
         header: Header {
             kind: "pca".into(),

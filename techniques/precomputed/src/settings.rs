@@ -143,6 +143,13 @@ pub struct PrecomputedSettings {
     /// each) or one over all three channels ([`Colour::Joint`], shared eigenvectors).
     #[setting(default = Colour::PerChannel)]
     pub colour: Colour,
+    /// Store the PCA images and the sky images as IEEE half floats (2 bytes, values
+    /// rounded to 11 significant bits: relative error ≤ 4.9e-4) instead of f32: the file
+    /// halves, the key's restoration moves by less than the keys' own noise (measured:
+    /// docs/benchmarks/precomputed.md, "Half-float files"). Beyond the paper, which
+    /// counts values; the means and coefficients stay f32. Default false.
+    #[setting(default = false)]
+    pub half_floats: bool,
     /// Interpolation of coefficients. Default `linear` (§3.1, §4.2).
     #[setting(default = Interpolation::Linear)]
     pub interpolation: Interpolation,
@@ -172,6 +179,7 @@ impl PrecomputedSettings {
             interpolation: Interpolation::Linear,
             colour: Colour::PerChannel,
             verify_midpoint: false,
+            half_floats: false,
             ..Self::default()
         }
     }

@@ -153,6 +153,123 @@ fn denoised_key_agrees_with_the_converged_reference() {
     assert!(e_denoised < 0.5 * e_raw, "{e_denoised} vs raw {e_raw}");
 }
 
+/// Key times as the adaptive schedule makes them: uneven.
+const UNEVEN_TIMES: [f64; 5] = [10.0, 10.5, 12.0, 12.25, 14.0];
+
+/// Texel i at `t` hours: (a_i + t·b_i)·`scale`, both varying over the image (rank 2 after
+/// the mean).
+fn linear_light(size: (u32, u32), t: f64, scale: f32) -> RgbImage {
+    let t = t as f32;
+    let px = (0..size.0 * size.1)
+        .map(|i| {
+            let (a, b) = (0.1 + (i % 7) as f32 * 0.1, 1.0 + (i % 5) as f32 * 0.5);
+            Rgb::new(a + t * b, 0.5 * a + t * b, a + 0.5 * t * b) * scale
+        })
+        .collect();
+    RgbImage::from_vec(size.0, size.1, px).unwrap()
+}
+
+/// Lit keys of [`linear_light`] at `times`.
+fn linear_light_keys(size: (u32, u32), times: &[f64], scale: f32) -> Vec<Key> {
+    times
+        .iter()
+        .map(|&hours| Key {
+            time: KeyTime { hours, level: 0 },
+            dark: false,
+            image: linear_light(size, hours, scale),
+        })
+        .collect()
+}
+
+/// The technique over an in-memory `file` at `size`.
+fn from_file(
+    world: &World,
+    s: PrecomputedSettings,
+    file: illume_precomputed::file::PcFile,
+    size: (u32, u32),
+) -> Precomputed {
+    Precomputed::from_file(
+        world,
+        s,
+        std::path::Path::new("memory"),
+        file,
+        size.0,
+        size.1,
+        std::time::Instant::now(),
+    )
+    .unwrap()
+}
+
+/// `half_floats`: the PCA and sky images stored as half floats restore the keys within
+/// their rounding (≈ 5·10⁻⁴) of the f32 file's, in about half the bytes; a section beyond
+/// the half floats' range (65 504) stays f32 rather than turn into infinities.
+#[test]
+fn half_float_files_restore_the_keys_within_their_rounding() {
+    use illume_precomputed::file::SectionFormat;
+    let world = world();
+    let size = (8, 6);
+    let make = |half_floats: bool, scale: f32| {
+        let s = PrecomputedSettings {
+            components: 2,
+            half_floats,
+            ..Default::default()
+        };
+        let keys = linear_light_keys(size, &UNEVEN_TIMES, scale);
+        let base = base_header(&world, &s, size).unwrap();
+        let sky = RgbImage::filled(size.0, size.1, Rgb::splat(0.25));
+        let file = compress(base, &s, &keys, &sky.into()).unwrap();
+        (s, file)
+    };
+    let bytes = |f: &illume_precomputed::file::PcFile| -> u64 {
+        f.sections
+            .iter()
+            .map(|s| s.values.len() as u64 * s.format.bytes())
+            .sum()
+    };
+    let (s32, full) = make(false, 1.0);
+    let (s16, half) = make(true, 1.0);
+    for section in &half.sections {
+        let image = section.name.starts_with("images.") || section.name.starts_with("sky");
+        let want = if image {
+            SectionFormat::F16
+        } else {
+            SectionFormat::F32
+        };
+        assert_eq!(section.format, want, "{}", section.name);
+    }
+    assert!(
+        (bytes(&half) as f64) < 0.6 * bytes(&full) as f64,
+        "{} bytes against {}",
+        bytes(&half),
+        bytes(&full)
+    );
+    let (a, b) = (
+        from_file(&world, s32, full, size),
+        from_file(&world, s16, half, size),
+    );
+    for hours in [10.25, 11.0, 12.1, 13.0] {
+        for (x, y) in a
+            .reconstruct(hours, 0.0)
+            .iter()
+            .zip(b.reconstruct(hours, 0.0).iter())
+        {
+            assert!(
+                (*x - *y).abs().max_element() <= 1e-3 * x.max_element(),
+                "{hours} h: {x} (f32) against {y} (f16)"
+            );
+        }
+    }
+    let (_, bright) = make(true, 1e6);
+    for section in bright
+        .sections
+        .iter()
+        .filter(|s| s.name.starts_with("images."))
+    {
+        assert_eq!(section.format, SectionFormat::F32, "{}", section.name);
+        assert!(section.values.iter().all(|v| v.is_finite()));
+    }
+}
+
 /// Catmull–Rom spaced by time: keys at uneven times (as the adaptive schedule makes
 /// them) of a light that grows linearly in time are interpolated exactly. Spaced by key
 /// index (before issue 36), 11:00 between the keys of 10:30 and 12:00 came out as the
@@ -166,41 +283,13 @@ fn cubic_interpolation_is_spaced_by_time() {
         interpolation: Interpolation::Cubic,
         ..Default::default()
     };
-    // Texel i: a_i + t·b_i, both varying over the image (rank 2 after the mean).
-    let light = |t: f64| -> RgbImage {
-        let t = t as f32;
-        let px = (0..size.0 * size.1)
-            .map(|i| {
-                let (a, b) = (0.1 + (i % 7) as f32 * 0.1, 1.0 + (i % 5) as f32 * 0.5);
-                Rgb::new(a + t * b, 0.5 * a + t * b, a + 0.5 * t * b)
-            })
-            .collect();
-        RgbImage::from_vec(size.0, size.1, px).unwrap()
-    };
-    let times = [10.0, 10.5, 12.0, 12.25, 14.0];
-    let keys: Vec<Key> = times
-        .iter()
-        .map(|&hours| Key {
-            time: KeyTime { hours, level: 0 },
-            dark: false,
-            image: light(hours),
-        })
-        .collect();
+    let keys = linear_light_keys(size, &UNEVEN_TIMES, 1.0);
     let base = base_header(&world, &s, size).unwrap();
     let sky = RgbImage::filled(size.0, size.1, Rgb::ZERO);
     let file = compress(base, &s, &keys, &sky.into()).unwrap();
-    let technique = Precomputed::from_file(
-        &world,
-        s,
-        std::path::Path::new("memory"),
-        file,
-        size.0,
-        size.1,
-        std::time::Instant::now(),
-    )
-    .unwrap();
+    let technique = from_file(&world, s, file, size);
     for hours in [10.25, 11.0, 11.5, 12.1, 13.0] {
-        let expect = light(hours);
+        let expect = linear_light(size, hours, 1.0);
         for (got, want) in technique
             .reconstruct(hours, 0.0)
             .iter()

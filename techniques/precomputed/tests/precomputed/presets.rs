@@ -18,6 +18,7 @@ fn paper_values(s: &PrecomputedSettings) -> Vec<(&'static str, bool)> {
             s.components == 10 && s.variance_target.is_none(),
         ),
         ("colour", s.colour == Colour::PerChannel),
+        ("half_floats", !s.half_floats),
     ]
 }
 
