@@ -493,6 +493,9 @@ pub fn precompute(
             keys
         }
         crate::settings::ScheduleKind::Adaptive => {
+            if let Some(warning) = crate::schedule::small_image_warning(w, h) {
+                log::warn!("{warning}");
+            }
             let criterion = if settings.verify_midpoint {
                 crate::schedule::Criterion::VerifyMidpoint
             } else {

@@ -36,6 +36,25 @@ pub enum Criterion {
     VerifyMidpoint,
 }
 
+/// The smallest key image \[pixels\] on which the adaptive schedule was seen to place
+/// keys by the light: on `builtin:sun-room` at 64×48 Yee's metric saw too little and every
+/// lit hour sat at the daylight floor, at 160×120 and above keys gathered where the sun's
+/// patch moves (docs/benchmarks/precomputed.md, "keys placed by the light").
+pub const ADAPTIVE_MIN_PIXELS: u64 = 160 * 120;
+
+/// What to tell a user who runs the adaptive schedule on key images of `width`×`height`
+/// below [`ADAPTIVE_MIN_PIXELS`]; `None` at or above it.
+pub fn small_image_warning(width: u32, height: u32) -> Option<String> {
+    (u64::from(width) * u64::from(height) < ADAPTIVE_MIN_PIXELS).then(|| {
+        format!(
+            "precomputed: the adaptive schedule compares {width}×{height} key images; below \
+             160×120 pixels Yee's metric sees too little and keeps about the daylight \
+             floor's keys (1–2 an hour) instead of following the light: use a larger \
+             --width/--height, or --schedule uniform"
+        )
+    })
+}
+
 /// Uniform keys from `from_h` to `to_h` inclusive (when `to_h` falls on a step) every
 /// `step_min` minutes (Eq. 1), at most
 /// [`crate::file::MAX_KEYS`] (the settings refuse a step that asks for more,
@@ -254,6 +273,21 @@ pub fn bracket(times: &[f64], hours: f64) -> (usize, usize, f32) {
 
 #[cfg(test)]
 mod tests {
+
+    /// The adaptive schedule warns below 160×120 (where it was measured to sit at the
+    /// daylight floor on `sun-room`), naming the size, and not at or above it.
+    #[test]
+    fn small_key_images_get_a_warning_naming_their_size() {
+        let w = small_image_warning(64, 48).expect("64×48 is below the measured size");
+        assert!(
+            w.contains("64×48") && w.contains("--schedule uniform"),
+            "{w}"
+        );
+        assert!(small_image_warning(159, 120).is_some());
+        assert!(small_image_warning(160, 120).is_none());
+        assert!(small_image_warning(702, 722).is_none());
+        assert!(small_image_warning(u32::MAX, u32::MAX).is_none());
+    }
     use super::*;
 
     /// A synthetic "image": one value, rendered from a function of the time.

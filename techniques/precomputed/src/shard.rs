@@ -644,6 +644,12 @@ pub fn precompute_level(
     }
     let sun = sun_of(&world.scene)?;
     let mut header = base_header(world, settings, size)?;
+    if level == 0
+        && shard.index == 0
+        && let Some(warning) = crate::schedule::small_image_warning(header.width, header.height)
+    {
+        log::warn!("{warning}");
+    }
     header.kind = "partial".into();
     header.shard = [shard.index, shard.count];
     let mut sections = Vec::new();
