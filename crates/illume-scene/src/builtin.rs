@@ -15,7 +15,10 @@
 //! * `moving-light` — the cube-in-box with a tiled (checker-textured) floor and the cube
 //!   at rest; animation `move_light` (0–4 s) moves the point light along cube-in-box's
 //!   square below the ceiling (temporal radiance caching's Moving Light: "the bottom of
-//!   the box is tiled to highlight the change of indirect lighting").
+//!   the box is tiled to highlight the change of indirect lighting"); `move_light_laps`
+//!   goes round the same square [`MOVING_LIGHT_LAPS`] times, 4 s a lap (the paper's
+//!   400-frame animation at any motion per frame: 2.5 frames a second is ≈ 33 cm a
+//!   frame for 160 s).
 //! * `kite` — the same white box with a tiled (checker-textured) floor and a flat
 //!   two-coloured kite flying a loop through the room (animation `fly`, 0–4 s): a textured
 //!   scene with a flying object (temporal radiance caching's Flying Kite, in kind).
@@ -1123,6 +1126,23 @@ fn move_light_animation(light: NodeId) -> Animation {
     }
 }
 
+/// Laps of `moving-light`'s `move_light_laps`: 160 s, 400 frames at 2.5 frames a
+/// second.
+pub const MOVING_LIGHT_LAPS: usize = 40;
+
+/// `move_light`'s square [`MOVING_LIGHT_LAPS`] times over, 4 s a lap.
+fn move_light_laps_animation(light: NodeId) -> Animation {
+    let corners = &MOVING_LIGHT_PATH[..MOVING_LIGHT_PATH.len() - 1];
+    let keys = corners.len() * MOVING_LIGHT_LAPS + 1;
+    let path: Vec<Vec3> = (0..keys).map(|i| corners[i % corners.len()]).collect();
+    let times: Vec<f32> = (0..keys).map(|i| i as f32).collect();
+    Animation {
+        name: "move_light_laps".into(),
+        channels: vec![linear_translation(light, &times, &path)],
+        properties: Vec::new(),
+    }
+}
+
 /// The Moving Light's key positions at 0, 1, 2, 3 and 4 s: a square below the ceiling.
 const MOVING_LIGHT_PATH: [Vec3; 5] = [
     Vec3::new(0.0, 1.8, -0.2),
@@ -1269,6 +1289,7 @@ fn moving_light() -> Scene {
         false,
     );
     b.animation(move_light_animation(light));
+    b.animation(move_light_laps_animation(light));
     b.finish("builtin:moving-light")
 }
 
@@ -1491,6 +1512,41 @@ mod tests {
         assert!(!changes.is_empty());
         assert_eq!(s.instances, instances, "nothing but the light moves");
         assert!((s.lights[0].position() - light).length() > 0.1);
+    }
+
+    #[test]
+    fn moving_light_laps_repeat_the_square_for_400_frames_at_2_5_fps() {
+        let square = load("moving-light").unwrap();
+        let mut laps = square.clone();
+        laps.select_animation("move_light_laps").unwrap();
+        let mut one = square;
+        one.select_animation("move_light").unwrap();
+        assert_eq!(laps.animation_duration(), 4.0 * MOVING_LIGHT_LAPS as f64);
+        assert!(
+            laps.animation_duration() * 2.5 >= 399.0,
+            "400 frames at 2.5 fps"
+        );
+        // Every lap is the square: the same light position a whole number of laps on.
+        for t in [0.0, 0.4, 1.7, 2.9, 3.6] {
+            one.set_time(t);
+            for lap in [0, 1, 17, MOVING_LIGHT_LAPS - 1] {
+                laps.set_time(t + 4.0 * lap as f64);
+                let d = laps.lights[0].position() - one.lights[0].position();
+                assert!(d.length() < 1e-4, "t = {t}, lap {lap}: {d}");
+            }
+        }
+        // At 2.5 fps the light is 33 cm on average from one frame to the next (37 cm of
+        // path; frames across a corner cut it), 17–48 cm.
+        let at = |laps: &mut Scene, frame: usize| {
+            laps.set_time(frame as f64 / 2.5);
+            laps.lights[0].position()
+        };
+        let steps: Vec<f32> = (0..10)
+            .map(|f| (at(&mut laps, f + 1) - at(&mut laps, f)).length())
+            .collect();
+        let mean = steps.iter().sum::<f32>() / 10.0;
+        assert!((0.31..0.35).contains(&mean), "{mean} m a frame on average");
+        assert!(steps.iter().all(|s| (0.15..0.5).contains(s)), "{steps:?}");
     }
 
     #[test]

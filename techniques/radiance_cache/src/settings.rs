@@ -223,8 +223,16 @@ pub struct RadianceCacheSettings {
     /// (`continue_path`). Lower: faster, noisier records (still unbiased).
     #[setting(default = 3)]
     pub rr_start_depth: u32,
-    /// Hard limit on a gather ray's reflections, a safety net behind Russian roulette.
-    /// At least 1; default 1024.
+    /// Hard limit on a gather ray's reflections: 1 caches one bounce of indirect light
+    /// (the light each gather ray's hit reflects straight from the emitters), more caches
+    /// every bounce. Beyond the paper: its records are made by rasterizing the scene over
+    /// the record with each visible point's own lighting ("the position and incoming
+    /// lighting … of each point visible to p_k", §5, after GKBP05; "the outgoing radiance
+    /// of reprojected visible points … accounting for … light sources", §4.3), one
+    /// bounce, which `--preset paper` sets. One bounce changes faster when a light moves
+    /// (records live shorter: the Moving Light's 0.95×) and misses the light of later
+    /// bounces (a white box's indirect light is largely multiply reflected). At least 1;
+    /// default 1024, a safety net behind Russian roulette (every bounce).
     #[setting(default = 1024, range = "≥ 1")]
     pub max_depth: u32,
     /// Seed of the gather rays' jitter and paths: the same seed gives the same records,
@@ -313,10 +321,10 @@ impl TechniqueSettings for RadianceCacheSettings {
 
 impl RadianceCacheSettings {
     /// The paper: its values (§6), the reasoned choices where it gives none (as the
-    /// default), and every addition of this implementation switched off
-    /// (`gradient_limit`, `replace_only_on_surface`, `reuse_directions`,
-    /// `expire_on_surprise`; `neighbour_aging` is off by default). The test
-    /// `settings::the_paper_preset_switches_every_deviation_off` pins this list.
+    /// default), records of one bounce (`max_depth` 1, §4.3 and §5) and every addition
+    /// of this implementation switched off (`gradient_limit`, `replace_only_on_surface`,
+    /// `reuse_directions`, `expire_on_surprise`; `neighbour_aging` is off by default).
+    /// The test `settings::the_paper_preset_switches_every_deviation_off` pins this list.
     pub fn paper() -> Self {
         Self {
             gradient_limit: false,
@@ -324,6 +332,7 @@ impl RadianceCacheSettings {
             reuse_directions: false,
             expire_on_surprise: false,
             neighbour_aging: false,
+            max_depth: 1,
             ..Self::default()
         }
     }
@@ -358,11 +367,11 @@ impl RadianceCacheSettings {
         &[
             (
                 "default",
-                "the paper's values (§6: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated) with four additions `paper` turns off",
+                "the paper's values (§6: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated) with records of every bounce and four additions, which `paper` turns off",
             ),
             (
                 "paper",
-                "the paper: its §6 values, no gradient limit, replacements anywhere with new directions, no expiry on surprises",
+                "the paper: its §6 values, records of one bounce (§4.3, §5), no gradient limit, replacements anywhere with new directions, no expiry on surprises",
             ),
             (
                 "still",

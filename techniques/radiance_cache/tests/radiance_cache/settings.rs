@@ -13,6 +13,8 @@ fn paper_values(s: &RadianceCacheSettings) -> Vec<(&'static str, bool)> {
         ("reuse_directions", !s.reuse_directions),
         ("expire_on_surprise", !s.expire_on_surprise),
         ("neighbour_aging", !s.neighbour_aging),
+        // The paper's records hold one bounce (§4.3, §5); ours every bounce.
+        ("max_depth", s.max_depth == 1),
         // Only in real time, where the paper has no rule (its frames are a timeline).
         ("max_age_frames", s.max_age_frames == 20),
     ]
@@ -29,6 +31,7 @@ fn the_paper_preset_switches_every_deviation_off() {
             replace_only_on_surface: true,
             reuse_directions: true,
             expire_on_surprise: true,
+            max_depth: 1024,
             ..paper
         },
         default
