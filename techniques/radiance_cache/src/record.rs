@@ -682,6 +682,23 @@ pub fn ward_weight(p: Vec3, n: Vec3, record_position: Vec3, record_normal: Vec3,
     1.0 / ward_error(p, n, record_position, record_normal, r_k)
 }
 
+/// A usable record's weight in Eq. 1 at a point where Ward's error is `ward_error`
+/// (≤ `accuracy`): Ward's w_k = 1/ε (Eq. 2), or with `smooth`, 1/ε − 1/a, which falls to
+/// zero at the edge of the record's sphere of use instead of jumping there from 1/a to
+/// nothing (where neighbouring records' values differ, Ward's jump draws the sphere's
+/// circle on the image). Both are infinite at ε = 0 (the record's own value) and keep
+/// the records' order; a point at the very edge keeps a weight of 1e-6/a, so a record
+/// that serves it alone still does.
+#[inline]
+pub fn interpolation_weight(ward_error: f32, accuracy: f32, smooth: bool) -> f32 {
+    let ward = 1.0 / ward_error;
+    if smooth {
+        (ward - 1.0 / accuracy).max(1e-6 / accuracy)
+    } else {
+        ward
+    }
+}
+
 /// Eq. 3 as it should read (the paper prints w_k ≥ a; compare Eq. 10): a record is in
 /// the usable set S_r(p) when w_k(p) ≥ 1/a, tested as 1/w_k ≤ a so that the infinite
 /// weight at the record itself needs no special case. False for NaN.

@@ -96,6 +96,16 @@ pub struct RadianceCacheSettings {
     /// True costs more records along such edges.
     #[setting(default = true)]
     pub gradient_limit: bool,
+    /// Beyond the paper: records fade out at the edge of their sphere of use. Eq. 1
+    /// weights a usable record by Ward's w_k = 1/ε (Eq. 2), which is 1/a at the edge
+    /// and zero beyond it: where neighbouring records' values differ (each carries its
+    /// own noise), the image jumps along the edge, drawing the record's circle (seen on
+    /// the back wall of `builtin:cornell-spot` at 640×480). True weights by 1/ε − 1/a,
+    /// zero at the edge, so the image is continuous there; the records used, their
+    /// order and the value at a record are unchanged. Default true; `--preset paper`:
+    /// false (Ward's weight).
+    #[setting(default = true)]
+    pub smooth_weights: bool,
     /// Strata of the hemisphere grid in θ (cosine-weighted: each stratum has the same
     /// projected solid angle), §6: 64. Rays per record = `theta_strata × phi_strata`.
     /// Higher: less noise per record and finer gradients, at a cost linear in the rays.
@@ -321,9 +331,10 @@ impl TechniqueSettings for RadianceCacheSettings {
 
 impl RadianceCacheSettings {
     /// The paper: its values (§6), the reasoned choices where it gives none (as the
-    /// default), records of one bounce (`max_depth` 1, §4.3 and §5) and every addition
-    /// of this implementation switched off (`gradient_limit`, `replace_only_on_surface`,
-    /// `reuse_directions`, `expire_on_surprise`; `neighbour_aging` is off by default).
+    /// default), records of one bounce (`max_depth` 1, §4.3 and §5), Ward's weight and every
+    /// addition of this implementation switched off (`gradient_limit`,
+    /// `replace_only_on_surface`, `reuse_directions`, `expire_on_surprise`,
+    /// `smooth_weights`; `neighbour_aging` is off by default).
     /// The test `settings::the_paper_preset_switches_every_deviation_off` pins this list.
     pub fn paper() -> Self {
         Self {
@@ -333,6 +344,7 @@ impl RadianceCacheSettings {
             expire_on_surprise: false,
             neighbour_aging: false,
             max_depth: 1,
+            smooth_weights: false,
             ..Self::default()
         }
     }

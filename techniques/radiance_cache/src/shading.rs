@@ -14,7 +14,7 @@
 //! `show_records` marks the records on the image (the paper's Fig. 1c).
 
 use crate::radiance::{GlossyShading, diffuse_albedo};
-use crate::record::{WeightedSum, usable};
+use crate::record::{WeightedSum, interpolation_weight, usable};
 use crate::state::RadianceCache;
 use crate::temporal::contribution;
 use illume_core::image::RgbImage;
@@ -228,7 +228,7 @@ impl RadianceCache {
     /// with Eq. 17) and the specular part; counts the records' uses. `None` where
     /// nothing reflects.
     fn shade_pixel(&self, world: &World, i: usize, px: &GBufferPixel) -> Option<ShadedPixel> {
-        let accuracy = self.settings.accuracy;
+        let (accuracy, smooth) = (self.settings.accuracy, self.settings.smooth_weights);
         let frame = self.frame;
         let (p, n) = shading_point(px)?;
         let surface = self.surface(&px.hit);
@@ -237,7 +237,10 @@ impl RadianceCache {
             if let Some(s) = &self.slots[id as usize] {
                 let error = s.record.ward_error(p, n);
                 if usable(error, accuracy) {
-                    sum.add(1.0 / error, contribution(&s.record, p, n, frame));
+                    sum.add(
+                        interpolation_weight(error, accuracy, smooth),
+                        contribution(&s.record, p, n, frame),
+                    );
                     self.uses[id as usize].fetch_add(1, Ordering::Relaxed);
                 }
             }
@@ -354,7 +357,11 @@ impl RadianceCache {
             }
             let from = Frame::from_normal(s.record.normal);
             let rotated = self.glossy.rotate(&moved, &from, &to);
-            let weight = 1.0 / error.max(1e-6);
+            let weight = interpolation_weight(
+                error.max(1e-6),
+                self.settings.accuracy,
+                self.settings.smooth_weights,
+            );
             for (a, r) in acc.iter_mut().zip(&rotated) {
                 *a += *r * weight;
             }

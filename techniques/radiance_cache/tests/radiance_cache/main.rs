@@ -14,6 +14,7 @@ mod modes;
 mod octree;
 mod radiance;
 mod record;
+mod record_edges;
 mod reproject;
 mod settings;
 mod settling;

@@ -15,6 +15,7 @@ fn paper_values(s: &RadianceCacheSettings) -> Vec<(&'static str, bool)> {
         ("neighbour_aging", !s.neighbour_aging),
         // The paper's records hold one bounce (§4.3, §5); ours every bounce.
         ("max_depth", s.max_depth == 1),
+        ("smooth_weights", !s.smooth_weights),
         // Only in real time, where the paper has no rule (its frames are a timeline).
         ("max_age_frames", s.max_age_frames == 20),
     ]
@@ -32,6 +33,7 @@ fn the_paper_preset_switches_every_deviation_off() {
             reuse_directions: true,
             expire_on_surprise: true,
             max_depth: 1024,
+            smooth_weights: true,
             ..paper
         },
         default
