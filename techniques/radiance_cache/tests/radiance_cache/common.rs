@@ -23,3 +23,26 @@ pub fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
         .unwrap()
         .install(f)
 }
+
+/// A still of builtin scene `name` at `w × h` with radiance caching in `per_frame` mode
+/// (`settings` otherwise): its rasterized G-buffer and the indirect image.
+pub fn still_indirect(
+    name: &str,
+    (w, h): (u32, u32),
+    settings: illume_radiance_cache::RadianceCacheSettings,
+) -> (GBuffer, illume_core::image::RgbImage) {
+    use illume_transport::Technique;
+    let scene = illume_scene::builtin::load(name).unwrap();
+    let timeline = illume_scene::Timeline::new(scene.clone(), vec![0.0], w, h).unwrap();
+    let world = World::new(scene);
+    let settings = illume_radiance_cache::RadianceCacheSettings {
+        temporal: illume_radiance_cache::TemporalMode::PerFrame,
+        ..settings
+    };
+    let mut rc = illume_radiance_cache::RadianceCache::new(&world, &timeline, settings).unwrap();
+    rc.precompute(&world, &mut illume_core::progress::Silent)
+        .unwrap();
+    let g = GBuffer::rasterize(&world, w, h);
+    let img = rc.indirect(&world, &g);
+    (g, img)
+}

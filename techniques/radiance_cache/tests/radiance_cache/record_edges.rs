@@ -3,11 +3,8 @@
 //! records' values differ the image jumps along a circle; `smooth_weights` (1/ε − 1/a)
 //! fades each record out to zero there instead.
 
-use illume_core::progress::Silent;
 use illume_core::{Rgb, luminance};
-use illume_radiance_cache::{RadianceCache, RadianceCacheSettings, TemporalMode};
-use illume_scene::Timeline;
-use illume_transport::{GBuffer, Technique, World};
+use illume_radiance_cache::RadianceCacheSettings;
 
 /// Pixels between a pixel looked at and the wall's edge.
 const MARGIN: usize = 4;
@@ -21,22 +18,15 @@ const MARGIN: usize = 4;
 /// Returns (steps, pixel pairs looked at).
 fn steps_on_the_back_wall(smooth_weights: bool) -> (usize, usize) {
     let (w, h) = (320, 240);
-    let scene = illume_scene::builtin::load("cornell-spot").unwrap();
-    let timeline = Timeline::new(scene.clone(), vec![0.0], w, h).unwrap();
-    let world = World::new(scene);
     // 16×16 rays a record: noisier records than the default's, so differences between
     // neighbours (what an edge shows) are plain at a test's cost.
     let settings = RadianceCacheSettings {
         theta_strata: 16,
         phi_strata: 16,
-        temporal: TemporalMode::PerFrame,
         smooth_weights,
         ..RadianceCacheSettings::default()
     };
-    let mut rc = RadianceCache::new(&world, &timeline, settings).unwrap();
-    rc.precompute(&world, &mut Silent).unwrap();
-    let g = GBuffer::rasterize(&world, w, h);
-    let img = rc.indirect(&world, &g);
+    let (g, img) = crate::common::still_indirect("cornell-spot", (w, h), settings);
     // The back wall: z = −1, facing +z (the box is open at +z, towards the camera).
     let on_wall: Vec<bool> = g
         .pixels

@@ -2,10 +2,7 @@
 //! smooth-shaded mesh faces away from a camera that sees the triangle's front, the
 //! specular part is evaluated about the normal bent towards the camera.
 
-use illume_core::progress::Silent;
-use illume_radiance_cache::{RadianceCache, RadianceCacheSettings, TemporalMode};
-use illume_scene::Timeline;
-use illume_transport::{GBuffer, Technique, World};
+use illume_radiance_cache::RadianceCacheSettings;
 
 /// `builtin:glossy-box` at 320×240 (its gold sphere is a metal: no diffuse part, and the
 /// renderer's direct light is zero at such pixels too): every reflecting pixel gets
@@ -14,20 +11,13 @@ use illume_transport::{GBuffer, Technique, World};
 #[test]
 fn a_glossy_silhouette_has_no_black_pixels() {
     let (w, h) = (320, 240);
-    let scene = illume_scene::builtin::load("glossy-box").unwrap();
-    let timeline = Timeline::new(scene.clone(), vec![0.0], w, h).unwrap();
-    let world = World::new(scene);
     let settings = RadianceCacheSettings {
         theta_strata: 8,
         phi_strata: 8,
         traced_rays: 2,
-        temporal: TemporalMode::PerFrame,
         ..RadianceCacheSettings::default()
     };
-    let mut rc = RadianceCache::new(&world, &timeline, settings).unwrap();
-    rc.precompute(&world, &mut Silent).unwrap();
-    let g = GBuffer::rasterize(&world, w, h);
-    let img = rc.indirect(&world, &g);
+    let (g, img) = crate::common::still_indirect("glossy-box", (w, h), settings);
     let (mut facing_away, mut black) = (0, Vec::new());
     for (i, (px, out)) in g.pixels.iter().zip(img.pixels()).enumerate() {
         let Some(px) = px else { continue };
