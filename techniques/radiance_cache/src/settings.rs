@@ -379,11 +379,11 @@ impl RadianceCacheSettings {
         &[
             (
                 "default",
-                "the paper's values (§6: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated) with records of every bounce and four additions, which `paper` turns off",
+                "the paper's values (§6: a = 0.2, 64×64 rays per record, a^t = 0.05, δt_max = 20, interpolated) with records of every bounce and five additions (records fading out at their edge among them), which `paper` turns off",
             ),
             (
                 "paper",
-                "the paper: its §6 values, records of one bounce (§4.3, §5), no gradient limit, replacements anywhere with new directions, no expiry on surprises",
+                "the paper: its §6 values, records of one bounce (§4.3, §5), Ward's weight, no gradient limit, replacements anywhere with new directions, no expiry on surprises",
             ),
             (
                 "still",
