@@ -465,6 +465,19 @@ const COLOURS: [RGBColor; 10] = [
 /// The legend box's fill: white, slightly see-through.
 const LEGEND_BACKGROUND: RGBAColor = RGBAColor(255, 255, 255, 0.85);
 
+/// Draws the legend box of `chart`'s labelled series: [`LEGEND_BACKGROUND`], a black
+/// border (line charts and the bar chart's line alike; a dual-axis chart passes its
+/// primary context, which holds both axes' labels).
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_series_labels()
+        .background_style(LEGEND_BACKGROUND)
+        .border_style(BLACK)
+        .draw()
+}
+
 /// A line series' legend mark: a 20-pixel stroke in its colour.
 fn legend_mark(colour: RGBColor) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
     move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2))
@@ -547,12 +560,7 @@ pub fn plot_lines(
             .label(s.name.as_str())
             .legend(legend_mark(colour));
     }
-    chart
-        .configure_series_labels()
-        .background_style(LEGEND_BACKGROUND)
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| plot_error(&e))?;
+    draw_legend(&mut chart).map_err(|e| plot_error(&e))?;
     root.present().map_err(|e| plot_error(&e))
 }
 
@@ -653,12 +661,7 @@ fn draw_bars(
             .map_err(|e| plot_error(&e))?
             .label(line.name.as_str())
             .legend(legend_mark(colour));
-        chart
-            .configure_series_labels()
-            .background_style(LEGEND_BACKGROUND)
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| plot_error(&e))?;
+        draw_legend(&mut chart).map_err(|e| plot_error(&e))?;
     }
     root.present().map_err(|e| plot_error(&e))
 }
