@@ -80,6 +80,13 @@ pub struct ViewOptions {
     /// take goes to the technique's own threads, and the cores idle otherwise. A command
     /// (input) starts a frame at once. The reference and the split view are not paced.
     pub max_fps: f64,
+    /// Still refinement: once the view rests (no command, no animation playing, the
+    /// technique [settled](illume_transport::Technique::settled)), this many frames
+    /// sampled at jittered offsets in each pixel are averaged into the image shown, which
+    /// then converges to the box filter of a supersampled image (anti-aliased edges,
+    /// minified textures averaged); 0: off. Any command starts over. Each such frame costs
+    /// about a frame with a ray per pixel; nothing while anything moves.
+    pub refine_frames: u32,
 }
 
 /// Opens the window and runs until it is closed (or the test mode exits).

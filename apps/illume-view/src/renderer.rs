@@ -166,6 +166,10 @@ pub struct Shown {
     /// Another frame would add nothing (the technique is settled, or the reference has
     /// its samples): the renderer waits for a command after this one.
     pub settled: bool,
+    /// Frames averaged into the technique's image shown (still refinement,
+    /// [`RenderSetup::refine_frames`]): 1 for a frame as rendered, more once the view
+    /// rests; 0 for the reference alone.
+    pub refined_frames: u32,
     /// The last pick's result.
     pub pick: Option<Pick>,
     /// Messages for the window (rebuilds, refused edits, errors), newest last.
@@ -217,6 +221,10 @@ pub struct RenderSetup {
     ///
     /// [`ViewOptions::max_fps`]: crate::ViewOptions::max_fps
     pub max_fps: f64,
+    /// Frames of still refinement; see [`ViewOptions::refine_frames`].
+    ///
+    /// [`ViewOptions::refine_frames`]: crate::ViewOptions::refine_frames
+    pub refine_frames: u32,
     /// Called after each published frame (wakes the window).
     pub on_frame: Box<dyn Fn() + Send>,
 }
@@ -318,6 +326,26 @@ struct State {
     frame_started: Option<Instant>,
     /// Techniques that failed to build on this scene, with the error ([`Shown::unavailable`]).
     unavailable: Vec<(TechniqueKind, String)>,
+    /// Frames of still refinement to add once the view rests (0: off).
+    refine_frames: u32,
+    /// The running sum of the frames shown since the view last rested; `None` while
+    /// anything moves.
+    refinement: Option<Refinement>,
+}
+
+/// Still refinement's running sum: the view's frames since it rested, the first sampled
+/// at pixel centres, the others at jittered offsets ([`illume_core::sampling::r2_point`]).
+struct Refinement {
+    sum: RgbImage,
+    frames: u32,
+}
+
+impl Refinement {
+    /// The mean of the frames so far.
+    fn mean(&self) -> RgbImage {
+        let k = 1.0 / self.frames as f32;
+        self.sum.map(|&p| p * k)
+    }
 }
 
 impl State {
@@ -356,6 +384,8 @@ impl State {
                 .then(|| Duration::from_secs_f64(1.0 / setup.max_fps)),
             frame_started: None,
             unavailable: Vec::new(),
+            refine_frames: setup.refine_frames,
+            refinement: None,
         };
         // A technique that cannot run on this scene leaves the window to the reference,
         // which runs on every scene, rather than to an empty window.
@@ -677,6 +707,10 @@ impl State {
                 }
             }
             pending.extend(rx.try_iter());
+            if !pending.is_empty() {
+                // Whatever the command, the view starts over from a centre-sampled frame.
+                self.refinement = None;
+            }
             // Only the newest camera placement matters.
             let last_camera = pending
                 .iter()
@@ -738,7 +772,16 @@ impl State {
             self.engine
                 .as_ref()
                 .is_some_and(|e| e.technique().settled())
+                && !self.refining()
         }
+    }
+
+    /// True while still refinement has frames to add: the view rests and fewer than
+    /// `refine_frames` frames are averaged.
+    fn refining(&self) -> bool {
+        self.refinement
+            .as_ref()
+            .is_some_and(|r| r.frames < self.refine_frames)
     }
 
     fn reference_done(&self) -> bool {
@@ -767,14 +810,30 @@ impl State {
         // The scene is evaluated at `t` only when the time moved: edits to animated
         // objects hold while the animation is paused.
         let time_moved = t != self.time_s;
+        // Still refinement: the view rests and a frame sampled at jittered offsets adds
+        // to the mean shown.
+        let refine = wants_technique
+            && !wants_reference
+            && !time_moved
+            && self
+                .refinement
+                .as_ref()
+                .is_some_and(|r| r.frames < self.refine_frames);
         if wants_technique {
             let step = if time_moved {
                 engine.step(t)
+            } else if refine {
+                let frames = self.refinement.as_ref().map_or(0, |r| r.frames);
+                engine.set_jitter(Some(illume_core::sampling::r2_point(frames)));
+                let step = engine.step_held();
+                engine.set_jitter(None);
+                step
             } else {
                 engine.step_held()
             };
             match step {
                 Ok(out) => {
+                    let settled = engine.technique().settled();
                     let ft = out.frame.timings;
                     times.update_ms += out.update_ms;
                     times.advance_ms = out.advance_ms;
@@ -787,7 +846,34 @@ impl State {
                     if let Some(reason) = out.rebuilt {
                         self.message(format!("technique rebuilt: {reason}"));
                     }
-                    technique_image = Some(out.frame.full);
+                    technique_image = Some(match self.refinement.take() {
+                        Some(mut r)
+                            if refine
+                                && settled
+                                && (r.sum.width(), r.sum.height())
+                                    == (out.frame.full.width(), out.frame.full.height()) =>
+                        {
+                            let frame = out.frame.full.pixels();
+                            for (s, p) in r.sum.pixels_mut().iter_mut().zip(frame) {
+                                *s += *p;
+                            }
+                            r.frames += 1;
+                            let mean = r.mean();
+                            self.refinement = Some(r);
+                            mean
+                        }
+                        _ => {
+                            // A frame at pixel centres; the first of the mean if the
+                            // view rests after it.
+                            if settled && self.refine_frames > 0 && !wants_reference {
+                                self.refinement = Some(Refinement {
+                                    sum: out.frame.full.clone(),
+                                    frames: 1,
+                                });
+                            }
+                            out.frame.full
+                        }
+                    });
                 }
                 Err(e) => {
                     let m = format!("frame failed: {e}");
@@ -879,6 +965,11 @@ impl State {
             selection_pivot,
             commands_applied: self.commands_applied,
             settled: self.would_idle(),
+            refined_frames: match (&self.refinement, wants_technique) {
+                (Some(r), true) => r.frames,
+                (None, true) => 1,
+                (_, false) => 0,
+            },
             pick: self.pick.clone(),
             messages: self.messages.clone(),
             lights: scene
@@ -969,6 +1060,11 @@ pub(crate) mod tests {
     /// A render thread on `builtin:cornell-spot` at 32×24 with `technique` (the reference
     /// at 1 sample per pixel, frames unpaced).
     pub(crate) fn small_render_thread(technique: TechniqueKind) -> RenderThread {
+        small_render_thread_refined(technique, 0)
+    }
+
+    /// [`small_render_thread`] with `refine_frames` of still refinement.
+    fn small_render_thread_refined(technique: TechniqueKind, refine_frames: u32) -> RenderThread {
         let mut config = Config {
             technique,
             ..Default::default()
@@ -982,6 +1078,7 @@ pub(crate) mod tests {
             reference: false,
             play: false,
             max_fps: 0.0,
+            refine_frames,
             on_frame: Box::new(|| {}),
         })
     }
@@ -1002,6 +1099,30 @@ pub(crate) mod tests {
             assert!(Instant::now() < end, "timed out waiting for {what}");
             std::thread::sleep(Duration::from_millis(20));
         }
+    }
+
+    /// Once photon_stream settles, the window averages `refine_frames` frames sampled at
+    /// jittered pixel offsets, then idles; a command starts the mean over from one frame.
+    #[test]
+    fn a_resting_view_averages_jittered_frames_then_idles() {
+        let render = small_render_thread_refined(TechniqueKind::PhotonStream, 6);
+        let settled = wait_for(&render, "the refined, settled view", &|s| s.settled);
+        assert_eq!(settled.refined_frames, 6);
+        // Idle: no frame follows.
+        std::thread::sleep(Duration::from_millis(300));
+        assert_eq!(render.slot.latest().map(|s| s.index), Some(settled.index));
+        // A command starts the mean over: a frame at pixel centres, then 5 jittered ones.
+        let commands = settled.commands_applied;
+        render.send(Command::Scale(1));
+        let again = wait_for(&render, "the view settled again", &|s| {
+            s.settled && s.commands_applied > commands
+        });
+        assert_eq!(again.refined_frames, 6);
+        assert!(
+            again.index >= settled.index + 6,
+            "{} frames after the command",
+            again.index - settled.index
+        );
     }
 
     /// radiance_cache's default (`interpolated`) needs the frames known in advance; the

@@ -67,6 +67,12 @@ pub struct ViewArgs {
     /// the technique's own threads (more photons a second for photon_stream).
     #[arg(long, default_value_t = 60.0, value_parser = max_fps, allow_negative_numbers = true)]
     pub max_fps: f64,
+    /// Frames the window adds, once the view rests, with each pixel sampled off its
+    /// centre (jittered, a ray per pixel), showing their running mean: edges and fine
+    /// texture converge to the box filter of a supersampled image. 0: off. A command or
+    /// any change starts again from one centre-sampled frame.
+    #[arg(long, default_value_t = 64)]
+    pub refine: u32,
 }
 
 /// `--max-fps`: a finite number ≥ 0.
@@ -109,6 +115,7 @@ pub fn run(a: ViewArgs) -> Result<()> {
         duration_s: a.duration,
         output_dir: a.output,
         max_fps: a.max_fps,
+        refine_frames: a.refine,
     })?;
     Ok(())
 }

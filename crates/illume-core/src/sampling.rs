@@ -241,6 +241,17 @@ impl SampleStream for HaltonStream<'_> {
     }
 }
 
+/// Point `i` of the R₂ low-discrepancy sequence in [0, 1)² (Roberts 2018: the additive
+/// recurrence on 1/φ₂ and 1/φ₂², φ₂ the plastic number, x³ = x + 1), started at the
+/// centre (0.5, 0.5) for `i = 0`. Any run of n consecutive points covers the square
+/// evenly (a discrepancy of order 1/n), with no period: the pixel offsets of a
+/// progressive refinement that may stop after any frame.
+pub fn r2_point(i: u32) -> Vec2 {
+    const A: [f64; 2] = [0.754_877_666_246_692_8, 0.569_840_290_998_053_3];
+    let f = |a: f64| (0.5 + a * f64::from(i)).fract() as f32;
+    Vec2::new(f(A[0]), f(A[1]))
+}
+
 /// Cosine-weighted direction on the hemisphere around +Z; pdf = cosθ/π.
 #[inline]
 pub fn cosine_hemisphere(u: Vec2) -> Vec3 {

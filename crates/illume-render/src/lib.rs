@@ -294,6 +294,12 @@ pub struct Renderer {
     /// (the default): a technique's image is all indirect, and it may skip its share's
     /// work ([`Technique::want_direct_share`]); `full` is the same either way.
     pub split: bool,
+    /// Where in each pixel the next frames sample, in `[0, 1)²` (0.5, 0.5 = the
+    /// centre; `None`: the centre). Both primary visibilities follow it (the rasterizer
+    /// by a shifted projection, [`GBuffer::rasterize_into_at`]); the mean of frames over
+    /// well-spread offsets is the box filter a supersampled image gives (the window's
+    /// still refinement).
+    pub jitter: Option<Vec2>,
 }
 
 impl Renderer {
@@ -304,6 +310,7 @@ impl Renderer {
             previous: Mutex::new(None),
             shadow_maps: Mutex::new((ShadowMaps::default(), ShadowChooser::default())),
             split: false,
+            jitter: None,
         }
     }
 
@@ -341,15 +348,14 @@ impl Renderer {
     ) -> Frame {
         let t0 = Instant::now();
         let s = &self.settings;
+        let offset = self.jitter.unwrap_or(Vec2::splat(0.5));
         let gbuffer = Arc::new(match s.primary_visibility {
-            PrimaryVisibility::Raster => match self.recycled_gbuffer() {
-                Some(mut g) => {
-                    g.rasterize_into_with(world, s.width, s.height, s.texture_filter);
-                    g
-                }
-                None => GBuffer::rasterize_with(world, s.width, s.height, s.texture_filter),
-            },
-            PrimaryVisibility::Rays => GBuffer::render(world, s.width, s.height, Vec2::splat(0.5)),
+            PrimaryVisibility::Raster => {
+                let mut g = self.recycled_gbuffer().unwrap_or_else(GBuffer::empty);
+                g.rasterize_into_at(world, s.width, s.height, s.texture_filter, offset);
+                g
+            }
+            PrimaryVisibility::Rays => GBuffer::render(world, s.width, s.height, offset),
         });
         *self.previous.lock().unwrap_or_else(|e| e.into_inner()) = Some(Arc::clone(&gbuffer));
         let t1 = Instant::now();
@@ -528,7 +534,7 @@ pub fn direct_light_sky(
                 None => match &camera {
                     Some(c) => {
                         let (x, y) = (i as u32 % gbuffer.width, i as u32 / gbuffer.width);
-                        world.lights.sky_radiance(c.ray(x, y, Vec2::splat(0.5)).dir)
+                        world.lights.sky_radiance(c.ray(x, y, gbuffer.offset).dir)
                     }
                     None => Rgb::ZERO,
                 },

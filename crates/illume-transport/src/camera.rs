@@ -13,6 +13,8 @@ pub struct CameraRays {
     aspect: f32,
     width: u32,
     height: u32,
+    /// Where [`CameraRays::row`] samples each pixel (0.5, 0.5 = the centre).
+    offset: Vec2,
 }
 
 impl CameraRays {
@@ -25,7 +27,19 @@ impl CameraRays {
             aspect: width as f32 / height.max(1) as f32,
             width,
             height,
+            offset: Vec2::splat(0.5),
         }
+    }
+
+    /// These rays with [`CameraRays::row`] sampling each pixel at `offset` in `[0, 1)²`
+    /// instead of its centre (jittered frames).
+    pub fn with_offset(self, offset: Vec2) -> Self {
+        Self { offset, ..self }
+    }
+
+    /// Where [`CameraRays::row`] samples each pixel (0.5, 0.5 = the centre).
+    pub fn offset(&self) -> Vec2 {
+        self.offset
     }
 
     /// The unit-direction ray through image position `(x + offset.x, y + offset.y)`,
@@ -43,14 +57,15 @@ impl CameraRays {
         Ray::new(self.origin, dir)
     }
 
-    /// The centre rays of image row `y`, generated incrementally along the row (the same
-    /// directions as [`CameraRays::ray`] with offset (0.5, 0.5) up to f32 rounding).
+    /// The rays of image row `y` through each pixel's sample point (its centre unless
+    /// [`CameraRays::with_offset`]), generated incrementally along the row (the same
+    /// directions as [`CameraRays::ray`] with that offset up to f32 rounding).
     #[inline]
     pub fn row(&self, y: u32) -> RowRays {
-        let ndc_y = 1.0 - ((y as f32 + 0.5) / self.height as f32) * 2.0;
+        let ndc_y = 1.0 - ((y as f32 + self.offset.y) / self.height as f32) * 2.0;
         let sx = 2.0 / self.width as f32 * self.tan_half_y * self.aspect;
         let first = Vec3::new(
-            (1.0 / self.width as f32 - 1.0) * self.tan_half_y * self.aspect,
+            (2.0 * self.offset.x / self.width as f32 - 1.0) * self.tan_half_y * self.aspect,
             ndc_y * self.tan_half_y,
             -1.0,
         );

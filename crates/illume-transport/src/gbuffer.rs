@@ -65,6 +65,9 @@ pub struct GBuffer {
     /// Pixels the last [`GBuffer::rasterize_into`] kept from the frame before (their
     /// surface could not have changed); 0 after [`GBuffer::render`].
     pub reused_pixels: u64,
+    /// Where in each pixel the primary hits were sampled, in `[0, 1)²` (0.5, 0.5 = the
+    /// centre): the offset of [`GBuffer::render`] or [`GBuffer::rasterize_into_at`].
+    pub offset: Vec2,
     /// The rasterizer's last visibility buffer, kept for its allocation.
     pub(crate) visibility: VisibilityBuffer,
     /// What the pixels were built from, to tell which ones the next frame may keep.
@@ -81,11 +84,18 @@ pub(crate) struct BuildState {
     instances: Vec<(illume_core::Affine3A, u32)>,
     materials: Vec<illume_scene::Material>,
     filter: TextureFilter,
+    offset: Vec2,
 }
 
 impl BuildState {
     /// The state of `world` for a `width × height` image.
-    pub(crate) fn of(world: &World, width: u32, height: u32, filter: TextureFilter) -> Self {
+    pub(crate) fn of(
+        world: &World,
+        width: u32,
+        height: u32,
+        filter: TextureFilter,
+        offset: Vec2,
+    ) -> Self {
         let scene = &world.scene;
         Self {
             camera: Some(scene.camera.clone()),
@@ -97,6 +107,7 @@ impl BuildState {
                 .collect(),
             materials: scene.materials.clone(),
             filter,
+            offset,
         }
     }
 
@@ -109,6 +120,7 @@ impl BuildState {
             || self.size != next.size
             || self.materials != next.materials
             || self.filter != next.filter
+            || self.offset != next.offset
             || self.instances.len() != next.instances.len()
         {
             return Vec::new();
@@ -146,18 +158,20 @@ impl GBuffer {
             height,
             pixels,
             reused_pixels: 0,
+            offset,
             visibility: VisibilityBuffer::empty(),
             built_from: BuildState::default(),
         }
     }
 
-    /// A 0 × 0 G-buffer.
-    pub(crate) fn empty() -> Self {
+    /// A 0 × 0 G-buffer: an allocation for [`GBuffer::rasterize_into`] to fill.
+    pub fn empty() -> Self {
         Self {
             width: 0,
             height: 0,
             pixels: Vec::new(),
             reused_pixels: 0,
+            offset: Vec2::splat(0.5),
             visibility: VisibilityBuffer::empty(),
             built_from: BuildState::default(),
         }
@@ -249,14 +263,20 @@ impl<'a> PrimarySurfaces<'a> {
     /// would; such pixels are a few per thousand at most.
     pub(crate) const EDGE_SLACK: f32 = 0.0;
 
-    pub(crate) fn new(world: &'a World, width: u32, height: u32, filter: TextureFilter) -> Self {
+    pub(crate) fn new(
+        world: &'a World,
+        width: u32,
+        height: u32,
+        filter: TextureFilter,
+        offset: Vec2,
+    ) -> Self {
         let frames = world
             .scene
             .instances
             .iter()
             .map(|inst| crate::hit_tables::InstanceFrame::new(&inst.world_from_object))
             .collect();
-        let camera = CameraRays::new(&world.scene.camera, width, height);
+        let camera = CameraRays::new(&world.scene.camera, width, height).with_offset(offset);
         Self {
             world,
             camera,
@@ -551,8 +571,25 @@ impl GBuffer {
         height: u32,
         filter: TextureFilter,
     ) {
+        self.rasterize_into_at(world, width, height, filter, Vec2::splat(0.5));
+    }
+
+    /// [`GBuffer::rasterize_into_with`] sampling each pixel at `offset` in `[0, 1)²`
+    /// instead of its centre (0.5, 0.5): the projection is shifted by the offset's
+    /// distance from the centre ([`VisibilityBuffer::offset`]) and the rays follow, so the
+    /// hits are [`GBuffer::render`]'s at `offset` up to the rasterizer's contract. Pixels
+    /// are kept from the previous build only when it used the same offset. Jittered
+    /// frames (still refinement) average such buffers over offsets spread in the pixel.
+    pub fn rasterize_into_at(
+        &mut self,
+        world: &World,
+        width: u32,
+        height: u32,
+        filter: TextureFilter,
+        offset: Vec2,
+    ) {
         let n = (width * height) as usize;
-        let next = BuildState::of(world, width, height, filter);
+        let next = BuildState::of(world, width, height, filter, offset);
         let unchanged = self.built_from.unchanged_instances(&next);
         let nothing_moved = !unchanged.is_empty() && unchanged.iter().all(|&u| u);
         self.built_from = next;
@@ -564,9 +601,11 @@ impl GBuffer {
         let vis = &mut self.visibility;
         vis.width = width;
         vis.height = height;
+        vis.offset = offset;
         vis.render_into(&world.scene);
         self.width = width;
         self.height = height;
+        self.offset = offset;
         if self.pixels.len() != n {
             self.pixels.clear();
             self.pixels.resize(n, None);
@@ -574,7 +613,7 @@ impl GBuffer {
         if n == 0 {
             return;
         }
-        let surfaces = PrimarySurfaces::new(world, width, height, filter);
+        let surfaces = PrimarySurfaces::new(world, width, height, filter, offset);
         let vis = &self.visibility;
         let w = width as usize;
         self.reused_pixels = self

@@ -44,7 +44,7 @@
 //! faces) or an orthographic one (directional lights), whose depth attribute is `1/w` or,
 //! orthographically, a plane of world position.
 
-use glam::{Affine3A, DVec4, Vec3, Vec4};
+use glam::{Affine3A, DVec4, Vec2, Vec3, Vec4};
 use illume_scene::{InstanceId, MASK_DEFAULT, MeshCutout, Scene};
 use rayon::prelude::*;
 
@@ -108,6 +108,11 @@ pub struct VisibilityBuffer {
     pub height: u32,
     /// One sample per pixel.
     pub pixels: Vec<VisibilitySample>,
+    /// Where in each pixel the sample lies, in `[0, 1)²` (0.5, 0.5 = the centre, what
+    /// [`VisibilityBuffer::render`] takes): [`VisibilityBuffer::render_into`] shifts the
+    /// projection by the offset's distance from the centre, so that the pixel centres
+    /// the rasterizer samples see what the camera sees at `(x, y) + offset`.
+    pub offset: Vec2,
 }
 
 impl VisibilityBuffer {
@@ -120,6 +125,7 @@ impl VisibilityBuffer {
             width,
             height,
             pixels: Vec::new(),
+            offset: Vec2::splat(0.5),
         };
         buffer.render_into(scene);
         buffer
@@ -131,6 +137,7 @@ impl VisibilityBuffer {
             width: 0,
             height: 0,
             pixels: Vec::new(),
+            offset: Vec2::splat(0.5),
         }
     }
 
@@ -144,7 +151,7 @@ impl VisibilityBuffer {
         if width == 0 || height == 0 {
             return;
         }
-        let viewport = Viewport::for_camera(scene, width, height);
+        let viewport = Viewport::for_camera(scene, width, height, self.offset);
         let setup = setup_scene(scene, &viewport);
         self.pixels
             .par_chunks_mut((width * STRIP_ROWS) as usize)
@@ -225,16 +232,23 @@ impl Viewport {
         }
     }
 
-    /// The viewport of `scene`'s camera, with [`CameraRays`](crate::CameraRays)'s projection.
-    pub(crate) fn for_camera(scene: &Scene, width: u32, height: u32) -> Self {
+    /// The viewport of `scene`'s camera, with [`CameraRays`](crate::CameraRays)'s projection,
+    /// shifted so that pixel centres sample the camera's image at `(x, y) + offset`
+    /// (`offset` = (0.5, 0.5): unshifted).
+    pub(crate) fn for_camera(scene: &Scene, width: u32, height: u32, offset: Vec2) -> Self {
         let camera = &scene.camera;
         let tan_half_y = (camera.yfov_rad * 0.5).tan();
         let aspect = width as f32 / height.max(1) as f32;
-        let clip_from_view = Affine3A::from_mat3(glam::Mat3::from_diagonal(Vec3::new(
-            1.0 / (tan_half_y * aspect),
-            1.0 / tan_half_y,
-            -1.0,
-        )));
+        // A point at screen x + offset.x must land on the centre x + 0.5: screen x is
+        // (x_c/w + 1)·W/2, so x_c gains −kx·w with kx = (offset.x − 0.5)·2/W; screen y is
+        // (1 − y_c/w)·H/2, so y_c gains ky·w. Here w = −z_view.
+        let kx = (offset.x - 0.5) * 2.0 / width.max(1) as f32;
+        let ky = (offset.y - 0.5) * 2.0 / height.max(1) as f32;
+        let clip_from_view = Affine3A::from_mat3(glam::Mat3::from_cols(
+            Vec3::new(1.0 / (tan_half_y * aspect), 0.0, 0.0),
+            Vec3::new(0.0, 1.0 / tan_half_y, 0.0),
+            Vec3::new(kx, -ky, -1.0),
+        ));
         Self::perspective(
             width,
             height,

@@ -274,6 +274,13 @@ impl Engine {
         self.renderer.split = split;
     }
 
+    /// Where in each pixel the next frames sample ([`illume_render::Renderer::jitter`]):
+    /// `Some(offset)` in [0, 1)² takes a BVH ray per pixel through it; `None` (the
+    /// default) the pixel centre through the configured primary visibility.
+    pub fn set_jitter(&mut self, offset: Option<illume_core::Vec2>) {
+        self.renderer.jitter = offset;
+    }
+
     /// One frame at scene time `t` \[s\]: advance time, propagate changes, advance the
     /// technique within its budget, render, collect counters. Fails only when the
     /// technique's precompute (first frame) or a rebuild fails.

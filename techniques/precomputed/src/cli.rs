@@ -487,18 +487,16 @@ fn run_info(i: InfoArgs) -> Result<()> {
             .collect();
         println!("variance[{g}] {}", curve.join(", "));
     }
-    let raw = (h.keys.len() - dark) as f64 * h.width as f64 * h.height as f64 * 3.0 * 4.0;
-    let stored: f64 = file
-        .sections
-        .iter()
-        .map(|s| s.values.len() as f64 * s.format.bytes() as f64)
-        .sum();
-    if h.kind == "pca" && raw > 0.0 {
+    if let Some(c) = file.compression() {
         println!(
-            "compression {:.1} % (raw keys {:.2} MB, stored {:.2} MB)",
-            100.0 * (1.0 - stored / raw),
-            raw / 1e6,
-            stored / 1e6
+            "compression {:.1} % of the bytes (raw keys {:.2} MB, stored {:.2} MB); \
+             {:.1} % of the keys' values (the paper's measure: components, coefficients \
+             and means against the lit keys; the sky's images stored beside, as its \
+             skylight image)",
+            100.0 * c.of_bytes(),
+            c.raw_bytes / 1e6,
+            c.stored_bytes / 1e6,
+            100.0 * c.of_key_values()
         );
     }
     if i.flip && h.kind == "pca" {

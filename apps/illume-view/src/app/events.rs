@@ -32,7 +32,7 @@ impl App {
             .retain(|t| now.duration_since(*t) < Duration::from_secs(2));
         if self.options.log_input {
             eprintln!(
-                "illume view: frame {} technique={} spp={} commands={} render_ms={:.1} pivot={} shown_unix_ms={:.1}",
+                "illume view: frame {} technique={} spp={} commands={} refined={} render_ms={:.1} pivot={} shown_unix_ms={:.1}",
                 latest.index,
                 latest.technique,
                 latest.reference_spp.map_or("none".to_owned(), |s| format!(
@@ -40,6 +40,7 @@ impl App {
                     latest.reference_target
                 )),
                 latest.commands_applied,
+                latest.refined_frames,
                 latest.times.total_ms,
                 latest.selection_pivot.map_or("none".into(), |p| format!(
                     "{:.5},{:.5},{:.5}",
@@ -273,6 +274,7 @@ impl ApplicationHandler for App {
             reference: self.options.reference,
             play: self.options.play,
             max_fps: self.options.max_fps,
+            refine_frames: self.options.refine_frames,
             on_frame: Box::new(move || {
                 let _ = proxy.send_event(());
             }),

@@ -238,10 +238,18 @@ impl App {
         self.send(Command::Camera(orbit.world_from_camera()));
     }
 
-    /// "27.3 fps", or "idle (settled)" once the renderer waits with nothing to add.
+    /// "27.3 fps", "refining 5/64" while still refinement adds frames, or "idle
+    /// (settled)" once the renderer waits with nothing to add.
     fn rate_text(&self) -> String {
         match &self.shown {
+            Some(s) if s.settled && s.refined_frames > 1 => {
+                format!("idle (settled, {} frames averaged)", s.refined_frames)
+            }
             Some(s) if s.settled => "idle (settled)".to_owned(),
+            Some(s) if s.refined_frames > 1 && self.options.refine_frames > 0 => format!(
+                "refining {}/{}",
+                s.refined_frames, self.options.refine_frames
+            ),
             _ => format!("{:.1} fps", self.fps()),
         }
     }

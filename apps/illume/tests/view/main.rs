@@ -697,11 +697,19 @@ fn a_settled_photon_stream_leaves_the_cores_idle_until_the_camera_moves() {
         "--technique",
         "photon_stream",
         "--log-input",
+        "--refine",
+        "4",
     ]);
-    // The streaming thread rests once its pool has turned over; the viewer then stops
+    // The streaming thread rests once its pool has turned over; the viewer then adds
+    // the still refinement's frames (jittered pixel centres, averaged) and stops
     // rendering (the scene's animation is paused, nothing moves).
     let quiet = Duration::from_millis(1500);
     let settled = viewer.wait_quiet(quiet, Duration::from_secs(60), "photon_stream settling");
+    assert_eq!(
+        field(&settled, "refined"),
+        Some(4.0),
+        "the last frame before the viewer idles averages the 4 refinement frames: {settled}"
+    );
     let t0 = Instant::now();
     let cpu0 = viewer.cpu_s();
     std::thread::sleep(Duration::from_secs(2));
@@ -722,14 +730,17 @@ fn a_settled_photon_stream_leaves_the_cores_idle_until_the_camera_moves() {
         |l| l.contains("render_ms=") && field(l, "commands").is_some_and(|c| c > before),
     );
     let last = viewer.wait_quiet(quiet, Duration::from_secs(20), "after the camera move");
-    // Frames follow commands only (the wheel may send a few camera steps): at most
-    // one more frame than commands, for the frame that finds the technique settled.
+    // Frames follow commands only (the wheel may send a few camera steps): each command
+    // starts the mean over, so at most a frame at pixel centres and the 3 refinement
+    // frames after it for each command, and for the frame that finds the technique
+    // settled.
     let frames = frame_index(&last).max(frame_index(&moved)) - frame_index(&settled);
     let commands = field(&last, "commands").unwrap_or(0.0) - before;
     assert!(
-        frames >= 1 && frames as f64 <= commands + 1.0,
+        frames >= 1 && frames as f64 <= 4.0 * (commands + 1.0),
         "{frames} frames for {commands} commands of a camera move (from {settled} to {last})"
     );
+    assert_eq!(field(&last, "refined"), Some(4.0), "{last}");
     viewer.finish();
 }
 

@@ -1,6 +1,7 @@
 //! Shadow maps against exact shadow rays: the same direct light except along shadow edges
 //! and creases, exact analytic values away from them, and no acne on lit surfaces.
 
+use crate::InteractiveBlack;
 use illume_core::image::RgbImage;
 use illume_core::{PI, Quat, Rgb, Vec2, Vec3, channel_mean};
 use illume_render::{ShadowMapSettings, ShadowMaps};
@@ -352,34 +353,6 @@ fn grazing_light_causes_no_acne() {
             (dark as f64) < 1e-3 * (w * h) as f64,
             "{name}: {dark} of {lit} lit pixels are darker with maps (acne)"
         );
-    }
-}
-
-/// A technique with no indirect light that asks for interactive defaults (so
-/// `shadows = "auto"` chooses by cost, as for `photon_stream`).
-struct InteractiveBlack;
-
-impl illume_transport::Technique for InteractiveBlack {
-    fn name(&self) -> &'static str {
-        "interactive_black"
-    }
-    fn scene_changed(
-        &mut self,
-        _: &World,
-        _: &[illume_scene::SceneChange],
-    ) -> illume_transport::ChangeResponse {
-        illume_transport::ChangeResponse::Updated
-    }
-    fn advance(&mut self, _: &World, _: &illume_transport::Budget) {}
-    fn indirect(&mut self, _: &World, g: &GBuffer) -> RgbImage {
-        RgbImage::black(g.width, g.height)
-    }
-    fn stats(&self) -> illume_core::Counters {
-        illume_core::Counters::default()
-    }
-    fn reset(&mut self) {}
-    fn interactive(&self) -> bool {
-        true
     }
 }
 

@@ -5,7 +5,7 @@
 
 use illume_core::{Affine3A, Quat, Vec2, Vec3};
 use illume_scene::{Edit, InstanceId, Scene};
-use illume_transport::{GBuffer, World};
+use illume_transport::{GBuffer, TextureFilter, World};
 
 /// Agreement of one raster/ray pair.
 #[derive(Debug, Default)]
@@ -20,8 +20,20 @@ struct Agreement {
 /// Compares `GBuffer::rasterize` with `GBuffer::render` at pixel centres; panics when a
 /// pixel that agrees on (instance, triangle) differs in any surface field.
 fn compare(world: &World, width: u32, height: u32, what: &str) -> Agreement {
-    let raster = GBuffer::rasterize(world, width, height);
-    let rays = GBuffer::render(world, width, height, Vec2::splat(0.5));
+    compare_at(world, width, height, Vec2::splat(0.5), what)
+}
+
+/// [`compare`] with both sampling each pixel at `offset` (jittered frames).
+fn compare_at(world: &World, width: u32, height: u32, offset: Vec2, what: &str) -> Agreement {
+    let raster = if offset == Vec2::splat(0.5) {
+        GBuffer::rasterize(world, width, height)
+    } else {
+        let mut g = GBuffer::empty();
+        g.rasterize_into_at(world, width, height, TextureFilter::Bilinear, offset);
+        assert_eq!(g.offset, offset);
+        g
+    };
+    let rays = GBuffer::render(world, width, height, offset);
     assert_eq!((raster.width, raster.height), (width, height));
     assert_eq!(raster.pixels.len(), rays.pixels.len());
     let mut a = Agreement {
@@ -167,6 +179,41 @@ fn gltf_cornell_spot() {
 #[test]
 fn sponza() {
     compare_while_moving(&mut file("dabrovic_sponza/sponza.obj"), "sponza");
+}
+
+/// Jittered frames: the rasterizer's shifted projection samples each pixel where a ray
+/// through the same offset does, over the whole pixel (corners included), on a box and
+/// on Sponza (textured, normal-mapped, alpha-masked).
+#[test]
+fn offsets_in_the_pixel_match_rays_through_them() {
+    for (name, world) in [
+        ("cornell-spot", builtin("cornell-spot")),
+        ("sponza", file("dabrovic_sponza/sponza.obj")),
+    ] {
+        let centre = GBuffer::rasterize(&world, 160, 120);
+        for offset in [(0.1, 0.9), (0.83, 0.27), (0.0, 0.0), (0.999, 0.5)] {
+            let offset = Vec2::from(offset);
+            compare_at(&world, 160, 120, offset, &format!("{name} at {offset}"));
+            // The samples moved: positions differ from the centre's on most covered pixels.
+            let mut g = GBuffer::empty();
+            g.rasterize_into_at(&world, 160, 120, TextureFilter::Bilinear, offset);
+            let both: Vec<_> = g
+                .pixels
+                .iter()
+                .zip(&centre.pixels)
+                .filter_map(|(a, b)| Some((a.as_ref()?, b.as_ref()?)))
+                .collect();
+            let moved = both
+                .iter()
+                .filter(|(a, b)| a.hit.position != b.hit.position)
+                .count();
+            assert!(
+                moved > both.len() * 9 / 10,
+                "{name} at {offset}: {moved} of {} moved",
+                both.len()
+            );
+        }
+    }
 }
 
 #[test]

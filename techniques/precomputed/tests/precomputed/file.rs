@@ -336,3 +336,73 @@ fn an_environment_maps_texels_enter_the_fingerprint_as_a_hash() {
         small_text.len()
     );
 }
+
+/// A `pca` file of `lit` lit keys (and 3 dark ones) of `texels` texels, `k` components
+/// per channel, with the sky's two images: the sections `precompute` writes.
+fn pca_file(lit: usize, texels: usize, k: usize) -> PcFile {
+    let mut file = sample(&scene());
+    file.header.width = texels as u32;
+    file.header.height = 1;
+    file.header.components = k as u32;
+    file.header.keys = (0..lit + 3)
+        .map(|i| KeyInfo {
+            hours: i as f64 * 0.1,
+            level: 0,
+            dark: i < 3,
+        })
+        .collect();
+    let t_all = lit + 3;
+    let section = |name: String, format, n: usize| Section {
+        name,
+        format,
+        values: vec![0.5; n],
+    };
+    file.sections = ["r", "g", "b"]
+        .iter()
+        .flat_map(|c| {
+            [
+                section(format!("mean.{c}"), SectionFormat::F32, t_all),
+                section(format!("temporal.{c}"), SectionFormat::F32, k * t_all),
+                section(format!("images.{c}"), SectionFormat::F16, k * texels),
+            ]
+        })
+        .chain([
+            section("sky".into(), SectionFormat::F32, 3 * texels),
+            section("sky.direct".into(), SectionFormat::F32, 3 * texels),
+        ])
+        .collect();
+    file
+}
+
+#[test]
+fn compression_counts_the_keys_values_as_the_paper_and_every_byte_beside() {
+    // The paper's case (§4.1): 180 keys of 480 000 pixels, k = 10: 94.4 % of the values
+    // (the paper rounds to 94.5 %), whatever the sky's images.
+    let (lit, texels, k) = (180usize, 480_000usize, 10usize);
+    let c = pca_file(lit, texels, k).compression().expect("a pca file");
+    let t_all = (lit + 3) as f64;
+    let (n, kf, tl) = (texels as f64, k as f64, lit as f64);
+    let keys = 3.0 * (t_all + kf * t_all + kf * n);
+    assert_eq!(c.raw_values, 3.0 * tl * n);
+    assert_eq!(c.key_values, keys);
+    let paper = c.of_key_values();
+    assert!((paper - (1.0 - keys / (3.0 * tl * n))).abs() < 1e-12);
+    assert!((0.9443..0.9445).contains(&paper), "{paper}");
+    // Bytes: f16 images, f32 coefficients, means and the sky's two f32 images, against
+    // the lit keys in f32.
+    let bytes = 3.0 * (4.0 * t_all + 4.0 * kf * t_all + 2.0 * kf * n) + 2.0 * 4.0 * 3.0 * n;
+    assert_eq!(c.stored_bytes, bytes);
+    assert!((c.of_bytes() - (1.0 - bytes / (4.0 * 3.0 * tl * n))).abs() < 1e-12);
+    // The sky's images weigh in bytes, not in the keys' values.
+    let mut no_sky = pca_file(lit, texels, k);
+    no_sky.sections.retain(|s| !s.name.starts_with("sky"));
+    let d = no_sky.compression().expect("a pca file");
+    assert_eq!(d.key_values, c.key_values);
+    assert!(d.of_bytes() > c.of_bytes());
+    // No lit key, or a partial file: nothing to compare with.
+    let mut dark = pca_file(0, 4, 1);
+    assert!(dark.compression().is_none());
+    dark = pca_file(5, 4, 1);
+    dark.header.kind = "partial".into();
+    assert!(dark.compression().is_none());
+}
