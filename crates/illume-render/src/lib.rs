@@ -30,6 +30,7 @@ use std::time::Instant;
 pub mod denoise;
 pub mod shadow_choice;
 pub mod shadow_map;
+pub mod taa;
 
 pub use shadow_choice::{LightShadowChoice, ShadowChooser, ShadowStats};
 pub use shadow_map::{LightMapPlan, ShadowMapError, ShadowMapSettings, ShadowMaps};
@@ -99,6 +100,21 @@ pub struct RenderSettings {
     /// wherever maps are (`shadows = "maps"`, or chosen by `auto`). Out-of-range values are rejected by
     /// [`RenderSettings::validate`]; a renderer given them anyway falls back to rays.
     pub shadow_maps: ShadowMapSettings,
+    /// Temporal anti-aliasing of interactive techniques' frames ([`taa`]): while the
+    /// camera moves, each frame samples its pixels at the next sub-pixel offset of the R₂
+    /// sequence, and the image shown (`Frame::full`; `direct` and `indirect` stay the
+    /// frame's own) blends it into the reprojected, neighbourhood-clamped history of the
+    /// frames before. Edges converge towards the box filter the reference shows; the cost
+    /// is the blend's pass (measured in BENCHMARKS.md, "temporal anti-aliasing") and a
+    /// little softening of texture detail under motion. A still camera keeps its last
+    /// offset (a new one would rebuild the whole G-buffer every frame). Not applied to
+    /// split frames, to explicit [`Renderer::jitter`]s, nor to the reference. Default
+    /// false: frames at pixel centres, bit for bit as before.
+    pub temporal_aa: bool,
+    /// The new frame's weight in temporal anti-aliasing's blend, in (0, 1]: smaller is
+    /// smoother (≈ 2/α − 1 frames averaged) but softer under motion and slower where the
+    /// clamp does not act. Default 0.1 (Karis 2014).
+    pub temporal_aa_blend: f32,
 }
 
 /// How analytic lights' shadows are found (see [`RenderSettings::shadows`]).
@@ -150,6 +166,8 @@ impl Default for RenderSettings {
             texture_filter: TextureFilter::Trilinear,
             shadows: ShadowMode::Auto,
             shadow_maps: ShadowMapSettings::default(),
+            temporal_aa: false,
+            temporal_aa_blend: 0.1,
         }
     }
 }
@@ -163,6 +181,9 @@ pub enum RenderSettingsError {
     /// `area_light_samples` is 0 (area lights would light nothing).
     #[error("area_light_samples = 0: must be at least 1")]
     NoAreaLightSamples,
+    /// `temporal_aa_blend` is outside (0, 1].
+    #[error("temporal_aa_blend = {0}: must be in (0, 1] (the new frame's weight)")]
+    TemporalAaBlend(f32),
 }
 
 impl RenderSettings {
@@ -171,6 +192,9 @@ impl RenderSettings {
     pub fn validate(&self) -> Result<(), RenderSettingsError> {
         if self.area_light_samples == 0 {
             return Err(RenderSettingsError::NoAreaLightSamples);
+        }
+        if !(self.temporal_aa_blend > 0.0 && self.temporal_aa_blend <= 1.0) {
+            return Err(RenderSettingsError::TemporalAaBlend(self.temporal_aa_blend));
         }
         Ok(self.shadow_maps.validate()?)
     }
@@ -289,6 +313,8 @@ pub struct Renderer {
     /// The shadow maps, re-rendered each frame into the same allocations, and the
     /// per-light choice of `shadows = "auto"`.
     shadow_maps: Mutex<(ShadowMaps, ShadowChooser)>,
+    /// Temporal anti-aliasing's history ([`RenderSettings::temporal_aa`]).
+    taa: Mutex<taa::TemporalAa>,
     /// Frames split as the reference splits light: the technique's
     /// [`Technique::direct_share`] is asked for and moved into the direct image. False
     /// (the default): a technique's image is all indirect, and it may skip its share's
@@ -309,6 +335,7 @@ impl Renderer {
             settings,
             previous: Mutex::new(None),
             shadow_maps: Mutex::new((ShadowMaps::default(), ShadowChooser::default())),
+            taa: Mutex::new(taa::TemporalAa::default()),
             split: false,
             jitter: None,
         }
@@ -348,7 +375,17 @@ impl Renderer {
     ) -> Frame {
         let t0 = Instant::now();
         let s = &self.settings;
-        let offset = self.jitter.unwrap_or(Vec2::splat(0.5));
+        let mut taa = self.taa.lock().unwrap_or_else(|e| e.into_inner());
+        let temporal_aa =
+            s.temporal_aa && self.jitter.is_none() && !self.split && technique.interactive();
+        if !temporal_aa {
+            taa.reset();
+        }
+        let offset = match self.jitter {
+            Some(offset) => offset,
+            None if temporal_aa => taa.next_offset(&world.scene.camera),
+            None => Vec2::splat(0.5),
+        };
         let gbuffer = Arc::new(match s.primary_visibility {
             PrimaryVisibility::Raster => {
                 let mut g = self.recycled_gbuffer().unwrap_or_else(GBuffer::empty);
@@ -417,6 +454,12 @@ impl Renderer {
             Some(share) => add_moving_share(&mut direct, &mut indirect, &share),
             None => add_par(&direct, &indirect),
         };
+        let full = if temporal_aa {
+            taa.resolve(&gbuffer, &full, s, &world.scene)
+        } else {
+            full
+        };
+        drop(taa);
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         let timings = FrameTimings {
             gbuffer_ms: ms(t0, t1),

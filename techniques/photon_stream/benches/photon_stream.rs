@@ -24,7 +24,8 @@
 //!   measure what the thread beside it costs; `ILLUME_BENCH_SHARE=S` sets its
 //!   `stream_share`. The world is still (only the camera moves), so by default the
 //!   thread rests once its pool has turned over; `ILLUME_BENCH_REST=0` keeps it
-//!   streaming, as it does while objects or lights move.
+//!   streaming, as it does while objects or lights move. `ILLUME_BENCH_TAA=1` turns the
+//!   renderer's temporal anti-aliasing on (`render.temporal_aa`), in every section.
 //!
 //! Every other section keeps the thread streaming (`rest_when_settled = false`): they
 //! measure it, or frames beside it, as in the paper.
@@ -122,6 +123,7 @@ fn run_frames(
         width: w,
         height: h,
         area_light_samples: 1,
+        temporal_aa: std::env::var_os("ILLUME_BENCH_TAA").is_some(),
         ..Default::default()
     });
     {
