@@ -214,6 +214,58 @@ impl<'a> Surfaces<'a> {
     }
 }
 
+/// For still objects in a rasterized frame: the pixel's point in the last frame's view,
+/// `1/w`-scaled, is `a·(1/w) + b0 + x·bx + y·by` (the current camera's ray of pixel
+/// (x, y) at view depth 1, [`Surfaces::position`], carried into the last view once a
+/// frame), so a pixel costs nine multiply-adds and one division.
+struct Direct {
+    a: Vec3,
+    b0: Vec3,
+    bx: Vec3,
+    by: Vec3,
+}
+
+impl Direct {
+    fn new(surfaces: &Surfaces<'_>, projection: &Projection) -> Option<Self> {
+        let Surfaces::Raster {
+            origin,
+            to_world,
+            corner,
+            right,
+            down,
+            ..
+        } = surfaces
+        else {
+            return None;
+        };
+        let v = &projection.view_from_world;
+        let carry = |d: Vec3| v.transform_vector3(to_world.transform_vector3(d));
+        Some(Self {
+            a: v.transform_point3(*origin),
+            b0: carry(*corner),
+            bx: carry(*right),
+            by: carry(*down),
+        })
+    }
+
+    /// Pixel coordinates in the last frame of the point pixel (x, y) sees.
+    #[inline]
+    fn project(
+        &self,
+        x: usize,
+        y: usize,
+        surfaces: &Surfaces<'_>,
+        projection: &Projection,
+    ) -> Option<Vec2> {
+        let Surfaces::Raster { samples, width, .. } = surfaces else {
+            return None;
+        };
+        let inverse_depth = samples[y * width + x].inverse_depth;
+        let v = self.a * inverse_depth + self.b0 + self.bx * x as f32 + self.by * y as f32;
+        projection.screen(v)
+    }
+}
+
 /// The last frame's camera as a projection to continuous pixel coordinates (pixel i's
 /// centre at i + 0.5, y down), the projection of [`illume_transport::CameraRays`].
 struct Projection {
@@ -242,18 +294,22 @@ impl Projection {
     /// Pixel coordinates and distance from the camera of world point `p`; `None` behind
     /// the camera.
     fn project(&self, p: Vec3) -> Option<(Vec2, f32)> {
-        let v = self.view_from_world.transform_point3(p);
-        if v.z >= -1e-6 {
+        let q = self.screen(self.view_from_world.transform_point3(p))?;
+        Some((q, (p - self.origin).length()))
+    }
+
+    /// Pixel coordinates of view-space point `v` (or any positive multiple of it);
+    /// `None` behind the camera.
+    #[inline]
+    fn screen(&self, v: Vec3) -> Option<Vec2> {
+        if v.z >= -1e-12 {
             return None;
         }
         let inv = -1.0 / v.z;
         let ndc = Vec2::new(v.x * self.sx * inv, v.y * self.sy * inv);
-        Some((
-            Vec2::new(
-                (ndc.x + 1.0) * 0.5 * self.width,
-                (1.0 - ndc.y) * 0.5 * self.height,
-            ),
-            (p - self.origin).length(),
+        Some(Vec2::new(
+            (ndc.x + 1.0) * 0.5 * self.width,
+            (1.0 - ndc.y) * 0.5 * self.height,
         ))
     }
 }
@@ -297,6 +353,7 @@ fn blend(
     let still = hist.camera == *camera;
     let (wi, hi_) = (w as i64, h as i64);
     let surfaces = Surfaces::of(gbuffer, camera);
+    let direct = Direct::new(&surfaces, &projection);
     // A moving object's trail: a history texel within one of (x, y) saw another
     // instance, and it or this one moved since (the clamp alone lets a silhouette's
     // colours through, and a texel's colour may hold a surface its last sample missed).
@@ -333,7 +390,12 @@ fn blend(
             }
             return Some(history[y * w + x]);
         }
-        let (q, _) = projection.project(motion.unwrap_or_else(position))?;
+        let q = match (&motion, &direct) {
+            // A still object seen through the rasterizer: its point in the last frame's
+            // view straight from the pixel and `1/w` (one division, no transforms).
+            (None, Some(d)) => d.project(x, y, &surfaces, &projection)?,
+            _ => projection.project(motion.unwrap_or_else(position))?.0,
+        };
         // The history position (texel j's centre at j + 0.5); outside the last frame
         // (beyond half a texel of its border), nothing.
         let at = q + shift - Vec2::splat(0.5);
