@@ -907,6 +907,14 @@ mod tests {
             no_samples.validate(),
             Err(RenderSettingsError::NoAreaLightSamples)
         ));
+        for blend in [0.0, -0.1, 1.5, f32::NAN] {
+            let bad_blend = RenderSettings {
+                temporal_aa_blend: blend,
+                ..settings.clone()
+            };
+            let e = bad_blend.validate().expect_err("out of (0, 1]");
+            assert!(e.to_string().contains("temporal_aa_blend"), "{e}");
+        }
         let fallback = Renderer::new(bad).render(&world, &mut black(), 1);
         let rays = direct_light(
             &world,
