@@ -11,11 +11,11 @@
 //! Per pixel with a surface:
 //! - **Reprojection.** The pixel's surface point, moved back by its instance's motion
 //!   since the last frame (each instance's transform is kept), is projected into the
-//!   last frame's camera; the history is read there bilinearly, shifted by the two
-//!   frames' sub-pixel offsets so that it stays centred on pixel centres.
-//!   The history is read by a 4 × 4 Catmull-Rom filter (bilinear reads soften the image
-//!   a little more at every frame of motion); texels beyond the border are read at the
-//!   border, and a point that was outside the last frame takes the frame as it is.
+//!   last frame's camera, shifted by the frame's sub-pixel offset so that the history
+//!   stays centred on pixel centres, and the history is read there by a 4 × 4
+//!   Catmull-Rom filter (bilinear reads soften the image a little more at every frame of
+//!   motion); texels beyond the border are read at the border, and a point that was
+//!   outside the last frame takes the frame as it is.
 //! - **Rejection.** Where a history texel within one of the point saw another instance
 //!   and either instance moved since the last frame, the pixel takes the frame as it is
 //!   (a moving object's trail and the surfaces it uncovers). Between still objects the
@@ -30,9 +30,10 @@
 //!   [`RenderSettings::temporal_aa_blend`].
 //!
 //! Pixels without a surface (the sky, the background) take the frame as it is. The
-//! error left: the clamp keeps some aliasing on thin features, and bilinear history
-//! reads soften texture detail a little under motion (measured in BENCHMARKS.md,
-//! "temporal anti-aliasing").
+//! error left: the clamp keeps some aliasing on thin features, the silhouettes of moving
+//! objects are not anti-aliased (their history is rejected), and resampling the history
+//! softens detail a little under motion (measured in BENCHMARKS.md, "temporal
+//! anti-aliasing", against each frame's box filter).
 
 use crate::RenderSettings;
 use illume_core::image::RgbImage;
@@ -270,7 +271,6 @@ impl Direct {
 /// centre at i + 0.5, y down), the projection of [`illume_transport::CameraRays`].
 struct Projection {
     view_from_world: Affine3A,
-    origin: Vec3,
     sx: f32,
     sy: f32,
     width: f32,
@@ -283,7 +283,6 @@ impl Projection {
         let aspect = width as f32 / height.max(1) as f32;
         Self {
             view_from_world: camera.world_from_camera.inverse(),
-            origin: camera.world_from_camera.translation.into(),
             sx: 1.0 / (tan_half_y * aspect),
             sy: 1.0 / tan_half_y,
             width: width as f32,
@@ -291,11 +290,9 @@ impl Projection {
         }
     }
 
-    /// Pixel coordinates and distance from the camera of world point `p`; `None` behind
-    /// the camera.
-    fn project(&self, p: Vec3) -> Option<(Vec2, f32)> {
-        let q = self.screen(self.view_from_world.transform_point3(p))?;
-        Some((q, (p - self.origin).length()))
+    /// Pixel coordinates of world point `p`; `None` behind the camera.
+    fn project(&self, p: Vec3) -> Option<Vec2> {
+        self.screen(self.view_from_world.transform_point3(p))
     }
 
     /// Pixel coordinates of view-space point `v` (or any positive multiple of it);
@@ -394,7 +391,7 @@ fn blend(
             // A still object seen through the rasterizer: its point in the last frame's
             // view straight from the pixel and `1/w` (one division, no transforms).
             (None, Some(d)) => d.project(x, y, &surfaces, &projection)?,
-            _ => projection.project(motion.unwrap_or_else(position))?.0,
+            _ => projection.project(motion.unwrap_or_else(position))?,
         };
         // The history position (texel j's centre at j + 0.5); outside the last frame
         // (beyond half a texel of its border), nothing.
@@ -506,10 +503,10 @@ mod tests {
         ] {
             let o = Vec2::from(o);
             let ray = rays.ray(x, y, o);
-            let (q, d) = p.project(ray.origin + ray.dir * 3.0).expect("in front");
+            let q = p.project(ray.origin + ray.dir * 3.0).expect("in front");
             let want = Vec2::new(x as f32, y as f32) + o;
             assert!((q - want).abs().max_element() < 1e-3, "{q} against {want}");
-            assert!((d - 3.0).abs() < 1e-4, "{d}");
+            assert!(p.project(ray.origin - ray.dir * 3.0).is_none(), "behind");
         }
     }
 }
