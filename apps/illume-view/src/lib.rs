@@ -81,11 +81,12 @@ pub struct ViewOptions {
     /// (input) starts a frame at once. The reference and the split view are not paced.
     pub max_fps: f64,
     /// Still refinement: once the view rests (no command, no animation playing, the
-    /// technique [settled](illume_transport::Technique::settled)), this many frames
-    /// sampled at jittered offsets in each pixel are averaged into the image shown, which
-    /// then converges to the box filter of a supersampled image (anti-aliased edges,
-    /// minified textures averaged); 0: off. Any command starts over. Each such frame costs
-    /// about a frame with a ray per pixel; nothing while anything moves.
+    /// technique [settled](illume_transport::Technique::settled)), this many frames are
+    /// averaged into the image shown — the one at pixel centres and the others at jittered
+    /// offsets in each pixel — which then converges to the box filter of a supersampled
+    /// image (anti-aliased edges, minified textures averaged); 0 or 1: off. Any command
+    /// starts over. Each such frame costs about a moving-camera frame (the G-buffer
+    /// rasterized at the offset); nothing is spent while anything moves.
     pub refine_frames: u32,
 }
 

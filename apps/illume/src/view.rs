@@ -67,10 +67,10 @@ pub struct ViewArgs {
     /// the technique's own threads (more photons a second for photon_stream).
     #[arg(long, default_value_t = 60.0, value_parser = max_fps, allow_negative_numbers = true)]
     pub max_fps: f64,
-    /// Frames the window adds, once the view rests, with each pixel sampled off its
-    /// centre (jittered, a ray per pixel), showing their running mean: edges and fine
-    /// texture converge to the box filter of a supersampled image. 0: off. A command or
-    /// any change starts again from one centre-sampled frame.
+    /// Frames the window averages once the view rests (the technique settled): the frame
+    /// at pixel centres and N − 1 more, each sampling its pixels at another point of the
+    /// pixel; edges and fine texture converge to the box filter of a supersampled image.
+    /// 0 or 1: off. A command or any change starts again from one centre-sampled frame.
     #[arg(long, default_value_t = 64)]
     pub refine: u32,
 }
