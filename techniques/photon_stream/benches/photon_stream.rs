@@ -24,8 +24,10 @@
 //!   measure what the thread beside it costs; `ILLUME_BENCH_SHARE=S` sets its
 //!   `stream_share`. The world is still (only the camera moves), so by default the
 //!   thread rests once its pool has turned over; `ILLUME_BENCH_REST=0` keeps it
-//!   streaming, as it does while objects or lights move. `ILLUME_BENCH_TAA=1` turns the
-//!   renderer's temporal anti-aliasing on (`render.temporal_aa`), in every section.
+//!   streaming, as it does while objects or lights move. `ILLUME_BENCH_SCENE=NAME` keeps
+//!   the scenes whose label contains NAME (e.g. `Sponza`; for profiling one).
+//!   `ILLUME_BENCH_TAA=1` turns the renderer's temporal anti-aliasing on
+//!   (`render.temporal_aa`), in every section.
 //!
 //! Every other section keeps the thread streaming (`rest_when_settled = false`): they
 //! measure it, or frames beside it, as in the paper.
@@ -237,7 +239,11 @@ fn target_table() {
     );
     println!("| scene | camera | fps | G-buffer [ms] | direct [ms] | VSL indirect [ms] |");
     println!("|---|---|---:|---:|---:|---:|");
+    let only = std::env::var("ILLUME_BENCH_SCENE").ok();
     for (label, file) in [SCENES[0], SCENES[2], SCENES[3]] {
+        if only.as_deref().is_some_and(|o| !label.contains(o)) {
+            continue;
+        }
         let world: SharedWorld = World::new(load(file)).shared();
         let mut runs: [Vec<FrameRun>; 2] = [Vec::new(), Vec::new()];
         for _ in 0..5 {
