@@ -154,10 +154,12 @@ impl TemporalAa {
 enum Surfaces<'a> {
     Raster {
         samples: &'a [illume_transport::raster::VisibilitySample],
-        /// The camera's origin, its rotation, and the view direction of pixel (x, y) at
-        /// view depth 1: `corner + x·right + y·down`.
+        /// The camera's origin, and the world direction of pixel (x, y)'s sample at view
+        /// depth 1, `corner + x·right + y·down` (the frame's own [`CameraRays`] at its
+        /// offset, as the rasterizer's surfaces use them).
+        ///
+        /// [`CameraRays`]: illume_transport::CameraRays
         origin: Vec3,
-        to_world: Affine3A,
         corner: Vec3,
         right: Vec3,
         down: Vec3,
@@ -171,21 +173,15 @@ impl<'a> Surfaces<'a> {
         let (w, h) = (gbuffer.width, gbuffer.height);
         match gbuffer.visibility() {
             Some(v) => {
-                let tan_half_y = (camera.yfov_rad * 0.5).tan();
-                let aspect = w as f32 / h.max(1) as f32;
-                let (sx, sy) = (2.0 / w as f32, 2.0 / h.max(1) as f32);
-                let o = gbuffer.offset;
+                let rays =
+                    illume_transport::CameraRays::new(camera, w, h).with_offset(gbuffer.offset);
+                let row = rays.row(0);
                 Self::Raster {
                     samples: &v.pixels,
-                    origin: camera.world_from_camera.translation.into(),
-                    to_world: camera.world_from_camera,
-                    corner: Vec3::new(
-                        (o.x * sx - 1.0) * tan_half_y * aspect,
-                        (1.0 - o.y * sy) * tan_half_y,
-                        -1.0,
-                    ),
-                    right: Vec3::new(sx * tan_half_y * aspect, 0.0, 0.0),
-                    down: Vec3::new(0.0, -sy * tan_half_y, 0.0),
+                    origin: rays.origin(),
+                    corner: row.direction(0),
+                    right: row.step(),
+                    down: rays.row_step(),
                     width: w as usize,
                 }
             }
@@ -209,15 +205,13 @@ impl<'a> Surfaces<'a> {
             Self::Raster {
                 samples,
                 origin,
-                to_world,
                 corner,
                 right,
                 down,
                 width,
             } => {
-                let view = *corner + *right * x as f32 + *down * y as f32;
-                let depth = 1.0 / samples[y * width + x].inverse_depth;
-                *origin + to_world.transform_vector3(view) * depth
+                let direction = *corner + *right * x as f32 + *down * y as f32;
+                *origin + direction / samples[y * width + x].inverse_depth
             }
             Self::Entries(pixels, width) => pixels[y * width + x]
                 .as_ref()
@@ -241,7 +235,6 @@ impl Direct {
     fn new(surfaces: &Surfaces<'_>, projection: &Projection) -> Option<Self> {
         let Surfaces::Raster {
             origin,
-            to_world,
             corner,
             right,
             down,
@@ -251,12 +244,11 @@ impl Direct {
             return None;
         };
         let v = &projection.view_from_world;
-        let carry = |d: Vec3| v.transform_vector3(to_world.transform_vector3(d));
         Some(Self {
             a: v.transform_point3(*origin),
-            b0: carry(*corner),
-            bx: carry(*right),
-            by: carry(*down),
+            b0: v.transform_vector3(*corner),
+            bx: v.transform_vector3(*right),
+            by: v.transform_vector3(*down),
         })
     }
 
