@@ -22,7 +22,8 @@
 //! 5e; the default). Glossy surfaces get radiance records (hemispherical harmonics)
 //! for their specular lobe. Beyond the paper: replacement only on a surface, replacements
 //! with their predecessor's rays, surprise expiry and a work budget in records per
-//! frame, and neighbour aging (§7's future work, off by default) ([`expiry`], [`budget`]).
+//! frame, a smallest sphere of use on the image ([`placement`]), and neighbour aging
+//! (§7's future work, off by default) ([`expiry`], [`budget`]).
 //!
 //! | paper | here |
 //! |---|---|

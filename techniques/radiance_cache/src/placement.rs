@@ -85,6 +85,10 @@ impl RadianceCache {
         let rs = &self.record_settings;
         let (gather, paths) = HemisphereGather::trace_keeping_paths(world, p, n, key, rs)?;
         let mut record = IrradianceRecord::from_gather(p, &gather, self.frame, instance, rs);
+        record.harmonic_distance_m = record
+            .harmonic_distance_m
+            .max(self.screen_floor_m(world, p))
+            .min(rs.r_max_m);
         let mut seen: Vec<InstanceId> = paths
             .iter()
             .filter_map(|c| c.hit.map(|h| h.instance))
@@ -131,6 +135,21 @@ impl RadianceCache {
             },
             holes,
         })
+    }
+
+    /// The smallest R_k `min_sphere_fraction` allows at `p` \[m\]: the sphere of use
+    /// a·R_k spans that fraction of the image height at p's distance from the camera
+    /// (the image is 2·d·tan(fov/2) high there); 0 when off.
+    fn screen_floor_m(&self, world: &World, p: Vec3) -> f32 {
+        let s = &self.settings;
+        if s.min_sphere_fraction <= 0.0 {
+            return 0.0;
+        }
+        let camera = &world.scene.camera;
+        let eye = Vec3::from(camera.world_from_camera.translation);
+        let height_m = 2.0 * (0.5 * camera.yfov_rad).tan() * p.distance(eye);
+        let floor = s.min_sphere_fraction * height_m / s.accuracy;
+        if floor.is_finite() { floor } else { 0.0 }
     }
 
     /// True when a record of the cache is usable at `p` with normal `n` (Eq. 3), and,

@@ -28,9 +28,23 @@ pub fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
 /// (`settings` otherwise): its rasterized G-buffer and the indirect image.
 pub fn still_indirect(
     name: &str,
-    (w, h): (u32, u32),
+    size: (u32, u32),
     settings: illume_radiance_cache::RadianceCacheSettings,
 ) -> (GBuffer, illume_core::image::RgbImage) {
+    let (g, img, _) = still_cache(name, size, settings);
+    (g, img)
+}
+
+/// [`still_indirect`], also returning the cache the still left (its records).
+pub fn still_cache(
+    name: &str,
+    (w, h): (u32, u32),
+    settings: illume_radiance_cache::RadianceCacheSettings,
+) -> (
+    GBuffer,
+    illume_core::image::RgbImage,
+    illume_radiance_cache::RadianceCache,
+) {
     use illume_transport::Technique;
     let scene = illume_scene::builtin::load(name).unwrap();
     let timeline = illume_scene::Timeline::new(scene.clone(), vec![0.0], w, h).unwrap();
@@ -44,5 +58,5 @@ pub fn still_indirect(
         .unwrap();
     let g = GBuffer::rasterize(&world, w, h);
     let img = rc.indirect(&world, &g);
-    (g, img)
+    (g, img, rc)
 }

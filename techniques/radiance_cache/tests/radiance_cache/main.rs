@@ -16,6 +16,7 @@ mod radiance;
 mod record;
 mod record_edges;
 mod reproject;
+mod screen_floor;
 mod settings;
 mod settling;
 mod silhouettes;

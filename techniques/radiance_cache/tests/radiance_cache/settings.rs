@@ -16,6 +16,7 @@ fn paper_values(s: &RadianceCacheSettings) -> Vec<(&'static str, bool)> {
         // The paper's records hold one bounce (§4.3, §5); ours every bounce.
         ("max_depth", s.max_depth == 1),
         ("smooth_weights", !s.smooth_weights),
+        ("min_sphere_fraction", s.min_sphere_fraction == 0.0),
         // Only in real time, where the paper has no rule (its frames are a timeline).
         ("max_age_frames", s.max_age_frames == 20),
     ]
@@ -34,6 +35,7 @@ fn the_paper_preset_switches_every_deviation_off() {
             expire_on_surprise: true,
             max_depth: 1024,
             smooth_weights: true,
+            min_sphere_fraction: 0.04,
             ..paper
         },
         default
@@ -63,6 +65,9 @@ fn invalid_settings_name_their_field() {
         (|s| s.r_max_fraction = -1.0, "r_max_fraction"),
         (|s| s.r_max_fraction = f32::INFINITY, "r_max_fraction"),
         (|s| s.r_max_fraction = f32::NAN, "r_max_fraction"),
+        (|s| s.min_sphere_fraction = -0.01, "min_sphere_fraction"),
+        (|s| s.min_sphere_fraction = 0.6, "min_sphere_fraction"),
+        (|s| s.min_sphere_fraction = f32::NAN, "min_sphere_fraction"),
         (|s| s.theta_strata = 1, "theta_strata"),
         (|s| s.theta_strata = 5000, "theta_strata"),
         (|s| s.phi_strata = 2, "phi_strata"),
