@@ -629,6 +629,9 @@ impl GBuffer {
         self.reused_pixels = self
             .pixels
             .par_chunks_mut(w * SURFACE_ROWS as usize)
+            // One job a task, as the rasterizer's strips: rayon's own splitting left a
+            // few long runs of rows a thread, and textured rows cost unevenly.
+            .with_max_len(1)
             .enumerate()
             .map(|(chunk, out)| {
                 let mut current: Option<TriangleSetup> = None;
