@@ -547,6 +547,14 @@ fn run_technique(
     progress.end();
     // Stop the technique (and any thread it runs) before measuring.
     drop(engine);
+    // A supersampled entry's frames, averaged back to the scenario's pixels (after the
+    // timed loop: the averaging is the bench's, not the technique's).
+    let supersample = spec.supersample();
+    if supersample > 1 {
+        for f in &mut frames {
+            f.image = f.image.box_downsample(supersample);
+        }
+    }
     let own = if scenario.own_converged_frames > 0 {
         Some(own_converged_images(
             scenario, k, &config, scene, times, references, progress,
@@ -580,11 +588,12 @@ fn technique_engine(
         name: scenario.techniques[k].name.clone(),
         message,
     };
+    // The size the technique renders at (K times the scenario's when supersampled).
     let timeline = Timeline::new(
         scene.clone(),
         times.to_vec(),
-        scenario.width,
-        scenario.height,
+        config.render.width,
+        config.render.height,
     )
     .map_err(|e| error(e.to_string()))?;
     Engine::with_timeline(scene.clone(), config, timeline).map_err(|e| error(e.to_string()))
@@ -647,6 +656,11 @@ fn own_converged_images(
             }
             last = Some(engine.step(t).map_err(technique_error)?.frame.full);
             progress.set(n as u64 * steps + step + 1);
+        }
+        if let Some(image) = &mut last
+            && spec.supersample() > 1
+        {
+            *image = image.box_downsample(spec.supersample());
         }
         images[i] = last;
     }

@@ -454,3 +454,68 @@ translation = [0.3, 0.3, 0.3]
     );
     let _ = std::fs::remove_dir_all(&root);
 }
+
+/// `supersample = K`: an entry's frames are rendered at K × K times the pixels and
+/// averaged back, so a 1-sample-a-pixel path tracer becomes K² samples a pixel and its
+/// error against the converged reference falls by about K (≈ 1/√samples).
+#[test]
+fn a_supersampled_entry_is_measured_on_frames_averaged_back_to_the_scenarios_size() {
+    let root = temp_dir("supersample");
+    let text = r#"
+name = "supersample"
+scene = "builtin:cornell-spot"
+width = 16
+height = 12
+times_s = [0.0, 0.5]
+metrics = ["rmse"]
+
+[reference]
+spp = 256
+
+[[technique]]
+name = "reference"
+label = "one sample"
+work = 1
+
+[[technique]]
+name = "reference"
+label = "four by four"
+work = 1
+supersample = 4
+"#;
+    let scenario = Scenario::parse(text, &root.join("supersample.toml")).unwrap();
+    let options = RunOptions {
+        output_dir: root.join("report"),
+        cache_dir: root.join("cache"),
+        save_frames: true,
+        notes: Vec::new(),
+    };
+    let result = run(&scenario, &options, &mut Silent).unwrap();
+    let rmse = |series: &str| -> f64 {
+        let v: Vec<f64> = result
+            .records
+            .iter()
+            .filter(|r| r.series == series)
+            .map(|r| {
+                r.metrics
+                    .iter()
+                    .find(|(m, _)| *m == Metric::Rmse)
+                    .unwrap()
+                    .1
+            })
+            .collect();
+        assert_eq!(v.len(), 2, "{series}: one record a frame");
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    let (one, sixteen) = (rmse("one sample"), rmse("four by four"));
+    // 16 samples a pixel: ≈ 1/4 of the error; at most 1/2 allowed for the noise of
+    // 192 pixels, at least 1/8 (a frame not averaged back would fail to compare at all).
+    assert!(
+        sixteen < 0.5 * one && sixteen > one / 8.0,
+        "RMSE {sixteen} supersampled against {one}"
+    );
+    // The saved frames are the scenario's size.
+    let saved = options.output_dir.join("frames/four_by_four/0000.exr");
+    let image = RgbImage::read(&saved).unwrap_or_else(|e| panic!("{}: {e}", saved.display()));
+    assert_eq!((image.width(), image.height()), (16, 12));
+}

@@ -462,3 +462,21 @@ translation = [0.0, 1.5, 0.0]
     };
     assert_eq!((rays(&full), rays(&mini)), (64 * 64, 8 * 8));
 }
+
+#[test]
+fn supersample_outside_one_to_eight_is_refused_by_its_field() {
+    for k in [0, 9] {
+        let e = error(&format!("{MINIMAL}supersample = {k}\n"));
+        assert!(
+            e.contains("test_case.toml") && e.contains("technique[0].supersample"),
+            "{k}: {e}"
+        );
+    }
+    let s = parse(&format!("{MINIMAL}supersample = 3\n")).unwrap();
+    let config = s.technique_config(0).unwrap();
+    assert_eq!(
+        (config.render.width, config.render.height),
+        (3 * s.width, 3 * s.height),
+        "the technique renders three times the size along each side"
+    );
+}
