@@ -67,8 +67,10 @@ pub const STRIP_ROWS: u32 = 16;
 /// than by stepping.
 const SPAN_MIN_WIDTH: i32 = 8;
 
-/// Triangles per parallel setup job.
-const SETUP_CHUNK: usize = 2048;
+/// Triangles per parallel setup job. Small enough that a scene of a few thousand
+/// triangles (the Cornell box: 2 188) still splits over two threads; on Sponza the 260
+/// jobs' strip lists cost nothing measurable (BENCHMARKS.md, "passes").
+const SETUP_CHUNK: usize = 256;
 
 /// Vertices per parallel transform job (smaller meshes are transformed in one go).
 const TRANSFORM_CHUNK: usize = 8192;
@@ -553,9 +555,11 @@ impl SceneSetup<'_> {
 fn setup_scene<'s>(scene: &'s Scene, viewport: &Viewport) -> SceneSetup<'s> {
     let strips = viewport.height.div_ceil(STRIP_ROWS) as usize;
     let cutouts = MeshCutout::all(scene);
+    // Instances transformed side by side (a small mesh's vertices in one go, a large one's
+    // in parallel chunks below).
     let instances: Vec<(usize, Vec<Vec4>)> = scene
         .instances
-        .iter()
+        .par_iter()
         .enumerate()
         .filter(|(_, inst)| inst.mask & MASK_DEFAULT != 0)
         .map(|(i, inst)| {
