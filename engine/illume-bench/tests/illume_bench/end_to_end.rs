@@ -518,4 +518,5 @@ supersample = 4
     let saved = options.output_dir.join("frames/four_by_four/0000.exr");
     let image = RgbImage::read(&saved).unwrap_or_else(|e| panic!("{}: {e}", saved.display()));
     assert_eq!((image.width(), image.height()), (16, 12));
+    let _ = std::fs::remove_dir_all(&root);
 }
