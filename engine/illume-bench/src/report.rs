@@ -383,6 +383,29 @@ fn markdown(
         outcome.cache_renders,
         options.cache_dir.display()
     );
+    // Supersampled entries say so: their frames (and frame times) are of a larger image.
+    let supersampled: Vec<String> = scenario
+        .techniques
+        .iter()
+        .filter(|t| t.supersample() > 1)
+        .map(|t| {
+            let k = t.supersample();
+            format!(
+                "{} {k} × {k} ({}×{} rendered)",
+                t.label(),
+                scenario.width * k,
+                scenario.height * k
+            )
+        })
+        .collect();
+    if !supersampled.is_empty() {
+        let _ = writeln!(
+            md,
+            "Supersampled series (frames averaged over K × K samples a pixel before they \
+             are measured; frame times are those of the larger image): {}.  ",
+            supersampled.join(", ")
+        );
+    }
     let _ = writeln!(md, "Machine: {}.\n", machine_info());
     let _ = write!(
         md,

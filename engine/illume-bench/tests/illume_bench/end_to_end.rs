@@ -518,5 +518,16 @@ supersample = 4
     let saved = options.output_dir.join("frames/four_by_four/0000.exr");
     let image = RgbImage::read(&saved).unwrap_or_else(|e| panic!("{}: {e}", saved.display()));
     assert_eq!((image.width(), image.height()), (16, 12));
+    // The report says which series were supersampled, and only those.
+    let files = write_report(&scenario, &result, &options).unwrap();
+    let report = std::fs::read_to_string(&files.report_md).unwrap();
+    let line = report
+        .lines()
+        .find(|l| l.starts_with("Supersampled series"))
+        .unwrap_or_else(|| panic!("no supersampled line in\n{report}"));
+    assert!(
+        line.contains("four by four 4 × 4 (64×48 rendered)") && !line.contains("one sample"),
+        "{line}"
+    );
     let _ = std::fs::remove_dir_all(&root);
 }
