@@ -14,7 +14,9 @@
 //! direction, 6 per ray), `illume_t.f32` (illume's hit distance per ray, +∞ for a miss).
 //! The last line printed is `ILLUME {json}` with the timings and the traversal kernel
 //! (`ILLUME_ACCEL_KERNEL=portable|avx2` forces one; `ILLUME_SPLIT_BUDGET=x` sets
-//! [`BvhSettings::split_budget`](illume_accel::BvhSettings::split_budget)).
+//! [`BvhSettings::split_budget`](illume_accel::BvhSettings::split_budget)) and, on Linux,
+//! how much of the process's memory the kernel backs with transparent huge pages
+//! (`anon_huge_kb`, from `smaps_rollup`; `-1` elsewhere).
 
 use illume_accel::ray_sets::{incoherent_rays, primary_rays};
 use illume_accel::{BvhSettings, Tracer};
@@ -36,6 +38,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // a fault can stall for milliseconds, and a timed build then takes 55–82 ms instead of
     // 41–50 (Sponza, BENCHMARKS.md "Issue 16, third pass"). The measurement should not
     // depend on how fragmented the machine's memory is: huge pages off for this process.
+    // They do not change the tracing rate measurably (≤ 2 %, docs/benchmarks/tracer.md
+    // "Huge pages checked"), only the build's time.
     #[cfg(target_os = "linux")]
     #[allow(unsafe_code)]
     // SAFETY: PR_SET_THP_DISABLE takes integer arguments only and touches no memory of ours.
@@ -97,7 +101,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     // CPU time of one thread tracing alone: insensitive to other processes time-slicing
     // the machine (Linux only; -1 elsewhere). Repeats until half a second of CPU time.
-    let cpu_rays_per_s = match thread_cpu_seconds() {
+    // It runs on a worker of the pool, as the app's tracing does: on the main thread the
+    // same binary traced Sponza's primary rays at 16–18 M rays/s in most processes and at
+    // 12 in one of four to twelve, by where the environment's size and address
+    // randomisation put the main thread's stack (`setarch -R` with a padded environment
+    // makes it the same every run); a worker's stack is mapped at a page boundary, the same
+    // in every process (docs/benchmarks/tracer.md, "The main thread's stack").
+    let one_thread = || match thread_cpu_seconds() {
         Some(start) => {
             let mut traced = 0usize;
             let mut spent = 0.0;
@@ -112,18 +122,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         None => -1.0,
     };
+    let cpu_rays_per_s = pool.install(one_thread);
     let stats = tracer.stats();
     let hit_count = hits.iter().flatten().count();
     println!(
         "ILLUME {{\"scene\": \"{scene_arg}\", \"kind\": \"{kind}\", \"rays\": {}, \"threads\": {threads}, \"triangles\": {}, \"build_ms\": {build_ms:.2}, \
-         \"median_s\": {median:.6}, \"rays_per_s\": {:.0}, \"hits\": {hit_count}, \"nodes\": {}, \"memory_bytes\": {}, \"stored_triangles\": {}, \"cpu_rays_per_s_1thread\": {cpu_rays_per_s:.0}, \"kernel\": \"{}\"}}",
+         \"median_s\": {median:.6}, \"rays_per_s\": {:.0}, \"hits\": {hit_count}, \"nodes\": {}, \"memory_bytes\": {}, \"stored_triangles\": {}, \"cpu_rays_per_s_1thread\": {cpu_rays_per_s:.0}, \"kernel\": \"{}\", \"anon_huge_kb\": {}}}",
         rays.len(),
         scene.instanced_triangle_count(),
         rays.len() as f64 / median,
         stats.mesh_nodes + stats.instance_nodes,
         stats.memory_bytes,
         stats.stored_triangles,
-        tracer.kernel().name()
+        tracer.kernel().name(),
+        anon_huge_kb().unwrap_or(-1)
     );
     Ok(())
 }
@@ -145,12 +157,30 @@ fn world_triangles(scene: &Scene) -> Vec<[f32; 9]> {
 
 /// User + system CPU time of the calling thread [s], from `/proc/thread-self/stat`
 /// (10 ms resolution).
+/// CPU time of the calling thread in seconds, to the nanosecond (`/proc`'s clock ticks
+/// of 10 ms made the half-second measurement move in steps of 2 %).
+#[cfg(target_os = "linux")]
 fn thread_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/thread-self/stat").ok()?;
-    // Fields after the parenthesised command name; utime and stime are the 12th and 13th.
-    let fields: Vec<&str> = stat.rsplit(')').next()?.split_whitespace().collect();
-    let ticks = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
-    Some(ticks / 100.0)
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    #[allow(unsafe_code)]
+    // SAFETY: `ts` is a valid, writable timespec for the duration of the call.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn thread_cpu_seconds() -> Option<f64> {
+    None
+}
+
+/// The process's anonymous memory in transparent huge pages [KiB] (Linux).
+fn anon_huge_kb() -> Option<i64> {
+    let rollup = std::fs::read_to_string("/proc/self/smaps_rollup").ok()?;
+    let line = rollup.lines().find(|l| l.starts_with("AnonHugePages:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 fn write_f32(path: &Path, values: impl Iterator<Item = f32>) -> std::io::Result<()> {
