@@ -207,6 +207,21 @@ pub fn render_sky_in(
     Ok(Sky { all, direct })
 }
 
+/// Runs `render` (the sky's images) as a phase of its own in `progress`: one image for
+/// the whole day, but at the keys' samples it takes as long as two keys or so (Sponza's
+/// atlas at 512 spp: 17–19 min), and without a phase the log said nothing until the keys
+/// began.
+pub(crate) fn with_sky_progress<T>(
+    progress: &mut dyn illume_core::Progress,
+    render: impl FnOnce() -> T,
+) -> T {
+    progress.begin("precomputed sky (once for the day)", 1);
+    let out = render();
+    progress.set(1);
+    progress.end();
+    out
+}
+
 /// The 8-bit sRGB encoding (clamped, no tone curve) of an image at `exposure` (for the Yee metric).
 pub fn to_srgb8(image: &RgbImage, exposure: f32) -> Vec<u8> {
     illume_core::image::to_srgb8(
@@ -479,7 +494,7 @@ pub fn precompute(
             reason,
         }
     })?;
-    let sky = render_sky_in(world, settings, &layout)?;
+    let sky = with_sky_progress(progress, || render_sky_in(world, settings, &layout))?;
     let keys = match settings.schedule {
         crate::settings::ScheduleKind::Uniform => {
             let times = crate::schedule::uniform(settings.from_h, settings.to_h, settings.step_min);

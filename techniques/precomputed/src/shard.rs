@@ -36,7 +36,7 @@ use crate::file::{FileError, PcFile, Section, SectionFormat};
 use crate::file::{Header, KeyInfo};
 use crate::precompute::{
     Key, SKY_DIRECT, Sky, base_header, compress, daylight_floor, differs_visibly, lerp, render_key,
-    render_sky, sun_of,
+    render_sky, sun_of, with_sky_progress,
 };
 use crate::schedule::{Criterion, KeyTime, Middle, adaptive_start, keeps_middle, level_middles};
 use crate::settings::{PrecomputedSettings, ScheduleKind};
@@ -100,7 +100,8 @@ pub fn precompute_shard(
         })
         .collect();
     if shard.index == 0 {
-        sections.extend(render_sky(world, settings, size)?.sections());
+        let sky = with_sky_progress(progress, || render_sky(world, settings, size))?;
+        sections.extend(sky.sections());
     }
     Ok(PcFile { header, sections })
 }
@@ -741,7 +742,8 @@ pub fn precompute_level(
         })
         .collect();
     if level == 0 && shard.index == 0 {
-        sections.extend(render_sky(world, settings, size)?.sections());
+        let sky = with_sky_progress(progress, || render_sky(world, settings, size))?;
+        sections.extend(sky.sections());
     }
     Ok(PcFile { header, sections })
 }
