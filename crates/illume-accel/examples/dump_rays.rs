@@ -155,8 +155,6 @@ fn world_triangles(scene: &Scene) -> Vec<[f32; 9]> {
     out
 }
 
-/// User + system CPU time of the calling thread [s], from `/proc/thread-self/stat`
-/// (10 ms resolution).
 /// CPU time of the calling thread in seconds, to the nanosecond (`/proc`'s clock ticks
 /// of 10 ms made the half-second measurement move in steps of 2 %).
 #[cfg(target_os = "linux")]

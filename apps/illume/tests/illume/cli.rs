@@ -1020,7 +1020,7 @@ fn data_flag_reads_a_precomputed_file_like_the_set_key() {
             && err.contains("precomputed keys: done in"),
         "{err}"
     );
-    // The sky's image (rendered once, as long as a key or two) is a phase of its own,
+    // The sky's image (rendered once, as long as two keys or so) is a phase of its own,
     // before the keys: a long run's log is never silent.
     let sky = err.find("precomputed sky (once for the day): started, 1 to do");
     let keys = err.find("precomputed keys: started");
