@@ -209,7 +209,7 @@ pub fn render_sky_in(
 
 /// Runs `render` (the sky's images) as a phase of its own in `progress`: one image for
 /// the whole day, but at the keys' samples it takes as long as two keys or so (Sponza's
-/// atlas at 512 spp: 17–19 min), and without a phase the log said nothing until the keys
+/// atlas at 512 spp: ≈ 12 min), and without a phase the log said nothing until the keys
 /// began.
 pub(crate) fn with_sky_progress<T>(
     progress: &mut dyn illume_core::Progress,
