@@ -12,6 +12,9 @@
 //!   [`NEW_LIGHT_STILL_FRAMES`] for a light seen for the first time — plus the lookups;
 //! * **rays** cost `lit × ray_ns`.
 //!
+//! A light's `lookup_ns` includes the rays of the points it grazes, which its maps leave
+//! to rays ([`ShadowMapSettings::ray_below_cos`]).
+//!
 //! Every cost is measured on the scene at hand, per light, and carried from frame to
 //! frame as a running average. `ray_ns` (whenever the light's maps are stale) and
 //! `lookup_ns` (whenever they were just rendered) by timing [`PROBE_RAYS`] shadow rays or
@@ -221,7 +224,12 @@ impl ShadowChooser {
             let m = &mut self.measured[light];
             m.lookup_ns = average(
                 m.lookup_ns,
-                time_batches(lit, |(hit, s)| maps_ref.visibility(light, hit, s)),
+                // Grazing points take rays even with maps: part of the maps' cost.
+                time_batches(lit, |(hit, s)| {
+                    maps_ref
+                        .visibility(light, hit, s)
+                        .unwrap_or_else(|| f32::from(u8::from(world.unoccluded(hit, s))))
+                }),
             );
             // A rendering this frame calibrates the priors for lights not yet rendered.
             if !choice.plan.current

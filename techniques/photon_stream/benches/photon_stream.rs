@@ -27,7 +27,10 @@
 //!   streaming, as it does while objects or lights move. `ILLUME_BENCH_SCENE=NAME` keeps
 //!   the scenes whose label contains NAME (e.g. `Sponza`; for profiling one).
 //!   `ILLUME_BENCH_TAA=1` turns the renderer's temporal anti-aliasing on
-//!   (`render.temporal_aa`), in every section.
+//!   (`render.temporal_aa`), in every section. `ILLUME_BENCH_GRAZING_MAPS=1` gives the
+//!   shadow maps the settings they had before grazing light took rays
+//!   (`render.shadow_maps.ray_below_cos = 0`, `normal_offset_texels = 1`), in every
+//!   section: that change's cost, measured in one binary.
 //!
 //! Every other section keeps the thread streaming (`rest_when_settled = false`): they
 //! measure it, or frames beside it, as in the paper.
@@ -126,6 +129,15 @@ fn run_frames(
         height: h,
         area_light_samples: 1,
         temporal_aa: std::env::var_os("ILLUME_BENCH_TAA").is_some(),
+        shadow_maps: if std::env::var_os("ILLUME_BENCH_GRAZING_MAPS").is_some() {
+            illume_render::ShadowMapSettings {
+                ray_below_cos: 0.0,
+                normal_offset_texels: 1.0,
+                ..Default::default()
+            }
+        } else {
+            Default::default()
+        },
         ..Default::default()
     });
     {

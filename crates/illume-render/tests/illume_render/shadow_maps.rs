@@ -356,6 +356,134 @@ fn grazing_light_causes_no_acne() {
     }
 }
 
+/// Grazing light takes rays ([`ShadowMapSettings::ray_below_cos`]): the plane and its
+/// occluder (lowered to 5 cm above it, so its long shadow is in view) under a sun 81°
+/// from the plane's normal (cos θ ≈ 0.16). With the default 0.2 the maps decline every
+/// lookup and the image is the rays' exactly; with 0 they answer every one; at 70° (cos
+/// θ ≈ 0.34) the default answers every one.
+#[test]
+fn grazing_light_takes_rays_and_steeper_light_the_map() {
+    let (w, h) = (160, 120);
+    // (lookups declined, lookups answered, pixels differing from rays, shadowed pixels)
+    let direct = |from_normal_deg: f32, ray_below_cos: f32| {
+        let sun = Trs {
+            rotation: Quat::from_rotation_x(
+                -std::f32::consts::FRAC_PI_2 + from_normal_deg.to_radians(),
+            ),
+            ..Trs::IDENTITY
+        };
+        let irradiance = Rgb::splat(2.0);
+        let mut scene =
+            illume_scene::builtin::lit_plane(LightKind::Directional { irradiance }, sun, RHO, true);
+        let occluder = scene
+            .nodes
+            .iter_mut()
+            .find(|n| n.name == "occluder")
+            .expect("the occluder's node");
+        occluder.local.translation.y -= 0.45;
+        scene.update_world_transforms();
+        let world = World::new(scene);
+        let g = GBuffer::rasterize(&world, w, h);
+        let rays = direct_light(&world, &g, 1, 0);
+        let settings = ShadowMapSettings {
+            ray_below_cos,
+            ..Default::default()
+        };
+        let maps = ShadowMaps::build(&world, &settings).expect("valid settings");
+        let mapped = direct_light_with(&world, &g, Shadows::Maps(&maps), 1, 0);
+        let (mut declined, mut answered) = (0, 0);
+        for px in g.pixels.iter().flatten() {
+            let (s, _) = world
+                .lights
+                .incident_from(0, px.hit.position, Vec2::ZERO)
+                .expect("a sun reaches everywhere");
+            match maps.visibility(0, &px.hit, &s) {
+                None => declined += 1,
+                Some(_) => answered += 1,
+            }
+        }
+        let differ = (rays.pixels().iter())
+            .zip(mapped.pixels())
+            .filter(|(r, m)| r != m)
+            .count();
+        let shadowed = rays.pixels().iter().filter(|p| p.x == 0.0).count();
+        (declined, answered, differ, shadowed)
+    };
+    let default = ShadowMapSettings::default().ray_below_cos;
+    assert_eq!(default, 0.2);
+    let n = (w * h) as usize;
+    let (declined, answered, differ, shadowed) = direct(81.0, default);
+    assert!(
+        shadowed > 100,
+        "{shadowed} shadowed pixels: the shadow is in view"
+    );
+    assert_eq!(
+        (declined, answered),
+        (n, 0),
+        "81°, default: every lookup declined"
+    );
+    assert_eq!(differ, 0, "81°, default: {differ} pixels differ from rays");
+    let (declined, answered, _, _) = direct(81.0, 0.0);
+    assert_eq!(
+        (declined, answered),
+        (0, n),
+        "81°, 0: every lookup answered"
+    );
+    let (declined, answered, _, _) = direct(70.0, default);
+    assert_eq!(
+        (declined, answered),
+        (0, n),
+        "70°, default: every lookup answered"
+    );
+}
+
+/// The leak that made grazing light take rays: Dabrovic Sponza under the `[sun]`
+/// defaults at 9:37 (`scenarios/day_sponza.toml`'s camera and clock), where the sun
+/// grazes the atrium's long walls at cos θ ≈ 0.1–0.2. Direct light with the default maps
+/// is within 1 % of rays per channel; as before (maps everywhere, a one-footprint normal
+/// offset) it was ≥ 10 % too bright (+27 % at 800×600 with
+/// `examples/shadow_map_error.rs`).
+#[test]
+fn sunlit_sponza_at_a_grazing_sun_matches_rays() {
+    let path = illume_scene::shared_scenes_dir().join("dabrovic_sponza/sponza.obj");
+    let mut scene =
+        illume_scene::load_scene(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    illume_scene::builtin::look_from(
+        &mut scene,
+        Vec3::new(-14.0, 2.0, 0.0),
+        Vec3::new(0.0, 5.0, 0.0),
+    )
+    .expect("a valid view");
+    scene
+        .attach_sun(illume_scene::sun::SunSettings::default())
+        .expect("default sun");
+    scene.set_time(34_620.0);
+    let world = World::new(scene);
+    let g = GBuffer::rasterize(&world, 320, 240);
+    let rays = direct_light(&world, &g, 1, 0);
+    let mean_diff = |settings: &ShadowMapSettings| {
+        let maps = ShadowMaps::build(&world, settings).expect("valid settings");
+        let mapped = direct_light_with(&world, &g, Shadows::Maps(&maps), 1, 0);
+        let (r, m) = (rays.mean(), mapped.mean());
+        [0, 1, 2].map(|c| (m[c] - r[c]) / r[c])
+    };
+    assert!(rays.mean().x > 0.0, "the sun lights the view");
+    let now = mean_diff(&ShadowMapSettings::default());
+    assert!(
+        now.iter().all(|d| d.abs() < 0.01),
+        "default maps against rays: {now:?}"
+    );
+    let before = mean_diff(&ShadowMapSettings {
+        ray_below_cos: 0.0,
+        normal_offset_texels: 1.0,
+        ..Default::default()
+    });
+    assert!(
+        before.iter().all(|&d| d > 0.1),
+        "the old settings no longer leak: {before:?}"
+    );
+}
+
 /// A large scene: the Cornell dragon (`cornell_dragon/cornell_dragon.obj` of the shared
 /// scenes, 100 k triangles), its ceiling light replaced by one point light 5 % of the
 /// box's height below the ceiling (a cube map: six rasterizations of every triangle).
