@@ -7,8 +7,8 @@
 //! (maps everywhere, a one-footprint normal offset), then at `ray_below_cos` 0 (maps
 //! everywhere), 0.1, 0.2 (the default) and 0.3 without a normal offset (the default).
 //! Printed per row: HDR-FLIP and per-channel mean differences against the rays' image,
-//! the share of the light's lit pixels that took a ray because the light grazes them,
-//! and the direct pass's time (the fastest of 3, the maps already rendered: lookups and
+//! the share of the light's lit pixels that took a ray because the light grazes them and
+//! the map did not find them fully shadowed, and the direct pass's time (the fastest of 3, the maps already rendered: lookups and
 //! the grazing rays). Scenes: `cornell-spot`; Dabrovic Sponza under the `[sun]` defaults
 //! (Koldinghus, 21 June) at the five clock times of `scenarios/day_sponza.toml`, seen
 //! from its camera; Sponza and Sibenik under the photon-streaming benches' spot from

@@ -34,9 +34,10 @@
 //! because of the bias — as do surfaces lit at an angle, whose slope-scaled bias reaches
 //! several footprints (a fold of the Cornell dragon a few cm from the surface it
 //! shades). Points lit more grazing than [`ShadowMapSettings::ray_below_cos`] (78° from
-//! their normal by default) are not looked up at all: they take an exact ray, because
-//! there a texel covers many times its own size of surface and the offsets let light
-//! past mouldings and arches (a low sun along Sponza's walls). Everywhere else the bias
+//! their normal by default) keep the map's answer only where it is "fully shadowed";
+//! otherwise they take an exact ray, because there a texel covers many times its own
+//! size of surface and the offsets let light past mouldings and arches (a low sun along
+//! Sponza's walls). Everywhere else the bias
 //! keeps lit surfaces lit (no "acne") and occluders further than the bias from the
 //! receiver shadow exactly.
 
@@ -101,9 +102,10 @@ pub struct ShadowMapSettings {
     /// pixels that differ from exact rays). Default 2.
     pub pcf_texels: u32,
     /// Grazing light takes rays \[cos θ\]: a point lit at cos θ below this (θ between its
-    /// geometric normal and the light) gets an exact shadow ray instead of the map. There
-    /// a texel stretches over 1/cos θ of the surface and the slope-scaled bias and normal
-    /// offset reach several footprints, enough to let light past mouldings and arches
+    /// geometric normal and the light) that the map calls lit, even partly, gets an exact
+    /// shadow ray instead (one the map calls fully shadowed stays so). There a texel
+    /// stretches over 1/cos θ of the surface and the slope-scaled bias and normal offset
+    /// reach several footprints, enough to let light past mouldings and arches
     /// (direct light in sunlit Sponza at 9:37, whose walls the sun grazes at cos θ ≈
     /// 0.1–0.2: +5 % against rays at 0, +2.9 % at 0.1, +0.0 % at 0.2; Sibenik under a
     /// spot: +2.3 / +1.9 / +0.7 %). Higher: exact shadows over more of the surfaces lit
@@ -742,9 +744,9 @@ impl ShadowMaps {
     /// Fraction in [0, 1] of analytic light `light` (an index of
     /// [`LightSet::analytic_range`](illume_transport::LightSet::analytic_range)) that reaches `hit`
     /// along `sample` (which came from that light): filtered, biased depth comparisons
-    /// standing in for [`World::unoccluded`]. `None` when the light has no map or lights
-    /// the point at a grazing angle ([`ShadowMapSettings::ray_below_cos`]): the caller
-    /// casts a ray.
+    /// standing in for [`World::unoccluded`]. `None` when the light has no map, or lights
+    /// the point at a grazing angle ([`ShadowMapSettings::ray_below_cos`]) and the map
+    /// does not find it fully shadowed: the caller casts a ray.
     pub fn visibility(&self, light: usize, hit: &SurfaceHit, sample: &LightSample) -> Option<f32> {
         if !self.uses_maps(light) {
             return None;
@@ -768,10 +770,7 @@ impl ShadowMaps {
         let s = &self.settings;
         let n = hit.facing_geometric_normal();
         let cos = n.dot(sample.wi).clamp(1e-4, 1.0);
-        if cos < s.ray_below_cos {
-            // Grazing light: the map's texel and bias are too coarse here.
-            return None;
-        }
+        let grazing = cos < s.ray_below_cos;
         let tan = ((1.0 - cos * cos).sqrt() / cos).min(MAX_SLOPE);
         // A point behind a perspective view cannot be lit by it (it is outside its cone
         // or face); treat it as lit and let the light's own falloff decide.
@@ -782,7 +781,13 @@ impl ShadowMaps {
             return Some(1.0);
         };
         let bias = at.footprint * (s.depth_bias_texels + s.slope_bias_texels * tan);
-        Some(map.filtered_visibility(at.texel, at.depth - bias, s.pcf_texels))
+        let v = map.filtered_visibility(at.texel, at.depth - bias, s.pcf_texels);
+        if grazing && v > 0.0 {
+            // Grazing light: the map's texel and bias are too coarse to say "lit" here
+            // (they let light past mouldings and arches); its "shadowed" stands.
+            return None;
+        }
+        Some(v)
     }
 }
 
