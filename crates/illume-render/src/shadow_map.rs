@@ -37,9 +37,8 @@
 //! their normal by default) keep the map's answer only where it is "fully shadowed";
 //! otherwise they take an exact ray, because there a texel covers many times its own
 //! size of surface and the offsets let light past mouldings and arches (a low sun along
-//! Sponza's walls). Everywhere else the bias
-//! keeps lit surfaces lit (no "acne") and occluders further than the bias from the
-//! receiver shadow exactly.
+//! Sponza's walls). Everywhere else the bias keeps lit surfaces lit (no "acne") and
+//! occluders further than the bias from the receiver shadow exactly.
 
 use glam::{Affine3A, Mat3, Vec2, Vec3, Vec4};
 use illume_transport::lights::{Emitter, LightSample};
@@ -92,8 +91,9 @@ pub struct ShadowMapSettings {
     /// leaking than a depth bias alone. Higher: no acne, at the cost of shadows shifted by
     /// up to that distance and light let past mouldings and ledges within it. Default 0:
     /// with grazing light on rays (`ray_below_cos`) the depth and slope biases keep lit
-    /// surfaces lit, and one footprint let +5 % to +27 % of direct light through in sunlit
-    /// Sponza and +2 % in Sibenik (`examples/shadow_map_error.rs`, `BENCHMARKS.md`).
+    /// surfaces lit, and with one footprint (and no rays) direct light in sunlit Sponza
+    /// was +0.5 % to +27 % too bright against rays (−0.2 % to +5 % without it), Sibenik
+    /// under a spot +6.8 % (+2.3 %) (`examples/shadow_map_error.rs`, `BENCHMARKS.md`).
     pub normal_offset_texels: f32,
     /// Width of the percentage-closer filter \[texels\]: 1 compares one texel (hard,
     /// aliased edges); k ≥ 2 averages k × k comparisons with bilinear weights (2 is the
@@ -109,7 +109,7 @@ pub struct ShadowMapSettings {
     /// (direct light in sunlit Sponza at 9:37, whose walls the sun grazes at cos θ ≈
     /// 0.1–0.2: +5 % against rays at 0, +2.9 % at 0.1, +0.0 % at 0.2; Sibenik under a
     /// spot: +2.3 / +1.9 / +0.7 %). Higher: exact shadows over more of the surfaces lit
-    /// at an angle, at the cost of one ray each (0.2: 3–4 ms more direct light a frame
+    /// at an angle, at the cost of one ray each (0.2: 2–3.5 ms more direct light a frame
     /// at 800×600 in Sponza and Sibenik under a spot, 0.1: under 1 ms; `BENCHMARKS.md`).
     /// 0: maps everywhere, the paper's choice (§0.7.3); 1: rays everywhere. Default 0.2
     /// (78° from the normal).
