@@ -24,7 +24,9 @@ fn metric_pairs<'py>(
 /// bench` does: converged references from (and into) `cache`, each technique's series.
 /// With `output` the report (report.md, results.csv, plots) is written there too.
 /// Returns a dict: `times_s` (array), `events` (list of dicts), `cache_hits`,
-/// `cache_renders`, and `series`, a dict from series name to its summary
+/// `cache_renders`, `reference_noise` {metric: (mean, max)} (each metric between the two
+/// halves of the converged references' samples: their own noise, empty when the cache
+/// holds no halves), and `series`, a dict from series name to its summary
 /// (`technique`, `median_frame_ms`, `precompute_ms`, `metrics` {name: (mean, max)},
 /// `latencies` [(frames, seconds, wall_seconds)]) and per-frame arrays under `frames`
 /// (`frame`, `time_s`, `frame_ms`, and one per metric, NaN where not measured).
@@ -63,6 +65,11 @@ pub fn bench<'py>(
     d.set_item("events", events)?;
     d.set_item("cache_hits", outcome.cache_hits)?;
     d.set_item("cache_renders", outcome.cache_renders)?;
+    let noise = PyDict::new(py);
+    for (m, mean, max, _) in outcome.reference_noise_summary() {
+        noise.set_item(m.to_string(), (mean, max))?;
+    }
+    d.set_item("reference_noise", noise)?;
     let series = PyDict::new(py);
     for s in &outcome.summaries {
         let sd = PyDict::new(py);

@@ -320,3 +320,6 @@ def test_a_bench_scenario_runs_into_dicts_and_arrays(tmp_path):
     assert series["frames"]["rmse"].shape == (2,)
     assert np.all(np.isfinite(series["frames"]["rmse"]))
     assert result["cache_renders"] == 2
+    # Two samples a pixel in each half of a 4-spp reference: their difference is noise.
+    mean, worst = result["reference_noise"]["rmse"]
+    assert 0.0 < mean <= worst

@@ -99,6 +99,19 @@ pub fn run_bench(a: BenchArgs) -> Result<()> {
             metrics.join(", ")
         );
     }
+    let noise = outcome.reference_noise_summary();
+    if !noise.is_empty() {
+        let metrics: Vec<String> = noise
+            .iter()
+            .map(|(m, mean, _, _)| format!("{m} {mean:.4}"))
+            .collect();
+        eprintln!(
+            "{:<40} between its halves ({} spp each): mean {}",
+            "converged reference",
+            scenario.reference.spp / 2,
+            metrics.join(", ")
+        );
+    }
     eprintln!(
         "wrote {} and {} ({} plots) in {:.1} s",
         files.report_md.display(),

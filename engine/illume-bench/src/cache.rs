@@ -9,6 +9,12 @@
 //! state is what the frame time and the scripted edits applied so far produce, so two
 //! frames of a static scene share one reference, and a changed setting changes the key.
 //! The key text is stored beside the image (`HASH.key.txt`) for inspection.
+//!
+//! Beside each image rendered since the halves were kept, `HASH.half.exr` holds the mean
+//! of its first ⌊spp/2⌋ samples. The second half's mean follows from the two (2·full −
+//! half), and the two halves are independent (every sample has its own random stream),
+//! so their difference measures the reference's own noise: the floor under every error
+//! measured against it ([`HalfImages`]).
 
 use crate::error::BenchError;
 use illume_core::image::RgbImage;
@@ -136,42 +142,99 @@ impl ReferenceCache {
             && std::fs::read_to_string(key_file).is_ok_and(|text| text == key.text)
     }
 
-    /// The stored image of `key`, or `render()`'s result, stored for next time.
-    /// A stored image that is not `size` (width, height) is an error naming its file.
+    /// Where the first half's image of `key` is (or would be) stored.
+    pub fn half_path(&self, key: &CacheKey) -> PathBuf {
+        self.dir.join(format!("{}.half.exr", key.hex()))
+    }
+
+    /// The stored image of `key` and its first half (None when the image was stored
+    /// without one), or `render()`'s result, stored for next time. A stored image that
+    /// is not `size` (width, height) is an error naming its file.
     pub fn get_or_render(
         &mut self,
         key: &CacheKey,
         size: (u32, u32),
-        render: impl FnOnce() -> RgbImage,
-    ) -> Result<RgbImage, BenchError> {
+        render: impl FnOnce() -> (RgbImage, Option<RgbImage>),
+    ) -> Result<(RgbImage, Option<RgbImage>), BenchError> {
         let path = self.path(key);
+        let half_path = self.half_path(key);
         if self.contains(key) {
             self.hits += 1;
-            let image = RgbImage::read(&path)?;
-            if (image.width(), image.height()) != size {
-                return Err(illume_core::image::ImageError::Read {
-                    path,
-                    message: format!(
-                        "the cached reference is {}×{}, the scenario's frames are {}×{}: a damaged or foreign cache file (remove it, or the cache folder, to render it again)",
-                        image.width(),
-                        image.height(),
-                        size.0,
-                        size.1
-                    ),
-                }
-                .into());
-            }
-            return Ok(image);
+            let image = read_sized(&path, size)?;
+            let half = if half_path.is_file() {
+                Some(read_sized(&half_path, size)?)
+            } else {
+                None
+            };
+            return Ok((image, half));
         }
-        let image = render();
+        let (image, half) = render();
         std::fs::create_dir_all(&self.dir).map_err(|e| BenchError::io(&self.dir, e))?;
-        // Image first, key last: a key file present means a complete image.
+        // Images first, key last: a key file present means complete images. A half left
+        // by an earlier, interrupted render is removed so it cannot pair with this image.
         image.write(&path, &Default::default())?;
+        match &half {
+            Some(h) => h.write(&half_path, &Default::default())?,
+            None if half_path.exists() => {
+                std::fs::remove_file(&half_path).map_err(|e| BenchError::io(&half_path, e))?
+            }
+            None => {}
+        }
         let key_file = self.dir.join(format!("{}.key.txt", key.hex()));
         illume_core::atomic::write_file(&key_file, &key.text)
             .map_err(|e| BenchError::io(&key_file, e))?;
         self.renders += 1;
-        Ok(image)
+        Ok((image, half))
+    }
+}
+
+/// The cached image at `path`, which must be `size` (width, height) pixels.
+fn read_sized(path: &Path, size: (u32, u32)) -> Result<RgbImage, BenchError> {
+    let image = RgbImage::read(path)?;
+    if (image.width(), image.height()) != size {
+        return Err(illume_core::image::ImageError::Read {
+            path: path.to_owned(),
+            message: format!(
+                "the cached reference is {}×{}, the scenario's frames are {}×{}: a damaged or foreign cache file (remove it, or the cache folder, to render it again)",
+                image.width(),
+                image.height(),
+                size.0,
+                size.1
+            ),
+        }
+        .into());
+    }
+    Ok(image)
+}
+
+/// A converged reference's two independent halves: the mean of its first ⌊spp/2⌋
+/// samples and the mean of the rest, 2·full − first (exact up to float rounding,
+/// since the full image is the samples' mean; with an odd spp the second half has one
+/// sample more, which this ignores).
+#[derive(Clone, Debug)]
+pub struct HalfImages {
+    /// The first half's mean.
+    pub first: RgbImage,
+    /// The second half's mean.
+    pub second: RgbImage,
+}
+
+impl HalfImages {
+    /// The halves of `full`, whose first half is `first`; None when their sizes differ.
+    pub fn new(full: &RgbImage, first: RgbImage) -> Option<Self> {
+        if (first.width(), first.height()) != (full.width(), full.height()) {
+            return None;
+        }
+        let second = RgbImage::from_vec(
+            full.width(),
+            full.height(),
+            full.pixels()
+                .iter()
+                .zip(first.pixels())
+                .map(|(f, a)| 2.0 * *f - *a)
+                .collect(),
+        )?;
+        Some(Self { first, second })
     }
 }
 

@@ -40,7 +40,7 @@ pub mod report;
 pub mod run;
 pub mod scenario;
 
-pub use cache::{CacheKey, ReferenceCache};
+pub use cache::{CacheKey, HalfImages, ReferenceCache};
 pub use error::BenchError;
 pub use illume_core::{Progress, Silent};
 pub use replay::{EditTarget, Replay};

@@ -343,6 +343,55 @@ pub fn write_report(
     })
 }
 
+/// The report's section on the converged reference's own noise: each metric between the
+/// two independent halves of its samples, over the measured frames.
+fn reference_noise_section(scenario: &Scenario, outcome: &BenchOutcome) -> String {
+    let half = scenario.reference.spp / 2;
+    let mut md = String::from("## The converged reference's own noise\n\n");
+    let summary = outcome.reference_noise_summary();
+    if summary.is_empty() {
+        let _ = write!(
+            md,
+            "Not measured: {}.\n\n",
+            if half == 0 {
+                "the reference has one sample a pixel, so no halves".to_owned()
+            } else {
+                "its cached images were stored before the cache kept their first halves \
+                 (remove them from the cache to render them again with halves)"
+                    .to_owned()
+            }
+        );
+        return md;
+    }
+    let table = Table {
+        columns: ["metric", "between halves, mean", "max", "frames"]
+            .map(String::from)
+            .to_vec(),
+        rows: summary
+            .iter()
+            .map(|&(m, mean, max, n)| {
+                vec![
+                    Cell::Text(m.to_string()),
+                    Cell::Number(mean),
+                    Cell::Number(max),
+                    Cell::Text(n.to_string()),
+                ]
+            })
+            .collect(),
+    };
+    let _ = write!(
+        md,
+        "Each converged reference is the mean of two independent halves of its samples \
+         ({half} spp each). The metrics between them measure its noise: the full \
+         reference's own error is smaller (for RMSE, half of the halves'), but a series \
+         whose error approaches these values is measuring the reference's noise as much \
+         as its own; raise `[reference].spp` (error falls as 1/√spp) before reading \
+         differences there.\n\n{}\n",
+        table.to_markdown()
+    );
+    md
+}
+
 fn markdown(
     scenario: &Scenario,
     outcome: &BenchOutcome,
@@ -423,6 +472,7 @@ fn markdown(
         },
         summary_table(scenario, outcome).to_markdown()
     );
+    let _ = write!(md, "{}", reference_noise_section(scenario, outcome));
     let _ = write!(
         md,
         "## Latency after events\n\nFrames, scene seconds and wall-clock seconds (the frame \

@@ -1,7 +1,7 @@
 //! Running a scenario: converged references (cached), each technique frame by frame,
 //! the equal-time path tracer, then the per-frame and per-series measurements.
 
-use crate::cache::{CacheKey, ReferenceCache};
+use crate::cache::{CacheKey, HalfImages, ReferenceCache};
 use crate::error::BenchError;
 use crate::replay::Replay;
 use crate::scenario::Scenario;
@@ -46,6 +46,9 @@ impl RunOptions {
 /// Seed offset of the equal-time path tracer, so its samples are independent of the
 /// converged reference's (same seed would correlate the two and understate the error).
 pub const EQUAL_TIME_SEED_OFFSET: u64 = 0x9e37_79b9_7f4a_7c15;
+
+/// `(metric, value)` for each of a scenario's metrics, in its order.
+pub type MetricValues = Vec<(Metric, f64)>;
 
 /// One frame of one series, measured against the converged reference.
 #[derive(Clone, Debug, PartialEq)]
@@ -164,6 +167,12 @@ pub struct BenchOutcome {
     pub cache_renders: usize,
     /// The cache key of each frame's converged reference.
     pub reference_keys: Vec<CacheKey>,
+    /// The converged reference's own noise at each frame: `(metric, value)` between the
+    /// two independent halves of its samples (⌊spp/2⌋ each), for each of the scenario's
+    /// metrics. None for a frame not measured, or whose cached reference was stored
+    /// without its half (rendered before halves were kept). A series whose error is
+    /// near this is measuring the reference's noise, not its own.
+    pub reference_noise: Vec<Option<MetricValues>>,
 }
 
 /// The converged reference settings of `scenario`.
@@ -270,6 +279,7 @@ pub fn run(
         }
     }
     let summaries = summarize(scenario, &records, &times, &events, &measured)?;
+    let reference_noise = reference_noise(scenario, &references)?;
     Ok(BenchOutcome {
         times_s: times,
         events,
@@ -278,7 +288,51 @@ pub fn run(
         cache_hits: cache.hits,
         cache_renders: cache.renders,
         reference_keys: keys,
+        reference_noise,
     })
+}
+
+impl BenchOutcome {
+    /// `(metric, mean, max, frames)` of [`BenchOutcome::reference_noise`] over the frames
+    /// that have it, in the scenario's metric order; empty when no frame has it.
+    pub fn reference_noise_summary(&self) -> Vec<(Metric, f64, f64, usize)> {
+        let measured: Vec<&Vec<(Metric, f64)>> = self.reference_noise.iter().flatten().collect();
+        let Some(first) = measured.first() else {
+            return Vec::new();
+        };
+        first
+            .iter()
+            .enumerate()
+            .map(|(j, &(metric, _))| {
+                let values: Vec<f64> = measured.iter().map(|v| v[j].1).collect();
+                let mean = values.iter().sum::<f64>() / values.len() as f64;
+                let max = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                (metric, mean, max, values.len())
+            })
+            .collect()
+    }
+}
+
+/// [`BenchOutcome::reference_noise`]: the scenario's metrics between each distinct
+/// reference's halves, measured once and given to each frame that shows it.
+fn reference_noise(
+    scenario: &Scenario,
+    references: &References,
+) -> Result<Vec<Option<MetricValues>>, BenchError> {
+    let per_image = references
+        .halves
+        .iter()
+        .map(|h| {
+            h.as_ref()
+                .map(|h| compare_images(&h.first, &h.second, &scenario.metrics))
+                .transpose()
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(references
+        .frame_image
+        .iter()
+        .map(|k| k.and_then(|k| per_image[k].clone()))
+        .collect())
 }
 
 /// The series name of the equal-time path tracer matched to technique `label`.
@@ -359,6 +413,8 @@ pub fn references_shard(
 /// Frames outside `reference_frames` have none; with a shard, only its images are there.
 struct References {
     images: Vec<Option<RgbImage>>,
+    /// Each image's two halves, when rendered (or cached) with them.
+    halves: Vec<Option<HalfImages>>,
     frame_image: Vec<Option<usize>>,
     unique: usize,
 }
@@ -406,6 +462,7 @@ fn converged_references(
         progress.begin("converged reference", to_render * u64::from(spp));
     }
     let mut images: Vec<Option<RgbImage>> = vec![None; unique.len()];
+    let mut halves: Vec<Option<HalfImages>> = vec![None; unique.len()];
     let mut world = World::new(scene.clone());
     let mut replay = Replay::new(scenario);
     let mut rendered = 0u64;
@@ -418,17 +475,29 @@ fn converged_references(
             continue;
         }
         let size = (scenario.width, scenario.height);
-        let image = cache.get_or_render(key, size, || {
+        let (image, first_half) = cache.get_or_render(key, size, || {
             let mut r = ReferenceRenderer::new(settings.clone(), scenario.width, scenario.height);
-            // Chunks keep the bar moving; the image does not depend on the chunking.
+            // Chunks keep the bar moving; the image does not depend on the chunking, so
+            // stopping at the half to keep its mean changes nothing.
             let chunk = (spp / 16).max(1);
+            let half_spp = spp / 2;
+            let mut first_half = None;
             while r.samples() < spp {
-                r.add_samples(&world, chunk.min(spp - r.samples()));
+                let until = if r.samples() < half_spp {
+                    half_spp
+                } else {
+                    spp
+                };
+                r.add_samples(&world, chunk.min(until - r.samples()));
+                if r.samples() == half_spp {
+                    first_half = Some(r.images().full);
+                }
                 progress.set(rendered * u64::from(spp) + u64::from(r.samples()));
             }
             rendered += 1;
-            r.images().full
+            (r.images().full, first_half)
         })?;
+        halves[slot] = first_half.and_then(|h| HalfImages::new(&image, h));
         images[slot] = Some(image);
     }
     if to_render > 0 {
@@ -441,6 +510,7 @@ fn converged_references(
         .collect();
     Ok(References {
         images,
+        halves,
         frame_image,
         unique: unique.len(),
     })

@@ -331,17 +331,17 @@ work = 1
         let expected = if k == 0 { "2 of 3" } else { "1 of 3" };
         assert!(err.contains(expected), "{err}");
     }
-    let images = std::fs::read_dir(&cache)
+    let names: Vec<String> = std::fs::read_dir(&cache)
         .unwrap()
-        .filter(|e| {
-            e.as_ref()
-                .unwrap()
-                .path()
-                .extension()
-                .is_some_and(|x| x == "exr")
-        })
-        .count();
-    assert_eq!(images, 3);
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".exr"))
+        .collect();
+    let halves = names.iter().filter(|n| n.ends_with(".half.exr")).count();
+    assert_eq!(
+        (names.len() - halves, halves),
+        (3, 3),
+        "images and their halves"
+    );
     let out = root.join("report");
     let err = ok(&illume(&[
         "bench",

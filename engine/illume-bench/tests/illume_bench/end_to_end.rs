@@ -187,9 +187,10 @@ fn tiny_scenario_runs_end_to_end_and_reuses_its_references() {
         "the edit at 0.5 s shows from frame 1"
     );
 
-    // Second run: all three references come from the cache, the files are untouched.
+    // Second run: all three references come from the cache, the files (each image and
+    // its first half) are untouched.
     let before = mtimes(&options.cache_dir);
-    assert_eq!(before.len(), 3);
+    assert_eq!(before.len(), 6);
     let second = run(&scenario, &options, &mut Silent).unwrap();
     assert_eq!((second.cache_hits, second.cache_renders), (3, 0));
     assert_eq!(
@@ -210,7 +211,11 @@ fn tiny_scenario_runs_end_to_end_and_reuses_its_references() {
     for (a, b) in third.reference_keys.iter().zip(&first.reference_keys) {
         assert_ne!(a.hash, b.hash);
     }
-    assert_eq!(mtimes(&options.cache_dir).len(), 6);
+    assert_eq!(
+        mtimes(&options.cache_dir).len(),
+        12,
+        "3 + 3 images, each with its half"
+    );
     std::fs::remove_dir_all(&root).unwrap();
 }
 

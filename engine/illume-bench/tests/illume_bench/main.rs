@@ -6,6 +6,7 @@
 
 mod common;
 mod end_to_end;
+mod reference_noise;
 mod replay;
 mod scenario;
 mod shards;

@@ -70,7 +70,11 @@ fn sharded_references_equal_the_unsharded_ones() {
     assert_eq!(mine, vec![2, 2, 1], "distinct references j mod 3");
     assert!(!sharded.output_dir.exists(), "a shard writes no report");
     let (a, b) = (files(&root.join("whole")), files(&root.join("sharded")));
-    assert_eq!(a.len(), 10, "5 images and 5 key files");
+    assert_eq!(
+        a.len(),
+        15,
+        "5 images, their 5 first halves and 5 key files"
+    );
     let names = |v: &[(String, Vec<u8>)]| v.iter().map(|f| f.0.clone()).collect::<Vec<_>>();
     assert_eq!(names(&a), names(&b));
     for ((name, x), (_, y)) in a.iter().zip(&b) {
