@@ -166,6 +166,12 @@ struct RunArgs {
     /// wrote for level L−1). Must come from the same scene and settings.
     #[arg(long, value_name = "FILE", requires = "level")]
     previous: Option<PathBuf>,
+    /// Take the sky images from FILE (another .illumepc of the same scene, --sky, image
+    /// size, layout, spp and seed) instead of rendering them: the sky does not depend on
+    /// the hours, and it costs as much as two keys or so. Checked; what differs is named.
+    /// Not with --shard or --level (shard 0 renders the sky there).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["level", "shard"])]
+    sky_from: Option<PathBuf>,
     /// Extra settings, as in render: `--set precomputed.KEY=VALUE`.
     #[arg(long = "set", value_name = "TABLE.KEY=VALUE")]
     sets: Vec<String>,
@@ -313,6 +319,16 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
         Some(p) => Some((p.clone(), PcFile::read(p)?)),
         None => None,
     };
+    let sky_from = match &a.sky_from {
+        Some(p) => {
+            eprintln!(
+                "precomputed sky: from {} (checked before the keys)",
+                p.display()
+            );
+            Some((p.clone(), PcFile::read(p)?))
+        }
+        None => None,
+    };
     let size = (width, height);
     // Every key is held for the PCA (a shard's until it is written): refuse, before
     // rendering any, keys that this machine cannot hold.
@@ -351,7 +367,13 @@ fn run_precompute(a: RunArgs, host: &dyn OfflineHost) -> Result<()> {
             &mut *bars,
         )?,
         (_, None, Some(shard)) => precompute_shard(&world, &s, size, shard, &mut *bars)?,
-        (_, None, None) => crate::precompute::precompute(&world, &s, size, &mut *bars)?,
+        (_, None, None) => crate::precompute::precompute_with_sky(
+            &world,
+            &s,
+            size,
+            sky_from.as_ref().map(|(p, f)| (p.as_path(), f)),
+            &mut *bars,
+        )?,
     };
     bars.finish();
     file.write(&output)?;

@@ -207,6 +207,74 @@ pub fn render_sky_in(
     Ok(Sky { all, direct })
 }
 
+/// The settings a sky image depends on besides the scene, its sky and the camera: the
+/// layout's and the sampling's. The hours, the schedule, the PCA and the run-time
+/// settings do not enter it (the sky is rendered with the sun off).
+const SKY_SETTINGS: [&str; 6] = [
+    "domain",
+    "cube_face",
+    "atlas_density",
+    "probe_spacing",
+    "spp",
+    "seed",
+];
+
+/// The sky images stored in `file` (read from `path`), for a precompute of `world` with
+/// `settings` in `layout` (`illume precompute --sky-from`). The sky image does not depend
+/// on the hours, the schedule or the PCA, so a file of the same scene and sky, image
+/// size, layout, samples and seed holds, bit for bit, the image this precompute would
+/// spend as long as two keys rendering. Anything of those that differs is an error
+/// naming the file and each difference.
+pub fn sky_from_file(
+    world: &World,
+    settings: &PrecomputedSettings,
+    layout: &Layout,
+    path: &std::path::Path,
+    file: &PcFile,
+) -> Result<Sky, PrecomputedError> {
+    let ours = base_header_in(world, settings, layout)?;
+    let theirs = &file.header;
+    let mut differs = Vec::new();
+    if ours.scene_fingerprint != theirs.scene_fingerprint {
+        differs.push("the scene or its sky".to_owned());
+    }
+    if (ours.width, ours.height) != (theirs.width, theirs.height) {
+        differs.push(format!(
+            "the image size ({}×{} here, {}×{} in the file)",
+            ours.width, ours.height, theirs.width, theirs.height
+        ));
+    }
+    // The screen and cube domains see from the camera; the atlas does not.
+    if ours.domain != "atlas" && ours.camera != theirs.camera {
+        differs.push("the camera".to_owned());
+    }
+    if ours.atlas != theirs.atlas && differs.is_empty() {
+        differs.push("the atlas layout".to_owned());
+    }
+    for name in SKY_SETTINGS {
+        let (a, b) = (ours.settings.get(name), theirs.settings.get(name));
+        if a != b {
+            let show = |v: Option<&toml::Value>| v.map_or("unset".into(), |v| v.to_string());
+            differs.push(format!(
+                "{name} ({} here, {} in the file)",
+                show(a),
+                show(b)
+            ));
+        }
+    }
+    if !differs.is_empty() {
+        return Err(crate::shard::unusable(
+            path,
+            format!(
+                "its sky image cannot serve this precompute: {} differ{}",
+                differs.join(", "),
+                if differs.len() == 1 { "s" } else { "" }
+            ),
+        ));
+    }
+    crate::shard::sky_of(path, file)
+}
+
 /// Runs `render` (the sky's images) as a phase of its own in `progress`: one image for
 /// the whole day, but at the keys' samples it takes as long as two keys or so (Sponza's
 /// atlas at 512 spp: ≈ 12 min), and without a phase the log said nothing until the keys
@@ -484,6 +552,18 @@ pub fn precompute(
     size: (u32, u32),
     progress: &mut dyn illume_core::Progress,
 ) -> Result<PcFile, PrecomputedError> {
+    precompute_with_sky(world, settings, size, None, progress)
+}
+
+/// [`precompute`], with the sky images taken from another file (path and contents;
+/// checked by [`sky_from_file`]) instead of rendered, when `sky_from` is given.
+pub fn precompute_with_sky(
+    world: &World,
+    settings: &PrecomputedSettings,
+    size: (u32, u32),
+    sky_from: Option<(&std::path::Path, &PcFile)>,
+    progress: &mut dyn illume_core::Progress,
+) -> Result<PcFile, PrecomputedError> {
     settings.validate()?;
     sun_of(&world.scene)?;
     let layout = Layout::new(world, settings, size)?;
@@ -494,7 +574,10 @@ pub fn precompute(
             reason,
         }
     })?;
-    let sky = with_sky_progress(progress, || render_sky_in(world, settings, &layout))?;
+    let sky = match sky_from {
+        Some((path, file)) => sky_from_file(world, settings, &layout, path, file)?,
+        None => with_sky_progress(progress, || render_sky_in(world, settings, &layout))?,
+    };
     let keys = match settings.schedule {
         crate::settings::ScheduleKind::Uniform => {
             let times = crate::schedule::uniform(settings.from_h, settings.to_h, settings.step_min);

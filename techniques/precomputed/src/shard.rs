@@ -107,7 +107,7 @@ pub fn precompute_shard(
 }
 
 /// A file that cannot serve as what it was given for (`message` says why).
-fn unusable(path: &Path, message: String) -> PrecomputedError {
+pub(crate) fn unusable(path: &Path, message: String) -> PrecomputedError {
     PrecomputedError::File(FileError::Header {
         path: path.to_path_buf(),
         message,
@@ -282,7 +282,7 @@ fn shard_file(parts: &[(PathBuf, PcFile)], k: u32) -> &(PathBuf, PcFile) {
 /// The sky images of a file (shard 0 of level 0, a `levels` file), or an error naming
 /// it. Its direct share is carried when the file has one (shards of an older build have
 /// none: the merged file then has none either).
-fn sky_of(path: &Path, file: &PcFile) -> Result<Sky, PrecomputedError> {
+pub(crate) fn sky_of(path: &Path, file: &PcFile) -> Result<Sky, PrecomputedError> {
     let size = (file.header.width, file.header.height);
     let all = file
         .section("sky")

@@ -222,6 +222,64 @@ fn sky_flag_round_trips_through_a_precomputed_file() {
     );
 }
 
+/// `--sky-from` on the command line: another range of hours with the file's sky writes
+/// the file a fresh precompute writes, byte for byte; a file rendered with other samples
+/// is refused by name and setting, before any key, and nothing is written.
+#[test]
+fn sky_from_reuses_a_files_sky_and_refuses_one_that_differs() {
+    let dir = scratch("sky-from");
+    let run = |from: &str, to: &str, spp: &str, extra: &[&str], out: &Path| {
+        let mut args = vec!["precompute", "builtin:sun-room", "--schedule", "uniform"];
+        args.extend(["--from", from, "--to", to, "--step-min", "120"]);
+        args.extend([
+            "--spp",
+            spp,
+            "--components",
+            "2",
+            "--width",
+            "16",
+            "--height",
+            "12",
+        ]);
+        args.extend(extra);
+        args.extend(["--output", path(out)]);
+        illume(&args)
+    };
+    let morning = dir.join("morning.illumepc");
+    ok(&run("6", "10", "2", &[], &morning));
+    let (fresh, reused) = (dir.join("fresh.illumepc"), dir.join("reused.illumepc"));
+    ok(&run("12", "16", "2", &[], &fresh));
+    let out = run("12", "16", "2", &["--sky-from", path(&morning)], &reused);
+    ok(&out);
+    assert!(stderr(&out).contains("sky: from"), "{}", stderr(&out));
+    assert!(
+        std::fs::read(&fresh).unwrap() == std::fs::read(&reused).unwrap(),
+        "the file made with --sky-from differs from the fresh one"
+    );
+    let refused = dir.join("refused.illumepc");
+    let out = run("12", "16", "4", &["--sky-from", path(&morning)], &refused);
+    let err = stderr(&out);
+    assert!(
+        !out.status.success()
+            && err.contains("morning.illumepc")
+            && err.contains("spp (4 here, 2 in the file)"),
+        "{err}"
+    );
+    assert!(!refused.exists(), "a refused precompute wrote its output");
+    let out = run(
+        "12",
+        "16",
+        "2",
+        &["--sky-from", path(&morning), "--shard", "0/2"],
+        &refused,
+    );
+    assert!(
+        !out.status.success() && stderr(&out).contains("--shard"),
+        "{}",
+        stderr(&out)
+    );
+}
+
 /// `convert` gives the PNG `render` writes for the same image (the same automatic
 /// exposure, curve and encoding), with `--exposure` on top.
 #[test]

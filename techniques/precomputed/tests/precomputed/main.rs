@@ -11,5 +11,6 @@ mod file;
 mod pca_paper_size;
 mod presets;
 mod shards;
+mod sky_from;
 mod split;
 mod sun_room;
