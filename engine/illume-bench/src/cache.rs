@@ -12,7 +12,7 @@
 //!
 //! Beside each image rendered since the halves were kept, `HASH.half.exr` holds the mean
 //! of its first ⌊spp/2⌋ samples. The second half's mean follows from the two (2·full −
-//! half), and the two halves are independent (every sample has its own random stream),
+//! half for an even spp), and the two halves are independent (every sample has its own random stream),
 //! so their difference measures the reference's own noise: the floor under every error
 //! measured against it ([`HalfImages`]).
 
@@ -208,9 +208,9 @@ fn read_sized(path: &Path, size: (u32, u32)) -> Result<RgbImage, BenchError> {
 }
 
 /// A converged reference's two independent halves: the mean of its first ⌊spp/2⌋
-/// samples and the mean of the rest, 2·full − first (exact up to float rounding,
-/// since the full image is the samples' mean; with an odd spp the second half has one
-/// sample more, which this ignores).
+/// samples and the mean of the rest, (spp·full − ⌊spp/2⌋·first) / (spp − ⌊spp/2⌋)
+/// (2·full − first for an even spp; exact up to float rounding, since the full image is
+/// the samples' mean).
 #[derive(Clone, Debug)]
 pub struct HalfImages {
     /// The first half's mean.
@@ -220,18 +220,20 @@ pub struct HalfImages {
 }
 
 impl HalfImages {
-    /// The halves of `full`, whose first half is `first`; None when their sizes differ.
-    pub fn new(full: &RgbImage, first: RgbImage) -> Option<Self> {
-        if (first.width(), first.height()) != (full.width(), full.height()) {
+    /// The halves of `full`, the mean of `spp` samples whose first ⌊spp/2⌋ have the mean
+    /// `first`; None when their sizes differ or `spp` < 2.
+    pub fn new(full: &RgbImage, first: RgbImage, spp: u32) -> Option<Self> {
+        if (first.width(), first.height()) != (full.width(), full.height()) || spp < 2 {
             return None;
         }
+        let (n, h) = (spp as f32, (spp / 2) as f32);
         let second = RgbImage::from_vec(
             full.width(),
             full.height(),
             full.pixels()
                 .iter()
                 .zip(first.pixels())
-                .map(|(f, a)| 2.0 * *f - *a)
+                .map(|(f, a)| (n * *f - h * *a) / (n - h))
                 .collect(),
         )?;
         Some(Self { first, second })
@@ -241,6 +243,20 @@ impl HalfImages {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn second_half_is_the_mean_of_the_other_samples_for_odd_and_even_spp() {
+        use illume_core::Vec3;
+        let image = |v: f32| RgbImage::filled(2, 1, Vec3::new(v, 2.0 * v, 0.0));
+        // Samples 1, 2, 3: the first half is sample 1, the second the mean of 2 and 3.
+        let h = HalfImages::new(&image(2.0), image(1.0), 3).unwrap();
+        assert_eq!(h.second.pixels(), image(2.5).pixels());
+        // Samples 1, 2, 3, 5: halves 1.5 and 4.
+        let h = HalfImages::new(&image(2.75), image(1.5), 4).unwrap();
+        assert_eq!(h.second.pixels(), image(4.0).pixels());
+        assert!(HalfImages::new(&image(1.0), image(1.0), 1).is_none());
+        assert!(HalfImages::new(&image(1.0), RgbImage::filled(1, 1, Vec3::ZERO), 4).is_none());
+    }
 
     #[test]
     fn fnv1a64_matches_published_vectors() {

@@ -497,7 +497,7 @@ fn converged_references(
             rendered += 1;
             (r.images().full, first_half)
         })?;
-        halves[slot] = first_half.and_then(|h| HalfImages::new(&image, h));
+        halves[slot] = first_half.and_then(|h| HalfImages::new(&image, h, spp));
         images[slot] = Some(image);
     }
     if to_render > 0 {
