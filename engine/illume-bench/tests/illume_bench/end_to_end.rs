@@ -1,8 +1,8 @@
 //! A tiny scenario end to end: converged references (and their cache), the reference
 //! technique with its equal-time path tracer, report files, and the CSV read back.
 
-use crate::common::temp_dir;
-use illume_bench::{RunOptions, Scenario, Silent, run, write_report};
+use crate::common::{options_in, temp_dir};
+use illume_bench::{Scenario, Silent, run, write_report};
 use illume_core::image::RgbImage;
 use illume_metrics::report::{Cell, read_csv};
 use illume_metrics::{Metric, compare_images};
@@ -51,12 +51,8 @@ fn mtimes(dir: &Path) -> Vec<(PathBuf, SystemTime)> {
 fn tiny_scenario_runs_end_to_end_and_reuses_its_references() {
     let root = temp_dir("e2e");
     let scenario = Scenario::parse(TINY, &root.join("tiny.toml")).unwrap();
-    let options = RunOptions {
-        output_dir: root.join("report"),
-        cache_dir: root.join("cache"),
-        save_frames: true,
-        notes: vec!["test run".into()],
-    };
+    let mut options = options_in(&root, true);
+    options.notes = vec!["test run".into()];
 
     // First run: every distinct state is rendered (3 frames, 3 states: the light moves).
     let first = run(&scenario, &options, &mut Silent).unwrap();
@@ -233,12 +229,7 @@ fn static_scene_shares_one_reference_across_frames() {
             "[reference]\nspp = 4\nequal_time = false",
         );
     let scenario = Scenario::parse(&text, &root.join("static.toml")).unwrap();
-    let options = RunOptions {
-        output_dir: root.join("report"),
-        cache_dir: root.join("cache"),
-        save_frames: false,
-        notes: Vec::new(),
-    };
+    let options = options_in(&root, false);
     let outcome = run(&scenario, &options, &mut Silent).unwrap();
     assert_eq!((outcome.cache_hits, outcome.cache_renders), (0, 1));
     assert_eq!(outcome.records.len(), 3, "no equal-time series");
@@ -289,12 +280,7 @@ translation = [0.2, 0.3, 0.0]
 "#;
     let root = temp_dir("sparse");
     let scenario = Scenario::parse(text, &root.join("sparse.toml")).unwrap();
-    let options = RunOptions {
-        output_dir: root.join("report"),
-        cache_dir: root.join("cache"),
-        save_frames: false,
-        notes: vec![],
-    };
+    let options = options_in(&root, false);
     let out = run(&scenario, &options, &mut Silent).unwrap();
     // Three references rendered, not five.
     assert_eq!(out.cache_renders, 3);
@@ -418,12 +404,7 @@ translation = [0.3, 0.3, 0.3]
     .replace("SCENE", &scene.to_string_lossy());
     let root = temp_dir("own-selective");
     let scenario = Scenario::parse(&text, &root.join("own_selective.toml")).unwrap();
-    let options = RunOptions {
-        output_dir: root.join("report"),
-        cache_dir: root.join("cache"),
-        save_frames: false,
-        notes: vec![],
-    };
+    let options = options_in(&root, false);
     let out = run(&scenario, &options, &mut Silent).unwrap();
     let own: Vec<f64> = out
         .records
@@ -489,12 +470,7 @@ work = 1
 supersample = 4
 "#;
     let scenario = Scenario::parse(text, &root.join("supersample.toml")).unwrap();
-    let options = RunOptions {
-        output_dir: root.join("report"),
-        cache_dir: root.join("cache"),
-        save_frames: true,
-        notes: Vec::new(),
-    };
+    let options = options_in(&root, true);
     let result = run(&scenario, &options, &mut Silent).unwrap();
     let rmse = |series: &str| -> f64 {
         let v: Vec<f64> = result

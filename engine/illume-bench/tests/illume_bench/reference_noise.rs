@@ -2,9 +2,9 @@
 //! samples, the full image is unchanged by that, and the metric between the two halves
 //! predicts the reference's actual error against a far more converged image.
 
-use crate::common::temp_dir;
+use crate::common::{options_in, temp_dir};
 use illume_bench::run::reference_settings;
-use illume_bench::{RunOptions, Scenario, Silent, run, write_report};
+use illume_bench::{Scenario, Silent, run, write_report};
 use illume_core::image::RgbImage;
 use illume_metrics::{Metric, compare_images};
 use illume_reference::ReferenceRenderer;
@@ -35,12 +35,7 @@ fn rmse(a: &RgbImage, b: &RgbImage) -> f64 {
 fn halves_are_stored_and_their_difference_predicts_the_references_error() {
     let root = temp_dir("halves");
     let scenario = Scenario::parse(STILL, &root.join("still.toml")).unwrap();
-    let options = RunOptions {
-        output_dir: root.join("report"),
-        cache_dir: root.join("cache"),
-        save_frames: false,
-        notes: Vec::new(),
-    };
+    let options = options_in(&root, false);
     let outcome = run(&scenario, &options, &mut Silent).unwrap();
     assert_eq!(outcome.cache_renders, 1, "one still state");
     let key = &outcome.reference_keys[0];
