@@ -12,9 +12,9 @@
 //!
 //! Beside each image rendered since the halves were kept, `HASH.half.exr` holds the mean
 //! of its first ⌊spp/2⌋ samples. The second half's mean follows from the two (2·full −
-//! half for an even spp), and the two halves are independent (every sample has its own random stream),
-//! so their difference measures the reference's own noise: the floor under every error
-//! measured against it ([`HalfImages`]).
+//! half for an even spp), and the two halves are independent (every sample has its own
+//! random stream), so their difference measures the reference's own noise: the floor
+//! under every error measured against it ([`HalfImages`]).
 
 use crate::error::BenchError;
 use illume_core::image::RgbImage;
